@@ -42,7 +42,7 @@ def main() -> None:
     server = StreamServer.of_frames(cfg, frames)
     encode = (time.perf_counter() - t0) / len(frames)
     with server:
-        pdc = pdc_client(*server.address, pdc_id=9)
+        pdc = pdc_client(*server.address, idcode=server.idcode)
         cfg2 = pdc.get_config()
         pdc.start()
         got, arrived = [], []

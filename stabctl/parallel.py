@@ -95,7 +95,7 @@ class RunnerOptions:
     Raises
     ------
     InputError
-        workers < 1.
+        workers < 1, or a scheduler address `check_scheduler` refuses.
     """
 
     workers: int | None = None
@@ -105,6 +105,8 @@ class RunnerOptions:
     def __post_init__(self) -> None:
         if self.workers is not None and self.workers < 1:
             raise InputError(f"workers must be >= 1, got {self.workers}")
+        if self.scheduler is not None:
+            check_scheduler(self.scheduler)
 
 
 @dataclass
@@ -194,9 +196,11 @@ REAP_TIMEOUT = 30.0  # s a stopped pool waits for its killed workers to be reape
 
 def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
     """(line number, line, the record or None if the line is not a whole sweep record) of
-    every non-blank line of a records file, each read in at most MAX_RECORD_LINE bytes.
-    Raises InputError at a longer line, or a line giving a key twice."""
-    with path.open(errors="replace") as f:
+    every non-blank line of a records file (UTF-8, a byte-order mark before the first
+    line skipped: an editor's, not part of the record), each read in at most
+    MAX_RECORD_LINE bytes.  Raises InputError at a longer line, or a line giving a key
+    twice."""
+    with path.open(encoding="utf-8-sig", errors="replace") as f:
         for n, line in enumerate(iter(lambda: f.readline(MAX_RECORD_LINE + 1), ""), start=1):
             if len(line) > MAX_RECORD_LINE:
                 raise InputError(
@@ -230,19 +234,45 @@ def _record(line: str, where: str) -> dict | None:
 _STATUS_FIELD = {"ok": "result", "verdict": "verdict", "failed": "error"}
 
 
-def read_records(path: str | Path) -> dict[str, dict]:
+def read_records(path: str | Path, whole: str | None = None) -> dict[str, dict]:
     """Records of an output file: key -> last line of that key (a retry's record after
     its failed one).  Lines that are not whole sweep records (a line cut by a kill, a
-    record without its result) are skipped with a warning; a missing file gives {}.
-    Raises InputError for a line longer than MAX_RECORD_LINE, a line giving a key twice,
-    or a job recorded twice other than after a failure (a file edited by hand: which
-    result holds?)."""
+    record without its result) are skipped with a warning, unless `whole` is given; a
+    missing file gives {}.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The records file.
+    whole : str, optional
+        The file is an input that must be whole (e.g. ``"--screening"``, named in the
+        message): a line that is not a sweep record is an error, not skipped (the records
+        read would be part of the file's, presented as all of them).
+
+    Returns
+    -------
+    dict
+        Key -> record.
+
+    Raises
+    ------
+    InputError
+        A line longer than MAX_RECORD_LINE, a line giving a key twice, a job recorded
+        twice other than after a failure (a file edited by hand: which result holds?),
+        or with `whole` a line that is not a sweep record (its number named).
+    """
     path = Path(path)
     if not path.exists():
         return {}
     records: dict[str, dict] = {}
     first: dict[str, int] = {}
     for n, _, rec in _record_lines(path):
+        if rec is None and whole is not None:
+            raise InputError(
+                f"{whole} {path} line {n}: not a whole sweep record (a damaged or cut "
+                "line): the records must be whole; repair or remove the line, or rerun the "
+                "screening"
+            )
         if rec is None:
             warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
             continue
@@ -504,7 +534,7 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S; a job
         whose worker died runs again on another worker.
     """
-    if scheduler:
+    if scheduler is not None:  # '' is refused (`check_scheduler`), never local
         with dask_client(scheduler, workers) as client:
             yield lambda func, jobs, done=None: _dask_map(client, func, jobs, done)
         return
@@ -615,6 +645,8 @@ def run_sweep(
     jobs = list(jobs)
     if workers is not None and workers < 1:
         raise InputError(f"workers must be >= 1, got {workers}")
+    if scheduler is not None:
+        check_scheduler(scheduler)
     out = Path(out)
     with exclusive(out):
         return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool)
@@ -890,6 +922,10 @@ def _completed(pool, jobs: list) -> Generator[dict, None, None]:
 SCHEDULER_TIMEOUT_S = 10.0
 
 
+#: how an address is given, for the messages of `check_scheduler`
+_SCHEDULER_FORMS = "give 'local' or a Dask scheduler's tcp://host:port"
+
+
 def check_scheduler(address: str) -> str:
     """``address`` once it is "local", a Dask TCP address ``tcp://host[:port]`` (port
     1-65535, Dask's 8786 if left out) or a cluster in this process (``inproc://``).
@@ -897,14 +933,32 @@ def check_scheduler(address: str) -> str:
     Raises
     ------
     InputError
-        Another scheme (tls:// and ucx:// need a configuration stabctl does not pass), no
-        host, or a port out of range.
+        An empty or blank address (it is no scheduler: local processes are had by
+        leaving --scheduler out), 'local' with a port (a local cluster has none), another
+        scheme (tls:// and ucx:// need a configuration stabctl does not pass), no host, a
+        port out of range, or text that is no URL (``tcp://[::1``).
     """
     from urllib.parse import urlsplit
 
     if address == "local" or address.startswith("inproc://"):  # inproc: this process's
         return address
-    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    if not address.strip():
+        raise InputError(
+            f"--scheduler {address!r}: an empty address; {_SCHEDULER_FORMS}, or leave "
+            "--scheduler out to run on local processes"
+        )
+    if address.startswith("local:"):
+        raise InputError(
+            f"--scheduler {address}: 'local' takes no port (it starts a local Dask cluster "
+            "of --workers processes); give 'local', or tcp://local:PORT for a scheduler on a "
+            "host named local"
+        )
+    try:
+        parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    except ValueError as exc:  # an unclosed IPv6 bracket
+        raise InputError(
+            f"--scheduler {address}: not an address ({exc}); {_SCHEDULER_FORMS}"
+        ) from None
     try:
         port = parts.port
     except ValueError:
@@ -912,13 +966,13 @@ def check_scheduler(address: str) -> str:
     given = parts.netloc.rpartition("]")[2].partition(":")[2]  # the port as written
     if given.isascii() and given.isdigit() and not 0 < int(given) < 65536:  # 0 ran on 8786
         raise InputError(
-            f"--scheduler {address}: port {int(given)} is out of range (1-65535); give "
-            "'local' or a Dask scheduler's tcp://host:port"
+            f"--scheduler {address}: port {int(given)} is out of range (1-65535); "
+            f"{_SCHEDULER_FORMS}"
         )
     if parts.scheme != "tcp" or not parts.hostname or port == -1 or parts.path:
         raise InputError(
-            f"--scheduler {address}: give 'local' or a Dask scheduler's tcp://host:port "
-            "(port 1-65535; tls:// and ucx:// are not supported)"
+            f"--scheduler {address}: {_SCHEDULER_FORMS} (port 1-65535; tls:// and ucx:// "
+            "are not supported)"
         )
     host = f"[{parts.hostname}]" if ":" in parts.hostname else parts.hostname  # IPv6
     return f"tcp://{host}:{port or 8786}"
@@ -1109,7 +1163,7 @@ def _records(
     (`dask_client`: connected on entering, before the sweep's file is touched, and
     closed with its local cluster on leaving, however the block is left, even before
     the first record) or from local processes (`_local`)."""
-    if not scheduler:
+    if scheduler is None:  # '' is refused (`check_scheduler`), never local
         with closing(_local(jobs, workers, pool)) as records:
             yield records
         return

@@ -455,6 +455,45 @@ def test_scheduler_addresses_are_checked_before_any_contact(tmp_path, address, n
 
 
 @pytest.mark.dask
+@pytest.mark.parametrize(
+    "address, needle",
+    [
+        ("", "--scheduler '': an empty address"),
+        ("  ", "--scheduler '  ': an empty address"),
+        ("tcp://[::1", "--scheduler tcp://[::1: not an address (Invalid IPv6 URL)"),
+        ("local:4", "--scheduler local:4: 'local' takes no port"),
+    ],
+)
+def test_a_scheduler_that_is_no_address_is_refused_not_run_locally(tmp_path, address, needle):
+    """An empty scheduler ran the sweep on local processes without a word (the callers
+    tested its truth), an unclosed IPv6 bracket was urlsplit's ValueError, and 'local:4'
+    was a host named local (10 s to time out): each refused before any contact or job,
+    by `check_scheduler`, `run_sweep` and `RunnerOptions` alike."""
+    from stabctl.parallel import RunnerOptions
+
+    for call in (
+        lambda: check_scheduler(address),
+        lambda: run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler=address),
+        lambda: RunnerOptions(1, address),
+    ):
+        with pytest.raises(InputError, match=re.escape(needle)):
+            call()
+    assert not (tmp_path / "d.jsonl").exists()
+
+
+def test_a_records_file_starting_with_a_byte_order_mark_is_read_whole(tmp_path, recwarn):
+    """A records file whose first line starts with a UTF-8 byte-order mark (an editor's)
+    had that valid line moved to .damaged and its job run again: the mark is skipped."""
+    out = tmp_path / "d.jsonl"
+    run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    out.write_bytes(b"\xef\xbb\xbf" + out.read_bytes())
+    report = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    assert report.ran == 0 and report.skipped == 2
+    assert not (tmp_path / "d.jsonl.damaged").exists()
+    assert sorted(read_records(out)) == ["square/1", "square/2"]
+    assert not [w for w in recwarn if "d.jsonl" in str(w.message)]
+
+
 def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time_box(
     tmp_path, monkeypatch
 ):

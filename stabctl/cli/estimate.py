@@ -33,6 +33,7 @@ from stabctl.cli.options import (
 )
 from stabctl.cli.pmu_options import (
     ESTIMATOR,
+    IDCODE,
     PMU_AT,
     WINDOW,
     fail_short,
@@ -43,6 +44,7 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     refuse_short_over,
     stream_controller,
+    stream_idcodes,
 )
 from stabctl.errors import InputError
 
@@ -496,6 +498,7 @@ def cct(
     default=None,
     help="Data frames to take from each stream.",
 )
+@IDCODE
 @ESTIMATOR
 @rate_latency_options
 @pmu_noise_options
@@ -508,6 +511,7 @@ def track(
     source,
     until_s,
     frames,
+    idcode,
     estimator,
     rate,
     latency_ms,
@@ -531,7 +535,10 @@ def track(
     --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
-    tuned to.  A stream that stops before --until or --frames is tracked as far as it came,
+    tuned to.  Over TCP the commands address stream --idcode, and every frame is checked
+    (CRC; each data frame's IDCODE, type and size against its CFG-2: a frame refused
+    refuses the source) and must come whole within 30 s.  A stream that stops before
+    --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2: the result is partial), unless --out
     exists: a file there is replaced only by the track of a whole stream (the file left
     as it was, refused before any tracking), as `pmu record` does.
@@ -562,10 +569,17 @@ def track(
     end = End(frames, until_s)
     if src.path is None and not end.given:
         raise InputError("a TCP --source needs its end: --until S or --frames N")
+    if src.path is not None:
+        refuse_given(
+            ("idcode",),
+            "with a recording as --source: it addresses a TCP server's stream (a "
+            "recording's frames carry their own IDCODE)",
+        )
+    codes = stream_idcodes(idcode, len(src.servers)) if src.path is None else 1
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
-    got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end)
+    got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end, idcode=codes)
     why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
     kept = f"{len(got.frames)} frames tracked"
     if got.short:

@@ -124,6 +124,7 @@ def reports_errors(func):
             try:
                 _check_numbers(kwargs)
                 _check_single_rate(kwargs)
+                _check_scheduler(kwargs)
                 out = func(*args, **kwargs)
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
@@ -502,6 +503,16 @@ def _check_single_rate(kwargs) -> None:
             "--single-rate given with --conventions pstess: the pstess conventions always "
             "integrate the whole model at one step (sub-intervals are an ieee option)"
         )
+
+
+def _check_scheduler(kwargs) -> None:
+    """Refuse a --scheduler address that is none (`stabctl.parallel.check_scheduler`: an
+    empty one, 'local' with a port, no URL) before any work: given, it is never taken for
+    local processes."""
+    if kwargs.get("scheduler") is not None:
+        from stabctl.parallel import check_scheduler
+
+        check_scheduler(kwargs["scheduler"])
 
 
 def subintervals_chosen() -> bool:

@@ -28,6 +28,7 @@ from stabctl.cli.options import (
 )
 from stabctl.cli.pmu_options import (
     ESTIMATOR,
+    IDCODE,
     PMU_AT,
     RATE,
     fail_short,
@@ -38,6 +39,7 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     refuse_short_over,
     stream_controller,
+    stream_idcodes,
 )
 from stabctl.errors import InputError
 
@@ -76,19 +78,20 @@ _LISTEN = (
     ),
     click.option(
         "--allow",
-        default="",
+        default=None,
         metavar="IP[,IP...]",
         help="Peers allowed to connect (IP addresses); others are closed at once and named. "
-        "Default: any.",
+        "Default (left out): any.",
     ),
 )
 _LOOPBACK = ("127.0.0.1", "::1", "localhost")
 
 
-def _allowed(host: str, allow: str) -> tuple:
-    """The --allow list as a tuple of addresses (InputError for an item that is not one,
-    an empty item or a repeat: `comma_list`); warns when listening beyond loopback to any
-    peer."""
+def _allowed(host: str, allow: str | None) -> tuple:
+    """The --allow list as a tuple of addresses (None, the option left out: empty, any
+    peer); InputError for an empty or blank value (it names no peer: it must not mean
+    any), an item that is not an address, an empty item or a repeat (`comma_list`); warns
+    when listening beyond loopback to any peer."""
     from stabctl.estimation.c37_tcp import plain_ip
 
     if not host.strip():
@@ -96,7 +99,12 @@ def _allowed(host: str, allow: str) -> tuple:
             "--host '': an empty address listens on every interface; give 0.0.0.0 (or :: "
             "for IPv6) to mean that, or a local address"
         )
-    peers = tuple(comma_list(allow, "--allow", plain_ip, "an IP address") if allow else ())
+    if allow is not None and not allow.strip():
+        raise InputError(
+            f"--allow {allow!r}: names no peer; give IP[,IP...], or leave --allow out to "
+            "let any peer connect"
+        )
+    peers = tuple(() if allow is None else comma_list(allow, "--allow", plain_ip, "an IP address"))
     if host not in _LOOPBACK and not peers:  # said now, before the server waits for peers
         click.echo(
             f"warning: listening on {host}: any host that reaches this port may connect "
@@ -119,8 +127,8 @@ def _serving(func):
         type=FLOAT,
         default=60.0,
         show_default=True,
-        help="Longest silence of a peer before its command, and longest wait for it to "
-        "take a frame (s); a peer past it is dropped.",
+        help="Longest wait for a whole command frame from a peer (silent or sending it "
+        "byte by byte), and for it to take a frame (s); a peer past it is dropped.",
     )
     return _apply(func, (*_LISTEN, speed, timeout))
 
@@ -171,9 +179,10 @@ def serve(
 ):
     """Simulate CASE through a line fault and serve one PMU per generator as one IEEE
     C37.118.2 stream on HOST:PORT, to one PDC: CFG-2 and header on request, then the data
-    frames from 'start', paced by their time stamps (docs/estimation.md 6).  With
-    --each-pmu every PMU is a server of its own, on PORT, PORT+1, ... (any free ports with
-    --port 0).
+    frames from 'start', paced by their time stamps (docs/estimation.md 6).  The stream's
+    IDCODE is 1: commands addressed to another drop their peer.  With --each-pmu every
+    PMU is a server of its own, on PORT, PORT+1, ... (any free ports with --port 0), each
+    stream IDCODE 1, its PMU's block 2, 3, ... as in the one stream.
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
     noise, lost frames as absent data).  Exits once the PDC has been sent every frame
@@ -202,13 +211,16 @@ def serve(
         )
     res = Simulator(case).run([ev], t_end=tf)
     frames = list(pm.measure(pm.phasor_truth(case, res, pmus, window_cycles), settings, seed))
-    # one stream of every PMU, or one per PMU (IDCODE 1 + 2k, its PMU's 2 + 2k)
+    # one stream of every PMU, or one per PMU: every stream IDCODE 1, the one a client's
+    # commands address (`--idcode`), PMU k's block 2 + k either way
     streams = [range(len(pmus))] if not each_pmu else [[k] for k in range(len(pmus))]
     with contextlib.ExitStack() as stack:
         servers = [
             stack.enter_context(
                 StreamServer.of_frames(
-                    c37.stream_config(case, [pmus[k] for k in cols], rate, 1 + 2 * j),
+                    c37.stream_config(
+                        case, [pmus[k] for k in cols], rate, 1, pmu_idcode=2 + cols[0]
+                    ),
                     [f.of(cols) for f in frames],
                     host=host,
                     port=port + j if port else 0,
@@ -227,10 +239,14 @@ def serve(
 @reports_errors
 def replay(recording, host, port, allow, speed, timeout):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
-    CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.  Ends as
-    `pmu serve` does: exit status 0 once the PDC has been sent every frame, 2 with an
-    error naming the PDC and the frames sent if it said 'stop', closed the connection or
-    took no frame for --timeout s before the last.
+    CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.  Every
+    frame is checked before the server listens (CRC; each data frame's IDCODE, type and
+    size against the CFG-2): a frame refused is an error naming RECORDING and the data
+    frame's number.  The stream's IDCODE is the recording's (printed): commands
+    addressed to another drop their peer.  Ends as `pmu serve` does: exit status 0 once
+    the PDC has been sent every frame, 2 with an error naming the PDC and the frames sent
+    if it said 'stop', closed the connection or took no frame for --timeout s before the
+    last.
 
     \b
     Example:
@@ -243,13 +259,12 @@ def replay(recording, host, port, allow, speed, timeout):
 
     guard = Guard(_allowed(host, allow), timeout)
     path = input_file(recording, "RECORDING")
-    _, data = c37.recorded_frames(path)
+    cfg2, data = c37.recorded_frames(path)
     if not data:
         raise InputError(f"RECORDING {path}: no data frame (a configuration frame only)")
+    c37.check_data_frames(cfg2, data, f"RECORDING {path}")
     check_order(data, f"RECORDING {path}")
-    with StreamServer.of_recording(
-        path, host=host, port=port, speed=speed or _INF, guard=guard
-    ) as server:
+    with StreamServer(cfg2, data, host=host, port=port, speed=speed or _INF, guard=guard) as server:
         _serve([server])
 
 
@@ -260,8 +275,8 @@ def _serve(servers) -> None:
 
     for server in servers:
         click.echo(
-            f"serving {server.n_frames} frames on {hostport(*server.address)} (C37.118.2); "
-            "waiting for a PDC",
+            f"serving {server.n_frames} frames on {hostport(*server.address)} (C37.118.2, "
+            f"IDCODE {server.idcode}); waiting for a PDC",
             err=True,
         )
     for server in servers:
@@ -293,14 +308,18 @@ def _serve(servers) -> None:
     required=True,
     help="Data frames to record.",
 )
+@IDCODE
 @reports_errors
-def record(address, out, frames):
+def record(address, out, frames, idcode):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
-    then 'start') and write its CFG-2 and FRAMES data frames to OUT, as received (an IPv6
-    HOST in brackets: [::1]:4712).  A stream that stops before FRAMES (the server closes,
-    resets or falls silent) is written as far as it came and named an error (exit status
-    2: the recording is partial), unless OUT exists: a file there is replaced only by a
-    whole recording (OUT left as it was).
+    then 'start', addressed to stream --idcode) and write its CFG-2 and FRAMES data frames
+    to OUT, as received (an IPv6 HOST in brackets: [::1]:4712).  Each frame is checked as
+    it comes (CRC; each data frame's IDCODE, type and size against the CFG-2) and must
+    come whole within 30 s.  A stream that stops before FRAMES (the server closes, resets
+    or sends no whole frame for 30 s, or a data frame is refused) is written as far as it
+    came, up to the frame refused, and named an error (exit status 2: the recording is
+    partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
+    left as it was).
 
     \b
     Example:
@@ -310,8 +329,9 @@ def record(address, out, frames):
     from stabctl.parallel import atomic_write
 
     host, port = _host_port(address)
+    [code] = stream_idcodes(idcode, 1)
     check_writable(out, "--out")
-    got = receive(host, port, End(frames=frames))
+    got = receive(host, port, End(frames=frames), idcode=code)
     why, kept = f"{address}: {got.short}", f"{len(got.data)} received"
     if got.short:
         refuse_short_over(out, why, kept)
@@ -354,7 +374,7 @@ def _host_port(address: str) -> tuple[str, int]:
     type=FLOAT,
     default=60.0,
     show_default=True,
-    help="Longest wait for the controller to connect, and for each answer (s).",
+    help="Longest wait for the controller to connect, and for each whole answer (s).",
 )
 @model_options
 @json_option("the verdict and the link's figures")
@@ -446,7 +466,13 @@ def plant(
 @pmu_noise_options
 @storage_options(" Required: the ESDs commanded, as the plant's.")
 @PMU_AT
-@click.option("--timeout", type=FLOAT, default=60.0, show_default=True, help="Longest silence (s).")
+@click.option(
+    "--timeout",
+    type=FLOAT,
+    default=60.0,
+    show_default=True,
+    help="Longest wait for a whole frame from the plant (s).",
+)
 @reports_errors
 def control(
     case_name,

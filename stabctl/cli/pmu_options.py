@@ -31,6 +31,56 @@ RATE = click.option(
     metavar="FPS",
     help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
 )
+IDCODE = click.option(
+    "--idcode",
+    default="1",
+    show_default=True,
+    metavar="N[,N...]",
+    help="IDCODE of the C37.118.2 stream to receive, which the commands address (a server "
+    "drops a PDC that addresses another stream): one for every server, or one per server "
+    "in the order given; `pmu serve` (--each-pmu too), `plant` and the replay of their "
+    "recordings send 1.",
+)
+
+
+def stream_idcodes(text: str, servers: int) -> list[int]:
+    """The IDCODE each of `servers` TCP servers is addressed with, from ``--idcode``: one
+    for all, or one per server.
+
+    Parameters
+    ----------
+    text : str
+        The option's value, ``N[,N...]``.
+    servers : int
+        The servers of the source.
+
+    Returns
+    -------
+    list of int
+        One IDCODE per server.
+
+    Raises
+    ------
+    InputError
+        An item that is not a number in 1-65534 written in ASCII digits (an empty one
+        too), or a count that is neither 1 nor `servers`.
+    """
+    codes = []
+    for item in (x.strip() for x in text.split(",")):
+        if not (item.isascii() and item.isdigit() and 1 <= int(item) <= 65534):
+            raise InputError(
+                f"--idcode {text!r}: {item!r} is not an IDCODE (a number in 1-65534; "
+                "C37.118.2 reserves 0 and 65535)"
+            )
+        codes.append(int(item))
+    if len(codes) not in (1, servers):
+        raise InputError(
+            f"--idcode {text}: {len(codes)} IDCODEs for {servers} server(s); give one for "
+            "all, or one per server in the order of the source"
+        )
+    return codes * servers if len(codes) == 1 else codes
+
+
 PMU_AT = click.option(
     "--pmu-at",
     type=click.Choice(["terminal", "hv"]),

@@ -5,7 +5,7 @@ frames themselves.
 
 Stream layout (C37.118.2-2011 Tables 5, 6, 8, 9):
 - one PMU block per `stabctl.estimation.pmu.PMU`, station name its label (``B3:G1``),
-  IDCODE = the stream's IDCODE + 1 + its index;
+  IDCODE = the stream's IDCODE + 1 + its index (or from `StreamConfig.pmu_idcode`);
 - FORMAT 0x0002: phasors rectangular floating point in engineering units (volts and
   amperes, phase-to-neutral: pu times `StreamConfig.v_base`, `StreamConfig.i_base`), FREQ
   and DFREQ 16-bit integers: FREQ the deviation from nominal in mHz, DFREQ the ROCOF in
@@ -48,7 +48,8 @@ class StreamConfig:
     Attributes
     ----------
     idcode : int
-        The stream's IDCODE (1..65535 - number of PMUs); PMU k's block has idcode + 1 + k.
+        The stream's IDCODE (1..65535 - number of PMUs), which a server's commands
+        address; PMU k's block has idcode + 1 + k unless `pmu_idcode` is given.
     pmus : tuple of PMU
         The PMUs, in block order.
     f0 : float
@@ -59,6 +60,8 @@ class StreamConfig:
         Volts and amperes per pu of each PMU's voltage and current (n_pmu,).
     epoch : int
         UNIX second of the run's t = 0 (SOC of a time stamp t: epoch + floor(t)).
+    pmu_idcode : int
+        IDCODE of the first PMU's block, PMU k's pmu_idcode + k (0: idcode + 1).
     """
 
     idcode: int
@@ -68,6 +71,7 @@ class StreamConfig:
     v_base: np.ndarray
     i_base: np.ndarray
     epoch: int = 1_700_000_000
+    pmu_idcode: int = 0
 
     @property
     def n(self) -> int:
@@ -80,10 +84,16 @@ class StreamConfig:
 
 
 def stream_config(
-    case, pmus, rate: float, idcode: int = 1, epoch: int = 1_700_000_000
+    case,
+    pmus,
+    rate: float,
+    idcode: int = 1,
+    epoch: int = 1_700_000_000,
+    pmu_idcode: int | None = None,
 ) -> StreamConfig:
     """The stream of `pmus` in `case`: engineering units from each PMU bus's rated kV
     (V per pu = kV 1000 / sqrt(3), A per pu = base MVA 1e6 / (sqrt(3) kV 1000)).
+    `pmu_idcode`: the first PMU block's IDCODE (None: idcode + 1).
 
     Raises
     ------
@@ -99,6 +109,10 @@ def stream_config(
         raise InputError(f"C37.118.2 data rate must be 1..240 frames/s, got {rate:g}")
     if not 1 <= idcode <= 65535 - len(pmus):
         raise InputError(f"IDCODE must be in [1, {65535 - len(pmus)}], got {idcode}")
+    if pmu_idcode is not None and not 1 <= pmu_idcode <= 65535 - len(pmus):
+        raise InputError(
+            f"the first PMU's IDCODE must be in [1, {65535 - len(pmus)}], got {pmu_idcode}"
+        )
     if case.freq_hz not in (50.0, 60.0):
         raise InputError(f"C37.118.2 FNOM is 50 or 60 Hz, the case has {case.freq_hz:g} Hz")
     kv = np.array([case.buses.kv[case.bus_index(p.bus)] for p in pmus], float)
@@ -114,6 +128,7 @@ def stream_config(
         v_base,
         case.base_mva * 1e6 / (3.0 * v_base),
         int(epoch),
+        0 if pmu_idcode is None else int(pmu_idcode),
     )
 
 
@@ -137,7 +152,7 @@ def config_frame(cfg: StreamConfig):
         TIME_BASE,
         n,
         one([p.label for p in cfg.pmus]),
-        one([cfg.idcode + 1 + k for k in range(n)]),
+        one([(cfg.pmu_idcode or cfg.idcode + 1) + k for k in range(n)]),
         one([FORMAT] * n),
         one([cfg.phasors(k) for k in range(n)]),
         one([0] * n),
@@ -226,20 +241,11 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
         frame (a frame padded or cut, which pyc37 reads without a word).
     """
     f = _pyc37()
+    check_data_frame(cfg2, data)
     try:
         df = f.CommonFrame.convert2frame(data, cfg2)
     except f.FrameError as exc:
         raise InputError(f"C37.118.2 data frame not readable: {exc}") from None
-    if not isinstance(df, f.DataFrame):
-        raise InputError(f"C37.118.2: a {type(df).__name__}, not a data frame")
-    if (idcode := df.get_id_code()) != cfg2.get_id_code():
-        raise InputError(
-            f"a data frame of IDCODE {idcode}, not the stream's {cfg2.get_id_code()} (its CFG-2's)"
-        )
-    if (size := int.from_bytes(data[2:4], "big")) != (want := data_frame_size(cfg2)):
-        raise InputError(
-            f"a data frame of FRAMESIZE {size} bytes, where its CFG-2 makes one {want} bytes"
-        )
     many = (lambda x: [x]) if cfg.n == 1 else (lambda x: x)
     valid = np.array([(s & 0xC000) == 0 for s in many(df._stat)])  # raw words: pyc37
     # 1.0.2 decodes the data-error bits as STAT >> 15
@@ -258,6 +264,71 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     rocof = np.array(many(df.get_dfreq()), float) / DFREQ_PER_HZ_S * nan
     t = df.get_soc() - cfg.epoch + df.get_frasec()[0] / TIME_BASE
     return Frame(reporting_instant(t, cfg.rate), valid, v, i, freq, rocof)
+
+
+#: C37.118.2-2011 frame types (SYNC bits 6-4) other than a data frame's (0)
+FRAME_TYPES = {1: "header frame", 2: "CFG-1", 3: "CFG-2", 4: "command frame", 5: "CFG-3"}
+
+
+def check_data_frame(cfg2, data: bytes) -> None:
+    """Refuse bytes that are not a data frame of the stream `cfg2` describes: the checks
+    every reader of data frames makes (`parse_frame`, a stream received over TCP, a
+    recording served again), in one place.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+    data : bytes
+        One whole frame (SYNC and FRAMESIZE read, at least 16 bytes).
+
+    Raises
+    ------
+    InputError
+        A CRC that fails, another frame type, a data frame of another IDCODE than cfg2's,
+        or whose FRAMESIZE is not the size cfg2 gives a data frame (a frame padded or cut,
+        which pyc37 reads without a word).
+    """
+    if not _pyc37().CommonFrame._check_crc(data):
+        raise InputError(
+            "C37.118.2 data frame not readable: CRC failed (its bytes or its FRAMESIZE damaged)"
+        )
+    if kind := data[1] >> 4 & 0x7:
+        name = FRAME_TYPES.get(kind, f"frame of type {kind}")
+        raise InputError(f"C37.118.2: a {name}, not a data frame")
+    if (idcode := int.from_bytes(data[4:6], "big")) != cfg2.get_id_code():
+        raise InputError(
+            f"a data frame of IDCODE {idcode}, not the stream's {cfg2.get_id_code()} (its CFG-2's)"
+        )
+    if (size := int.from_bytes(data[2:4], "big")) != (want := data_frame_size(cfg2)):
+        raise InputError(
+            f"a data frame of FRAMESIZE {size} bytes, where its CFG-2 makes one {want} bytes"
+        )
+
+
+def check_data_frames(cfg2, data, what: str) -> None:
+    """`check_data_frame` on every frame of a stream or recording, before any is used.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+    data : sequence of bytes
+        The data frames, in order.
+    what : str
+        Their source, for the message (``RECORDING r.c37``).
+
+    Raises
+    ------
+    InputError
+        At the first frame refused: what, the frame's number (1: the first data frame)
+        and why.
+    """
+    for k, frame in enumerate(data):
+        try:
+            check_data_frame(cfg2, frame)
+        except InputError as exc:
+            raise InputError(f"{what}: data frame {k + 1}: {exc}") from None
 
 
 def data_frame_size(cfg2) -> int:

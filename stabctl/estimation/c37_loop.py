@@ -7,7 +7,9 @@ C37.118.2 server inside the simulator's `CommandFrames` callback) calls its `mea
 the controller (`serve_controller`, a C37.118.2 client) its `act`, so the loop over TCP
 runs the in-process loop's code with the wire in between.
 
-Protocol, one TCP connection per loop (C37.118.2-2011 frames throughout, CRC checked):
+Protocol, one TCP connection per loop (C37.118.2-2011 frames throughout, CRC checked,
+each due whole within the time-out; the controller's commands and answers addressed to
+the stream's IDCODE, others dropped):
 1. the controller sends the command 'cfg2'; the plant answers with the stream's CFG-2
    (one PMU per generator, `c37.config_frame`); the controller checks its station names;
 2. the controller sends 'start';
@@ -39,7 +41,14 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
-from stabctl.estimation.c37_tcp import Guard, _read_frame, command_word, hostport, listen
+from stabctl.estimation.c37_tcp import (
+    FrameTimeout,
+    Guard,
+    _read_frame,
+    command_word,
+    hostport,
+    listen,
+)
 
 EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
 #: C37.118.2-2011 frame type (SYNC bits 6-4) of a header frame
@@ -75,9 +84,14 @@ def end_of_run_frame(idcode: int, t: float) -> bytes:
     return HeaderFrame(idcode, f"{END_OF_RUN}{t:.6f} s").convert2bytes()
 
 
-def _end_time(data: bytes) -> float | None:
-    """The end time (s) a header frame from the plant gives, None for any other frame."""
+def _end_time(data: bytes, idcode: int) -> float | None:
+    """The end time (s) a header frame of the stream `idcode` from the plant gives, its
+    CRC valid; None for any other frame."""
+    from pyc37.frame import CommonFrame
+
     if len(data) < 16 or (data[1] >> 4) & 0x7 != HEADER:
+        return None
+    if not CommonFrame._check_crc(data) or int.from_bytes(data[4:6], "big") != idcode:
         return None
     text = data[14:-2].decode("ascii", "replace")
     if not text.startswith(END_OF_RUN):
@@ -131,14 +145,15 @@ def modes_frame(idcode: int, soc: int, fracsec: int, modes) -> bytes:
     return CommandFrame(idcode, "extended", payload, soc, (fracsec, "+")).convert2bytes()
 
 
-def read_modes(data: bytes, n_dev: int) -> tuple[int, np.ndarray]:
+def read_modes(data: bytes, n_dev: int, idcode: int | None = None) -> tuple[int, np.ndarray]:
     """(the answered time stamp's SOC and FRACSEC count as one integer of TIME_BASE
     counts, the modes (n_dev,)) of an answer (`modes_frame`).
 
     Raises
     ------
     InputError
-        Not an extended command frame, a CRC that fails, not n_dev modes, or a mode
+        Not an extended command frame, a CRC that fails, one addressed to another IDCODE
+        than `idcode` (the plant's stream; None: not checked), not n_dev modes, or a mode
         other than -1, 0, +1.
     """
     from pyc37.frame import CommandFrame, FrameError
@@ -147,6 +162,11 @@ def read_modes(data: bytes, n_dev: int) -> tuple[int, np.ndarray]:
         cmd = CommandFrame.convert2frame(data)
     except FrameError as exc:
         raise InputError(f"controller's answer not readable: {exc}") from None
+    if idcode is not None and cmd.get_id_code() != idcode:
+        raise InputError(
+            f"controller's answer is addressed to IDCODE {cmd.get_id_code()}, not this "
+            f"stream's {idcode}"
+        )
     if cmd._command != EXTENDED or len(cmd._extended_frame) != n_dev:
         raise InputError(f"controller's answer is not the modes of {n_dev} ESDs")
     stamp = cmd.get_soc() * c37.TIME_BASE + cmd.get_frasec()[0]
@@ -288,7 +308,7 @@ class PlantLink:
         conn.sendall(data)
         answer = self._next(conn, f"the answer to the frame at {t_f:.4f} s")
         self._trips.append(time.perf_counter() - sent)
-        stamp, modes = read_modes(answer, self.ctrl.mode.size)
+        stamp, modes = read_modes(answer, self.ctrl.mode.size, self.cfg.idcode)
         soc, counts = c37.time_stamp(self.cfg, t_f)
         if stamp != soc * c37.TIME_BASE + counts:
             raise InputError(f"the controller answered another frame than that at {t_f:.4f} s")
@@ -343,8 +363,9 @@ class PlantLink:
         raise InputError(f"no controller connected within {self.timeout:g} s{refused}")
 
     def _handshake(self, conn: socket.socket, deadline: float) -> None:
-        """Answer 'cfg2' until 'start' (InputError past the deadline or on a peer that
-        closes or speaks another protocol)."""
+        """Answer 'cfg2' until 'start' (InputError past the deadline, each frame due
+        whole by it, or on a peer that closes, speaks another protocol or addresses
+        another IDCODE than the stream's: `c37_tcp.command_word`)."""
         conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         while True:
             conn.settimeout(max(deadline - time.monotonic(), 1e-3))
@@ -354,7 +375,7 @@ class PlantLink:
                 raise InputError("sent no 'start' in time") from None
             if frame is None:
                 raise InputError("closed before 'start'")
-            word = command_word(frame)
+            word = command_word(frame, self.cfg.idcode)
             if word == 2:  # 'start'
                 return
             if word == 5:  # 'cfg2'
@@ -385,7 +406,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     host, port : str, int
         The plant.
     timeout : float, optional
-        Longest silence of the plant (s).
+        Longest wait for a whole frame from the plant (s).
 
     Returns
     -------
@@ -395,7 +416,9 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     Raises
     ------
     InputError
-        No plant there, silence, or a CFG-2 whose stations are not the controller's.
+        No plant there, no whole frame within `timeout` s, a CFG-2 whose stations are not
+        the controller's, or a frame after 'start' that is neither a data frame of the
+        stream (`c37.check_data_frame`) nor the end-of-run header (its CRC valid).
     PlantStopped
         The plant closed the loop without its end-of-run header (an InputError).
     """
@@ -422,14 +445,25 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 )
             conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
             while (data := _read_frame(conn)) is not None:
-                if _end_time(data) is not None:
+                if _end_time(data, cfg.idcode) is not None:
                     return n
-                frame = c37.parse_frame(cfg, cfg2, data)
+                try:  # a data frame, checked (`c37.check_data_frame`)
+                    frame = c37.parse_frame(cfg, cfg2, data)
+                except InputError as exc:
+                    raise InputError(
+                        f"the plant at {host}:{port}: its frame {n + 1} after 'start': {exc}"
+                        f", after {n} frame(s) answered"
+                    ) from None
                 soc, counts = c37.time_stamp(cfg, frame.t)
                 conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
                 n, last = n + 1, frame.t
     except OSError as exc:  # a reset or broken pipe (not a plant, or a second controller)
-        what = "fell silent" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        if isinstance(exc, FrameTimeout):  # a frame dripped, not finished in time
+            what = f"sent {exc}"
+        elif isinstance(exc, TimeoutError):
+            what = f"sent nothing for {timeout:g} s"
+        else:
+            what = exc.strerror or str(exc)
         raise InputError(
             f"the plant at {host}:{port}: {what}, after {n} frame(s) answered (a plant is "
             "`stabctl pmu plant`, one controller at a time)"

@@ -41,8 +41,9 @@ class Guard:
         A connection from another address is closed at once and counted in
         `StreamServer.refused`.
     timeout : float
-        Longest silence of a peer expected to send (a command, an answer), and longest
-        wait for a peer to take a frame (s); a peer past it is dropped.
+        Longest wait for a whole frame from a peer expected to send (a command, an
+        answer: silence and a frame sent byte by byte alike), and for a peer to take a
+        frame (s); a peer past it is dropped.
     max_peers : int
         Peers served at once; one more is closed at once.
     """
@@ -186,8 +187,11 @@ class StreamServer:
     which), each peer on a thread of its own: CFG-2 and header on request, the data frames
     from 'start'.  Build it with `of_frames` (simulated PMUs) or `of_recording` (a
     recording, its frames re-sent as they are).  Command frames are obeyed only with a
-    valid CRC; a peer that is not allowed (`Guard.allow`), falls silent, speaks another
-    protocol or connects and closes is dropped without ending the server's session.
+    valid CRC and addressed to the stream's IDCODE (C37.118.2-2011 Table 2: a command's
+    IDCODE is its destination stream's); a peer that is not allowed (`Guard.allow`),
+    addresses another IDCODE, sends no whole frame within the time-out (silent, or
+    dripping bytes), speaks another protocol or connects and closes is dropped without
+    ending the server's session.
 
     Parameters
     ----------
@@ -258,9 +262,17 @@ class StreamServer:
     @classmethod
     def of_recording(cls, path, **kw) -> StreamServer:
         """The server of a recording (`c37.record`'s or any capture): its CFG-2 and data
-        frames re-sent as recorded.  Raises InputError as `c37.recorded_frames`."""
+        frames re-sent as recorded, each checked first.  Raises InputError as
+        `c37.recorded_frames`, or at a data frame `c37.check_data_frame` refuses (named
+        by its number), before listening."""
         cfg2, data = c37.recorded_frames(path)
+        c37.check_data_frames(cfg2, data, f"C37.118.2 recording {path}")
         return cls(cfg2, data, **kw)
+
+    @property
+    def idcode(self) -> int:
+        """The stream's IDCODE, which a peer's commands must address."""
+        return int(self._cfg2.get_id_code())
 
     @property
     def n_frames(self) -> int:
@@ -314,6 +326,8 @@ class StreamServer:
                 ended = self._serve(conn)
         except InputError as exc:  # another protocol, a cut frame: dropped, serve on
             self.refused.append(f"{hostport(*peer[:2])}: {exc}")
+        except FrameTimeout as exc:  # a frame begun, dripped and not finished
+            self.refused.append(f"{hostport(*peer[:2])}: sent {exc}")
         except TimeoutError:
             self.refused.append(f"{hostport(*peer[:2])}: silent for {self.guard.timeout:g} s")
         except OSError:  # the peer vanished mid-session
@@ -357,8 +371,16 @@ class StreamServer:
                 conn.settimeout(self.guard.timeout)
                 conn.sendall(data)
                 self.sent_at[k] = time.perf_counter()
+        except FrameTimeout as exc:  # a command begun and not finished
+            return f"sent {exc}"
         except TimeoutError:  # not reading
             return f"took no frame for {self.guard.timeout:g} s"
+        except CutFrame:
+            return "closed the connection in the middle of a frame"
+        except ForeignCommand as exc:
+            return f"sent {exc}"
+        except InputError as exc:  # bytes that start no frame
+            return f"sent what is not C37.118.2 ({exc})"
         except ConnectionError:  # a reset, a broken pipe
             return "closed the connection"
         except OSError as exc:
@@ -367,18 +389,30 @@ class StreamServer:
 
     def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
         """The next command frame's word as a name (None: the peer closed; '' none, one
-        this server ignores, or one whose CRC fails).  Raises TimeoutError after
-        `Guard.timeout` s of silence when block is True."""
-        conn.settimeout(self.guard.timeout if block else timeout)
+        this server ignores, or one whose CRC fails).  A frame must come whole within
+        `Guard.timeout` s (block True: of the call; else of its first byte, which is
+        waited for `timeout` s).
+
+        Raises
+        ------
+        TimeoutError
+            No whole frame within `Guard.timeout` s when block is True; `FrameTimeout`
+            (a TimeoutError) a frame begun and not finished within it either way.
+        ForeignCommand
+            A command addressed to another IDCODE than the stream's.
+        """
+        conn.settimeout(self.guard.timeout)
         try:
-            frame = _read_frame(conn)
+            frame = _read_frame(conn, first_byte=None if block else timeout)
+        except FrameTimeout:
+            raise
         except TimeoutError:
             if block:
                 raise
             return ""
         if frame is None:
             return None
-        return COMMANDS.get(command_word(frame), "")
+        return COMMANDS.get(command_word(frame, self.idcode), "")
 
     def _header(self) -> bytes:
         from pyc37.frame import HeaderFrame
@@ -388,24 +422,77 @@ class StreamServer:
         return HeaderFrame(c.get_id_code(), text, c.get_soc(), (0, "+")).convert2bytes()
 
 
-def command_word(frame: bytes) -> int:
-    """The command word of a command frame whose CRC is valid (C37.118.2-2011 Table 15;
-    0 for any other frame, or a command frame whose CRC fails)."""
+class ForeignCommand(InputError):
+    """A command frame (its CRC valid) addressed to another stream's IDCODE."""
+
+
+def command_word(frame: bytes, idcode: int | None = None) -> int:
+    """The command word of a command frame whose CRC is valid (C37.118.2-2011 Table 15).
+
+    Parameters
+    ----------
+    frame : bytes
+        One whole frame.
+    idcode : int, optional
+        The IDCODE of the stream the server sends: a command's IDCODE is its destination
+        stream's (C37.118.2-2011 Table 2).  None: not checked.
+
+    Returns
+    -------
+    int
+        The command word; 0 for any other frame, or a command frame whose CRC fails.
+
+    Raises
+    ------
+    ForeignCommand
+        A command frame, its CRC valid, addressed to another IDCODE than `idcode`.
+    """
     from pyc37.frame import CommonFrame
 
     if frame[1] & 0x70 != 0x40 or not CommonFrame._check_crc(frame):
         return 0
+    if idcode is not None and (to := int.from_bytes(frame[4:6], "big")) != idcode:
+        raise ForeignCommand(f"a command for IDCODE {to}, not this stream's {idcode}")
     return int.from_bytes(frame[14:16], "big")
 
 
-def _recv_exactly(conn: socket.socket, n: int):
-    """n bytes from conn (None if the peer closed first; CutFrame if it closed after
-    some of them)."""
+class FrameTimeout(TimeoutError):
+    """A frame begun and not finished within the time-out for a whole frame (a peer that
+    sends it a byte at a time)."""
+
+
+@dataclass(frozen=True)
+class _Deadline:
+    """When a whole frame is due: ``at`` (`time.monotonic()`), ``budget`` s after its
+    wait began."""
+
+    at: float
+    budget: float
+
+
+def _recv_exactly(
+    conn: socket.socket, n: int, deadline: _Deadline | None = None, begun: bool = False
+):
+    """n bytes from conn by `deadline` (None: each read within the socket's time-out),
+    the socket's time-out set to what is left before each read.  None if the peer closed
+    first; CutFrame if it closed after some of them (or `begun`: bytes of the frame came
+    before); TimeoutError past the deadline, `FrameTimeout` once some bytes of the frame
+    came."""
     out = b""
     while len(out) < n:
-        chunk = conn.recv(n - len(out))
+        try:
+            if deadline is not None:
+                if (left := deadline.at - time.monotonic()) <= 0:
+                    raise TimeoutError("timed out")
+                conn.settimeout(left)
+            chunk = conn.recv(n - len(out))
+        except TimeoutError:
+            if not (out or begun):
+                raise
+            budget = conn.gettimeout() if deadline is None else deadline.budget
+            raise FrameTimeout(f"part of a frame and not the rest within {budget:g} s") from None
         if not chunk:
-            if out:
+            if out or begun:
                 raise CutFrame("the peer closed the connection in the middle of a frame")
             return None
         out += chunk
@@ -461,47 +548,64 @@ class End:
 
 @dataclass(frozen=True)
 class Stream:
-    """A received stream: its CFG-2 frame and data frames (bytes, as received) and, if it
-    stopped before its `End`, why.
+    """A received stream: its CFG-2 frame and data frames (bytes, as received, each
+    checked: `c37.check_data_frame`) and, if it stopped before its `End`, why.
 
     Attributes
     ----------
     cfg2 : bytes
         The CFG-2 frame.
     data : list of bytes
-        The data frames received, in arrival order.
+        The data frames received, in arrival order, up to the first refused.
     short : str
         Empty if the stream reached its end; else what cut it (the server closed, the
-        connection was reset or went silent, a frame cut in the middle), with the frames
-        and the last time stamp received.
+        connection was reset or sent no whole frame within the time-out, a frame cut in
+        the middle, a data frame refused), with the frames and the last time stamp
+        received.
+    refused : str
+        Empty, or why the data frame after `data` was refused (`c37.check_data_frame`:
+        its CRC, IDCODE, type or size); the stream was cut there (`short` says so).
     """
 
     cfg2: bytes
     data: list
     short: str = ""
+    refused: str = ""
+
+
+#: a receiver's longest wait for a whole frame (s), unless the caller gives its own
+RECEIVE_TIMEOUT_S = 30.0
 
 
 def receive(
-    host: str, port: int, end: End = End(), pdc_id: int = 1, timeout: float = 30.0
+    host: str, port: int, end: End = End(), idcode: int = 1, timeout: float | None = None
 ) -> Stream:
     """The CFG-2 frame and the data frames of the C37.118.2 stream at host:port: command
-    frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached.  A stream
-    that stops before its stated end (the server closes, resets or falls silent for
-    `timeout` s, or cuts a frame) is returned with what arrived and `Stream.short` saying
-    so; a stream with no stated end ends when the server closes.
+    frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached, each
+    addressed to the stream `idcode` (C37.118.2-2011 Table 2: a command's IDCODE is its
+    destination stream's; a server of another drops the peer).  The CFG-2 and every data
+    frame are checked (CRC; a data frame's IDCODE, type and size: `c37.check_data_frame`)
+    and each must come whole within `timeout` s (None: `RECEIVE_TIMEOUT_S`), however its
+    bytes are spread.  A stream that stops before its stated
+    end (the server closes, resets or sends no whole frame for `timeout` s, cuts a frame,
+    or sends a data frame that is refused) is returned with the good frames that arrived
+    before and `Stream.short` saying so (`Stream.refused` why a frame was refused); a
+    stream with no stated end ends when the server closes.
 
     Raises
     ------
     InputError
-        No server there, silence for `timeout` s before the first data frame, a reply to
-        'cfg2' that is not a configuration frame, a peer of another protocol or bytes off
-        a frame's start (a FRAMESIZE that is not the frame's), a connection reset before
-        the first data frame, or more than `MAX_FRAMES` frames of a stream without a
-        stated end: each named with host:port.
+        No server there, no whole frame within `timeout` s before the first data frame, a
+        reply to 'cfg2' that is not a valid configuration frame (its CRC), a peer of
+        another protocol or bytes off a frame's start (a FRAMESIZE that is not the
+        frame's), a connection reset or closed before the first data frame, a first data
+        frame refused, or more than `MAX_FRAMES` frames of a stream without a stated end:
+        each named with host:port.
     """
     from pyc37.frame import CommandFrame
 
     where = hostport(host, port)
+    timeout = RECEIVE_TIMEOUT_S if timeout is None else timeout
     try:
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
@@ -509,12 +613,21 @@ def receive(
     with conn:
         data: list[bytes] = []
         try:
-            conn.sendall(CommandFrame(pdc_id, "cfg2").convert2bytes())
-            cfg2 = _frame(conn)
+            conn.sendall(CommandFrame(idcode, "cfg2").convert2bytes())
+            cfg2 = _read_frame(conn)
+            if cfg2 is None:
+                raise InputError(
+                    f"the C37.118.2 server closed the connection before its CFG-2 (a server "
+                    f"drops a PDC whose commands address another stream: these addressed "
+                    f"IDCODE {idcode})"
+                )
             if cfg2[1] & 0x70 != 0x30:  # frame type 011: CFG-2
                 raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")
-            conn.sendall(CommandFrame(pdc_id, "start").convert2bytes())
-            short = _data_frames(conn, cfg2, end, data)
+            config = c37.read_config(cfg2, "its CFG-2")
+            conn.sendall(CommandFrame(idcode, "start").convert2bytes())
+            short, refused = _data_frames(conn, config, end, data)
+        except FrameTimeout as exc:
+            raise InputError(f"{where}: sent {exc}, before any data frame") from None
         except TimeoutError:
             raise InputError(f"{where}: nothing received for {timeout:g} s") from None
         except InputError as exc:
@@ -525,19 +638,23 @@ def receive(
             raise InputError(f"{where}: {short}")
         if not short and end.given:
             with contextlib.suppress(OSError):
-                conn.sendall(CommandFrame(pdc_id, "stop").convert2bytes())
-    return Stream(cfg2, data, short)
+                conn.sendall(CommandFrame(idcode, "stop").convert2bytes())
+    return Stream(cfg2, data, short, refused)
 
 
-def _data_frames(conn: socket.socket, cfg2: bytes, end: End, data: list) -> str:
-    """Append data frames from conn to data until `end`; '' if it was reached (or, with
-    no end stated, the server closed), else what cut the stream."""
-    soc = int.from_bytes(cfg2[6:10], "big")
+def _data_frames(conn: socket.socket, cfg2, end: End, data: list) -> tuple[str, str]:
+    """Append data frames from conn to data until `end`, each checked against cfg2 (the
+    CFG-2 as pyc37 reads it; `c37.check_data_frame`): ('', '') if the end was reached
+    (or, with no end stated, the server closed), else (what cut the stream, why a data
+    frame was refused or '')."""
+    soc = cfg2.get_soc()
     while end.frames is None or len(data) < end.frames:
         try:
             frame = _read_frame(conn)
+        except FrameTimeout as exc:
+            cut = f"sent {exc}"
         except TimeoutError:
-            cut = "fell silent"
+            cut = f"sent nothing for {conn.gettimeout():g} s"
         except ConnectionError:
             cut = "reset the connection"
         except CutFrame:
@@ -549,9 +666,21 @@ def _data_frames(conn: socket.socket, cfg2: bytes, end: End, data: list) -> str:
             if frame is not None:
                 if frame[1] & 0x70 != 0:  # not a data frame (a CFG or header resent)
                     continue
+                try:
+                    c37.check_data_frame(cfg2, frame)
+                except InputError as exc:
+                    last = (
+                        f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
+                    )
+                    why = f"data frame {len(data) + 1}: {exc}"
+                    return (
+                        f"the server sent a data frame that is refused ({why}); the stream "
+                        f"is cut there: {len(data)} data frames before it{last}, before {end}",
+                        why,
+                    )
                 data.append(frame)
                 if end.tf is not None and c37.frame_time(frame) - soc >= end.tf - 0.5e-6:
-                    return ""
+                    return "", ""
                 if not end.given and len(data) > MAX_FRAMES:
                     raise InputError(
                         f"more than {MAX_FRAMES} frames without an end: give the frames or "
@@ -559,28 +688,31 @@ def _data_frames(conn: socket.socket, cfg2: bytes, end: End, data: list) -> str:
                     )
                 continue
             if not end.given:
-                return ""
+                return "", ""
             cut = "closed the connection"
         last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
-        return f"the server {cut} after {len(data)} data frames{last}, before {end}"
-    return ""
-
-
-def _frame(conn: socket.socket) -> bytes:
-    """One whole frame from conn; InputError if it closes first."""
-    frame = _read_frame(conn)
-    if frame is None:
-        raise InputError("the C37.118.2 server closed the connection")
-    return frame
+        return f"the server {cut} after {len(data)} data frames{last}, before {end}", ""
+    return "", ""
 
 
 class CutFrame(InputError):
     """The peer closed the connection in the middle of a frame."""
 
 
-def _read_frame(conn: socket.socket):
+def _read_frame(conn: socket.socket, first_byte: float | None = None):
     """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed
-    between frames).
+    between frames), within the connection's time-out (``conn.gettimeout()``) for the
+    whole frame, not for each read: a peer that sends a frame a byte at a time is timed
+    out as a silent one is.  The connection's time-out is left as it was.
+
+    Parameters
+    ----------
+    conn : socket.socket
+        The connection.
+    first_byte : float, optional
+        Wait at most this long (s) for a frame to begin (TimeoutError, nothing taken);
+        the connection's time-out then runs from its first byte.  None: the time-out
+        runs from the call.
 
     Raises
     ------
@@ -589,29 +721,48 @@ def _read_frame(conn: socket.socket):
         the peer speaks another protocol.
     CutFrame
         The peer closed in the middle of a frame.
+    TimeoutError
+        No frame within the time-out; `FrameTimeout` (a TimeoutError) if one began and
+        did not end within it.
     """
-    head = _recv_exactly(conn, 4)
-    if head is None:
-        return None
-    if head[0] != 0xAA or int.from_bytes(head[2:4], "big") < 16:
-        raise InputError(f"the peer does not speak C37.118.2: it sent {head!r} for a frame start")
-    body = _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4)
-    if body is None:
-        raise CutFrame("the peer closed the connection in the middle of a frame")
-    return head + body
+    budget = conn.gettimeout()
+    try:
+        first = b""
+        if first_byte is not None:
+            conn.settimeout(first_byte)
+            first = conn.recv(1)
+            if not first:
+                return None
+        deadline = None if budget is None else _Deadline(time.monotonic() + budget, budget)
+        rest = _recv_exactly(conn, 4 - len(first), deadline, begun=bool(first))
+        if rest is None:
+            return None
+        head = first + rest
+        if head[0] != 0xAA or int.from_bytes(head[2:4], "big") < 16:
+            raise InputError(
+                f"the peer does not speak C37.118.2: it sent {head!r} for a frame start"
+            )
+        body = _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4, deadline, True)
+        return head + body
+    finally:
+        with contextlib.suppress(OSError):  # closed meanwhile (by another thread)
+            conn.settimeout(budget)
 
 
-def pdc_client(host: str, port: int, pdc_id: int = 1):
+def pdc_client(host: str, port: int, idcode: int = 1):
     """pyc37's own PDC client connected to host:port, set up to read a stream whole: a
     receive buffer of one frame header (its ``get`` keeps no bytes beyond the frame it
     reads, so a larger buffer loses the next frame when two arrive together) and its
-    loggers, which write every connection to stdout at INFO, at WARNING.  Used by the
-    tests and benchmarks/bench_c37.py as the independent client."""
+    loggers, which write every connection to stdout at INFO, at WARNING.  Its commands
+    carry `idcode` (pyc37's ``pdc_id``), which must be the stream's: a command's IDCODE
+    is its destination stream's (C37.118.2-2011 Table 2), and a `StreamServer` drops a
+    peer addressing another.  Used by the tests and benchmarks/bench_c37.py as the
+    independent client."""
     import logging
 
     from pyc37.pdc import Pdc
 
-    pdc = Pdc(pdc_id=pdc_id, pmu_ip=host, pmu_port=port, buffer_size=4)
+    pdc = Pdc(pdc_id=idcode, pmu_ip=host, pmu_port=port, buffer_size=4)
     pdc.run()
     for name in list(logging.root.manager.loggerDict):
         if name.startswith(("pyc37", "CLIENT")):

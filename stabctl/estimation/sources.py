@@ -141,13 +141,23 @@ class Received:
 
 
 def read_frames(
-    source: Source, case, pmus, rate: float, end=None, timeout: float = 30.0
+    source: Source,
+    case,
+    pmus,
+    rate: float,
+    end=None,
+    timeout: float | None = None,
+    idcode=1,
 ) -> Received:
     """Every frame of `source` for the PMUs `pmus` of `case` at `rate` frames/s up to
     `end` (`c37_tcp.End`; None: a recording whole, each TCP stream until its server
     closes): the recording read, or each TCP stream received (all at once, one thread
-    each, as a PDC does; Ctrl-C ends the wait), then merged.  A stream that stops before
-    `end` is kept and named in `Received.short`.
+    each, as a PDC does; Ctrl-C ends the wait; `idcode` the IDCODE of the stream each
+    server sends, which the commands address: one int for all, or one per server of the
+    source; `timeout` the longest wait for a whole
+    frame, None: `c37_tcp.RECEIVE_TIMEOUT_S`), then merged.  A stream that stops before
+    `end` is kept and named in `Received.short`; one cut at a data frame that is refused
+    is not (the whole source is refused).
 
     Raises
     ------
@@ -155,8 +165,9 @@ def read_frames(
         As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
         ``--source``); more TCP servers than PMUs; a stream at another rate, a station
         that is not one of `pmus` or in two streams, a PMU in no stream, a data frame that
-        is not readable or not the stream's (`c37.parse_frame`), a stream whose time
-        stamps repeat or go backwards, or frames whose every value is absent.
+        is not readable or not the stream's (`c37.parse_frame`; over TCP as received:
+        `c37_tcp.Stream.refused`), a stream whose time stamps repeat or go backwards, or
+        frames whose every value is absent.
     """
     from stabctl.estimation.c37_tcp import End, Stream, receive
 
@@ -170,11 +181,16 @@ def read_frames(
                 f"--source {source}: {len(source.servers)} servers for {len(pmus)} PMUs "
                 "(each stream carries at least one PMU)"
             )
+        codes = [idcode] * len(source.servers) if isinstance(idcode, int) else list(idcode)
+        if len(codes) != len(source.servers):
+            raise InputError(
+                f"--source {source}: {len(codes)} IDCODEs for {len(source.servers)} servers"
+            )
         got: list[Stream | Exception | None] = [None] * len(source.servers)
 
         def fetch(k, host, port):
             try:
-                got[k] = receive(host, port, end, timeout=timeout)
+                got[k] = receive(host, port, end, idcode=codes[k], timeout=timeout)
             except (InputError, OSError) as exc:  # handed to the caller
                 got[k] = exc
 
@@ -189,6 +205,9 @@ def read_frames(
                 t.join(0.2)
         if errors := [g for g in got if isinstance(g, Exception)]:
             raise InputError(f"--source {source}: {errors[0]}") from None
+        for (h, p), g in zip(source.servers, got):
+            if isinstance(g, Stream) and g.refused:  # its frames are not taken in part
+                raise InputError(f"--source {source}: {hostport(h, p)}: {g.refused}")
         streams = [
             (
                 c37.read_config(g.cfg2, f"--source {source}: {hostport(h, p)}'s CFG-2"),

@@ -262,7 +262,8 @@ def screening_brackets(path, case: str, digest: str) -> dict:
     Raises
     ------
     InputError
-        A file that is not a regular file, not sweep records, a record of another case or
+        A file that is not a regular file, not sweep records, a line that is not a whole
+        record (a damaged or cut line: the file must be whole), a record of another case or
         of other content of the case (its line named,
         `stabctl.parallel.check_records_case`), a malformed screening record, or records
         that bracket no fault.
@@ -277,7 +278,7 @@ def screening_brackets(path, case: str, digest: str) -> dict:
         check_records_case(
             path, {case: digest}, f"give the records of a screening of {case} as it is now"
         )
-        records = read_records(path)
+        records = read_records(path, whole="screening records")
     except InputError:  # it names the file
         raise
     except (OSError, ValueError) as exc:

@@ -890,7 +890,8 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
     """A 3 GiB file of zeros given as a sweep's --out was read whole (MemoryError), and a
     --screening line with a key but no status stopped `place` with a KeyError; a line
     longer than MAX_RECORD_LINE is one error naming the file and line (the file left as it
-    was), and a line that is not a whole record is skipped like a damaged one."""
+    was), and a --screening line that is not a whole record is one error naming the file
+    and line (an input read in part would be presented as whole)."""
     from stabctl import parallel
 
     monkeypatch.setattr(parallel, "MAX_RECORD_LINE", 1000)
@@ -906,7 +907,7 @@ def test_records_files_are_read_in_bounded_lines_and_whole_records_only(tmp_path
     screening.write_text('{"key": "k"}\n')
     args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1"]
     res = CliRunner().invoke(main, [*args, "--target-cct-gain", "5", "--screening", str(screening)])
-    assert res.exit_code == 2 and "no fault bracketed without storage" in res.output, res.output
+    assert_error(res, f"{screening} line 1: not a whole sweep record")
 
 
 def test_screening_records_of_another_case_or_content_are_refused(tmp_path, no_simulation):
@@ -927,6 +928,67 @@ def test_screening_records_of_another_case_or_content_are_refused(tmp_path, no_s
         assert_error(
             run(*args, "--screening", screening), f"{screening} line 1: job {rec['key']} ", needle
         )
+
+
+def _screening_record(fault, digest):
+    result = {"fault": fault, "t_stable_s": 0.155, "t_unstable_s": 0.16}
+    rec = {"key": "kundur/3-101/t1/esd-none", "status": "ok", "result": result}
+    rec["inputs"] = {"case": "kundur", "case_digest": digest, **fault, "esd_pct": None}
+    return json.dumps(rec)
+
+
+def test_screening_records_with_a_damaged_line_are_refused(tmp_path, no_simulation):
+    """`place --screening` of a file whose line 2 is NUL bytes went on with a warning
+    ("not a sweep record, ignored"): the placement used part of the screening as all of
+    it.  An input's records must be whole: one error naming the file and the line."""
+    fault = {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
+    screening = tmp_path / "s.jsonl"
+    line = _screening_record(fault, load_case("kundur").digest())
+    screening.write_bytes(line.encode() + b"\n" + b"\x00" * 64 + b"\n")
+    args = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1", "--target-cct-gain", "5"]
+    assert_error(
+        run(*args, "--screening", screening), f"{screening} line 2: not a whole sweep record"
+    )
+
+
+def test_screening_records_starting_with_a_byte_order_mark_are_read(tmp_path):
+    """A records file whose first line starts with a UTF-8 byte-order mark had that valid
+    line taken for a damaged one: the mark is skipped and the line read."""
+    from stabctl.placement.requirements import screening_brackets
+
+    fault = {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
+    digest = load_case("kundur").digest()
+    screening = tmp_path / "s.jsonl"
+    screening.write_bytes(b"\xef\xbb\xbf" + _screening_record(fault, digest).encode() + b"\n")
+    brackets = screening_brackets(screening, "kundur", digest)
+    assert list(brackets.values()) == [(0.155, 0.16)]
+
+
+SCHEDULED = [
+    ("screen", "kundur", "--out", "o.jsonl"),
+    ("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"),
+    ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5", "--out", "o.json"),
+]
+
+
+@pytest.mark.parametrize("command", SCHEDULED, ids=lambda c: c[0])
+@pytest.mark.parametrize(
+    "address, needle",
+    [
+        ("", "--scheduler '': an empty address"),
+        ("tcp://[::1", "--scheduler tcp://[::1: not an address"),
+        ("local:4", "--scheduler local:4: 'local' takes no port"),
+    ],
+)
+def test_a_scheduler_that_is_no_address_is_refused_before_any_work(
+    command, address, needle, tmp_path, monkeypatch, no_simulation
+):
+    """`--scheduler ''` ran the jobs locally without a word, `tcp://[::1` ended in a
+    traceback and `local:4` waited 10 s for a host named local: each command that takes
+    --scheduler refuses them at once, one line naming the option, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    assert_error(run(*command, "--workers", 1, "--scheduler", address), needle)
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize(
@@ -1305,7 +1367,8 @@ def test_stream_errors_name_the_address_and_the_source(kundur_wire, tmp_path):
     """`pmu record` from a server that speaks another protocol, and `estimate track` from
     one whose frame 31 claims 2 bytes less than it has (the stream off its frames' starts
     after it), said what was wrong but not where: each names the address, and track its
-    --source too.  Nothing is written."""
+    --source too (that frame fails its CRC as received, and is named by its number).
+    Nothing is written."""
     from pmu_streams import fake_server
 
     _, _, head, body = kundur_wire
@@ -1327,8 +1390,8 @@ def test_stream_errors_name_the_address_and_the_source(kundur_wire, tmp_path):
         )  # fmt: skip
     assert_error(
         res,
-        f"--source tcp://127.0.0.1:{port}: 127.0.0.1:{port}: after 31 data frames: ",
-        "(or data frame 31's FRAMESIZE is off)",
+        f"--source tcp://127.0.0.1:{port}: 127.0.0.1:{port}: data frame 31: ",
+        "CRC failed (its bytes or its FRAMESIZE damaged)",
     )
     assert sorted(tmp_path.iterdir()) == []
 
@@ -1382,7 +1445,7 @@ def test_track_refuses_a_frame_that_is_not_the_stream_s(kundur_wire, tmp_path, c
             "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
             "--until", 1.1, "--out", tmp_path / "t.csv",
         )  # fmt: skip
-    assert_error(res, f"--source tcp://127.0.0.1:{port}: stream 1, data frame 31: {needle}")
+    assert_error(res, f"--source tcp://127.0.0.1:{port}: 127.0.0.1:{port}: data frame 31: {needle}")
     assert not (tmp_path / "t.csv").exists()
 
 

@@ -223,6 +223,31 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         ),
         (["replay", "junk.c37", "--allow", "pdc.example"], "'pdc.example': not an IP address"),
         (["replay", "junk.c37", "--allow", "10.0.0.1,,10.0.0.2"], "an empty item"),
+        (["replay", "junk.c37", "--allow", ""], "--allow '': names no peer"),
+        (["replay", "junk.c37", "--allow", "  "], "': names no peer"),
+        (["serve", "kundur", "--fault", "9999", "--far-bus", "1", "--allow", ""], "--allow ''"),
+        (
+            ["plant", "kundur", "--fault", "9999", "--far-bus", "1", "--esd-pct", "5"]
+            + ["--allow", ""],
+            "--allow '': names no peer",
+        ),
+        (
+            ["record", "127.0.0.1:1", "--frames", "5", "-o", "r.c37", "--idcode", "0"],
+            "--idcode '0': '0' is not an IDCODE",
+        ),
+        (
+            ["record", "127.0.0.1:1", "--frames", "5", "-o", "r.c37", "--idcode", "1,2"],
+            "--idcode 1,2: 2 IDCODEs for 1 server(s)",
+        ),
+        (
+            ["track", "kundur", "--source", "junk.c37", "--out", "t.csv", "--idcode", "5"],
+            "--idcode given with a recording as --source",
+        ),
+        (
+            ["track", "kundur", "--source", "tcp://127.0.0.1:1-2", "--frames", "5"]
+            + ["--out", "t.csv", "--idcode", "1,2,3"],
+            "--idcode 1,2,3: 3 IDCODEs for 2 server(s)",
+        ),
         (["plant", "kundur", "--fault", "3", "--far-bus", "101"], "needs --esd-pct"),
         (
             ["plant", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
@@ -280,13 +305,13 @@ def test_listening_beyond_loopback_without_allow_list_warns(capsys):
     from stabctl.cli.pmu import _allowed
     from stabctl.errors import InputError
 
-    assert _allowed("0.0.0.0", "") == ()
+    assert _allowed("0.0.0.0", None) == ()
     assert _allowed("0.0.0.0", "10.0.0.5, 10.0.0.6") == ("10.0.0.5", "10.0.0.6")
-    assert _allowed("127.0.0.1", "") == ()
+    assert _allowed("127.0.0.1", None) == ()
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("warning: listening on 0.0.0.0: any host")
     with pytest.raises(InputError, match="--host '': an empty address"):
-        _allowed("", "")
+        _allowed("", None)
 
 
 def test_a_peer_that_resets_the_controller_is_named_by_its_address():
@@ -377,3 +402,35 @@ def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
         "stream was not sent whole",
         line,
     ), line
+
+
+@pytest.mark.parametrize("kind", ["replay", "serve"])
+def test_a_server_drops_a_peer_addressing_another_idcode_and_names_it(
+    kundur_recording, tmp_path, kind
+):
+    """A command frame for IDCODE 999 (CRC valid) was obeyed by `pmu replay` and `pmu
+    serve` of stream 1: the peer gets nothing, a line on stderr names it and the IDCODE,
+    and the PDC addressing the stream gets it whole."""
+    import socket
+
+    from pyc37.frame import CommandFrame
+
+    if kind == "replay":
+        args, n = ["replay", str(kundur_recording)], 73
+    else:
+        args, n = ["serve", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "1"], 61
+    proc, address = serving(*args, "--speed", "0", "--timeout", "2")
+    host, port = address.rsplit(":", 1)
+    with socket.create_connection((host, int(port)), timeout=5) as peer:
+        peer.sendall(CommandFrame(999, "cfg2").convert2bytes())
+        me = f"127.0.0.1:{peer.getsockname()[1]}"
+        peer.settimeout(1.5)
+        try:
+            got = peer.recv(100)
+        except (TimeoutError, ConnectionError):
+            got = b""
+    assert got == b"", "answered a command addressed to another IDCODE"
+    record(address, n, tmp_path / "b.c37")
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0 and out == f"sent {n} of {n} frames\n", (out, err)
+    assert f"dropped {me}: a command for IDCODE 999, not this stream's 1" in err.splitlines()

@@ -148,7 +148,7 @@ def test_loopback_stream_reaches_pyc37_s_client_whole(wecc_stream):
     _case, cfg, stream = wecc_stream
     sent = list(stream)
     with StreamServer.of_frames(cfg, sent) as server:
-        pdc = pdc_client(*server.address, pdc_id=5)
+        pdc = pdc_client(*server.address, idcode=server.idcode)
         assert "34" in pdc.get_header().get_header()
         cfg2 = pdc.get_config()
         assert (cfg2.get_num_pmu(), cfg2.get_data_rate()) == (34, 60)
@@ -178,7 +178,7 @@ def test_unpaced_stream_ends_the_session_and_serves_the_next(wecc_stream):
     _case, cfg, stream = wecc_stream
     with StreamServer.of_frames(cfg, stream, speed=float("inf")) as server:
         for _ in range(2):
-            pdc = pdc_client(*server.address, pdc_id=5)
+            pdc = pdc_client(*server.address, idcode=server.idcode)
             pdc.get_config()
             pdc.start()
             frames = [pdc.get() for _ in range(len(stream))]

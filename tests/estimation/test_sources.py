@@ -41,13 +41,14 @@ def figures(case, res, frames):
     return study.received_errors(case, res, SETTINGS, frames, 3, WINDOW)
 
 
-def read(case, pmus, servers):
-    """The frames of servers read over TCP as `--source tcp://...` reads them."""
+def read(case, pmus, servers, idcode=1):
+    """The frames of servers read over TCP as `--source tcp://...` reads them, each
+    addressed with `idcode` (one for all, or one per server: `--idcode`)."""
     with contextlib.ExitStack() as stack:
         for server in servers:
             stack.enter_context(server)
         src = sources.Source(servers=tuple(s.address for s in servers))
-        return sources.read_frames(src, case, pmus, SETTINGS.rate, timeout=20)
+        return sources.read_frames(src, case, pmus, SETTINGS.rate, timeout=20, idcode=idcode)
 
 
 def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
@@ -78,8 +79,9 @@ def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
 
 
 def test_two_streams_merge_into_the_one_stream(kundur_run, tmp_path):
-    """The PMUs split over two servers (two PMUs each, as two PDCs would send them) give
-    the frames of the one stream; a recording of the one stream gives them too."""
+    """The PMUs split over two servers (two PMUs each, as two PDCs would send them, their
+    streams IDCODE 1 and 10, each addressed by its own) give the frames of the one
+    stream; a recording of the one stream gives them too."""
     case, res, pmus, drawn = kundur_run
     cfg = c37.stream_config(case, pmus, SETTINGS.rate)
     one = read(case, pmus, [StreamServer.of_frames(cfg, drawn, speed=float("inf"))])
@@ -88,7 +90,7 @@ def test_two_streams_merge_into_the_one_stream(kundur_run, tmp_path):
         sub = c37.stream_config(case, [pmus[c] for c in cols], SETTINGS.rate, idcode)
         frames = [f.of(cols) for f in drawn]
         halves.append(StreamServer.of_frames(sub, frames, speed=float("inf")))
-    two = read(case, pmus, halves)
+    two = read(case, pmus, halves, idcode=[1, 10])
     assert two.streams == 2 and two.data_frames == 2 * len(drawn) and two.missing == 0
     path = tmp_path / "kundur.c37"
     c37.record(path, cfg, drawn)
