@@ -39,8 +39,8 @@ Two searches (`SearchOptions.method`), both on the lattice below:
 
 Both end in the same cell where the verdict is monotone in the clearing time (every fault
 of Kundur's screening and every fourth of miniWECC's, `benchmarks/bench_cct.py`).
-"sime" takes fewer runs there (Kundur 13.2 against 14.8 per CCT, 11.0 against 12.6 at the
-step h; miniWECC 14.4 against 14.6, 12.2 against 12.4 at h: the run at t_max costs about
+"sime" takes fewer runs there (Kundur 13.6 against 14.8 per CCT, 11.4 against 12.6 at the
+step h; miniWECC 14.2 against 14.6, 11.9 against 12.4 at h: the run at t_max costs about
 one run a CCT and saves the doubling's three for a robust fault) and less time on a
 sample of ACTIVSg2000's N-1, where most faults are robust at t_max 0.5 s (1.02 s a search
 against 1.45, 6.2 runs a search against 8.4, the same counts of CCTs and verdicts;
