@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import Case, PssTable
+from stabctl.outdir import output_directory
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
     ModalAnalysis,
@@ -114,37 +115,37 @@ def figure_modes(ma: ModalAnalysis) -> list[int]:
 
 
 def write_report(st: EigStudy, out_dir) -> Path:
-    """Write the Markdown report and its three figures into out_dir atomically; returns
-    the report path."""
+    """Write the Markdown report and its three figures into out_dir atomically (a
+    directory created for them is removed again if the writing is interrupted or fails,
+    `stabctl.outdir.output_directory`); returns the report path."""
     from stabctl.plotting.figures import eigenvalue_plot, mode_shape_compass, participation_bars
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     names = {k: f"{st.stem}_{k}.png" for k in ("eigs", "shapes", "pf")}
     title = f"{st.case.name}" + (" without PSS" if st.no_pss else "")
     modes = figure_modes(st.ma)
     tmp = {}
-    try:
-        for key, draw in (
-            ("eigs", lambda p: eigenvalue_plot(st.ma, p, title)),
-            ("shapes", lambda p: mode_shape_compass(st.ma, modes, p)),
-            ("pf", lambda p: participation_bars(st.ma, modes, p)),
-        ):
-            tmp[names[key]] = _temp(out, names[key])
-            if modes or key == "eigs":
-                draw(tmp[names[key]])
-        md = out / f"{st.stem}.md"
-        tmp[md.name] = _temp(out, md.name)
-        Path(tmp[md.name]).write_text(report_markdown(st, names, bool(modes)))
-        for final, t in tmp.items():
-            if Path(t).stat().st_size:
-                os.chmod(t, 0o644)
-                os.replace(t, out / final)
-            else:
-                Path(t).unlink()
-    finally:
-        for t in tmp.values():
-            Path(t).unlink(missing_ok=True)
+    with output_directory(out_dir) as out:
+        try:
+            for key, draw in (
+                ("eigs", lambda p: eigenvalue_plot(st.ma, p, title)),
+                ("shapes", lambda p: mode_shape_compass(st.ma, modes, p)),
+                ("pf", lambda p: participation_bars(st.ma, modes, p)),
+            ):
+                tmp[names[key]] = _temp(out, names[key])
+                if modes or key == "eigs":
+                    draw(tmp[names[key]])
+            md = out / f"{st.stem}.md"
+            tmp[md.name] = _temp(out, md.name)
+            Path(tmp[md.name]).write_text(report_markdown(st, names, bool(modes)))
+            for final, t in tmp.items():
+                if Path(t).stat().st_size:
+                    os.chmod(t, 0o644)
+                    os.replace(t, out / final)
+                else:
+                    Path(t).unlink()
+        finally:
+            for t in tmp.values():
+                Path(t).unlink(missing_ok=True)
     return md
 
 

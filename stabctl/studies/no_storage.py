@@ -16,6 +16,7 @@ import numpy as np
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import fault_with_clearing
 from stabctl.io import load_case
+from stabctl.outdir import output_directory
 from stabctl.plotting.figures import simulation_overview
 from stabctl.studies.cases import CASE1, CASE2, PaperCase
 
@@ -108,15 +109,15 @@ def no_storage_report(pc: PaperCase, out_dir: Path, t_end: float = 5.0) -> list[
         _verdict(case, res),
     ]
     lines += _cct_scan(pc, int(cycles), t_end) if pc is CASE1 else _excursions(case, res)
-    out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / f"{key}_no_storage.png"
-    simulation_overview(
-        res,
-        path,
-        title=f"{pc.label}, no storage: {case.name}, {cycles}-cycle "
-        f"fault at bus {pc.bus}, line {pc.bus}-{pc.far_bus} tripped",
-        case=case,
-    )
+    with output_directory(out_dir):  # removed again if the figure is not written
+        simulation_overview(
+            res,
+            path,
+            title=f"{pc.label}, no storage: {case.name}, {cycles}-cycle "
+            f"fault at bus {pc.bus}, line {pc.bus}-{pc.far_bus} tripped",
+            case=case,
+        )
     return lines + [f"  wrote {path}"]
 
 
