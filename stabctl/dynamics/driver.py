@@ -252,8 +252,9 @@ class Simulator:
             op = OperatingPoint.from_bus_matrix(pf.bus_matrix())
             case = _with_solved_shunts(_with_solved_taps(case, pf.taps), pf.shunt_levels)
         try:
-            self._start(case, op, injection_buses, step, background_compile, off_equilibrium,
-                        subintervals)  # fmt: skip
+            self._start(
+                case, op, injection_buses, step, background_compile, off_equilibrium, subintervals
+            )
         except CaseError as exc:
             settings = dict(
                 injection_buses=injection_buses,
