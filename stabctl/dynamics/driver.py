@@ -623,6 +623,7 @@ class Simulator:
             m.mp.H,
             self.case.machines.mva,
             self.case.buses.pload,
+            [n.faulted for n in nets],
         )
 
     def _semantics(self, semantics: str | None) -> str:

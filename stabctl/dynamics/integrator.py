@@ -43,6 +43,7 @@ from stabctl.dynamics.model import (
     call_evaluate,
     kernel_outputs,
 )
+from stabctl.dynamics.partition import criterion_inertia
 from stabctl.storage import control as law
 
 if TYPE_CHECKING:
@@ -182,6 +183,9 @@ class RunOptions(NamedTuple):
     judged : ndarray of bool, shape (n_stage, n_mac)
         The machines the loss-of-synchronism check judges in each stage
         (`stabctl.dynamics.partition.Partition.judged`).
+    judging : ndarray, shape (n_stage, n_mac)
+        The COI weights of that check (`stabctl.dynamics.partition.criterion_inertia`:
+        `inertia` but in a faulted stage whose clearing loses machines).
     limit : float
         Separation limit, rad.
     stop : bool
@@ -201,6 +205,7 @@ class RunOptions(NamedTuple):
     inertia: np.ndarray
     island: np.ndarray
     judged: np.ndarray
+    judging: np.ndarray
     limit: float
     stop: bool
 
@@ -248,6 +253,7 @@ def run_options(
         inertia=np.ascontiguousarray([r[0] for r in rows], np.float64),
         island=np.ascontiguousarray([r[1] for r in rows], np.int64),
         judged=np.ascontiguousarray([r[2] for r in rows], np.bool_),
+        judging=np.ascontiguousarray([criterion_inertia(*r) for r in rows], np.float64),
         limit=limit,
         stop=stop,
     )
@@ -381,9 +387,10 @@ def _judged_stage(grid, k):
 @kernel
 def _separated(x, nm, opts, s):
     """Whether the rotor angle of a machine that stage s judges (opts.judged[s]) is more
-    than opts.limit from its island's COI angle (eq. 40, the islands and weights of stage
-    s): a machine tripped or cut off from the main grid never stops a run."""
-    coi = island_coi(x[:nm], opts.inertia[s], opts.island[s])[0]
+    than opts.limit from its island's COI angle (eq. 40, the islands of stage s, the
+    criterion's weights opts.judging[s]): a machine tripped or cut off from the main grid
+    never stops a run."""
+    coi = island_coi(x[:nm], opts.judging[s], opts.island[s])[0]
     judged = opts.judged[s]
     for i in range(nm):
         if judged[i] and abs(x[i] - coi[i]) > opts.limit:

@@ -345,6 +345,7 @@ class DynamicModel:
             islanded=islanded,
             bus_island=label[: case.n_bus].astype(np.int64),
             machine_island=np.where(online, label[self.mp.bus_idx], -1).astype(np.int64),
+            faulted=bool(config.faults) or any(f for _, _, f in config.fault_feeds),
         )
 
     def _pre_event_factor(self, config: StageConfig):

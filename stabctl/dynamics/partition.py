@@ -15,6 +15,15 @@ Before the disturbance each machine swings against the centre of inertia (COI, p
   names it and its island's buses (`machine_islands_log`).  The island keeps running in
   the simulation, against its own COI (`SimulationResult.relative_angle`).
 
+A machine that the stage clearing a fault cuts off or trips (the first stage after the
+fault's without a fault on: a generator whose step-up transformer or only line is the
+faulted one, a split by the clearing's trips) is lost from the fault's start: while the
+fault is on it is not judged, and the criterion's COI of its island leaves it out
+(`criterion_inertia`), so that its own pole slip before its breakers open, or the swing of
+an area about to be split off, does not make the rest of the system unstable.  The
+stage's islands and COI weights are kept for the storage devices, which see the machine
+connected until the clearing.
+
 The main grid of an island before the disturbance is the part, in the stage's network,
 that holds its infinite bus (a machine with H = 0), else the part that serves the most
 load (sum of the buses' active load: where the customers are, so that generators cut off
@@ -48,7 +57,7 @@ does nothing after the trip (tests/storage/test_islands_esd.py).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -60,6 +69,7 @@ __all__ = [
     "stage_at",
     "relative_to_islands",
     "judged_deviation",
+    "criterion_inertia",
     "machine_islands_log",
     "tripped_log",
 ]
@@ -100,6 +110,7 @@ def stage_partitions(
     H: np.ndarray,
     mva: np.ndarray,
     load: np.ndarray,
+    faulted=None,
 ) -> tuple[Partition, ...]:
     """The partition of every stage of a run, or none when no stage trips a machine or
     splits an island of the network before the disturbance.
@@ -121,6 +132,10 @@ def stage_partitions(
         Inertia constants (s, machine base; 0: an infinite bus) and machine bases (MVA).
     load : ndarray, shape (n_bus,)
         Each bus's active load, pu (the case's bus table, in the order of `bus_island`).
+    faulted : sequence of bool or None, optional
+        Whether a fault is on in each stage (None: in none).  A machine that the stage
+        clearing a fault (the first after it without one) cuts off or trips is not judged
+        while the fault is on either (module docstring).
 
     Returns
     -------
@@ -133,10 +148,44 @@ def stage_partitions(
     if all(_same_partition(lab, base) for lab in labels):
         return ()
     H, mva, load = np.asarray(H, float), np.asarray(mva, float), np.asarray(load, float)
-    return tuple(
+    parts = [
         _partition(float(t), lab, np.asarray(buses), base, H, mva, load)
         for t, lab, buses in zip(starts, labels, bus_island)
-    )
+    ]
+    on = [False] * len(parts) if faulted is None else [bool(f) for f in faulted]
+    for s in range(len(parts) - 2, -1, -1):  # backwards: a fault on over several stages
+        if on[s]:
+            parts[s] = _lost_at_clearing(parts[s], ~parts[s + 1].judged)
+    return tuple(parts)
+
+
+def _lost_at_clearing(p: Partition, lost: np.ndarray) -> Partition:
+    """A faulted stage's partition with the machines `lost` (bool (n_mac,)) by the stage
+    that follows out of its criterion (module docstring)."""
+    return replace(p, judged=p.judged & ~lost)
+
+
+def criterion_inertia(inertia: np.ndarray, island: np.ndarray, judged: np.ndarray) -> np.ndarray:
+    """The COI weights the loss-of-synchronism criterion uses (module docstring): in an
+    island whose judged machines weigh, those machines' weights only; elsewhere `inertia`.
+    The same as `inertia` in every stage but a faulted one whose clearing loses machines.
+
+    Parameters
+    ----------
+    inertia : ndarray, shape (n_mac,)
+        A stage's COI weights (`Partition.inertia`).
+    island : ndarray of int, shape (n_mac,)
+        Its islands.
+    judged : ndarray of bool, shape (n_mac,)
+        The machines its criterion judges.
+
+    Returns
+    -------
+    ndarray, shape (n_mac,)
+    """
+    inertia, island = np.asarray(inertia, float), np.asarray(island)
+    kept = np.bincount(island, np.where(judged, inertia, 0.0), minlength=island.max() + 1)
+    return np.where((kept[island] > 0) & ~judged, 0.0, inertia)
 
 
 def _same_partition(stage: np.ndarray, base: np.ndarray) -> bool:
@@ -253,10 +302,13 @@ def judged_deviation(angle, t, inertia, island, partitions) -> np.ndarray:
     ndarray, shape (n_t, n_mac)
         rad.
     """
-    dev = np.abs(relative_to_islands(angle, t, inertia, island, partitions))
-    if partitions:
-        dev *= np.stack([p.judged for p in partitions])[stage_at(t, partitions)]
-    return dev
+    if not partitions:
+        return np.abs(relative_to_islands(angle, t, inertia, island, partitions))
+    judging = [
+        replace(p, inertia=criterion_inertia(p.inertia, p.island, p.judged)) for p in partitions
+    ]
+    dev = np.abs(relative_to_islands(angle, t, inertia, island, judging))
+    return dev * np.stack([p.judged for p in partitions])[stage_at(t, partitions)]
 
 
 def machine_islands_log(
@@ -286,7 +338,8 @@ def machine_islands_log(
     seen: set = set()
     for p, buses in zip(partitions, bus_islands):
         now = set()
-        lost = np.flatnonzero(~p.judged & ~p.tripped)
+        main = np.isin(p.island, p.island[p.judged])  # a fault's lost machines are still in
+        lost = np.flatnonzero(~p.judged & ~p.tripped & ~main)  # it: not an island yet
         for k in dict.fromkeys(p.island[lost].tolist()):
             here = lost[p.island[lost] == k]
             key = tuple(int(m) for m in machine_numbers[here])

@@ -73,7 +73,8 @@ class ReducedNetwork:
     islanding: its load and shunts shed, its voltage 0); bus_island (n_bus,) int: each bus's
     island in this stage's network (`stabctl.network.topology.bus_islands`; empty: not
     computed); machine_island (n_mac,) int: the island of each machine's bus, -1 for a
-    tripped machine (empty: not computed).
+    tripped machine (empty: not computed); faulted: whether a fault is on in this stage (a
+    bus fault, or a line fault fed from an end still closed).
     """
 
     Y11: np.ndarray
@@ -91,6 +92,7 @@ class ReducedNetwork:
     bus_island: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     machine_island: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     factor: lowrank.SparseReduction | None = None
+    faulted: bool = False
 
 
 def reduce_network(

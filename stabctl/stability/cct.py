@@ -21,8 +21,9 @@ grid (a generator's step-up transformer opened, a system split) has the CCT of t
 of the system: the longest clearing time for which the machines left in the main grid
 stay in synchronism, the islanded machines counted as lost (as PSS/E trips a generator
 whose breaker opened; `stabctl.dynamics.partition`) and named with their island's buses
-in `CCTResult.islanded` (and a verdict's ``islanded``); N-1 insecure then means that the
-main grid loses synchronism even when the fault is cleared at once.
+in `CCTResult.islanded` (and a verdict's ``islanded``); they are lost from the fault's
+start (their own slip while the fault is on does not count); N-1 insecure then means that
+the main grid loses synchronism even when the fault is cleared at once.
 
 Two searches (`SearchOptions.method`), both on the lattice below:
 

@@ -295,3 +295,39 @@ def test_a_partitioned_result_keeps_its_islands_in_npz(kundur, tmp_path):
     assert list(back.judged) == list(res.judged) and back.stable
     assert back.max_angle_spread == res.max_angle_spread
     assert np.array_equal(back.relative_angle, res.relative_angle)
+
+
+def test_a_machine_the_clearing_cuts_off_is_out_of_the_criterion_while_the_fault_is_on():
+    """miniWECC's G4 (bus 9, no governor) hangs on line 9-10 alone.  A fault at bus 9
+    held 39.36 cycles makes G4 slip a pole 5 ms before the clearing opens 9-10 and
+    islands it; G4 is lost either way, so the criterion judges the rest from the fault's
+    start (as the CCT's definition counts islanded machines lost): the run is stable,
+    with G4 islanded at the clearing, the rest within 1.5 rad of their own COI, and the
+    fault robust up to t_max (before, G4's own slip set a CCT of 0.655 s).  The
+    fault-on stage's COI still holds G4 for the storage devices (it is connected)."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.errors import AboveSearchLimit
+    from stabctl.stability.cct import LineFault, critical_clearing_time
+
+    case = load_case("miniwecc")
+    sim = Simulator(case)
+    fault = LineFault(9, 10, 1.0)
+    tc = 39.36 / case.freq_hz
+    res = sim.run(fault.events(tc), 6.0, stop_at_separation=True)
+    four = list(res.machines).index(4)
+    rel = res.angle - coi_of_islands(res.angle, res.inertia, res.island)
+    before = res.t < 1.0 + tc - 1e-9
+    assert np.abs(rel[before, four]).max() > np.pi  # G4 slipped while the fault was on
+    assert res.stable and res.t[-1] == 6.0
+    assert res.meta["islanded"] == [{"t_s": pytest.approx(1.0 + tc), "buses": [9], "machines": [4]}]
+    rest = [i for i in range(res.machines.size) if i != four]
+    assert own_deviation(res, rest).max() < 1.5
+    with pytest.raises(AboveSearchLimit):
+        critical_clearing_time(sim, fault)
+
+
+def own_deviation(res, keep):
+    """abs(delta_i - delta_COI) of the machines `keep` (indices) against their own COI."""
+    w = res.inertia[keep]
+    a = res.angle[:, keep]
+    return np.abs(a - (a @ w / w.sum())[:, None])
