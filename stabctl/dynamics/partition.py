@@ -154,21 +154,17 @@ def stage_partitions(
     ]
     on = [False] * len(parts) if faulted is None else [bool(f) for f in faulted]
     for s in range(len(parts) - 2, -1, -1):  # backwards: a fault on over several stages
-        if on[s]:
-            parts[s] = _lost_at_clearing(parts[s], ~parts[s + 1].judged)
+        if on[s]:  # the machines the next stage loses are lost while the fault is on
+            parts[s] = replace(parts[s], judged=parts[s].judged & parts[s + 1].judged)
     return tuple(parts)
-
-
-def _lost_at_clearing(p: Partition, lost: np.ndarray) -> Partition:
-    """A faulted stage's partition with the machines `lost` (bool (n_mac,)) by the stage
-    that follows out of its criterion (module docstring)."""
-    return replace(p, judged=p.judged & ~lost)
 
 
 def criterion_inertia(inertia: np.ndarray, island: np.ndarray, judged: np.ndarray) -> np.ndarray:
     """The COI weights the loss-of-synchronism criterion uses (module docstring): in an
     island whose judged machines weigh, those machines' weights only; elsewhere `inertia`.
-    The same as `inertia` in every stage but a faulted one whose clearing loses machines.
+    That is `inertia` wherever an island's machines are all judged or none is: in every
+    stage without a fault on (short of a reclosure that joins part of one island to the
+    main grid of another).
 
     Parameters
     ----------
