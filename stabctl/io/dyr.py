@@ -437,10 +437,17 @@ def _compensate(records, gens, exciters, andes) -> list:
     (``vcomp/ieeevc.py``) takes its R_C, X_C with the machine's currents on the system
     base, read where the machine's MVA is the system base."""
     refused = []
+    seen: dict = {}
     for rec in records:
         _check_count(rec)
         gen = gens.get((rec.bus, rec.id))
         number = None if gen is None else int(gen["number"])
+        if number is not None and number in seen:
+            raise CaseError(
+                f"{rec.label()}: second compensator model for this generator (first at "
+                f"{seen[number].where()})"
+            )
+        seen[number] = rec
         if number not in exciters:
             refused.append((rec, "its machine has no (supported) exciter"))
             continue

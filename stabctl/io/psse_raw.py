@@ -327,6 +327,9 @@ def split_fields(text: str, double_quotes: bool = False) -> list[str]:
     return fields
 
 
+_INTEGER = re.compile(r"[+-]?\d+")
+
+
 @dataclass
 class _Rec:
     """One RAW record: its lines' fields, the file and its first line number."""
@@ -357,10 +360,13 @@ class _Rec:
     def int(
         self, row: builtins.int, k: builtins.int, default: builtins.int | None = None
     ) -> builtins.int:
-        """Field ``k`` of line ``row`` as an integer (see :meth:`num`)."""
+        """Field ``k`` of line ``row`` as an integer (see :meth:`num`): written as one,
+        digits with an optional sign (PSS/E reads "3.0" in an integer field as an error)."""
         v = self.num(row, k, default)
-        if not float(v).is_integer():
-            self.fail(f"field {k + 1} '{self.lines[row][k]}' is not an integer")
+        vals = self.lines[row]
+        written = vals[k].strip() if k < len(vals) else ""
+        if written and not _INTEGER.fullmatch(written):
+            self.fail(f"field {k + 1} '{written}' is not an integer")
         return int(v)
 
     def text(self, row: builtins.int, k: builtins.int, default: str = "1") -> str:
@@ -603,6 +609,8 @@ def _bus(b: _Builder, rec: _Rec):
     if num <= 0 or num in b.buses or num in b.isolated:
         rec.fail(f"bus number {num} must be a positive integer used once")
     b.base_kv[num] = rec.num(0, 2, 0.0)
+    if b.base_kv[num] < 0:
+        rec.fail(f"bus {num}: BASKV {b.base_kv[num]:g} kV must be >= 0 (0: not given)")
     if ide == _IDE_ISOLATED:
         b.isolated.add(num)
         b.switched_off.append(rec.source(f"bus {num}: isolated (IDE 4)"))
@@ -810,12 +818,12 @@ def _transformer(b: _Builder, rec: _Rec):
     if not _modelled(b, rec, (2,), what):
         return
     g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
-    t1, t2 = (_ratio(rec, row, bus[12], what) for row, bus in ((2, ends[0]), (3, ends[1])))
-    z = _impedance(b, rec, (0, 2), ends[0][12], what)
+    t1, t2 = (_ratio(rec, row, e[12], e[0], what) for row, e in ((2, ends[0]), (3, ends[1])))
+    z = _impedance(b, rec, (0, 2), ends[0][12], ends[0][0], what)
     r2, x2 = z.real * t2**2, z.imag * t2**2
     if r2 == 0 and x2 == 0:
         rec.fail(f"{what}: R1-2 + jX1-2 must not be 0")
-    ang = rec.num(2, 2, 0.0)
+    ang = _angle(rec, 2, what)
     row = [i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0]
     b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if g_mag or b_mag else []))
 
@@ -859,7 +867,7 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
     if not _modelled(b, rec, (2, 3, 4), what):
         return
     kvs = [b.base_kv[n] for n in buses]
-    z12, z23, z31 = (_impedance(b, rec, (3 * p, 2 + p), kvs[p], what) for p in range(3))
+    z12, z23, z31 = (_impedance(b, rec, (3 * p, 2 + p), kvs[p], buses[p], what) for p in range(3))
     if 0 in (z12, z23, z31):
         rec.fail(f"{what}: the pair impedances must not be 0")
     star_z = ((z12 + z31 - z23) / 2, (z12 + z23 - z31) / 2, (z23 + z31 - z12) / 2)
@@ -871,28 +879,55 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
     b.buses[star] = [star, vm, rec.num(1, 10, 0.0), *[0] * 6, PQ, 0, 0, 0.0, 0, 0]
     g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
     for w in windings:
-        z, ang = star_z[w], rec.num(2 + w, 2, 0.0)
-        row = [buses[w], star, z.real, z.imag, 0, _ratio(rec, 2 + w, kvs[w], what)]
+        z, ang = star_z[w], _angle(rec, 2 + w, what)
+        row = [buses[w], star, z.real, z.imag, 0, _ratio(rec, 2 + w, kvs[w], buses[w], what)]
         row += [-ang if ang else 0.0, 0, 0, 0]
         mag = w == 0 and (g_mag or b_mag)
         b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if mag else []))
 
 
-def _ratio(rec: _Rec, row: int, kv: float, what: str) -> float:
-    """Turns ratio in pu of the bus base voltage of the winding on line ``row`` (CW, WINDV,
-    NOMV)."""
+def _ratio(rec: _Rec, row: int, kv: float, bus: int, what: str) -> float:
+    """Turns ratio in pu of the base voltage ``kv`` (BASKV, 0: not given) of bus ``bus``,
+    the winding's on line ``row`` (CW, WINDVw, NOMVw; POM Transformer Data: WINDV blank is
+    1.0 under CW 1 and 3, NOMV under CW 2; NOMV 0 or blank is the bus base voltage).  A
+    WINDV or NOMV that is not > 0 (NOMV: >= 0), or kV given where the bus has no base
+    voltage, is refused naming the field."""
     cw = rec.int(0, 4, 1)
     if cw not in (1, 2, 3):
         rec.fail(f"{what}: CW {cw} must be 1, 2 or 3")
-    kv = kv or 1.0
-    windv, nomv = rec.num(row, 0, 1.0) or 1.0, rec.num(row, 1, 0.0) or kv
-    return {1: windv, 2: windv / kv, 3: windv * nomv / kv}[cw]
+    w = row - 1
+    nomv = _nominal(rec, row, kv, bus, w, what)
+    windv = rec.num(row, 0, nomv if cw == 2 else 1.0)
+    if not windv > 0:
+        rec.fail(f"{what}: WINDV{w} {windv:g} must be > 0")
+    if cw == 1 or (cw == 3 and nomv == kv):
+        return windv
+    if not kv > 0:
+        rec.fail(f"{what}: CW {cw} gives WINDV{w} in kV, but bus {bus} has no BASKV")
+    return windv / kv if cw == 2 else windv * nomv / kv
 
 
-def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, what: str) -> complex:
+def _angle(rec: _Rec, row: int, what: str) -> float:
+    """The winding's phase shift ANGw (degrees, line ``row``), within PSS/E's -180 to 180
+    (POM Transformer Data)."""
+    ang = rec.num(row, 2, 0.0)
+    if not -180 <= ang <= 180:
+        rec.fail(f"{what}: ANG{row - 1} {ang:g} degrees must be within -180 to 180")
+    return ang
+
+
+def _nominal(rec: _Rec, row: int, kv: float, bus: int, w: int, what: str) -> float:
+    """NOMVw (kV) on line ``row``: blank or 0 is the base voltage ``kv`` of bus ``bus``."""
+    nomv = rec.num(row, 1, 0.0)
+    if nomv < 0:
+        rec.fail(f"{what}: NOMV{w} {nomv:g} kV must be >= 0 (0: bus {bus}'s BASKV)")
+    return nomv or kv
+
+
+def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, bus: int, what: str) -> complex:
     """A measured winding-pair impedance R + jX (R, X, SBASE from field ``at[0]`` of line
     2) on the system base and the base voltage ``kv`` of the pair's first winding's bus
-    (its NOMV on line ``at[1]``) by CZ."""
+    ``bus`` (its NOMV on line ``at[1]``) by CZ."""
     cz = rec.int(0, 5, 1)
     r, x = rec.num(1, at[0]), rec.num(1, at[0] + 1)
     if cz == 1:
@@ -907,9 +942,10 @@ def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, what: str) -> compl
         if x < r:
             rec.fail(f"{what}: |Z| {x:g} pu below the loss resistance {r:g} pu (CZ 3)")
         x = math.sqrt(x * x - r * r)
-    kv = kv or 1.0
-    nomv = rec.num(at[1], 1, 0.0) or kv
-    return complex(r, x) * (b.base / sbase) * (nomv / kv) ** 2
+    nomv = _nominal(rec, at[1], kv, bus, at[1] - 1, what)
+    if nomv != kv and not kv > 0:
+        rec.fail(f"{what}: NOMV{at[1] - 1} {nomv:g} kV given, but bus {bus} has no BASKV")
+    return complex(r, x) * (b.base / sbase) * (nomv / kv if nomv != kv else 1.0) ** 2
 
 
 def _switched_shunt(b: _Builder, rec: _Rec):

@@ -1249,3 +1249,16 @@ def test_ieeevc_load_compensator_completes_its_exciter_row(tmp_path):
     assert (list(e.machine), list(e.Rcomp), list(e.Xcomp)) == ([1], [0.02], [0.08])
     assert [(r.line, r.model) for r in t.unsupported] == [(5, "IEEEVC")]
     assert "its machine has no (supported) exciter" in t.why[0]
+
+
+def test_a_second_ieeevc_for_one_machine_is_refused_as_a_second_model(tmp_path):
+    """Two IEEEVC records for one generator: the second had overwritten the first's
+    Xcomp without a word; it is refused as a second exciter or machine model is, naming
+    both records."""
+    text = (
+        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -3 3 /\n"
+        "1 'IEEEVC' 1 0.0 0.05 /\n1 'IEEEVC' 1 0.0 0.10 /\n"
+    )
+    recs = read_dyr(write(tmp_path, text))
+    with pytest.raises(CaseError, match=r":4.*second compensator model for this generator.*:3"):
+        dyr_tables(recs, kundur_generators()[:1], on_unsupported="skip")

@@ -784,3 +784,56 @@ def test_a_dyr_value_read_otherwise_is_named_changed(tmp_path):
     (changed,) = imported.changed
     assert changed.startswith("edited.dyr:5 SCRX (bus 1, id 1): read as ANDES 2.0 reads it")
     assert import_psse(V33, scrx).changed == ()
+
+
+_T1_WINDING_1 = "240.00,   0.000,   0.000,"
+
+
+def test_a_blank_winding_voltage_under_cw_2_is_the_nominal_one_as_pss_e_reads_it(tmp_path):
+    """POM Transformer Data: WINDV1 left blank is NOMV1 under CW 2 (kV), 1.0 only under
+    CW 1 and 3.  T1 (CW 2, NOMV1 0: bus 2's 230 kV) with WINDV1 blank has t1 = 1, not
+    1 kV / 230 kV (which had made the power flow fail with no record named)."""
+    path = _edit(tmp_path, _T1_WINDING_1, ",   0.000,   0.000,")
+    line = read_raw(path).line
+    np.testing.assert_allclose(line[2, 5], 1 / (21 / 20), rtol=1e-14)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            _T1_WINDING_1,
+            "0.0,   0.000,   0.000,",
+            r"edited\.raw:26 transformer record: "
+            r"transformer 2-3 '1': WINDV1 0 must be > 0",
+        ),
+        (_T1_WINDING_1, "-240.0,   0.000,   0.000,", r"WINDV1 -240 must be > 0"),
+        (_T1_WINDING_1, "240.00,   -5.000,   0.000,", r"NOMV1 -5 kV must be >= 0"),
+        (_T1_WINDING_1, "240.00,   0.000,   400.000,", r"ANG1 400 degrees must be within"),
+        (
+            "    2,'LOAD        ', 230.0000",
+            "    2,'LOAD        ',   0.0000",
+            r"transformer 2-3 '1': CW 2 gives WINDV1 in kV, but bus 2 has no BASKV",
+        ),
+        (
+            "    2,'LOAD        ', 230.0000",
+            "    2,'LOAD        ', -230.000",
+            r"edited\.raw:\d+ bus record: bus 2: BASKV -230 kV must be >= 0",
+        ),
+        (
+            "    2,     3,     0,'1 ',2,2,1,",
+            "    2.0,     3,     0,'1 ',2,2,1,",
+            r"edited\.raw:26 transformer record: field 1 '2\.0' is not an integer",
+        ),
+    ],
+)
+def test_transformer_and_bus_data_pss_e_refuses_are_refused_naming_the_field(
+    tmp_path, old, new, message
+):
+    """A winding voltage that is not > 0, a negative NOMV or BASKV, a phase shift outside
+    PSS/E's -180 to 180 degrees, kV under CW 2 at a bus without a base voltage and a bus
+    number written as 2.0 are refused naming the RAW line and the PSS/E field (they had
+    been replaced by 1.0 or 1 kV silently, or refused later naming a row of stabctl's
+    own tables)."""
+    with pytest.raises(CaseError, match=message):
+        read_raw(_edit(tmp_path, old, new))
