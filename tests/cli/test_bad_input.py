@@ -509,6 +509,48 @@ def test_read_only_existing_output_is_refused(tmp_path):
     assert_error(run("simulate", "kundur", "--out", out), "not writable")
 
 
+_FAULT_CSV = "bus,far_bus\n3,101\n"
+
+
+@pytest.mark.parametrize("link", ["broken", "loop"])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--tf", 2, "--out", "{out}.csv"),
+        ("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--plot", "{out}.png"),
+        ("import-psse", PSSE / "five_bus_v33.raw", "-o", "{out}.json"),
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--out", "{out}.jsonl"),
+        ("screen", "kundur", "--buses", 3, "--out", "{out}.jsonl"),
+        ("screen", "kundur", "--buses", 3, "--plot", "{out}.png"),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3, "--out", "{out}.json"),
+        ("estimate", "track", "kundur", "--source", "f.csv", "--out", "{out}.csv"),
+        ("pmu", "record", "127.0.0.1:9", "--frames", 1, "-o", "{out}.c37"),
+        ("eig", "kundur", "--report", "--out-dir", "{out}"),
+        ("paper", "--out-dir", "{out}"),
+    ],
+)
+def test_an_output_that_is_a_broken_or_looping_link_is_refused_before_any_work(
+    no_simulation, tmp_path, monkeypatch, args, link
+):
+    """An output named by a link to a file in a missing directory had that directory
+    created and written (exit 0), and a link to itself failed with a traceback (place's
+    after all its work); every command's output check refuses both (exit 2, one line
+    naming the option and the link), nothing created."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    name = next(a for a in args if "{out}" in str(a)).format(out="out")
+    out = tmp_path / name
+    if link == "broken":
+        out.symlink_to(tmp_path / "missing" / "dir" / name)
+    else:
+        out.symlink_to(name)
+    args = tuple(str(a).format(out="out") for a in args)
+    option = args[args.index(name) - 1]
+    option = "--out" if option == "-o" else option
+    assert_error(run(*args), f"{option} {name}: a {link}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["f.csv", name])
+
+
 def test_errors_are_stabctl_errors():
     assert issubclass(CaseError, StabctlError) and issubclass(InputError, StabctlError)
 
