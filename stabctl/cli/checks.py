@@ -183,7 +183,8 @@ def search_settings(tol_ms, t_max, tf):
     Raises
     ------
     InputError
-        A value not > 0.
+        A value not > 0, or a --t-max below the tolerance (no search could run:
+        `stabctl.stability.cct.check_search_range`).
     """
     if not tol_ms > 0:
         raise InputError(f"--tol-ms must be > 0, got {tol_ms:g}")
@@ -191,9 +192,14 @@ def search_settings(tol_ms, t_max, tf):
         raise InputError(f"--t-max must be > 0 s, got {t_max:g}")
     if tf is not None and not tf > 0:
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
-    from stabctl.stability.cct import SearchOptions
+    from stabctl.stability.cct import SearchOptions, check_search_range
 
-    return SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
+    search = SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
+    try:
+        check_search_range(search)
+    except InputError as exc:
+        raise InputError(f"--tol-ms {tol_ms:g} with --t-max {t_max:g} s: {exc}") from None
+    return search
 
 
 def check_run_end(faults, search) -> None:

@@ -1244,6 +1244,31 @@ def test_a_sweep_whose_runs_end_before_a_clearing_is_refused_before_any_work(
 
 
 @pytest.mark.parametrize(
+    "args",
+    [
+        ("screen", "kundur", "--buses", 3, "--workers", 1, "--out", "s.jsonl"),
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--workers", 1, "--t-max", 0.5),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101, "--t-max", 0.5),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3, "--t-max", 0.5),
+    ],
+)
+def test_a_search_limit_below_the_tolerance_is_refused_before_any_sweep(
+    no_simulation, tmp_path, monkeypatch, args
+):
+    """screen and sweep-cct with --tol-ms 900 and --t-max 0.5 recorded every job failed
+    (the search range narrower than the tolerance) and exited 0; refused up front by the
+    CCT search's own rule, for cct and place too, nothing recorded."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    res = run(*args, "--tol-ms", 900)
+    assert_error(res, "--tol-ms 900 with --t-max 0.5 s", "narrower than the tolerance 0.9 s")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
+@pytest.mark.parametrize(
     "key,value,needle",
     [
         ("solver_options", {"tol": 1e-3}, "unknown key(s) ['solver_options']"),
