@@ -551,6 +551,23 @@ def test_an_output_that_is_a_broken_or_looping_link_is_refused_before_any_work(
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["f.csv", name])
 
 
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("estimate", "rmse", "kundur", "--runs", 1, "--tf", 2), "with --tf 2 s"),
+        (("estimate", "closed-loop", "kundur", "--esd-pct", 5, "--tf", 2), "with --tf 2 s"),
+        (("pmu", "plant", "kundur", "--esd-pct", 5, "--tf", 2), "with --tf 2 s"),
+        (("estimate", "cct", "kundur", "--esd-pct", 5, "--runs", 1), "with the runs' end 6 s"),
+    ],
+)
+def test_a_latency_that_brings_no_frame_within_the_run_is_refused(no_simulation, args, needle):
+    """`estimate rmse --tf 2 --latency-ms 5000` printed errors at arrival and forecast
+    although every frame arrives after the run's end (exit 0); every command taking
+    --latency-ms and a run's end refuses it before any run (exit 2)."""
+    res = run(*args, "--fault", 3, "--far-bus", 101, "--latency-ms", 6000)
+    assert_error(res, "--latency-ms 6000", needle, "no PMU frame used arrives within the run")
+
+
 def test_errors_are_stabctl_errors():
     assert issubclass(CaseError, StabctlError) and issubclass(InputError, StabctlError)
 
