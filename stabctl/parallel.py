@@ -326,14 +326,15 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
     that writers choosing the format by extension still do), renamed over `path` only when
     complete; the temporary file is removed if writing fails.  The file gets the mode
     ``open`` gives a new one (0o666 less the umask).  The one atomic write of stabctl.
-    A symbolic link stays: the file it points to is the one replaced.  A path that is
-    neither a file nor a directory (a device or pipe: ``/dev/stdout``, a FIFO) is written
-    in place, as no file can replace it.
+    A symbolic link stays: the file it points to is the one replaced; a link that leads
+    nowhere (broken, or a loop) is an error, and no directory it points to is created.
+    A path that is neither a file nor a directory (a device or pipe: ``/dev/stdout``, a
+    FIFO) is written in place, as no file can replace it.
 
     Parameters
     ----------
     path : str or Path
-        The file; its directory is created if missing.
+        The file; its directory is created if missing (not a symbolic link's).
     write : callable
         ``write(f)`` with the temporary file open in `mode`, or, with ``mode=None``,
         ``write(tmp_path)`` with the temporary file's path (a str; the file exists, empty).
@@ -348,10 +349,11 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
     Raises
     ------
     OSError
-        The directory cannot be created or written; whatever `write` raises.
+        The directory cannot be created or written; `path` is a symbolic link that is
+        broken or loops; whatever `write` raises.
     """
     given = Path(path)
-    path = given.resolve() if given.is_symlink() else given
+    path = Path(os.path.realpath(given, strict=True)) if given.is_symlink() else given
     if path.exists() and not (path.is_file() or path.is_dir()):
         if mode is None:
             write(str(path))

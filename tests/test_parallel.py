@@ -1094,6 +1094,22 @@ def test_atomic_write_keeps_links_and_writes_devices_in_place(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "real.json", "sink"]
 
 
+def test_atomic_write_creates_no_directory_a_broken_link_points_to(tmp_path):
+    """A link to a file in a missing directory had that directory created and the file
+    written there; a link that leads nowhere (broken or a loop) is an OSError, nothing
+    created, the link left as it was."""
+    broken = tmp_path / "broken.csv"
+    broken.symlink_to(tmp_path / "missing" / "dir" / "x.csv")
+    with pytest.raises(OSError):
+        atomic_write(broken, lambda f: f.write("rows"))
+    loop = tmp_path / "loop.csv"
+    loop.symlink_to(loop.name)
+    with pytest.raises(OSError):
+        atomic_write(loop, lambda f: f.write("rows"))
+    assert not (tmp_path / "missing").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.csv", "loop.csv"]
+
+
 def test_a_record_of_another_case_is_refused_naming_its_line(tmp_path):
     """A kundur sweep resumed into a file holding a miniwecc record kept the foreign record
     without a word (the report listed only this run's jobs); refused, naming the file, the

@@ -6,6 +6,7 @@ exit status 2, by :func:`stabctl.cli.options.reports_errors`).
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 from pathlib import Path
@@ -32,10 +33,13 @@ def check_writable(path, option: str, directory: bool = False) -> None:
     ------
     InputError
         Unless a file can be created where ``path`` is (tried with a temporary file,
-        removed at once); ``path`` is a directory or another non-regular file (a file is
-        wanted) or a file (a directory is wanted); or it exists and is not writable.
+        removed at once); ``path`` is a symbolic link that is broken or loops (writing
+        would create the directories it points to, or fail after the work); a directory
+        or another non-regular file (a file is wanted) or a file (a directory is wanted);
+        or it exists and is not writable.
     """
     p = Path(path)
+    _leads_somewhere(p, option)
     if directory:
         if p.exists() and not p.is_dir():
             raise InputError(f"{option} {path}: not a directory")
@@ -67,6 +71,25 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         if p.exists():
             _replaceable(p, option)
         not_an_input(p, option)
+
+
+def _leads_somewhere(path: Path, option: str) -> None:
+    """An output given as a symbolic link must lead to something that exists (a file
+    written through it, a directory written into): a broken link or a loop of links is
+    refused, naming it."""
+    if not path.is_symlink():
+        return
+    try:
+        os.path.realpath(path, strict=True)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise InputError(
+                f"{option} {path}: a looping symbolic link (it leads back to itself); give a file"
+            ) from None
+        raise InputError(
+            f"{option} {path}: a broken symbolic link (to {os.readlink(path)}, "
+            f"{exc.strerror or exc}); give a file, or create what it points to"
+        ) from None
 
 
 def _replaceable(path: Path, option: str) -> None:
@@ -160,7 +183,8 @@ def search_settings(tol_ms, t_max, tf):
     Raises
     ------
     InputError
-        A value not > 0.
+        A value not > 0, or a --t-max below the tolerance (no search could run:
+        `stabctl.stability.cct.check_search_range`).
     """
     if not tol_ms > 0:
         raise InputError(f"--tol-ms must be > 0, got {tol_ms:g}")
@@ -168,9 +192,14 @@ def search_settings(tol_ms, t_max, tf):
         raise InputError(f"--t-max must be > 0 s, got {t_max:g}")
     if tf is not None and not tf > 0:
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
-    from stabctl.stability.cct import SearchOptions
+    from stabctl.stability.cct import SearchOptions, check_search_range
 
-    return SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
+    search = SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
+    try:
+        check_search_range(search)
+    except InputError as exc:
+        raise InputError(f"--tol-ms {tol_ms:g} with --t-max {t_max:g} s: {exc}") from None
+    return search
 
 
 def check_run_end(faults, search) -> None:

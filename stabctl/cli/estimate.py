@@ -36,6 +36,7 @@ from stabctl.cli.pmu_options import (
     IDCODE,
     PMU_AT,
     WINDOW,
+    check_latency,
     fail_short,
     fault_event,
     fault_run_options,
@@ -237,7 +238,7 @@ def rmse(
     figures of the one stream received, the same seed's figures in process beside them.
     """
     from stabctl.estimation import ambient as am
-    from stabctl.studies.estimate import ErrorRuns, estimator_errors
+    from stabctl.studies.estimate import ErrorRuns, error_window, estimator_errors
 
     _check_positive(tf=tf, runs=runs, deadband_hz=deadband_hz)
     if min(settle_ms, ambient_s, seed) < 0 or ambient_runs < 1:
@@ -253,6 +254,7 @@ def rmse(
     )
     check_storage_given(esd_pct, _STORAGE_NOT_COI)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    check_latency(settings, error_window(ev, settle_ms / 1000, tf)[0], tf, f"--tf {tf:g} s")
     mc = ErrorRuns(
         runs=runs,
         seed=seed,
@@ -389,6 +391,7 @@ def closed_loop(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    check_latency(settings, t_fault, tf, f"--tf {tf:g} s")
     rows = closed_loop_verdicts(
         case,
         ev,
@@ -453,7 +456,10 @@ def cct(
 
     _check_positive(runs=runs)
     settings = pmu_settings(rate, latency_ms, window_cycles=window_cycles)
-    case, _, _ = fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
+    case, ev, t_end = fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
+    check_latency(
+        settings, ev.t, t_end, f"the runs' end {t_end:g} s (the fault at {ev.t:g} s + 5 s)"
+    )
     table = estimator_ccts(
         case.name,
         fault,

@@ -31,6 +31,7 @@ from stabctl.cli.pmu_options import (
     IDCODE,
     PMU_AT,
     RATE,
+    check_latency,
     fail_short,
     fault_event,
     fault_run_options,
@@ -436,6 +437,7 @@ def plant(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    check_latency(settings, t_fault, tf, f"--tf {tf:g} s")
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     # the plant only measures: the estimator named here is never run (the controller's is)
     loop = cl.LoopOptions(esd_pct, "raw", settings, seed, law, esd_model=esd_model, transport="tcp")

@@ -192,6 +192,37 @@ def pmu_settings(
     )
 
 
+def check_latency(settings, t_first: float, t_end: float, end: str) -> None:
+    """Refuse, before any run, a --latency-ms under which no frame the command uses
+    arrives within the run (its figures or commands would all come after the run's end).
+
+    Parameters
+    ----------
+    settings : stabctl.estimation.settings.PMUSettings
+        Its latency.
+    t_first : float
+        Time stamp of the first frame the command uses, s (the fault's start, or the
+        start of the errors' window).
+    t_end : float
+        The run's end, s.
+    end : str
+        The run's end as the message names it, e.g. ``"--tf 2 s"``.
+
+    Raises
+    ------
+    InputError
+        That frame arriving (``t_first`` + the latency) at or after ``t_end``, naming
+        --latency-ms and ``end``.
+    """
+    arrival = t_first + settings.latency_s
+    if not arrival < t_end:
+        raise InputError(
+            f"--latency-ms {1000 * settings.latency_s:g} with {end}: no PMU frame used "
+            f"arrives within the run (the first, time-stamped at {t_first:g} s, arrives at "
+            f"{arrival:g} s); give a shorter latency or a later end"
+        )
+
+
 def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
     """The case, the fault event and the end of the run (default: fault + 5 s); an unknown
     bus or line refused before any work, naming --fault / --far-bus

@@ -380,18 +380,21 @@ def scanned_cct(
     a stable island above an unstable window (stability is not always monotonic in the
     clearing time with bang-bang storage), which this scan rules out on its grid.
     Clearing times below `start` are taken as stable (the caller passes a CCT without
-    storage).  Returns (CCTResult, scan runs).  Raises as critical_clearing_time
-    (InputError "above the search limit" when stable up to t_max).
+    storage).  The bisection's range is at least `tol` wide: with a step under `tol` the
+    last stable and the first unstable clearing time can lie in one lattice cell, which is
+    then searched up to its upper end.  Returns (CCTResult, scan runs).  Raises as
+    critical_clearing_time (InputError "above the search limit" when stable up to t_max).
     """
     limit = t_max if stop is None else min(stop, t_max)
     prev, t, runs = None, round(start, 12), 0
     while t <= limit + 1e-12:
         runs += 1
         if not _run(sim, fault, t, fleet).stable:
+            lo = prev or 0.0
             res = critical_clearing_time(
                 sim,
                 fault,
-                SearchOptions(tol=tol, t_lo=prev or 0.0, t_hi=t, error_check=False, t_max=t),
+                SearchOptions(tol=tol, t_lo=lo, t_hi=t, error_check=False, t_max=max(t, lo + tol)),
                 storage=fleet,
             )
             return res, runs

@@ -455,7 +455,7 @@ def critical_clearing_time(
     o = SearchOptions() if search is None else search
     tol, t_max = o.tol, o.t_max
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
-    t_hi = min(T_HI, t_max) if o.t_hi is None else o.t_hi
+    t_hi = _first_upper(o)
     _check_settings(fault, tol, o.t_lo, t_hi, t_max, t_end)
     check_trips(sim.case, fault)
     h = sim.default_h if h is None else h
@@ -724,6 +724,29 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
             f"run end {t_end:g} s must come after the latest clearing "
             f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)"
         )
+
+
+def check_search_range(search: SearchOptions) -> None:
+    """Refuse, before any run, a search whose range from t_lo to t_max holds no whole
+    lattice cell (a t_max below the tolerance): every search with these settings would
+    fail, whatever the fault.
+
+    Parameters
+    ----------
+    search : SearchOptions
+        The settings; ``tol`` > 0 and ``0 <= t_lo < t_hi <= t_max`` already checked.
+
+    Raises
+    ------
+    InputError
+        The range narrower than the tolerance (the search's own rule and message).
+    """
+    _lattice_bounds(search.tol, search.t_lo, _first_upper(search), search.t_max)
+
+
+def _first_upper(o: SearchOptions) -> float:
+    """The first upper bound of a search, s: t_hi, default min(T_HI, t_max)."""
+    return min(T_HI, o.t_max) if o.t_hi is None else o.t_hi
 
 
 def check_trips(case, fault: LineFault, name: str = "trip") -> None:

@@ -55,6 +55,33 @@ class ErrorRuns:
     ambient_runs: int
 
 
+def error_window(event, settle_s: float, t_end: float) -> tuple[float, float]:
+    """The time stamps `estimator_errors` evaluates: from ``settle_s`` after the fault's
+    clearing to the run's end.
+
+    Parameters
+    ----------
+    event : stabctl.dynamics.events.Fault
+        The fault, with its clearing.
+    settle_s, t_end : float
+        Settling time after the clearing and the run's end, s.
+
+    Returns
+    -------
+    tuple of float
+        (start, end), s.
+
+    Raises
+    ------
+    InputError
+        ``t_end`` not after the start, naming --tf.
+    """
+    start = max(event.times()) + settle_s
+    if not start < t_end:
+        raise InputError(f"--tf {t_end:g} s ends before the errors start ({start:g} s)")
+    return start, t_end
+
+
 def estimator_errors(
     case,
     event,
@@ -118,9 +145,7 @@ def estimator_errors(
     from stabctl.storage.devices import uniform_fleet
     from stabctl.studies import estimation as study
 
-    window = (max(event.times()) + settle_s, t_end)
-    if not window[0] < t_end:
-        raise InputError(f"--tf {t_end:g} s ends before the errors start ({window[0]:g} s)")
+    window = error_window(event, settle_s, t_end)
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct, model=esd_model)
     sim = (model or ModelOptions()).simulator(
         case, injection_buses=() if fleet is None else fleet.buses

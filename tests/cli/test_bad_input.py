@@ -509,6 +509,65 @@ def test_read_only_existing_output_is_refused(tmp_path):
     assert_error(run("simulate", "kundur", "--out", out), "not writable")
 
 
+_FAULT_CSV = "bus,far_bus\n3,101\n"
+
+
+@pytest.mark.parametrize("link", ["broken", "loop"])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--tf", 2, "--out", "{out}.csv"),
+        ("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--plot", "{out}.png"),
+        ("import-psse", PSSE / "five_bus_v33.raw", "-o", "{out}.json"),
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--out", "{out}.jsonl"),
+        ("screen", "kundur", "--buses", 3, "--out", "{out}.jsonl"),
+        ("screen", "kundur", "--buses", 3, "--plot", "{out}.png"),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3, "--out", "{out}.json"),
+        ("estimate", "track", "kundur", "--source", "f.csv", "--out", "{out}.csv"),
+        ("pmu", "record", "127.0.0.1:9", "--frames", 1, "-o", "{out}.c37"),
+        ("eig", "kundur", "--report", "--out-dir", "{out}"),
+        ("paper", "--out-dir", "{out}"),
+    ],
+)
+def test_an_output_that_is_a_broken_or_looping_link_is_refused_before_any_work(
+    no_simulation, tmp_path, monkeypatch, args, link
+):
+    """An output named by a link to a file in a missing directory had that directory
+    created and written (exit 0), and a link to itself failed with a traceback (place's
+    after all its work); every command's output check refuses both (exit 2, one line
+    naming the option and the link), nothing created."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    name = next(a for a in args if "{out}" in str(a)).format(out="out")
+    out = tmp_path / name
+    if link == "broken":
+        out.symlink_to(tmp_path / "missing" / "dir" / name)
+    else:
+        out.symlink_to(name)
+    args = tuple(str(a).format(out="out") for a in args)
+    option = args[args.index(name) - 1]
+    option = "--out" if option == "-o" else option
+    assert_error(run(*args), f"{option} {name}: a {link}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["f.csv", name])
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (("estimate", "rmse", "kundur", "--runs", 1, "--tf", 2), "with --tf 2 s"),
+        (("estimate", "closed-loop", "kundur", "--esd-pct", 5, "--tf", 2), "with --tf 2 s"),
+        (("pmu", "plant", "kundur", "--esd-pct", 5, "--tf", 2), "with --tf 2 s"),
+        (("estimate", "cct", "kundur", "--esd-pct", 5, "--runs", 1), "with the runs' end 6 s"),
+    ],
+)
+def test_a_latency_that_brings_no_frame_within_the_run_is_refused(no_simulation, args, needle):
+    """`estimate rmse --tf 2 --latency-ms 5000` printed errors at arrival and forecast
+    although every frame arrives after the run's end (exit 0); every command taking
+    --latency-ms and a run's end refuses it before any run (exit 2)."""
+    res = run(*args, "--fault", 3, "--far-bus", 101, "--latency-ms", 6000)
+    assert_error(res, "--latency-ms 6000", needle, "no PMU frame used arrives within the run")
+
+
 def test_errors_are_stabctl_errors():
     assert issubclass(CaseError, StabctlError) and issubclass(InputError, StabctlError)
 
@@ -1199,6 +1258,31 @@ def test_a_sweep_whose_runs_end_before_a_clearing_is_refused_before_any_work(
     res = run("sweep-cct", "kundur", "--workers", 1, "--faults", faults, "--out", out, "--tf", 2.5)
     assert_error(res, "--tf 2.5 s", "cleared as late as 4 s")
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("screen", "kundur", "--buses", 3, "--workers", 1, "--out", "s.jsonl"),
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--workers", 1, "--t-max", 0.5),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101, "--t-max", 0.5),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3, "--t-max", 0.5),
+    ],
+)
+def test_a_search_limit_below_the_tolerance_is_refused_before_any_sweep(
+    no_simulation, tmp_path, monkeypatch, args
+):
+    """screen and sweep-cct with --tol-ms 900 and --t-max 0.5 recorded every job failed
+    (the search range narrower than the tolerance) and exited 0; refused up front by the
+    CCT search's own rule, for cct and place too, nothing recorded."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    res = run(*args, "--tol-ms", 900)
+    assert_error(res, "--tol-ms 900 with --t-max 0.5 s", "narrower than the tolerance 0.9 s")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
 
 
 @pytest.mark.parametrize(

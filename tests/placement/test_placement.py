@@ -5,6 +5,7 @@ really simulating (counted Simulator.run calls, CCTs equal independent `stabctl.
 runs). Simulation-based tests use Kundur only."""
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -367,6 +368,35 @@ def test_bisection_warm_started_from_a_coarse_bracket_equals_the_cold_one():
     # a wrong bracket (stable end unstable) falls back to the search from 0
     bad = baseline("kundur", [CASE1], opts=VerifyOptions(brackets={"3-101": (0.3, 0.305)}))
     assert bad["3-101"]["cct_s"] == pytest.approx(cold["3-101"]["cct_s"])
+
+
+class _ClearedBefore:
+    """A stand-in simulator: stable iff the fault is cleared within `cct` s."""
+
+    conventions, default_h = "ieee", 0.01
+
+    def __init__(self, cct):
+        self.case, self.cct = SimpleNamespace(freq_hz=50.0), cct
+
+    def run(self, events, t_end, **kw):
+        unstable = events[0].clear_near - events[0].t > self.cct
+        return SimpleNamespace(stable=not unstable, separated=[7] if unstable else [], meta={})
+
+
+def test_a_scan_finer_than_the_tolerance_ends_in_the_lattice_cell_of_the_cct():
+    """With --tol-ms 20 the 5 ms scan found 0.205 s stable and 0.21 s unstable, one lattice
+    cell, and the bisection between them failed (search range narrower than the
+    tolerance), stopping `place`; the cell is searched up to its end.  With the default 1 ms
+    tolerance the range is the scan's own, as before."""
+    from stabctl.placement.evaluation import scanned_cct
+
+    sim = _ClearedBefore(0.2073)
+    coarse, runs = scanned_cct(
+        sim, CASE1, None, tol=0.02, t_max=1.0, start=0.2, stop=None, step=0.005
+    )
+    assert coarse.bracket == (0.2, 0.22) and runs == 3
+    fine, _ = scanned_cct(sim, CASE1, None, tol=0.001, t_max=1.0, start=0.2, stop=None, step=0.005)
+    assert fine.bracket == (0.207, 0.208)
 
 
 def test_a_start_already_evaluated_is_not_simulated_again():
