@@ -964,10 +964,12 @@ def check_scheduler(address: str) -> str:
     except ValueError:
         port = -1
     given = parts.netloc.rpartition("]")[2].partition(":")[2]  # the port as written
-    if given.isascii() and given.isdigit() and not 0 < int(given) < 65536:  # 0 ran on 8786
+    digits = given.lstrip("0")  # more than 5 of them: out of range, and too long for int()
+    if given.isascii() and given.isdigit() and not (len(digits) <= 5 and 0 < int(given) < 65536):
+        shown = digits if len(digits) <= 12 else f"of {len(digits)} digits"
         raise InputError(
-            f"--scheduler {address}: port {int(given)} is out of range (1-65535); "
-            f"{_SCHEDULER_FORMS}"
+            f"--scheduler {address if len(address) <= 80 else address[:60] + '...'}: port "
+            f"{shown or 0} is out of range (1-65535); {_SCHEDULER_FORMS}"
         )
     if parts.scheme != "tcp" or not parts.hostname or port == -1 or parts.path:
         raise InputError(
