@@ -37,6 +37,7 @@ cluster of ``scheduler="local"``) is closed when the sweep returns or raises, ho
 from __future__ import annotations
 
 import ctypes
+import io
 import json
 import logging
 import multiprocessing
@@ -863,23 +864,27 @@ def _check_space(out: Path, n_jobs: int) -> None:
 
 
 class _appender:
-    """A sweep file open for appending whole records (unbuffered bytes): a last line cut
-    short by a kill is ended first (so records stay one per line), and a record whose write
-    fails (a disk full) is cut off again, so that the file holds only whole records (the
-    sweep holds the file's lock: no one else appends)."""
+    """A sweep file open for appending whole records (unbuffered bytes), opened (made if
+    need be) by the first record: a sweep stopped before any leaves the file as it was, or
+    none (not an empty file of 0 records).  A last line cut short by a kill is ended before
+    the first record (so records stay one per line), and a record whose write fails (a
+    disk full) is cut off again, so that the file holds only whole records (the sweep holds
+    the file's lock: no one else appends)."""
 
     def __init__(self, path: Path):
         self.path = path
+        self.f: io.FileIO | None = None
 
     def __enter__(self):
-        self.f = self.path.open("a+b", buffering=0)
-        size = os.fstat(self.f.fileno()).st_size
-        if size and os.pread(self.f.fileno(), 1, size - 1) != b"\n":
-            self.append("\n")
         return self
 
     def append(self, line: str) -> None:
         """Write ``line`` whole; if a write fails, truncate the file to where it began."""
+        if self.f is None:
+            self.f = self.path.open("a+b", buffering=0)
+            size = os.fstat(self.f.fileno()).st_size
+            if size and os.pread(self.f.fileno(), 1, size - 1) != b"\n":
+                line = "\n" + line
         fd = self.f.fileno()
         start = os.fstat(fd).st_size
         data = memoryview(line.encode())
@@ -891,7 +896,8 @@ class _appender:
             raise
 
     def __exit__(self, *exc):
-        self.f.close()
+        if self.f is not None:
+            self.f.close()
 
 
 def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, None]:

@@ -185,6 +185,24 @@ def test_interrupt_keeps_finished_lines_and_resume_runs_the_rest(tmp_path):
     assert [r["key"] for r in lines(out)] == ["square/1", "square/2", "square/3"]
 
 
+def test_a_sweep_stopped_before_its_first_record_leaves_no_file(tmp_path):
+    """A sweep interrupted before any job finished (the finding: a Dask sweep waiting for
+    a worker, Ctrl-C) left an empty records file of 0 records: the file is made by the
+    first record, and an existing one is left as it was (its last line's missing newline
+    is added by the first record)."""
+    out = tmp_path / "none.jsonl"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(jobs_of(interrupt, 0), out, workers=1, progress=False)
+    assert not out.exists()
+    out.write_text('{"key": "square/1", "inputs": {"x": 1}, "status": "ok", "result": {"y": 1}}')
+    before = out.read_bytes()
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(jobs_of(interrupt, 0), out, workers=1, progress=False)
+    assert out.read_bytes() == before
+    run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    assert [r["key"] for r in lines(out)] == ["square/1", "square/2"]
+
+
 @pytest.fixture
 def sigint_raises():
     """SIGINT raising KeyboardInterrupt in this process for the test, as in a terminal:
