@@ -1243,6 +1243,11 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
 #: not run (`SweepIncomplete`); a cluster that has had no worker yet is waited for
 DASK_NO_WORKER_S = 30.0
 
+#: seconds a Dask sweep waits for its cluster's first worker before it says (a log
+#: warning, once) that the cluster has none and it is waiting for one to join; it keeps
+#: waiting (workers may be starting; Ctrl-C stops it, keeping the finished records)
+DASK_NO_WORKER_YET_S = 10.0
+
 
 class _NoWorker(Exception):
     """The Dask cluster has had no worker for DASK_NO_WORKER_S."""
@@ -1260,8 +1265,10 @@ def _dask_result(fut, workers: _DaskWorkers) -> dict:
 
 class _DaskWorkers:
     """The worker count of a Dask sweep's cluster, asked at most once a second: a lost
-    worker is said (log warning: its running job goes to another worker), and a cluster
-    without a worker for DASK_NO_WORKER_S after it had one raises `_NoWorker`."""
+    worker is said (log warning: its running job goes to another worker), a cluster
+    without a worker for DASK_NO_WORKER_S after it had one raises `_NoWorker`, and one
+    that has had none for DASK_NO_WORKER_YET_S since the sweep began is said once (log
+    warning: the sweep waits for a worker to join)."""
 
     def __init__(self, client):
         self.client = client
@@ -1269,6 +1276,8 @@ class _DaskWorkers:
         self.seen = False
         self.none_since: float | None = None
         self.next_check = 0.0
+        self.began = time.monotonic()
+        self.said_none_yet = False
 
     def check(self, force: bool = False) -> None:
         """Ask the scheduler (if a second has passed, or `force`)."""
@@ -1287,6 +1296,15 @@ class _DaskWorkers:
                 else f"waiting up to {DASK_NO_WORKER_S:g} s for one before giving up the "
                 "jobs not run",
             )
+        waited = now - self.began
+        if n == 0 and not (self.seen or self.said_none_yet) and waited >= DASK_NO_WORKER_YET_S:
+            _log.warning(
+                "the Dask cluster at %s has no worker (none for %g s): waiting for one to "
+                "join; Ctrl-C stops the sweep, keeping its finished records",
+                self.client.scheduler.address,
+                DASK_NO_WORKER_YET_S,
+            )
+            self.said_none_yet = True
         if n == 0 and self.seen:
             self.none_since = self.none_since or now
             if now - self.none_since >= DASK_NO_WORKER_S:

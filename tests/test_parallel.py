@@ -713,6 +713,37 @@ def test_dask_cluster(tmp_path):
 
 
 @pytest.mark.dask
+def test_a_cluster_without_a_worker_is_said_and_waited_for(tmp_path, monkeypatch, caplog):
+    """A scheduler with no worker (the finding: `screen --scheduler` sat at 0/2 for ever
+    without a word): after DASK_NO_WORKER_YET_S the sweep says, once, that the cluster has
+    no worker and that it waits for one; it keeps waiting, and runs its jobs once a
+    worker joins."""
+    import threading
+
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr("stabctl.parallel.DASK_NO_WORKER_YET_S", 0.5)
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
+        joins = threading.Timer(3.0, c.scale, (1,))
+        joins.start()
+        try:
+            with caplog.at_level("WARNING", logger="stabctl.parallel"):
+                rep = run_sweep(
+                    jobs_of(square, 1, 2),
+                    tmp_path / "d.jsonl",
+                    scheduler=c.scheduler_address,
+                    progress=False,
+                )
+        finally:
+            joins.join()
+    assert (rep.ran, rep.failed) == (2, 0)
+    said = [r.getMessage() for r in caplog.records if "has no worker" in r.getMessage()]
+    assert said == [
+        f"the Dask cluster at {c.scheduler_address} has no worker (none for 0.5 s): waiting "
+        "for one to join; Ctrl-C stops the sweep, keeping its finished records"
+    ]
+
+
+@pytest.mark.dask
 def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path):
     pytest.importorskip("distributed")
     out = tmp_path / "d.jsonl"
