@@ -5,7 +5,9 @@ function takes as its one argument); the function returns a JSON-able dict.  `ru
 jobs in local processes (`concurrent.futures.ProcessPoolExecutor`, one worker per available
 core, started with "spawn" so that no thread or lock of the parent is inherited) or, given a
 scheduler address, on a Dask distributed cluster (optional: `pip install "stabctl[dask]"`;
-stabctl must be installed on the workers).
+the same stabctl must be installed on the workers: each job runs only on a worker whose
+`stabctl._jit.cache.package_digest` is the client's, and a worker running another stops
+the sweep with an InputError naming it and both digests).
 
 Output: a JSON-lines file, one line per finished job, appended and flushed as each job
 completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished job:
@@ -530,7 +532,8 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     Raises
     ------
     InputError
-        Dask not installed or its scheduler unreachable.
+        Dask not installed or its scheduler unreachable; (from map, on Dask) a worker
+        running another stabctl (`_on_worker`).
     SweepIncomplete
         (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S; a job
         whose worker died runs again on another worker.
@@ -571,7 +574,12 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
     finishes (so that a worker's death makes no finished job run again: a job its worker
     was running runs again on another); a job's exception is raised; `SweepIncomplete`
     when the cluster has had no worker for DASK_NO_WORKER_S."""
-    futures = {client.submit(func, j, pure=False): i for i, j in enumerate(jobs)}
+    from stabctl._jit.cache import package_digest
+
+    digest = package_digest()
+    futures = {
+        client.submit(_on_worker, digest, func, j, pure=False): i for i, j in enumerate(jobs)
+    }
     results: list = [None] * len(jobs)
     workers = _DaskWorkers(client)
     try:
@@ -1194,14 +1202,26 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
     every time it ran (Dask's KilledWorker) is recorded as failed.  Jobs the cluster lost
     otherwise are not recorded: `SweepIncomplete` once the others are in, naming them;
     this includes every job left when the cluster has had no worker for
-    DASK_NO_WORKER_S after having one (its last worker died)."""
+    DASK_NO_WORKER_S after having one (its last worker died).  Each job runs only on a
+    worker whose stabctl is this one (`_on_worker`): a worker running another stops the
+    sweep (InputError, `_dask_result`), its job unrecorded."""
     from distributed import KilledWorker
 
+    from stabctl._jit.cache import package_digest
+
+    digest = package_digest()
     lost: list[str] = []
     try:
         futures = {
             client.submit(
-                run_job, j.func, j.key, dict(j.inputs), pure=False, retries=DASK_RETRIES
+                _on_worker,
+                digest,
+                run_job,
+                j.func,
+                j.key,
+                dict(j.inputs),
+                pure=False,
+                retries=DASK_RETRIES,
             ): j
             for j in jobs
         }
@@ -1214,6 +1234,8 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
                 rec = _lost(job, exc)
             except _NoWorker:
                 futures[fut] = job  # not run either
+                raise
+            except InputError:  # a worker running another stabctl: no loss of the cluster
                 raise
             except Exception as exc:  # noqa: BLE001 - the cluster lost the job: not a result
                 lost.append(f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}")
@@ -1253,14 +1275,51 @@ class _NoWorker(Exception):
     """The Dask cluster has had no worker for DASK_NO_WORKER_S."""
 
 
-def _dask_result(fut, workers: _DaskWorkers) -> dict:
-    """A finished future's record; if its result was lost with its worker before it was
-    fetched, Dask runs the job again: waited for while the cluster has workers."""
+def _dask_result(fut, workers: _DaskWorkers) -> Any:
+    """A finished future's record (a job submitted through `_on_worker`); if its result
+    was lost with its worker before it was fetched, Dask runs the job again: waited for
+    while the cluster has workers.  InputError if the worker runs another stabctl source
+    (`_OtherSource`): the job was not run there."""
     while True:
         try:
-            return fut.result(timeout=1.0)
+            result = fut.result(timeout=1.0)
         except TimeoutError:
             workers.check()
+            continue
+        if isinstance(result, _OtherSource):
+            from stabctl._jit.cache import package_digest
+
+            raise InputError(
+                f"Dask worker {result.worker} runs another stabctl than this one (package "
+                f"digest {result.digest[:12]} there, {package_digest()[:12]} here): install "
+                "this stabctl on every worker of the cluster at "
+                f"{workers.client.scheduler.address}; the finished records are kept"
+            )
+        return result
+
+
+@dataclass(frozen=True)
+class _OtherSource:
+    """What a Dask worker returns instead of a job's result when its stabctl is not the
+    client's (`_on_worker`): its address and its `package_digest`."""
+
+    worker: str
+    digest: str
+
+
+def _on_worker(digest: str, func: Callable, *args) -> Any:
+    """``func(*args)`` on a Dask worker whose stabctl is the client's (its `package_digest`
+    is ``digest``); on a worker running another (an uncommitted edit, another version)
+    the job is not run: an `_OtherSource` is returned instead (a value, not an exception,
+    which Dask would retry on another worker), refused by the client (`_dask_result`)."""
+    from distributed import get_worker
+
+    from stabctl._jit.cache import package_digest
+
+    here = package_digest()
+    if here != digest:
+        return _OtherSource(get_worker().address, here)
+    return func(*args)
 
 
 class _DaskWorkers:

@@ -744,6 +744,38 @@ def test_a_cluster_without_a_worker_is_said_and_waited_for(tmp_path, monkeypatch
 
 
 @pytest.mark.dask
+def test_a_worker_running_another_stabctl_is_refused_by_name(tmp_path, monkeypatch):
+    """A Dask worker importing a copy of stabctl with one edit (the finding: it ran the
+    sweep's jobs without a word, both sides reporting version 0.1.0): no job runs there,
+    and the sweep stops with one InputError naming the worker and both package digests,
+    no record written; `place`'s map (`worker_pool`) refuses it alike."""
+    import shutil
+
+    pytest.importorskip("distributed")
+    from stabctl._jit.cache import _PKG, package_digest
+    from stabctl.parallel import worker_pool
+
+    other = tmp_path / "other"
+    shutil.copytree(_PKG, other / "stabctl", ignore=shutil.ignore_patterns("__pycache__"))
+    init = other / "stabctl" / "__init__.py"
+    init.write_text(init.read_text() + "\n# an uncommitted edit\n")
+    theirs = package_digest(other / "stabctl")
+    assert theirs != package_digest()
+    out = tmp_path / "d.jsonl"
+    needle = (
+        r"Dask worker tcp://127\.0\.0\.1:\d+ runs another stabctl than this one \(package "
+        rf"digest {theirs[:12]} there, {package_digest()[:12]} here\)"
+    )
+    monkeypatch.chdir(tmp_path)  # `python -m` puts the working directory first on the path
+    with separate_cluster(1, path=(other, Path(__file__).parent)) as (address, _, _):
+        with pytest.raises(InputError, match=needle):
+            run_sweep(jobs_of(square, 1, 2), out, scheduler=address, progress=False)
+        with worker_pool(1, address) as pool_map, pytest.raises(InputError, match=needle):
+            pool_map(square, [{"x": 1}])
+    assert not out.exists()
+
+
+@pytest.mark.dask
 def test_local_dask_cluster_records_a_dead_worker_as_failed_and_resumes(tmp_path):
     pytest.importorskip("distributed")
     out = tmp_path / "d.jsonl"

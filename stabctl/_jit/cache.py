@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import hashlib
 import os
 import re
@@ -165,14 +166,39 @@ def kernel_sources(root: Path = _PKG) -> list[Path]:
     return sorted(files)
 
 
-def source_digest(root: Path = _PKG) -> str:
-    """SHA-256 over the relative names and contents of the `kernel_sources`: the key of the
-    on-disk cache (hex)."""
+def _files_digest(root: Path, files: list[Path]) -> str:
+    """SHA-256 (hex) over the names (relative to `root`) and contents of `files`."""
     digest = hashlib.sha256()
-    for f in kernel_sources(root):
+    for f in files:
         digest.update(str(f.relative_to(root)).encode())
         digest.update(f.read_bytes())
     return digest.hexdigest()
+
+
+def source_digest(root: Path = _PKG) -> str:
+    """SHA-256 over the relative names and contents of the `kernel_sources`: the key of the
+    on-disk cache (hex)."""
+    return _files_digest(root, kernel_sources(root))
+
+
+@functools.cache
+def package_digest(root: Path = _PKG) -> str:
+    """Which stabctl a process runs: SHA-256 over the relative names and contents of the
+    package's modules (``*.py``) and the cases shipped with them (``*.json``), taken once
+    per process.  A Dask sweep refuses a worker whose digest is not the
+    client's (`stabctl.parallel`): an uncommitted edit on one machine, another version.
+
+    Parameters
+    ----------
+    root : Path
+        The package directory (default: stabctl's).
+
+    Returns
+    -------
+    str
+        The digest, hex.
+    """
+    return _files_digest(root, sorted([*root.rglob("*.py"), *root.rglob("*.json")]))
 
 
 def cache_dirs() -> list[Path]:
