@@ -1,5 +1,7 @@
 """JSON text read strictly: an object that gives one key twice is refused instead of
-keeping its last value (`parse_json`), for every JSON file stabctl reads (case files,
+keeping its last value, and an integer of more digits than Python converts (4300, its
+``sys.get_int_max_str_digits``) is refused naming the file instead of escaping as
+Python's ValueError (`parse_json`), for every JSON file stabctl reads (case files,
 records files, ANDES JSON).  It sits low in the layers, just above
 `stabctl.errors`, so that the sweep records (`stabctl.parallel`) and the case readers
 (`stabctl.io`) read JSON alike.
@@ -8,6 +10,7 @@ records files, ANDES JSON).  It sits low in the layers, just above
 from __future__ import annotations
 
 import json
+import sys
 from typing import Any
 
 from stabctl.errors import InputError
@@ -21,6 +24,24 @@ class _KeyTwice(ValueError):
     def __init__(self, key: str, first, last):
         super().__init__(key)
         self.key, self.first, self.last = key, first, last
+
+
+class _LongInt(ValueError):
+    """An integer literal of more digits than Python converts (`_integer`), caught by
+    `parse_json`."""
+
+    def __init__(self, digits: str):
+        super().__init__(digits)
+        self.digits = digits
+
+
+def _integer(digits: str) -> int:
+    """``parse_int`` of `parse_json`: ``int(digits)``, or `_LongInt` when Python refuses
+    the conversion (more than ``sys.get_int_max_str_digits()`` digits)."""
+    try:
+        return int(digits)
+    except ValueError:
+        raise _LongInt(digits) from None
 
 
 def _unique_keys(pairs: list[tuple[str, Any]]) -> dict:
@@ -45,7 +66,9 @@ def _shown(value) -> str:
 
 def parse_json(text: str, where: str, error: type[Exception] = InputError) -> Any:
     """``json.loads(text)``, refusing an object that gives one key twice (json keeps the
-    last value without a word: a case's ``base_mva`` given 100 then 50 was read as 50).
+    last value without a word: a case's ``base_mva`` given 100 then 50 was read as 50) and
+    an integer of more digits than Python converts (json raised Python's own ValueError,
+    "Exceeds the limit (4300 digits)", naming no file).
 
     Parameters
     ----------
@@ -65,17 +88,27 @@ def parse_json(text: str, where: str, error: type[Exception] = InputError) -> An
     Raises
     ------
     Exception
-        ``error`` for a key given twice, naming ``where``, the key and both values.
+        ``error`` for a key given twice, naming ``where``, the key and both values; or
+        for an integer of too many digits, naming ``where`` (and the line of a text of
+        several lines) and how many digits.
     json.JSONDecodeError
         Not JSON (as json.loads).
     RecursionError
         Nested too deeply (as json.loads).
     """
     try:
-        return json.loads(text, object_pairs_hook=_unique_keys)
+        return json.loads(text, object_pairs_hook=_unique_keys, parse_int=_integer)
     except _KeyTwice as exc:
         raise error(
             f"{where}: key {json.dumps(exc.key)} given twice in one object "
             f"({_shown(exc.first)}, then {_shown(exc.last)}): give each key once (JSON "
             "readers keep the last without a word)"
+        ) from None
+    except _LongInt as exc:
+        line = text.count("\n", 0, text.find(exc.digits)) + 1
+        raise error(
+            f"{where}: an integer of {len(exc.digits.lstrip('-'))} digits"
+            + (f" at line {line}" if "\n" in text.strip() else "")
+            + f", more than Python converts ({sys.get_int_max_str_digits()}): give the number "
+            "in fewer digits"
         ) from None

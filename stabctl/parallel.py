@@ -5,7 +5,9 @@ function takes as its one argument); the function returns a JSON-able dict.  `ru
 jobs in local processes (`concurrent.futures.ProcessPoolExecutor`, one worker per available
 core, started with "spawn" so that no thread or lock of the parent is inherited) or, given a
 scheduler address, on a Dask distributed cluster (optional: `pip install "stabctl[dask]"`;
-stabctl must be installed on the workers).
+the same stabctl must be installed on the workers: each job runs only on a worker whose
+`stabctl._jit.cache.package_digest` is the client's, and a worker running another stops
+the sweep with an InputError naming it and both digests).
 
 Output: a JSON-lines file, one line per finished job, appended and flushed as each job
 completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished job:
@@ -37,6 +39,7 @@ cluster of ``scheduler="local"``) is closed when the sweep returns or raises, ho
 from __future__ import annotations
 
 import ctypes
+import io
 import json
 import logging
 import multiprocessing
@@ -531,7 +534,8 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     Raises
     ------
     InputError
-        Dask not installed or its scheduler unreachable.
+        Dask not installed or its scheduler unreachable; (from map, on Dask) a worker
+        running another stabctl (`_on_worker`).
     SweepIncomplete
         (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S; a job
         whose worker died runs again on another worker.
@@ -572,7 +576,12 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
     finishes (so that a worker's death makes no finished job run again: a job its worker
     was running runs again on another); a job's exception is raised; `SweepIncomplete`
     when the cluster has had no worker for DASK_NO_WORKER_S."""
-    futures = {client.submit(func, j, pure=False): i for i, j in enumerate(jobs)}
+    from stabctl._jit.cache import package_digest
+
+    digest = package_digest()
+    futures = {
+        client.submit(_on_worker, digest, func, j, pure=False): i for i, j in enumerate(jobs)
+    }
     results: list = [None] * len(jobs)
     workers = _DaskWorkers(client)
     try:
@@ -865,23 +874,27 @@ def _check_space(out: Path, n_jobs: int) -> None:
 
 
 class _appender:
-    """A sweep file open for appending whole records (unbuffered bytes): a last line cut
-    short by a kill is ended first (so records stay one per line), and a record whose write
-    fails (a disk full) is cut off again, so that the file holds only whole records (the
-    sweep holds the file's lock: no one else appends)."""
+    """A sweep file open for appending whole records (unbuffered bytes), opened (made if
+    need be) by the first record: a sweep stopped before any leaves the file as it was, or
+    none (not an empty file of 0 records).  A last line cut short by a kill is ended before
+    the first record (so records stay one per line), and a record whose write fails (a
+    disk full) is cut off again, so that the file holds only whole records (the sweep holds
+    the file's lock: no one else appends)."""
 
     def __init__(self, path: Path):
         self.path = path
+        self.f: io.FileIO | None = None
 
     def __enter__(self):
-        self.f = self.path.open("a+b", buffering=0)
-        size = os.fstat(self.f.fileno()).st_size
-        if size and os.pread(self.f.fileno(), 1, size - 1) != b"\n":
-            self.append("\n")
         return self
 
     def append(self, line: str) -> None:
         """Write ``line`` whole; if a write fails, truncate the file to where it began."""
+        if self.f is None:
+            self.f = self.path.open("a+b", buffering=0)
+            size = os.fstat(self.f.fileno()).st_size
+            if size and os.pread(self.f.fileno(), 1, size - 1) != b"\n":
+                line = "\n" + line
         fd = self.f.fileno()
         start = os.fstat(fd).st_size
         data = memoryview(line.encode())
@@ -893,7 +906,8 @@ class _appender:
             raise
 
     def __exit__(self, *exc):
-        self.f.close()
+        if self.f is not None:
+            self.f.close()
 
 
 def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, None]:
@@ -966,10 +980,12 @@ def check_scheduler(address: str) -> str:
     except ValueError:
         port = -1
     given = parts.netloc.rpartition("]")[2].partition(":")[2]  # the port as written
-    if given.isascii() and given.isdigit() and not 0 < int(given) < 65536:  # 0 ran on 8786
+    digits = given.lstrip("0")  # more than 5 of them: out of range, and too long for int()
+    if given.isascii() and given.isdigit() and not (len(digits) <= 5 and 0 < int(given) < 65536):
+        shown = digits if len(digits) <= 12 else f"of {len(digits)} digits"
         raise InputError(
-            f"--scheduler {address}: port {int(given)} is out of range (1-65535); "
-            f"{_SCHEDULER_FORMS}"
+            f"--scheduler {address if len(address) <= 80 else address[:60] + '...'}: port "
+            f"{shown or 0} is out of range (1-65535); {_SCHEDULER_FORMS}"
         )
     if parts.scheme != "tcp" or not parts.hostname or port == -1 or parts.path:
         raise InputError(
@@ -1188,14 +1204,26 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
     every time it ran (Dask's KilledWorker) is recorded as failed.  Jobs the cluster lost
     otherwise are not recorded: `SweepIncomplete` once the others are in, naming them;
     this includes every job left when the cluster has had no worker for
-    DASK_NO_WORKER_S after having one (its last worker died)."""
+    DASK_NO_WORKER_S after having one (its last worker died).  Each job runs only on a
+    worker whose stabctl is this one (`_on_worker`): a worker running another stops the
+    sweep (InputError, `_dask_result`), its job unrecorded."""
     from distributed import KilledWorker
 
+    from stabctl._jit.cache import package_digest
+
+    digest = package_digest()
     lost: list[str] = []
     try:
         futures = {
             client.submit(
-                run_job, j.func, j.key, dict(j.inputs), pure=False, retries=DASK_RETRIES
+                _on_worker,
+                digest,
+                run_job,
+                j.func,
+                j.key,
+                dict(j.inputs),
+                pure=False,
+                retries=DASK_RETRIES,
             ): j
             for j in jobs
         }
@@ -1208,6 +1236,8 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
                 rec = _lost(job, exc)
             except _NoWorker:
                 futures[fut] = job  # not run either
+                raise
+            except InputError:  # a worker running another stabctl: no loss of the cluster
                 raise
             except Exception as exc:  # noqa: BLE001 - the cluster lost the job: not a result
                 lost.append(f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}")
@@ -1237,25 +1267,69 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
 #: not run (`SweepIncomplete`); a cluster that has had no worker yet is waited for
 DASK_NO_WORKER_S = 30.0
 
+#: seconds a Dask sweep waits for its cluster's first worker before it says (a log
+#: warning, once) that the cluster has none and it is waiting for one to join; it keeps
+#: waiting (workers may be starting; Ctrl-C stops it, keeping the finished records)
+DASK_NO_WORKER_YET_S = 10.0
+
 
 class _NoWorker(Exception):
     """The Dask cluster has had no worker for DASK_NO_WORKER_S."""
 
 
-def _dask_result(fut, workers: _DaskWorkers) -> dict:
-    """A finished future's record; if its result was lost with its worker before it was
-    fetched, Dask runs the job again: waited for while the cluster has workers."""
+def _dask_result(fut, workers: _DaskWorkers) -> Any:
+    """A finished future's record (a job submitted through `_on_worker`); if its result
+    was lost with its worker before it was fetched, Dask runs the job again: waited for
+    while the cluster has workers.  InputError if the worker runs another stabctl source
+    (`_OtherSource`): the job was not run there."""
     while True:
         try:
-            return fut.result(timeout=1.0)
+            result = fut.result(timeout=1.0)
         except TimeoutError:
             workers.check()
+            continue
+        if isinstance(result, _OtherSource):
+            from stabctl._jit.cache import package_digest
+
+            raise InputError(
+                f"Dask worker {result.worker} runs another stabctl than this one (package "
+                f"digest {result.digest[:12]} there, {package_digest()[:12]} here): install "
+                "this stabctl on every worker of the cluster at "
+                f"{workers.client.scheduler.address}; the finished records are kept"
+            )
+        return result
+
+
+@dataclass(frozen=True)
+class _OtherSource:
+    """What a Dask worker returns instead of a job's result when its stabctl is not the
+    client's (`_on_worker`): its address and its `package_digest`."""
+
+    worker: str
+    digest: str
+
+
+def _on_worker(digest: str, func: Callable, *args) -> Any:
+    """``func(*args)`` on a Dask worker whose stabctl is the client's (its `package_digest`
+    is ``digest``); on a worker running another (an uncommitted edit, another version)
+    the job is not run: an `_OtherSource` is returned instead (a value, not an exception,
+    which Dask would retry on another worker), refused by the client (`_dask_result`)."""
+    from distributed import get_worker
+
+    from stabctl._jit.cache import package_digest
+
+    here = package_digest()
+    if here != digest:
+        return _OtherSource(get_worker().address, here)
+    return func(*args)
 
 
 class _DaskWorkers:
     """The worker count of a Dask sweep's cluster, asked at most once a second: a lost
-    worker is said (log warning: its running job goes to another worker), and a cluster
-    without a worker for DASK_NO_WORKER_S after it had one raises `_NoWorker`."""
+    worker is said (log warning: its running job goes to another worker), a cluster
+    without a worker for DASK_NO_WORKER_S after it had one raises `_NoWorker`, and one
+    that has had none for DASK_NO_WORKER_YET_S since the sweep began is said once (log
+    warning: the sweep waits for a worker to join)."""
 
     def __init__(self, client):
         self.client = client
@@ -1263,6 +1337,8 @@ class _DaskWorkers:
         self.seen = False
         self.none_since: float | None = None
         self.next_check = 0.0
+        self.began = time.monotonic()
+        self.said_none_yet = False
 
     def check(self, force: bool = False) -> None:
         """Ask the scheduler (if a second has passed, or `force`)."""
@@ -1281,6 +1357,15 @@ class _DaskWorkers:
                 else f"waiting up to {DASK_NO_WORKER_S:g} s for one before giving up the "
                 "jobs not run",
             )
+        waited = now - self.began
+        if n == 0 and not (self.seen or self.said_none_yet) and waited >= DASK_NO_WORKER_YET_S:
+            _log.warning(
+                "the Dask cluster at %s has no worker (none for %g s): waiting for one to "
+                "join; Ctrl-C stops the sweep, keeping its finished records",
+                self.client.scheduler.address,
+                DASK_NO_WORKER_YET_S,
+            )
+            self.said_none_yet = True
         if n == 0 and self.seen:
             self.none_since = self.none_since or now
             if now - self.none_since >= DASK_NO_WORKER_S:

@@ -8,7 +8,8 @@ through two context managers:
 
 - `Heartbeat`: such a callable that also repeats its latest status whenever nothing was
   said for HEARTBEAT_S, so that a long batch of runs is never silent;
-- `bar`: a tqdm bar on stderr, one step per job, or nothing when asked to be silent.
+- `bar`: a tqdm bar on stderr, one step per job, or nothing when asked to be silent;
+  a line said while one is shown goes above it (`bars_cleared`), not onto its line.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 
 from tqdm import tqdm
 
@@ -81,3 +83,16 @@ def bar(total: int, desc: str, show: bool = True, unit: str = "job") -> tqdm:
     """A tqdm bar of `total` steps (``update()`` one) on stderr, a context manager;
     show False: silent (the same object, disabled)."""
     return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, disable=not show)
+
+
+def bars_cleared() -> AbstractContextManager:
+    """A context manager during which the progress bars on stderr (`bar`) are cleared, and
+    after which they are drawn again: a line written to stderr inside it stands on a line
+    of its own above them (written beside a bar, it was appended to the bar's line).
+
+    Returns
+    -------
+    contextlib.AbstractContextManager
+        tqdm's ``external_write_mode`` for stderr.
+    """
+    return tqdm.external_write_mode(file=sys.stderr)

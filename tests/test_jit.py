@@ -272,6 +272,75 @@ def test_a_damaged_cache_entry_is_compiled_again(tmp_path):
         assert again.stdout.split()[0] == first.stdout.split()[0]  # sqrt(0.75 - 0.25)
 
 
+class _Planted:
+    """A pickle that makes the directory `path` when it is unpickled."""
+
+    def __init__(self, path):
+        self.path = str(path)
+
+    def __reduce__(self):
+        import os
+
+        return os.mkdir, (self.path,)
+
+
+def _plant(path, planted):
+    """Write into `path` an index numba would unpickle to the end: its version, then the
+    `_Planted` pickle making `planted`."""
+    import pickle
+
+    path.write_bytes(pickle.dumps(numba.__version__) + pickle.dumps(_Planted(planted)))
+
+
+@pytest.mark.parametrize("unsafe", ["index 666", "index of nobody", "index link", "data 666"])
+def test_a_cache_file_others_may_write_is_never_unpickled(tmp_path, unsafe):
+    """A kernel's index or data file writable by others, owned by another user or a link
+    (the finding: user nobody wrote a pickle into a chmod 666 index inside root's 0755
+    cache directory, and root's next `simulate` ran it): not unpickled; a warning names
+    the file and why, the entry is compiled again and rewritten writable by its owner
+    only, and the next process loads it."""
+    import os
+
+    cache = tmp_path / "cache"
+    first = _fresh_process(_LOAD, cache)
+    assert first.returncode == 0, first.stderr
+    index = next(cache.rglob("blocks.rectifier_loading-*.nbi"))
+    [data] = index.parent.glob(index.stem + ".*.nbc")
+    planted = tmp_path / "planted"
+    target, why = index, "is writable by others than its owner"
+    if unsafe == "data 666":
+        target = data
+        data.write_bytes(__import__("pickle").dumps(_Planted(planted)))
+        data.chmod(0o666)
+    elif unsafe == "index link":
+        elsewhere = tmp_path / "elsewhere.nbi"
+        _plant(elsewhere, planted)
+        index.unlink()
+        index.symlink_to(elsewhere)
+        why = "is not a regular file"
+    else:
+        _plant(index, planted)
+        if unsafe == "index 666":
+            index.chmod(0o666)
+        else:
+            if os.geteuid() != 0:
+                pytest.skip("giving a file to another user takes root")
+            os.chown(index, 65534, 65534)
+            why = "belongs to user 65534"
+    again = _fresh_process(_LOAD, cache)
+    assert again.returncode == 0, again.stderr
+    assert not planted.exists()
+    assert f"numba cache: {target} {why}; not loaded" in again.stderr
+    assert again.stdout.split()[0] == first.stdout.split()[0]
+    assert again.stdout.split()[1] == "Counter()"  # compiled, not loaded
+    for f in (index, data):
+        st = f.lstat()
+        assert f.is_file() and not f.is_symlink() and not st.st_mode & 0o022, oct(st.st_mode)
+        assert st.st_uid == os.geteuid()
+    last = _fresh_process(_LOAD, cache)
+    assert last.stdout.split()[1] != "Counter()" and "numba cache" not in last.stderr
+
+
 def test_kernels_make_their_cache_directories_only_when_compiled(tmp_path):
     """A process that declares kernels but compiles none makes nothing in an empty
     NUMBA_CACHE_DIR (the finding: numba made each kernel's directory as it was declared,

@@ -185,6 +185,24 @@ def test_interrupt_keeps_finished_lines_and_resume_runs_the_rest(tmp_path):
     assert [r["key"] for r in lines(out)] == ["square/1", "square/2", "square/3"]
 
 
+def test_a_sweep_stopped_before_its_first_record_leaves_no_file(tmp_path):
+    """A sweep interrupted before any job finished (the finding: a Dask sweep waiting for
+    a worker, Ctrl-C) left an empty records file of 0 records: the file is made by the
+    first record, and an existing one is left as it was (its last line's missing newline
+    is added by the first record)."""
+    out = tmp_path / "none.jsonl"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(jobs_of(interrupt, 0), out, workers=1, progress=False)
+    assert not out.exists()
+    out.write_text('{"key": "square/1", "inputs": {"x": 1}, "status": "ok", "result": {"y": 1}}')
+    before = out.read_bytes()
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(jobs_of(interrupt, 0), out, workers=1, progress=False)
+    assert out.read_bytes() == before
+    run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    assert [r["key"] for r in lines(out)] == ["square/1", "square/2"]
+
+
 @pytest.fixture
 def sigint_raises():
     """SIGINT raising KeyboardInterrupt in this process for the test, as in a terminal:
@@ -692,6 +710,69 @@ def test_dask_cluster(tmp_path):
     assert (rep.ran, rep.failed) == (3, 1)
     assert rep.records["square/2"]["result"] == {"y": 4}
     assert rep.records["boom/3"]["error"] == "ValueError: bad x = 3"
+
+
+@pytest.mark.dask
+def test_a_cluster_without_a_worker_is_said_and_waited_for(tmp_path, monkeypatch, caplog):
+    """A scheduler with no worker (the finding: `screen --scheduler` sat at 0/2 for ever
+    without a word): after DASK_NO_WORKER_YET_S the sweep says, once, that the cluster has
+    no worker and that it waits for one; it keeps waiting, and runs its jobs once a
+    worker joins."""
+    import threading
+
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr("stabctl.parallel.DASK_NO_WORKER_YET_S", 0.5)
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None) as c:
+        joins = threading.Timer(3.0, c.scale, (1,))
+        joins.start()
+        try:
+            with caplog.at_level("WARNING", logger="stabctl.parallel"):
+                rep = run_sweep(
+                    jobs_of(square, 1, 2),
+                    tmp_path / "d.jsonl",
+                    scheduler=c.scheduler_address,
+                    progress=False,
+                )
+        finally:
+            joins.join()
+    assert (rep.ran, rep.failed) == (2, 0)
+    said = [r.getMessage() for r in caplog.records if "has no worker" in r.getMessage()]
+    assert said == [
+        f"the Dask cluster at {c.scheduler_address} has no worker (none for 0.5 s): waiting "
+        "for one to join; Ctrl-C stops the sweep, keeping its finished records"
+    ]
+
+
+@pytest.mark.dask
+def test_a_worker_running_another_stabctl_is_refused_by_name(tmp_path, monkeypatch):
+    """A Dask worker importing a copy of stabctl with one edit (the finding: it ran the
+    sweep's jobs without a word, both sides reporting version 0.1.0): no job runs there,
+    and the sweep stops with one InputError naming the worker and both package digests,
+    no record written; `place`'s map (`worker_pool`) refuses it alike."""
+    import shutil
+
+    pytest.importorskip("distributed")
+    from stabctl._jit.cache import _PKG, package_digest
+    from stabctl.parallel import worker_pool
+
+    other = tmp_path / "other"
+    shutil.copytree(_PKG, other / "stabctl", ignore=shutil.ignore_patterns("__pycache__"))
+    init = other / "stabctl" / "__init__.py"
+    init.write_text(init.read_text() + "\n# an uncommitted edit\n")
+    theirs = package_digest(other / "stabctl")
+    assert theirs != package_digest()
+    out = tmp_path / "d.jsonl"
+    needle = (
+        r"Dask worker tcp://127\.0\.0\.1:\d+ runs another stabctl than this one \(package "
+        rf"digest {theirs[:12]} there, {package_digest()[:12]} here\)"
+    )
+    monkeypatch.chdir(tmp_path)  # `python -m` puts the working directory first on the path
+    with separate_cluster(1, path=(other, Path(__file__).parent)) as (address, _, _):
+        with pytest.raises(InputError, match=needle):
+            run_sweep(jobs_of(square, 1, 2), out, scheduler=address, progress=False)
+        with worker_pool(1, address) as pool_map, pytest.raises(InputError, match=needle):
+            pool_map(square, [{"x": 1}])
+    assert not out.exists()
 
 
 @pytest.mark.dask

@@ -58,6 +58,28 @@ def test_the_command_line_shows_library_log_lines_on_stderr_once(capsys):
         root.handlers[:] = before[1]
 
 
+def test_a_log_line_said_during_a_bar_stands_above_it_not_on_its_line(capsys):
+    """A library log line said while a progress bar is shown (the finding: the warning
+    that a Dask cluster has no worker was appended to the bar's "0/2" line) clears the bar
+    first, so that the line is one of its own, and the bar is drawn again below it."""
+    from stabctl.cli import _log_to_stderr
+
+    root = logging.getLogger("stabctl")
+    before = (root.level, list(root.handlers))
+    try:
+        _log_to_stderr()
+        with bar(2, "jobs"):
+            capsys.readouterr()
+            logging.getLogger("stabctl.parallel").warning("no worker")
+            err = capsys.readouterr().err
+    finally:
+        root.setLevel(before[0])
+        root.handlers[:] = before[1]
+    said, redrawn = err.split("no worker\n")
+    assert said.endswith("\r") and "jobs" not in said  # the bar's line cleared first
+    assert "jobs" in redrawn
+
+
 def _simulated(job: dict) -> dict:
     """A stand-in job reporting its simulations (`PlanContext.counting` adds them)."""
     return {"n_simulations": job["n"]}

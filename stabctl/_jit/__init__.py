@@ -4,7 +4,8 @@
   only kernels call: no CPython or C entry point; `CompiledOnly`);
 - :mod:`~stabctl._jit.cache`: the on-disk cache, its key (`source_digest` over the
   modules that feed the kernels, found by a scan: `kernel_sources`), its directories,
-  clearing it, whether a kernel is in it;
+  clearing it, whether a kernel is in it; and `package_digest`, which stabctl a process
+  runs (a Dask sweep refuses a worker whose digest is not its own);
 - :mod:`~stabctl._jit.background`: compiling a kernel in a child process while this one
   compiles another;
 - :mod:`~stabctl._jit.notify`: the notice and heartbeat while the first kernels compile;

@@ -18,13 +18,20 @@ Safety: a cached kernel's index is a pickle, so whoever can write into the cache
 can run code in every process that loads a kernel.  A cache directory (NUMBA_CACHE_DIR, or a
 ``__pycache__`` of the package) owned by another user than this one or root, or writable
 by others than its owner, is not used: the kernels are cached in this user's own
-directory instead, with a warning (`ensure_safe_cache`).  A damaged entry (truncated,
-garbage) is deleted and the kernel compiled again (`GuardedCache`).
+directory instead, with a warning (`ensure_safe_cache`).  So is each file of an entry,
+checked (one ``lstat``) just before numba unpickles it: an index (``*.nbi``) or data
+(``*.nbc``) file that is not a regular file (a symbolic link), belongs to another user than
+this one or root, or is writable by others than its owner (`unsafe_entry_reason`) is never
+unpickled: a warning names the file and why, and the entry is deleted and the kernel
+compiled again, as a damaged entry (truncated, garbage) is (`GuardedCache`).  The files
+stabctl writes are writable by their owner only, whatever the umask.
 """
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import functools
 import hashlib
 import os
 import re
@@ -34,7 +41,7 @@ from pathlib import Path
 from typing import ClassVar
 
 import numba
-from numba.core.caching import CompileResultCacheImpl, FunctionCache
+from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile
 
 _PKG = Path(__file__).resolve().parents[1]
 
@@ -159,14 +166,39 @@ def kernel_sources(root: Path = _PKG) -> list[Path]:
     return sorted(files)
 
 
-def source_digest(root: Path = _PKG) -> str:
-    """SHA-256 over the relative names and contents of the `kernel_sources`: the key of the
-    on-disk cache (hex)."""
+def _files_digest(root: Path, files: list[Path]) -> str:
+    """SHA-256 (hex) over the names (relative to `root`) and contents of `files`."""
     digest = hashlib.sha256()
-    for f in kernel_sources(root):
+    for f in files:
         digest.update(str(f.relative_to(root)).encode())
         digest.update(f.read_bytes())
     return digest.hexdigest()
+
+
+def source_digest(root: Path = _PKG) -> str:
+    """SHA-256 over the relative names and contents of the `kernel_sources`: the key of the
+    on-disk cache (hex)."""
+    return _files_digest(root, kernel_sources(root))
+
+
+@functools.cache
+def package_digest(root: Path = _PKG) -> str:
+    """Which stabctl a process runs: SHA-256 over the relative names and contents of the
+    package's modules (``*.py``) and the cases shipped with them (``*.json``), taken once
+    per process.  A Dask sweep refuses a worker whose digest is not the
+    client's (`stabctl.parallel`): an uncommitted edit on one machine, another version.
+
+    Parameters
+    ----------
+    root : Path
+        The package directory (default: stabctl's).
+
+    Returns
+    -------
+    str
+        The digest, hex.
+    """
+    return _files_digest(root, sorted([*root.rglob("*.py"), *root.rglob("*.json")]))
 
 
 def cache_dirs() -> list[Path]:
@@ -244,20 +276,68 @@ class _LazyCacheImpl(CompileResultCacheImpl):
     ]
 
 
+class _UnsafeEntry(Exception):
+    """A cache file numba must not unpickle (`unsafe_entry_reason`, the message)."""
+
+
+class _CheckedCacheFile(IndexDataCacheFile):
+    """numba's index and data files of one kernel, each checked (`unsafe_entry_reason`)
+    before it is unpickled (`_UnsafeEntry` if unsafe), and written writable by their owner
+    only (numba's are as the umask leaves them, group-writable under umask 002)."""
+
+    def _load_index(self):
+        _check_entry(self._index_path)
+        return super()._load_index()
+
+    def _load_data(self, name):
+        _check_entry(self._data_path(name))
+        return super()._load_data(name)
+
+    @contextlib.contextmanager
+    def _open_for_write(self, filepath):
+        with super()._open_for_write(filepath) as f:
+            mode = stat.S_IMODE(os.fstat(f.fileno()).st_mode)
+            os.fchmod(f.fileno(), mode & ~(stat.S_IWGRP | stat.S_IWOTH))
+            yield f
+
+
+def _check_entry(path: str) -> None:
+    """`_UnsafeEntry` naming why if numba must not unpickle the cache file `path`."""
+    why = unsafe_entry_reason(Path(path))
+    if why:
+        raise _UnsafeEntry(why)
+
+
 class GuardedCache(FunctionCache):
-    """numba's on-disk cache of one kernel, whose load survives a damaged entry: an index
-    or data file that does not unpickle (truncated, garbage) is deleted and the kernel
-    compiled again, instead of the run stopping with an UnpicklingError.  Its directory is
-    made only when the kernel is first saved (`_LooksFirst`), and the cache's key
-    (`stamp_cache`) written before."""
+    """numba's on-disk cache of one kernel, whose load survives a damaged or unsafe entry:
+    an index or data file that does not unpickle (truncated, garbage) is deleted and the
+    kernel compiled again, instead of the run stopping with an UnpicklingError; so is one
+    that is unsafe to unpickle (`unsafe_entry_reason`, checked before numba reads it), with
+    a RuntimeWarning naming the file and why.  Its directory is made only when the kernel
+    is first saved (`_LooksFirst`), and the cache's key (`stamp_cache`) written before."""
 
     _impl_class = _LazyCacheImpl
 
+    def __init__(self, py_func):
+        super().__init__(py_func)
+        self._cache_file = _CheckedCacheFile(
+            cache_path=self._cache_path,
+            filename_base=self._impl.filename_base,
+            source_stamp=self._impl.locator.get_source_stamp(),
+        )
+
     def load_overload(self, sig, target_context):
-        """The cached kernel for sig, or None (compile it) if none or damaged."""
+        """The cached kernel for sig, or None (compile it) if none, damaged or unsafe."""
         try:
             return super().load_overload(sig, target_context)
-        except Exception:  # noqa: BLE001 - whatever a damaged pickle raises
+        except Exception as exc:  # noqa: BLE001 - whatever a damaged pickle raises
+            if isinstance(exc, _UnsafeEntry):
+                warnings.warn(
+                    f"numba cache: {exc}; not loaded: the entry is deleted and its kernel "
+                    "compiled again",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
             cache_file = self._cache_file
             index = Path(cache_file._index_path)
             for path in (index, *index.parent.glob(index.stem + "*.nbc")):
@@ -292,15 +372,59 @@ def unsafe_reason(directory: Path) -> str:
     """Why numba must not load kernels from `directory` ('' if it may): it belongs to
     another user than this one or root, or others than its owner may write into it (a
     kernel index is a pickle: whoever can plant one runs code in every process that
-    loads it)."""
+    loads it).
+
+    Parameters
+    ----------
+    directory : Path
+        A cache directory (a link to one followed); one not there yet is safe (numba
+        makes it with this process's umask).
+
+    Returns
+    -------
+    str
+        The reason, naming the directory, or ''.
+    """
     try:
         st = directory.stat()
     except OSError:
-        return ""  # not there yet: numba creates it with this process's umask
+        return ""
+    return _unsafe_owner_or_mode(directory, st)
+
+
+def unsafe_entry_reason(path: Path) -> str:
+    """Why numba must not unpickle the cache file `path` (a kernel's ``*.nbi`` index or
+    ``*.nbc`` data; '' if it may): it is not a regular file (a symbolic link, even to a
+    safe file: its target is whatever the link's writer chose), or, as a directory
+    (`unsafe_reason`), it belongs to another user than this one or root or is writable by
+    others than its owner (whoever can write it runs code in the process that loads it).
+
+    Parameters
+    ----------
+    path : Path
+        The file; one that is missing is safe (numba finds no entry).
+
+    Returns
+    -------
+    str
+        The reason, naming the file, or ''.
+    """
+    try:
+        st = path.lstat()
+    except OSError:
+        return ""  # missing or unreadable: numba's own open of it says so
+    if not stat.S_ISREG(st.st_mode):
+        return f"{path} is not a regular file"
+    return _unsafe_owner_or_mode(path, st)
+
+
+def _unsafe_owner_or_mode(path: Path, st: os.stat_result) -> str:
+    """The reason a cache directory or file of status `st` is unsafe by its owner (another
+    user than this one or root) or its mode (writable by others than its owner), or ''."""
     if st.st_uid not in (os.geteuid(), 0):
-        return f"{directory} belongs to user {st.st_uid}"
+        return f"{path} belongs to user {st.st_uid}"
     if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
-        return f"{directory} is writable by others than its owner"
+        return f"{path} is writable by others than its owner"
     return ""
 
 

@@ -137,7 +137,10 @@ class _Echo(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            click.echo(self.format(record), err=True)
+            from stabctl.progress import bars_cleared
+
+            with bars_cleared():  # a progress bar shown: the line goes above it
+                click.echo(self.format(record), err=True)
         except Exception:  # noqa: BLE001 - a logging handler reports its own failures
             self.handleError(record)
 

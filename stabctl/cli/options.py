@@ -1027,7 +1027,8 @@ def parallel_options(func):
                 metavar="ADDRESS",
                 help="Dask distributed scheduler (tcp://host:8786) to run on instead, "
                 "or 'local' for a local Dask cluster of --workers processes "
-                "(needs pip install 'stabctl[dask]').",
+                "(needs pip install 'stabctl[dask]').  A cluster without a worker is "
+                "waited for until one joins, said after 10 s.",
             ),
         ),
     )

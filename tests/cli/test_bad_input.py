@@ -743,6 +743,38 @@ def test_devices_and_deeply_nested_json_are_refused_by_name(tmp_path):
     assert list(read_records(records)) == ["a"]
 
 
+def test_integers_of_more_digits_than_python_converts_are_refused_by_name(tmp_path, no_simulation):
+    """A case's base_mva or a bus number of 5001 digits stopped `cases` and `simulate` with
+    Python's "Exceeds the limit (4300 digits)" ValueError (exit 1, a traceback), and so did
+    a --scheduler port of 5001 digits: each is one error line naming the file (and the
+    line) or the option, exit 2, nothing written; a records line holding one is an error
+    naming the file and line, not a record."""
+    from stabctl.parallel import read_records
+
+    big = "1" + "0" * 5000
+    text = json.dumps(_kundur_dict(), indent=1)
+    base = tmp_path / "c_bigint.json"
+    base.write_text(text.replace('"base_mva": 100.0', f'"base_mva": {big}', 1))
+    line = text[: text.index('"base_mva"')].count("\n") + 1
+    assert_error(
+        run("cases", base), f"{base}: an integer of 5001 digits at line {line}, more than Python"
+    )
+    d = _kundur_dict()
+    d["tables"]["buses"]["rows"][0][0] = "@@BIG@@"
+    row = tmp_path / "c_bigint_row.json"
+    row.write_text(json.dumps(d).replace('"@@BIG@@"', big))
+    assert_error(run("simulate", row, "--tf", 0.3), f"{row}: an integer of 5001 digits, more")
+    out = tmp_path / "x.jsonl"
+    port = f"tcp://127.0.0.1:{big}"
+    res = run("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", out, "--scheduler", port)
+    assert_error(res, "--scheduler tcp://127.0.0.1:1000", "port of 5001 digits is out of range")
+    assert not out.exists()
+    records = tmp_path / "r.jsonl"
+    records.write_text(f'{{"key": "a", "status": "ok", "result": {{"n": {big}}}}}\n')
+    with pytest.raises(InputError, match=f"{records} line 1: an integer of 5001 digits, more"):
+        read_records(records)
+
+
 @pytest.mark.parametrize(
     "args,needle",
     [
