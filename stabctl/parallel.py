@@ -1155,13 +1155,14 @@ def _close_cluster(cluster) -> None:
 
 @contextmanager
 def _quiet_dask() -> Iterator[None]:
-    """distributed's loggers at CRITICAL for the block: it logs a traceback of its own
-    when the scheduler goes away; the jobs it lost are said in one line
-    (SweepIncomplete)."""
+    """distributed's loggers, and tornado's (its event loop, which logs a traceback of
+    distributed's when Ctrl-C lands inside one of its calls), at CRITICAL for the block:
+    it logs a traceback of its own when the scheduler goes away; the jobs it lost are
+    said in one line (SweepIncomplete)."""
     dask_logs = [
         logging.getLogger(name)
-        for name in list(logging.root.manager.loggerDict)
-        if name == "distributed" or name.startswith("distributed.")
+        for name in dict.fromkeys(["tornado.application", *logging.root.manager.loggerDict])
+        if name == "distributed" or name.startswith(("distributed.", "tornado.application"))
     ]
     levels = [log.level for log in dask_logs]
     for log in dask_logs:
