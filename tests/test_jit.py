@@ -17,6 +17,9 @@ def _numba_dir(locator):
 
 
 def test_cache_dirs_are_where_numba_puts_the_kernels(tmp_path, monkeypatch):
+    """In the package's __pycache__ without NUMBA_CACHE_DIR (whatever the environment
+    running the tests sets), under NUMBA_CACHE_DIR with it."""
+    monkeypatch.setattr(numba.config, "CACHE_DIR", "")
     assert _numba_dir(InTreeCacheLocator) in map(str, jc.cache_dirs())
     monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
     assert _numba_dir(UserProvidedCacheLocator) in map(str, jc.cache_dirs())
