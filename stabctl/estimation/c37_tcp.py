@@ -173,13 +173,20 @@ def port_number(text: str) -> int:
     ------
     InputError
         Not ASCII digits (``expected HOST:PORT``), or a number outside 1-65535 (``port
-        99999 is out of range (1-65535)``); the caller adds the address.
+        99999 is out of range (1-65535)``; a port of more than 5 digits, leading zeros
+        aside, is named by its length and never converted: Python refuses to convert a
+        string of more than 4300 digits); the caller adds the address.
     """
     if not (text.isascii() and text.isdigit()):
         raise InputError("expected HOST:PORT")
-    if int(text) not in PORTS:
-        raise InputError(f"port {int(text)} is out of range ({PORTS[0]}-{PORTS[-1]})")
-    return int(text)
+    digits = text.lstrip("0") or "0"
+    if len(digits) > len(str(PORTS[-1])):
+        raise InputError(
+            f"port of {len(digits)} digits is out of range ({PORTS[0]}-{PORTS[-1]})"
+        )
+    if int(digits) not in PORTS:
+        raise InputError(f"port {int(digits)} is out of range ({PORTS[0]}-{PORTS[-1]})")
+    return int(digits)
 
 
 class StreamServer:
