@@ -19,8 +19,10 @@ the stream's IDCODE, others dropped):
    +1 absorb);
 4. at the end of its run the plant sends a header frame (frame type 1) reading
    ``stabctl: end of run at t = <s>`` and closes the connection; a connection closed
-   without it is a plant that stopped early (killed, crashed), which the controller says
-   (`PlantStopped`) instead of presenting the frames it answered as the whole run.
+   without it is a plant that stopped early (killed, crashed), and so is a header whose
+   end is not that of the last frame answered (the last reporting instant at or before
+   it: frames of the run never came), which the controller says (`PlantStopped`)
+   instead of presenting the frames it answered as the whole run.
 
 The simulation waits for each answer (lock step), so the run is that of the in-process
 loop with the frames as on the wire (`c37.on_wire`) whatever the network does; the modes
@@ -58,9 +60,9 @@ END_OF_RUN = "stabctl: end of run at t = "
 
 
 class PlantStopped(InputError):
-    """The plant closed the loop without its end-of-run header: it stopped before the end
-    of its run (killed, crashed), so the frames the controller answered are not the whole
-    run."""
+    """The frames the controller answered are not the plant's whole run: the plant closed
+    the loop without its end-of-run header (killed, crashed), or the end that header
+    announces is not that of the last frame answered."""
 
 
 def end_of_run_frame(idcode: int, t: float) -> bytes:
@@ -420,7 +422,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         the controller's, or a frame after 'start' that is neither a data frame of the
         stream (`c37.check_data_frame`) nor the end-of-run header (its CRC valid).
     PlantStopped
-        The plant closed the loop without its end-of-run header (an InputError).
+        The plant closed the loop without its end-of-run header, or announced an end
+        that is not its last frame's (`_check_run_end`) (an InputError).
     """
     from pyc37.frame import CommandFrame
 
@@ -445,7 +448,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 )
             conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
             while (data := _read_frame(conn)) is not None:
-                if _end_time(data, cfg.idcode) is not None:
+                if (t_end := _end_time(data, cfg.idcode)) is not None:
+                    _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
                     return n
                 try:  # a data frame, checked (`c37.check_data_frame`)
                     frame = c37.parse_frame(cfg, cfg2, data)
@@ -473,6 +477,25 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         f"the plant at {host}:{port} closed the loop without ending its run, after {n} "
         f"frame(s) answered{at}: it stopped early (killed or crashed), so they are not "
         "the whole run"
+    )
+
+
+def _check_run_end(t_end: float, last: float | None, n: int, rate: int, where: str) -> None:
+    """PlantStopped unless the last frame answered (t = `last` s, None: none) is the
+    plant's last reporting instant at or before the end of run it announced (`t_end` s):
+    within one frame interval (1 / `rate` s) before it, to the time stamps' microsecond.
+    The frame at t = 0 is decided in the plant (no run has two points yet) and never
+    sent, so a run that ends within one interval of it answers none."""
+    t_last = 0.0 if last is None else last
+    count = 1.0 / c37.TIME_BASE
+    if t_end - 1.0 / rate + count < t_last <= t_end + count:
+        return
+    at = "none" if last is None else f"the last at t = {last:.4f} s"
+    raise PlantStopped(
+        f"the plant at {where} announced the end of its run at t = {t_end:.4f} s, after "
+        f"{n} frame(s) answered ({at}, {rate} frames/s): its frames "
+        + ("stopped before that end" if t_last <= t_end else "went past that end")
+        + ", so they are not the whole run"
     )
 
 
