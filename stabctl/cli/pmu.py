@@ -314,9 +314,11 @@ def record(address, out, frames, idcode):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
     then 'start', addressed to stream --idcode) and write its CFG-2 and FRAMES data frames
     to OUT, as received (an IPv6 HOST in brackets: [::1]:4712).  Each frame is checked as
-    it comes (CRC; each data frame's IDCODE, type and size against the CFG-2) and must
-    come whole within 30 s.  A stream that stops before FRAMES (the server closes, resets
-    or sends no whole frame for 30 s, or a data frame is refused) is written as far as it
+    it comes (CRC; each data frame's IDCODE, type and size against the CFG-2; a CFG-2
+    resent must be the one in use) and must come whole within 30 s, each data frame
+    within 30 s of the one before, whatever other frames come between.  A stream that
+    stops before FRAMES (the server closes, resets or sends no whole data frame for 30 s,
+    or a frame is refused) is written as far as it
     came, up to the frame refused, and named an error (exit status 2: the recording is
     partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
     left as it was).

@@ -266,8 +266,115 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     return Frame(reporting_instant(t, cfg.rate), valid, v, i, freq, rocof)
 
 
-#: C37.118.2-2011 frame types (SYNC bits 6-4) other than a data frame's (0)
-FRAME_TYPES = {1: "header frame", 2: "CFG-1", 3: "CFG-2", 4: "command frame", 5: "CFG-3"}
+#: C37.118.2-2011 frame types (SYNC bits 6-4)
+FRAME_TYPES = {
+    0: "data frame",
+    1: "header frame",
+    2: "CFG-1",
+    3: "CFG-2",
+    4: "command frame",
+    5: "CFG-3",
+}
+
+
+def frame_kind(data: bytes) -> str:
+    """A frame's type as named in messages (SYNC bits 6-4, C37.118.2-2011 Table 2).
+
+    Parameters
+    ----------
+    data : bytes
+        One frame (at least its SYNC word).
+
+    Returns
+    -------
+    str
+        ``data frame``, ``header frame``, ``CFG-1``, ``CFG-2``, ``command frame``,
+        ``CFG-3``, or ``frame of type N`` for the types the standard reserves.
+    """
+    kind = data[1] >> 4 & 0x7
+    return FRAME_TYPES.get(kind, f"frame of type {kind}")
+
+
+#: The CFG-2 fields (C37.118.2-2011 Table 8) as pyc37's getters read them, in frame order
+CONFIG_FIELDS = (
+    ("IDCODE", "get_id_code"),
+    ("TIME_BASE", "get_time_base"),
+    ("NUM_PMU", "get_num_pmu"),
+    ("STN", "get_station_name"),
+    ("the PMUs' IDCODE", "get_stream_id_code"),
+    ("FORMAT", "get_data_format"),
+    ("PHNMR", "get_phasor_num"),
+    ("ANNMR", "get_analog_num"),
+    ("DGNMR", "get_digital_num"),
+    ("CHNAM", "get_channel_names"),
+    ("PHUNIT", "get_ph_units"),
+    ("ANUNIT", "get_analog_units"),
+    ("DIGUNIT", "get_digital_units"),
+    ("FNOM", "get_fnom"),
+    ("CFGCNT", "get_cfg_count"),
+    ("DATA_RATE", "get_data_rate"),
+)
+
+
+def config_change(old, new) -> str:
+    """The first CFG-2 field in which `new` differs from `old` (both as pyc37 reads them),
+    or '' if none does: a CFG-2 resent with only its time stamp new is the same.
+
+    Parameters
+    ----------
+    old, new : pyc37 ConfigFrame2
+        The CFG-2 in use and one received later.
+
+    Returns
+    -------
+    str
+        The field's name (``FORMAT``, ``DATA_RATE``) with both values, or ''.
+    """
+    for name, get in CONFIG_FIELDS:
+        if (was := getattr(old, get)()) != (now := getattr(new, get)()):
+            return f"{name} {now} where the CFG-2 in use has {was}"
+    return ""
+
+
+def check_stream_frame(cfg2, data: bytes) -> bool:
+    """Check a frame received after 'start' on the stream `cfg2` describes: a data frame
+    as `check_data_frame` does; any other frame's CRC; a CFG-2 must be `cfg2` resent (its
+    time stamp aside): the data frames after one that differs would be read by a layout
+    that is not theirs.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame, by which its data frames are read.
+    data : bytes
+        One whole frame (SYNC and FRAMESIZE read, at least 16 bytes).
+
+    Returns
+    -------
+    bool
+        True for a data frame, False for another frame (a header, CFG-1, CFG-3 or
+        command frame, or the same CFG-2), which carries no measurement.
+
+    Raises
+    ------
+    InputError
+        As `check_data_frame`; another frame whose CRC fails; a CFG-2 that is not
+        readable or differs from `cfg2` (naming the field, `config_change`).
+    """
+    kind = frame_kind(data)
+    if kind == "data frame":
+        check_data_frame(cfg2, data)
+        return True
+    if not _pyc37().CommonFrame._check_crc(data):
+        raise InputError(
+            f"C37.118.2 {kind} not readable: CRC failed (its bytes or its FRAMESIZE damaged)"
+        )
+    if kind == "CFG-2" and (change := config_change(cfg2, read_config(data, "the CFG-2"))):
+        raise InputError(
+            f"a CFG-2 that changes the stream's configuration ({change}): a change "
+            "mid-stream is not followed (receive the stream again)"
+        )
+    return False
 
 
 def check_data_frame(cfg2, data: bytes) -> None:
@@ -293,9 +400,8 @@ def check_data_frame(cfg2, data: bytes) -> None:
         raise InputError(
             "C37.118.2 data frame not readable: CRC failed (its bytes or its FRAMESIZE damaged)"
         )
-    if kind := data[1] >> 4 & 0x7:
-        name = FRAME_TYPES.get(kind, f"frame of type {kind}")
-        raise InputError(f"C37.118.2: a {name}, not a data frame")
+    if (kind := frame_kind(data)) != "data frame":
+        raise InputError(f"C37.118.2: a {kind}, not a data frame")
     if (idcode := int.from_bytes(data[4:6], "big")) != cfg2.get_id_code():
         raise InputError(
             f"a data frame of IDCODE {idcode}, not the stream's {cfg2.get_id_code()} (its CFG-2's)"
