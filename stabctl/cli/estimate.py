@@ -12,7 +12,12 @@ import click
 import numpy as np
 
 from stabctl.cli.checks import check_writable, model_settings
-from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
+from stabctl.cli.format import (
+    closed_loop_lines,
+    estimator_cct_lines,
+    print_estimate,
+    print_json,
+)
 from stabctl.cli.options import (
     FLOAT,
     INT,
@@ -601,6 +606,7 @@ def track(
             f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
         )
         + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
+        + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + f"; wrote {out_path}"
     )
     if got.short:

@@ -263,7 +263,7 @@ def replay(recording, host, port, allow, speed, timeout):
     if not data:
         raise InputError(f"RECORDING {path}: no data frame (a configuration frame only)")
     c37.check_data_frames(cfg2, data, f"RECORDING {path}")
-    check_order(data, f"RECORDING {path}")
+    check_order(data, cfg2, f"RECORDING {path}")
     with StreamServer(cfg2, data, host=host, port=port, speed=speed or _INF, guard=guard) as server:
         _serve([server])
 
@@ -508,6 +508,7 @@ def control(
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_loop import serve_controller
+    from stabctl.estimation.sources import unused_values
     from stabctl.io import load_case
 
     if esd_pct is None:
@@ -523,8 +524,10 @@ def control(
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
-    n = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
+    got = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
+    flagged = unused_values(got.flagged)
     click.echo(
-        f"controller ({estimator}): answered {n} frames from {address}, {d.starts} ESD starts"
+        f"controller ({estimator}): answered {got.frames} frames from {address}, {d.starts} "
+        f"ESD starts" + (f"; {flagged}" if flagged else "")
     )

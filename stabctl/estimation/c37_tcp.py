@@ -246,7 +246,7 @@ class StreamServer:
         if not data:
             raise InputError("a stream server needs at least one data frame")
         self.speed, self._cfg2, self._data, self.guard = float(speed), cfg2, list(data), guard
-        self._t = [c37.frame_time(d) for d in self._data]
+        self._t = [c37.frame_time(d, cfg2) for d in self._data]
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
         self.refused: list[str] = []
@@ -633,7 +633,7 @@ def receive(
                 raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")
             config = c37.read_config(cfg2, "its CFG-2")
             conn.sendall(CommandFrame(idcode, "start").convert2bytes())
-            short, refused = _data_frames(conn, config, end, data)
+            short, refused = _data_frames(conn, config, end, data, timeout)
         except FrameTimeout as exc:
             raise InputError(f"{where}: sent {exc}, before any data frame") from None
         except TimeoutError:
@@ -650,16 +650,15 @@ def receive(
     return Stream(cfg2, data, short, refused)
 
 
-def _data_frames(conn: socket.socket, cfg2, end: End, data: list) -> tuple[str, str]:
+def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float) -> tuple[str, str]:
     """Append data frames from conn to data until `end`, every frame checked against cfg2
     (the CFG-2 as pyc37 reads it; `c37.check_stream_frame`: a data frame's CRC, IDCODE,
     type and size, any other frame's CRC, a CFG-2 resent unchanged): ('', '') if the end
     was reached (or, with no end stated, the server closed), else (what cut the stream,
-    why a frame was refused or '').  The connection's time-out is the longest wait for
-    the next data frame, whatever else comes meanwhile (a server sending header frames
-    and no data frame is cut as a silent one is)."""
+    why a frame was refused or '').  `budget` (s) is the longest wait for the next data
+    frame, whatever else comes meanwhile (a server sending header frames and no data
+    frame is cut as a silent one is); the connection's time-out is left at it."""
     soc = cfg2.get_soc()
-    budget = conn.gettimeout()
     since = time.monotonic()  # of 'start', then of the last data frame
     try:
         while end.frames is None or len(data) < end.frames:
@@ -686,7 +685,7 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list) -> tuple[str, 
                             continue  # a header, CFG-1, CFG-3, command or the same CFG-2
                     except InputError as exc:
                         last = (
-                            f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s"
+                            f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s"
                             if data
                             else ""
                         )
@@ -700,7 +699,7 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list) -> tuple[str, 
                         )
                     data.append(frame)
                     since = time.monotonic()
-                    if end.tf is not None and c37.frame_time(frame) - soc >= end.tf - 0.5e-6:
+                    if end.tf is not None and c37.frame_time(frame, cfg2) - soc >= end.tf - 0.5e-6:
                         return "", ""
                     if not end.given and len(data) > MAX_FRAMES:
                         raise InputError(
@@ -711,7 +710,9 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list) -> tuple[str, 
                 if not end.given:
                     return "", ""
                 cut = "closed the connection"
-            last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
+            last = (
+                f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s" if data else ""
+            )
             return f"the server {cut} after {len(data)} data frames{last}, before {end}", ""
         return "", ""
     finally:

@@ -120,7 +120,7 @@ def test_a_controller_of_other_pmus_is_refused(kundur_loop):
         with pytest.raises(InputError, match=r"1 peer.s. dropped, .*closed before 'start'"):
             link(0.05, sim.run(events, t_end=0.1))
         thread.join(timeout=10)
-    assert "not the controller's" in str(errors[0])
+    assert "its CFG-2 station names" in str(errors[0])
 
 
 def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
@@ -232,8 +232,8 @@ def _rest():
 
 
 def _serve_into(out, *args):
-    """`serve_controller(*args)`, its count appended to out."""
-    out.append(c37_loop.serve_controller(*args))
+    """`serve_controller(*args)`, its count of frames answered appended to out."""
+    out.append(c37_loop.serve_controller(*args).frames)
 
 
 def _catch(errors, func, *args):
