@@ -12,7 +12,12 @@ import click
 import numpy as np
 
 from stabctl.cli.checks import check_writable, model_settings
-from stabctl.cli.format import closed_loop_lines, estimator_cct_lines, print_estimate, print_json
+from stabctl.cli.format import (
+    closed_loop_lines,
+    estimator_cct_lines,
+    print_estimate,
+    print_json,
+)
 from stabctl.cli.options import (
     FLOAT,
     INT,
@@ -542,8 +547,9 @@ def track(
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
     tuned to.  Over TCP the commands address stream --idcode, and every frame is checked
-    (CRC; each data frame's IDCODE, type and size against its CFG-2: a frame refused
-    refuses the source) and must come whole within 30 s.  A stream that stops before
+    (CRC; each data frame's IDCODE, type and size against its CFG-2; a CFG-2 resent must
+    be the one in use: a frame refused refuses the source) and must come whole within
+    30 s, each data frame within 30 s of the one before.  A stream that stops before
     --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2: the result is partial), unless --out
     exists: a file there is replaced only by the track of a whole stream (the file left
@@ -606,6 +612,7 @@ def track(
             f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
         )
         + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
+        + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + f"; wrote {out_path}"
     )
     if got.short:

@@ -417,10 +417,13 @@ def print_modes(st, no_pss: bool) -> None:
 
 def _source_line(src: dict, seed: int) -> str:
     """What a received stream brought (`estimate rmse --source`)."""
+    from stabctl.estimation.sources import unused_values
+
     return (
         f"frames from {src['address']}: {src['frames']} time stamps, {src['data_frames']} "
-        f"data frames from {src['streams']} stream(s), {src['absent']} PMU values flagged "
-        f"absent, {src['missing']} missing (labelled seed {seed})"
+        f"data frames from {src['streams']} stream(s), "
+        f"{unused_values(src['flagged']) or 'no PMU value flagged unusable by its STAT'}, "
+        f"{src['missing']} missing (labelled seed {seed})"
     )
 
 

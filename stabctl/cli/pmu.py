@@ -264,7 +264,7 @@ def replay(recording, host, port, allow, speed, timeout):
     if not data:
         raise InputError(f"RECORDING {path}: no data frame (a configuration frame only)")
     c37.check_data_frames(cfg2, data, f"RECORDING {path}")
-    check_order(data, f"RECORDING {path}")
+    check_order(data, cfg2, f"RECORDING {path}")
     with StreamServer(cfg2, data, host=host, port=port, speed=speed or _INF, guard=guard) as server:
         _serve([server])
 
@@ -315,9 +315,11 @@ def record(address, out, frames, idcode):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
     then 'start', addressed to stream --idcode) and write its CFG-2 and FRAMES data frames
     to OUT, as received (an IPv6 HOST in brackets: [::1]:4712).  Each frame is checked as
-    it comes (CRC; each data frame's IDCODE, type and size against the CFG-2) and must
-    come whole within 30 s.  A stream that stops before FRAMES (the server closes, resets
-    or sends no whole frame for 30 s, or a data frame is refused) is written as far as it
+    it comes (CRC; each data frame's IDCODE, type and size against the CFG-2; a CFG-2
+    resent must be the one in use) and must come whole within 30 s, each data frame
+    within 30 s of the one before, whatever other frames come between.  A stream that
+    stops before FRAMES (the server closes, resets or sends no whole data frame for 30 s,
+    or a frame is refused) is written as far as it
     came, up to the frame refused, and named an error (exit status 2: the recording is
     partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
     left as it was).
@@ -508,6 +510,7 @@ def control(
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_loop import serve_controller
+    from stabctl.estimation.sources import unused_values
     from stabctl.io import load_case
 
     if esd_pct is None:
@@ -523,8 +526,10 @@ def control(
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
-    n = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
+    got = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
+    flagged = unused_values(got.flagged)
     click.echo(
-        f"controller ({estimator}): answered {n} frames from {address}, {d.starts} ESD starts"
+        f"controller ({estimator}): answered {got.frames} frames from {address}, {d.starts} "
+        f"ESD starts" + (f"; {flagged}" if flagged else "")
     )

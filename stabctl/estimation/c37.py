@@ -1,7 +1,8 @@
 """IEEE C37.118.2-2011 frames of the simulated PMUs: one multi-PMU stream (as a PDC sends
-it), its configuration frame (CFG-2) and data frames, built and parsed with pyc37 (BSD-3,
-the maintained fork of pypmu; the ``pmu`` extra), and recordings of a stream as the
-frames themselves.
+it), its configuration frame (CFG-2) and data frames, built with pyc37 (BSD-3, the
+maintained fork of pypmu; the ``pmu`` extra), which reads the CFG-2 too, the data frames
+read here as their CFG-2 lays them out, and recordings of a stream as the frames
+themselves.
 
 Stream layout (C37.118.2-2011 Tables 5, 6, 8, 9):
 - one PMU block per `stabctl.estimation.pmu.PMU`, station name its label (``B3:G1``),
@@ -20,11 +21,18 @@ Stream layout (C37.118.2-2011 Tables 5, 6, 8, 9):
   1 000 000 (1 us).
 A recording is the CFG-2 frame followed by the data frames, each as sent (they carry their
 own FRAMESIZE): any C37.118.2 reader can replay it.
+
+A stream someone else wrote is read as its CFG-2 says (`check_config`, `parse_frame`):
+TIME_BASE, FORMAT, PHUNIT, FNOM, the phasors by their PHUNIT type; STAT words that make
+a PMU's values unusable (`STAT_UNUSABLE`) leave them out, counted by reason.
 """
 
 from __future__ import annotations
 
+import cmath
 import collections.abc  # noqa: F401  pyc37 1.0.2 uses collections.abc without importing it
+import math
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -228,46 +236,432 @@ def _int16(value, what: str, k: int) -> int:
     return v
 
 
-def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
-    """A data frame of the stream back to a `pmu.Frame` (pu, Hz, Hz/s) with pyc37's
-    parser (its CRC checked); PMUs whose STAT says absent data are invalid, their values
-    NaN.
+#: STAT (C37.118.2-2011 Table 7) words whose PMU values are not a synchronised
+#: measurement at the frame's time stamp, each (mask, value, reason): not used (as a frame
+#: lost), counted by reason.  Bit 13 (PMU sync error): the PMU's clock has lost its time
+#: source, so its time stamp, and the phase angles referred to it, cannot be trusted; bit
+#: 12 (data sorting by arrival): the PDC put the values in the frame as they came, not by
+#: their own time stamps, so they may belong to another instant.
+STAT_UNUSABLE = (
+    (0xC000, 0x4000, "PMU error (STAT bits 15-14 = 01)"),
+    (0xC000, 0x8000, "absent (STAT bits 15-14 = 10)"),
+    (0xC000, 0xC000, "test mode (STAT bits 15-14 = 11)"),
+    (0x2000, 0x2000, "PMU sync lost (STAT bit 13)"),
+    (0x1000, 0x1000, "sorted by arrival (STAT bit 12)"),
+)
+
+
+def unusable(stat: int) -> str:
+    """Why a PMU's values with STAT word `stat` are not used ('' if they are).
+
+    Parameters
+    ----------
+    stat : int
+        The PMU's 16-bit STAT word in a data frame.
+
+    Returns
+    -------
+    str
+        The first reason of `STAT_UNUSABLE` that applies, or ''.
+    """
+    return next((why for mask, value, why in STAT_UNUSABLE if stat & mask == value), "")
+
+
+@dataclass(frozen=True)
+class Block:
+    """One PMU's block in a stream's data frames, as its CFG-2 gives it (C37.118.2-2011
+    Tables 5, 8, 9).
+
+    Attributes
+    ----------
+    station : str
+        STN.
+    polar, ph_float, an_float, fr_float : bool
+        FORMAT bits 0-3: phasors polar, phasors, analogs, FREQ/DFREQ floating point.
+    units : tuple of (int, str)
+        PHUNIT of each phasor: (scale in 1e-5 V or A per bit of an integer phasor,
+        ``v`` voltage or ``i`` current).
+    channels : tuple of str
+        CHNAM of each phasor.
+    analogs, digitals : int
+        ANNMR and DGNMR.
+    fnom : float
+        FNOM, Hz.
+    """
+
+    station: str
+    polar: bool
+    ph_float: bool
+    an_float: bool
+    fr_float: bool
+    units: tuple
+    channels: tuple
+    analogs: int
+    digitals: int
+    fnom: float
+
+    @property
+    def size(self) -> int:
+        """Bytes of the block: STAT, phasors, FREQ, DFREQ, analogs, digital words."""
+        return (
+            2
+            + len(self.units) * (8 if self.ph_float else 4)
+            + 2 * (4 if self.fr_float else 2)
+            + self.analogs * (4 if self.an_float else 2)
+            + 2 * self.digitals
+        )
+
+    def phasor(self, kind: str, need: bool, what: str) -> int | None:
+        """The index of the block's one phasor of `kind` (``v``, ``i``) by its PHUNIT
+        type; None if it has none and `need` is False.
+
+        Raises
+        ------
+        InputError
+            None of that kind where `need`, or more than one (which is the PMU's is not
+            known), or an integer phasor whose PHUNIT scale is 0, named with `what`.
+        """
+        name = {"v": "voltage", "i": "current"}[kind]
+        at = [j for j, (_, t) in enumerate(self.units) if t == kind]
+        listed = ", ".join(f"{c.strip()!r} ({t})" for c, (_, t) in zip(self.channels, self.units))
+        if len(at) > 1 or (need and not at):
+            how = "no" if not at else f"{len(at)}"
+            raise InputError(
+                f"{what}: PMU {self.station}: {how} {name} phasor(s) (PHUNIT type "
+                f"{'0' if kind == 'v' else '1'}) among its PHNMR {len(self.units)} "
+                f"[{listed}], where the stream needs one"
+            )
+        if at and not self.ph_float and self.units[at[0]][0] == 0:
+            raise InputError(
+                f"{what}: PMU {self.station}: integer phasor {self.channels[at[0]].strip()!r} "
+                "has PHUNIT scale 0"
+            )
+        return at[0] if at else None
+
+
+def blocks(cfg2) -> list[Block]:
+    """The PMU blocks of a stream's data frames, in order, as its CFG-2 gives them.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+
+    Returns
+    -------
+    list of Block
+    """
+    c = cfg2
+    one = (lambda x: x) if c.get_num_pmu() > 1 else (lambda x: [x])  # pyc37: one PMU's bare
+    fields = (
+        c.get_station_name,
+        c.get_data_format,
+        c.get_phasor_num,
+        c.get_ph_units,
+        c.get_channel_names,
+        c.get_analog_num,
+        c.get_digital_num,
+        c.get_fnom,
+    )
+    return [
+        Block(
+            str(name).strip(),
+            bool(fmt[0]),
+            bool(fmt[1]),
+            bool(fmt[2]),
+            bool(fmt[3]),
+            tuple(units),
+            tuple(str(x) for x in chnam[:phnmr]),
+            annmr,
+            dgnmr,
+            float(fnom),
+        )
+        for name, fmt, phnmr, units, chnam, annmr, dgnmr, fnom in zip(
+            *(one(get()) for get in fields)
+        )
+    ]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """How a stream's data frames are read into the PMUs of a `StreamConfig`
+    (`check_config`).
+
+    Attributes
+    ----------
+    time_base : int
+        TIME_BASE: FRACSEC counts per second.
+    blocks : tuple of Block
+        The PMUs' blocks, in the stream config's PMU order.
+    voltage : tuple of int
+        Each PMU's voltage phasor (its index among the block's phasors).
+    current : tuple of int or None
+        Each PMU's current phasor; None for a PMU the stream carries no current of.
+    """
+
+    time_base: int
+    blocks: tuple
+    voltage: tuple
+    current: tuple
+
+
+def check_config(cfg2, cfg: StreamConfig) -> Layout:
+    """The one check of a stream's CFG-2 against the stream a reader expects, and how its
+    data frames are read: every reader (a recording replayed, streams merged, the ESD
+    controller's plant) calls it, and `parse_frame` reads by its result.  Read as the
+    CFG-2 gives it: TIME_BASE, FORMAT (polar or rectangular, floating point or integer
+    phasors scaled by their PHUNIT, floating-point or integer FREQ/DFREQ), FNOM, and each
+    PMU's voltage and current phasors found by their PHUNIT type whatever their order.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+    cfg : StreamConfig
+        The stream expected: its IDCODE, PMUs (station names, in order), rate, and which
+        PMUs carry a current phasor (`StreamConfig.phasors`).
+
+    Returns
+    -------
+    Layout
 
     Raises
     ------
     InputError
-        A frame pyc37 rejects (its CRC, size or layout), naming its reason; a frame of
-        another IDCODE than cfg2's, or whose FRAMESIZE is not the size cfg2 gives a data
-        frame (a frame padded or cut, which pyc37 reads without a word).
+        An IDCODE, station names or DATA_RATE other than cfg's, a PMU without exactly
+        one voltage phasor, or without exactly one current phasor where cfg needs one,
+        or an integer phasor used whose PHUNIT scale is 0: each named (``its CFG-2``,
+        the field, the PMU); the caller adds the source.
     """
-    f = _pyc37()
+    bl = blocks(cfg2)
+    for field, theirs, ours in (
+        ("IDCODE", cfg2.get_id_code(), cfg.idcode),
+        ("station names", [b.station for b in bl], [p.label for p in cfg.pmus]),
+        ("DATA_RATE", cfg2.get_data_rate(), cfg.rate),
+    ):
+        if theirs != ours:
+            raise InputError(f"its CFG-2 {field} {theirs}, not the {ours} expected")
+    return Layout(
+        int(cfg2.get_time_base()),
+        tuple(bl),
+        tuple(b.phasor("v", True, "its CFG-2") for b in bl),
+        tuple(
+            b.phasor("i", True, "its CFG-2") if cfg.phasors(k) == 2 else None
+            for k, b in enumerate(bl)
+        ),
+    )
+
+
+#: a floating-point FREQ's range: FNOM +- this (Hz), the standard's range of FREQ
+FREQ_SPAN_HZ = 32.767
+
+
+def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
+    """A data frame of the stream back to a `pmu.Frame` (pu, Hz, Hz/s), read as cfg2
+    says (`check_config`; its checks first, and `check_data_frame`'s).  A PMU whose STAT
+    makes its values unusable (`unusable`: absent, PMU error, test mode, sync lost,
+    sorted by arrival) is invalid, its values NaN.
+
+    Raises
+    ------
+    InputError
+        As `check_data_frame` and `check_config`; a floating-point FREQ (FORMAT bit 3)
+        that is not within FNOM +- 32.767 Hz (C37.118.2-2011 Table 6: it is the actual
+        frequency; pyc37 writes the deviation there) or a DFREQ that is not finite, named
+        with its PMU.
+    """
     check_data_frame(cfg2, data)
-    try:
-        df = f.CommonFrame.convert2frame(data, cfg2)
-    except f.FrameError as exc:
-        raise InputError(f"C37.118.2 data frame not readable: {exc}") from None
-    many = (lambda x: [x]) if cfg.n == 1 else (lambda x: x)
-    valid = np.array([(s & 0xC000) == 0 for s in many(df._stat)])  # raw words: pyc37
-    # 1.0.2 decodes the data-error bits as STAT >> 15
-    v = np.full(cfg.n, np.nan + 0j)
-    i = np.full(cfg.n, np.nan + 0j)
-    # the phasors as sent, rectangular (re, im): pyc37 1.0.2's get_phasors converts a
-    # single PMU's to polar whatever it is asked
-    ph = [[f.DataFrame._int2phasor(p, FORMAT) for p in raw] for raw in many(df._phasors)]
-    for k in range(cfg.n):
-        if valid[k]:
-            v[k] = complex(*ph[k][0]) / cfg.v_base[k]
-            if cfg.phasors(k) == 2:
-                i[k] = complex(*ph[k][1]) / cfg.i_base[k]
-    nan = np.where(valid, 1.0, np.nan)
-    freq = (cfg.f0 + np.array(many(df.get_freq()), float) / MHZ_PER_HZ) * nan
-    rocof = np.array(many(df.get_dfreq()), float) / DFREQ_PER_HZ_S * nan
-    t = df.get_soc() - cfg.epoch + df.get_frasec()[0] / TIME_BASE
-    return Frame(reporting_instant(t, cfg.rate), valid, v, i, freq, rocof)
+    lay = check_config(cfg2, cfg)
+    n = cfg.n
+    valid = np.zeros(n, bool)
+    v, i = np.full(n, np.nan + 0j), np.full(n, np.nan + 0j)
+    freq, rocof = np.full(n, np.nan), np.full(n, np.nan)
+    at = 14
+    for k, b in enumerate(lay.blocks):
+        if not unusable(int.from_bytes(data[at : at + 2], "big")):
+            valid[k] = True
+            ph = _phasors(b, data, at + 2)
+            v[k] = ph[lay.voltage[k]] / cfg.v_base[k]
+            if (j := lay.current[k]) is not None:
+                i[k] = ph[j] / cfg.i_base[k]
+            freq[k], rocof[k] = _frequency(b, data, at + 2 + len(ph) * (8 if b.ph_float else 4))
+        at += b.size
+    count = int.from_bytes(data[11:14], "big")
+    t = int.from_bytes(data[6:10], "big") - cfg.epoch + count / lay.time_base
+    return Frame(reporting_instant(t, cfg.rate, lay.time_base), valid, v, i, freq, rocof)
 
 
-#: C37.118.2-2011 frame types (SYNC bits 6-4) other than a data frame's (0)
-FRAME_TYPES = {1: "header frame", 2: "CFG-1", 3: "CFG-2", 4: "command frame", 5: "CFG-3"}
+def _phasors(b: Block, data: bytes, at: int) -> list[complex]:
+    """The phasors of block b at byte `at` of a data frame, in volts and amperes: floating
+    point as they are (polar: magnitude, angle in rad), integers times their PHUNIT scale
+    (1e-5 V or A per bit; polar: the angle in 1e-4 rad)."""
+    n = len(b.units)
+    if b.ph_float:
+        vals = struct.unpack_from(f">{2 * n}f", data, at)
+    else:
+        vals = struct.unpack_from(">" + ("Hh" if b.polar else "hh") * n, data, at)
+    out = []
+    for j, (scale, _) in enumerate(b.units):
+        x, y = vals[2 * j], vals[2 * j + 1]
+        unit = 1.0 if b.ph_float else scale * 1e-5
+        if b.polar:
+            out.append(x * unit * cmath.exp(1j * (y if b.ph_float else y * 1e-4)))
+        else:
+            out.append(complex(x, y) * unit)
+    return out
+
+
+def _frequency(b: Block, data: bytes, at: int) -> tuple[float, float]:
+    """(FREQ Hz, DFREQ Hz/s) of block b at byte `at`: integers the deviation from FNOM in
+    mHz and the ROCOF in Hz/s x 100, floating point the actual frequency and the ROCOF
+    (C37.118.2-2011 Table 6)."""
+    if not b.fr_float:
+        mhz, dfreq = struct.unpack_from(">hh", data, at)
+        return b.fnom + mhz / MHZ_PER_HZ, dfreq / DFREQ_PER_HZ_S
+    f, dfreq = struct.unpack_from(">ff", data, at)
+    if not abs(f - b.fnom) <= FREQ_SPAN_HZ:
+        raise InputError(
+            f"PMU {b.station}: floating-point FREQ (FORMAT bit 3) {f:g} Hz is not within FNOM "
+            f"{b.fnom:g} +- {FREQ_SPAN_HZ} Hz: C37.118.2-2011 Table 6 makes it the actual "
+            "frequency (pyc37 writes the deviation from FNOM there)"
+        )
+    if not math.isfinite(dfreq):
+        raise InputError(f"PMU {b.station}: floating-point DFREQ {dfreq} is not a number")
+    return f, dfreq
+
+
+def flags(cfg2, data: bytes) -> list[str]:
+    """Why each PMU's values in a data frame are not used, by its STAT (`unusable`; ''
+    for those used).
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame.
+    data : bytes
+        A data frame of the stream (`check_data_frame` passed).
+
+    Returns
+    -------
+    list of str
+        One per PMU, in block order.
+    """
+    out, at = [], 14
+    for b in blocks(cfg2):
+        out.append(unusable(int.from_bytes(data[at : at + 2], "big")))
+        at += b.size
+    return out
+
+
+#: C37.118.2-2011 frame types (SYNC bits 6-4)
+FRAME_TYPES = {
+    0: "data frame",
+    1: "header frame",
+    2: "CFG-1",
+    3: "CFG-2",
+    4: "command frame",
+    5: "CFG-3",
+}
+
+
+def frame_kind(data: bytes) -> str:
+    """A frame's type as named in messages (SYNC bits 6-4, C37.118.2-2011 Table 2).
+
+    Parameters
+    ----------
+    data : bytes
+        One frame (at least its SYNC word).
+
+    Returns
+    -------
+    str
+        ``data frame``, ``header frame``, ``CFG-1``, ``CFG-2``, ``command frame``,
+        ``CFG-3``, or ``frame of type N`` for the types the standard reserves.
+    """
+    kind = data[1] >> 4 & 0x7
+    return FRAME_TYPES.get(kind, f"frame of type {kind}")
+
+
+#: The CFG-2 fields (C37.118.2-2011 Table 8) as pyc37's getters read them, in frame order
+CONFIG_FIELDS = (
+    ("IDCODE", "get_id_code"),
+    ("TIME_BASE", "get_time_base"),
+    ("NUM_PMU", "get_num_pmu"),
+    ("STN", "get_station_name"),
+    ("the PMUs' IDCODE", "get_stream_id_code"),
+    ("FORMAT", "get_data_format"),
+    ("PHNMR", "get_phasor_num"),
+    ("ANNMR", "get_analog_num"),
+    ("DGNMR", "get_digital_num"),
+    ("CHNAM", "get_channel_names"),
+    ("PHUNIT", "get_ph_units"),
+    ("ANUNIT", "get_analog_units"),
+    ("DIGUNIT", "get_digital_units"),
+    ("FNOM", "get_fnom"),
+    ("CFGCNT", "get_cfg_count"),
+    ("DATA_RATE", "get_data_rate"),
+)
+
+
+def config_change(old, new) -> str:
+    """The first CFG-2 field in which `new` differs from `old` (both as pyc37 reads them),
+    or '' if none does: a CFG-2 resent with only its time stamp new is the same.
+
+    Parameters
+    ----------
+    old, new : pyc37 ConfigFrame2
+        The CFG-2 in use and one received later.
+
+    Returns
+    -------
+    str
+        The field's name (``FORMAT``, ``DATA_RATE``) with both values, or ''.
+    """
+    for name, get in CONFIG_FIELDS:
+        if (was := getattr(old, get)()) != (now := getattr(new, get)()):
+            return f"{name} {now} where the CFG-2 in use has {was}"
+    return ""
+
+
+def check_stream_frame(cfg2, data: bytes) -> bool:
+    """Check a frame received after 'start' on the stream `cfg2` describes: a data frame
+    as `check_data_frame` does; any other frame's CRC; a CFG-2 must be `cfg2` resent (its
+    time stamp aside): the data frames after one that differs would be read by a layout
+    that is not theirs.
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The stream's configuration frame, by which its data frames are read.
+    data : bytes
+        One whole frame (SYNC and FRAMESIZE read, at least 16 bytes).
+
+    Returns
+    -------
+    bool
+        True for a data frame, False for another frame (a header, CFG-1, CFG-3 or
+        command frame, or the same CFG-2), which carries no measurement.
+
+    Raises
+    ------
+    InputError
+        As `check_data_frame`; another frame whose CRC fails; a CFG-2 that is not
+        readable or differs from `cfg2` (naming the field, `config_change`).
+    """
+    kind = frame_kind(data)
+    if kind == "data frame":
+        check_data_frame(cfg2, data)
+        return True
+    if not _pyc37().CommonFrame._check_crc(data):
+        raise InputError(
+            f"C37.118.2 {kind} not readable: CRC failed (its bytes or its FRAMESIZE damaged)"
+        )
+    if kind == "CFG-2" and (change := config_change(cfg2, read_config(data, "the CFG-2"))):
+        raise InputError(
+            f"a CFG-2 that changes the stream's configuration ({change}): a change "
+            "mid-stream is not followed (receive the stream again)"
+        )
+    return False
 
 
 def check_data_frame(cfg2, data: bytes) -> None:
@@ -293,9 +687,8 @@ def check_data_frame(cfg2, data: bytes) -> None:
         raise InputError(
             "C37.118.2 data frame not readable: CRC failed (its bytes or its FRAMESIZE damaged)"
         )
-    if kind := data[1] >> 4 & 0x7:
-        name = FRAME_TYPES.get(kind, f"frame of type {kind}")
-        raise InputError(f"C37.118.2: a {name}, not a data frame")
+    if (kind := frame_kind(data)) != "data frame":
+        raise InputError(f"C37.118.2: a {kind}, not a data frame")
     if (idcode := int.from_bytes(data[4:6], "big")) != cfg2.get_id_code():
         raise InputError(
             f"a data frame of IDCODE {idcode}, not the stream's {cfg2.get_id_code()} (its CFG-2's)"
@@ -346,26 +739,17 @@ def data_frame_size(cfg2) -> int:
     int
         Bytes.
     """
-    many = (lambda x: x) if cfg2.get_num_pmu() > 1 else (lambda x: [x])
-    c = cfg2
-    per_pmu = (c.get_data_format, c.get_phasor_num, c.get_analog_num, c.get_digital_num)
-    size = 16
-    for (_, ph_float, an_float, fr_float), phasors, analogs, digitals in zip(
-        *(many(get()) for get in per_pmu)
-    ):
-        size += 2 + phasors * (8 if ph_float else 4) + 2 * (4 if fr_float else 2)
-        size += analogs * (4 if an_float else 2) + 2 * digitals
-    return size
+    return 16 + sum(b.size for b in blocks(cfg2))
 
 
-def reporting_instant(t: float, rate: int) -> float:
+def reporting_instant(t: float, rate: int, time_base: int) -> float:
     """A received time stamp t (s) snapped to the reporting instant k / rate it stands for
-    when it is within one FRACSEC count of it (as a PDC rounds time stamps to its frame
-    rate): a TIME_BASE of 1 us cannot write k / 60 s exactly, and the estimators and their
-    error windows should see the instants the PMU reported at.  Other time stamps are
-    kept."""
+    when it is within one FRACSEC count (1 / time_base s) of it (as a PDC rounds time
+    stamps to its frame rate): a TIME_BASE of 1 us cannot write k / 60 s exactly, and the
+    estimators and their error windows should see the instants the PMU reported at.
+    Other time stamps are kept."""
     k = round(t * rate)
-    return k / rate if abs(t - k / rate) <= 1.0 / TIME_BASE else float(t)
+    return k / rate if abs(t - k / rate) <= 1.0 / time_base else float(t)
 
 
 def codec(cfg: StreamConfig):
@@ -416,10 +800,12 @@ def split_frames(data: bytes, what: str = "C37.118.2 recording") -> list[bytes]:
     return out
 
 
-def frame_time(data: bytes) -> float:
+def frame_time(data: bytes, cfg2) -> float:
     """A frame's time stamp, SOC + FRACSEC / TIME_BASE (s, UNIX), read from its bytes
-    (C37.118.2-2011 Table 2: SOC bytes 6-9, FRACSEC's count bytes 11-13)."""
-    return int.from_bytes(data[6:10], "big") + int.from_bytes(data[11:14], "big") / TIME_BASE
+    (C37.118.2-2011 Table 2: SOC bytes 6-9, FRACSEC's count bytes 11-13), TIME_BASE its
+    stream's (the CFG-2 `cfg2`, as pyc37 reads it)."""
+    count = int.from_bytes(data[11:14], "big")
+    return int.from_bytes(data[6:10], "big") + count / cfg2.get_time_base()
 
 
 def recorded_frames(path) -> tuple:
@@ -462,17 +848,12 @@ def replay(path, cfg: StreamConfig) -> list[Frame]:
     Raises
     ------
     InputError
-        No configuration frame first, one that does not describe cfg (names the field),
-        or a data frame that is not readable.
+        No configuration frame first, one that does not describe cfg (`check_config`,
+        naming the field), or a data frame that is not readable.
     """
     cfg2, data = recorded_frames(path)
-    names = cfg2.get_station_name()
-    names = [str(s).strip() for s in (names if isinstance(names, list) else [names])]
-    for field, theirs, ours in (
-        ("station names", names, [p.label for p in cfg.pmus]),
-        ("data rate", cfg2.get_data_rate(), cfg.rate),
-        ("IDCODE", cfg2.get_id_code(), cfg.idcode),
-    ):
-        if theirs != ours:
-            raise InputError(f"{path}: its CFG-2 {field} {theirs} differ from the stream's {ours}")
+    try:
+        check_config(cfg2, cfg)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
     return [parse_frame(cfg, cfg2, d) for d in data]

@@ -19,8 +19,10 @@ the stream's IDCODE, others dropped):
    +1 absorb);
 4. at the end of its run the plant sends a header frame (frame type 1) reading
    ``stabctl: end of run at t = <s>`` and closes the connection; a connection closed
-   without it is a plant that stopped early (killed, crashed), which the controller says
-   (`PlantStopped`) instead of presenting the frames it answered as the whole run.
+   without it is a plant that stopped early (killed, crashed), and so is a header whose
+   end is not that of the last frame answered (the last reporting instant at or before
+   it: frames of the run never came), which the controller says (`PlantStopped`)
+   instead of presenting the frames it answered as the whole run.
 
 The simulation waits for each answer (lock step), so the run is that of the in-process
 loop with the frames as on the wire (`c37.on_wire`) whatever the network does; the modes
@@ -31,11 +33,13 @@ the modelled latency is counted late.
 
 from __future__ import annotations
 
+import collections
 import socket
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -58,9 +62,9 @@ END_OF_RUN = "stabctl: end of run at t = "
 
 
 class PlantStopped(InputError):
-    """The plant closed the loop without its end-of-run header: it stopped before the end
-    of its run (killed, crashed), so the frames the controller answered are not the whole
-    run."""
+    """The frames the controller answered are not the plant's whole run: the plant closed
+    the loop without its end-of-run header (killed, crashed), or the end that header
+    announces is not that of the last frame answered."""
 
 
 def end_of_run_frame(idcode: int, t: float) -> bytes:
@@ -392,9 +396,26 @@ class PlantLink:
         return frame
 
 
-def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> int:
+class Answered(NamedTuple):
+    """What the controller answered (`serve_controller`).
+
+    Attributes
+    ----------
+    frames : int
+        Data frames answered.
+    flagged : dict
+        PMU values not used by their STAT (`c37.unusable`), by reason (the reasons that
+        occurred only).
+    """
+
+    frames: int
+    flagged: dict
+
+
+def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> Answered:
     """The controller's end: subscribe to the plant at host:port, then answer every data
-    frame with the modes `controller.act` gives, until the plant's end-of-run header.
+    frame with the modes `controller.act` gives (each answer stamped with the SOC and
+    FRACSEC of the frame it answers), until the plant's end-of-run header.
 
     Parameters
     ----------
@@ -410,17 +431,19 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
 
     Returns
     -------
-    int
-        Frames answered.
+    Answered
+        Frames answered, and PMU values not used by their STAT.
 
     Raises
     ------
     InputError
-        No plant there, no whole frame within `timeout` s, a CFG-2 whose stations are not
-        the controller's, or a frame after 'start' that is neither a data frame of the
-        stream (`c37.check_data_frame`) nor the end-of-run header (its CRC valid).
+        No plant there, no whole frame within `timeout` s, a CFG-2 that does not describe
+        the controller's stream (`c37.check_config`), or a frame after 'start' that is
+        neither a data frame of the stream (`c37.parse_frame`) nor the end-of-run header
+        (its CRC valid).
     PlantStopped
-        The plant closed the loop without its end-of-run header (an InputError).
+        The plant closed the loop without its end-of-run header, or announced an end
+        that is not its last frame's (`_check_run_end`) (an InputError).
     """
     from pyc37.frame import CommandFrame
 
@@ -429,24 +452,21 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     except OSError as exc:
         raise InputError(f"no plant at {host}:{port}: {exc.strerror or exc}") from None
     n, last = 0, None
+    flagged: collections.Counter = collections.Counter()
     try:
         with conn:
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             conn.sendall(CommandFrame(cfg.idcode, "cfg2").convert2bytes())
             cfg2 = c37.read_config(_read_frame(conn) or b"", f"{host}:{port}'s CFG-2")
-            names = cfg2.get_station_name()
-            names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
-            if names != [p.label for p in cfg.pmus]:
-                raise InputError(f"{host}:{port} streams PMUs {names}, not the controller's")
-            if cfg2.get_data_rate() != cfg.rate:
-                raise InputError(
-                    f"{host}:{port} streams {cfg2.get_data_rate()} frames/s, the controller's "
-                    f"estimator is tuned to {cfg.rate:g} (give --rate {cfg2.get_data_rate()})"
-                )
+            try:
+                c37.check_config(cfg2, cfg)
+            except InputError as exc:
+                raise InputError(f"the plant at {host}:{port}: {exc}") from None
             conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
             while (data := _read_frame(conn)) is not None:
-                if _end_time(data, cfg.idcode) is not None:
-                    return n
+                if (t_end := _end_time(data, cfg.idcode)) is not None:
+                    _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
+                    return Answered(n, dict(flagged))
                 try:  # a data frame, checked (`c37.check_data_frame`)
                     frame = c37.parse_frame(cfg, cfg2, data)
                 except InputError as exc:
@@ -454,7 +474,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                         f"the plant at {host}:{port}: its frame {n + 1} after 'start': {exc}"
                         f", after {n} frame(s) answered"
                     ) from None
-                soc, counts = c37.time_stamp(cfg, frame.t)
+                flagged.update(why for why in c37.flags(cfg2, data) if why)
+                soc, counts = int.from_bytes(data[6:10], "big"), int.from_bytes(data[11:14], "big")
                 conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
                 n, last = n + 1, frame.t
     except OSError as exc:  # a reset or broken pipe (not a plant, or a second controller)
@@ -473,6 +494,25 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         f"the plant at {host}:{port} closed the loop without ending its run, after {n} "
         f"frame(s) answered{at}: it stopped early (killed or crashed), so they are not "
         "the whole run"
+    )
+
+
+def _check_run_end(t_end: float, last: float | None, n: int, rate: int, where: str) -> None:
+    """PlantStopped unless the last frame answered (t = `last` s, None: none) is the
+    plant's last reporting instant at or before the end of run it announced (`t_end` s):
+    within one frame interval (1 / `rate` s) before it, to the time stamps' microsecond.
+    The frame at t = 0 is decided in the plant (no run has two points yet) and never
+    sent, so a run that ends within one interval of it answers none."""
+    t_last = 0.0 if last is None else last
+    count = 1.0 / c37.TIME_BASE
+    if t_end - 1.0 / rate + count < t_last <= t_end + count:
+        return
+    at = "none" if last is None else f"the last at t = {last:.4f} s"
+    raise PlantStopped(
+        f"the plant at {where} announced the end of its run at t = {t_end:.4f} s, after "
+        f"{n} frame(s) answered ({at}, {rate} frames/s): its frames "
+        + ("stopped before that end" if t_last <= t_end else "went past that end")
+        + ", so they are not the whole run"
     )
 
 

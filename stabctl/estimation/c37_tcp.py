@@ -173,13 +173,18 @@ def port_number(text: str) -> int:
     ------
     InputError
         Not ASCII digits (``expected HOST:PORT``), or a number outside 1-65535 (``port
-        99999 is out of range (1-65535)``); the caller adds the address.
+        99999 is out of range (1-65535)``; a port of more than 5 digits, leading zeros
+        aside, is named by its length and never converted: Python refuses to convert a
+        string of more than 4300 digits); the caller adds the address.
     """
     if not (text.isascii() and text.isdigit()):
         raise InputError("expected HOST:PORT")
-    if int(text) not in PORTS:
-        raise InputError(f"port {int(text)} is out of range ({PORTS[0]}-{PORTS[-1]})")
-    return int(text)
+    digits = text.lstrip("0") or "0"
+    if len(digits) > len(str(PORTS[-1])):
+        raise InputError(f"port of {len(digits)} digits is out of range ({PORTS[0]}-{PORTS[-1]})")
+    if int(digits) not in PORTS:
+        raise InputError(f"port {int(digits)} is out of range ({PORTS[0]}-{PORTS[-1]})")
+    return int(digits)
 
 
 class StreamServer:
@@ -241,7 +246,7 @@ class StreamServer:
         if not data:
             raise InputError("a stream server needs at least one data frame")
         self.speed, self._cfg2, self._data, self.guard = float(speed), cfg2, list(data), guard
-        self._t = [c37.frame_time(d) for d in self._data]
+        self._t = [c37.frame_time(d, cfg2) for d in self._data]
         self.sent_at = [float("nan")] * len(self._data)
         self.due_at = [float("nan")] * len(self._data)
         self.refused: list[str] = []
@@ -559,12 +564,13 @@ class Stream:
         The data frames received, in arrival order, up to the first refused.
     short : str
         Empty if the stream reached its end; else what cut it (the server closed, the
-        connection was reset or sent no whole frame within the time-out, a frame cut in
-        the middle, a data frame refused), with the frames and the last time stamp
+        connection was reset or sent no whole data frame within the time-out, a frame cut
+        in the middle, a frame refused), with the frames and the last time stamp
         received.
     refused : str
-        Empty, or why the data frame after `data` was refused (`c37.check_data_frame`:
-        its CRC, IDCODE, type or size); the stream was cut there (`short` says so).
+        Empty, or why the frame after `data` was refused (`c37.check_stream_frame`: its
+        CRC; a data frame's IDCODE, type or size; a CFG-2 that changes the stream's
+        configuration); the stream was cut there (`short` says so).
     """
 
     cfg2: bytes
@@ -583,14 +589,16 @@ def receive(
     """The CFG-2 frame and the data frames of the C37.118.2 stream at host:port: command
     frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached, each
     addressed to the stream `idcode` (C37.118.2-2011 Table 2: a command's IDCODE is its
-    destination stream's; a server of another drops the peer).  The CFG-2 and every data
-    frame are checked (CRC; a data frame's IDCODE, type and size: `c37.check_data_frame`)
-    and each must come whole within `timeout` s (None: `RECEIVE_TIMEOUT_S`), however its
-    bytes are spread.  A stream that stops before its stated
-    end (the server closes, resets or sends no whole frame for `timeout` s, cuts a frame,
-    or sends a data frame that is refused) is returned with the good frames that arrived
-    before and `Stream.short` saying so (`Stream.refused` why a frame was refused); a
-    stream with no stated end ends when the server closes.
+    destination stream's; a server of another drops the peer).  The CFG-2 and every frame
+    after 'start' are checked (`c37.check_stream_frame`: CRC; a data frame's IDCODE, type
+    and size; a CFG-2 resent must be the one in use) and each must come whole within
+    `timeout` s (None: `RECEIVE_TIMEOUT_S`), however its bytes are spread, and each data
+    frame within `timeout` s of the one before, whatever other frames come between.  A
+    stream that stops before its stated end (the server closes, resets or sends no whole
+    data frame for `timeout` s, cuts a frame, or sends a frame that is refused) is
+    returned with the good data frames that arrived before and `Stream.short` saying so
+    (`Stream.refused` why a frame was refused); a stream with no stated end ends when the
+    server closes.
 
     Raises
     ------
@@ -625,7 +633,7 @@ def receive(
                 raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")
             config = c37.read_config(cfg2, "its CFG-2")
             conn.sendall(CommandFrame(idcode, "start").convert2bytes())
-            short, refused = _data_frames(conn, config, end, data)
+            short, refused = _data_frames(conn, config, end, data, timeout)
         except FrameTimeout as exc:
             raise InputError(f"{where}: sent {exc}, before any data frame") from None
         except TimeoutError:
@@ -642,57 +650,74 @@ def receive(
     return Stream(cfg2, data, short, refused)
 
 
-def _data_frames(conn: socket.socket, cfg2, end: End, data: list) -> tuple[str, str]:
-    """Append data frames from conn to data until `end`, each checked against cfg2 (the
-    CFG-2 as pyc37 reads it; `c37.check_data_frame`): ('', '') if the end was reached
-    (or, with no end stated, the server closed), else (what cut the stream, why a data
-    frame was refused or '')."""
+def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float) -> tuple[str, str]:
+    """Append data frames from conn to data until `end`, every frame checked against cfg2
+    (the CFG-2 as pyc37 reads it; `c37.check_stream_frame`: a data frame's CRC, IDCODE,
+    type and size, any other frame's CRC, a CFG-2 resent unchanged): ('', '') if the end
+    was reached (or, with no end stated, the server closed), else (what cut the stream,
+    why a frame was refused or '').  `budget` (s) is the longest wait for the next data
+    frame, whatever else comes meanwhile (a server sending header frames and no data
+    frame is cut as a silent one is); the connection's time-out is left at it."""
     soc = cfg2.get_soc()
-    while end.frames is None or len(data) < end.frames:
-        try:
-            frame = _read_frame(conn)
-        except FrameTimeout as exc:
-            cut = f"sent {exc}"
-        except TimeoutError:
-            cut = f"sent nothing for {conn.gettimeout():g} s"
-        except ConnectionError:
-            cut = "reset the connection"
-        except CutFrame:
-            cut = "closed the connection in the middle of a frame"
-        except InputError as exc:  # bytes that start no frame
-            off = f" (or data frame {len(data)}'s FRAMESIZE is off)" if data else ""
-            raise InputError(f"after {len(data)} data frames: {exc}{off}") from None
-        else:
-            if frame is not None:
-                if frame[1] & 0x70 != 0:  # not a data frame (a CFG or header resent)
+    since = time.monotonic()  # of 'start', then of the last data frame
+    try:
+        while end.frames is None or len(data) < end.frames:
+            try:
+                if (left := since + budget - time.monotonic()) <= 0:
+                    raise TimeoutError("timed out")
+                conn.settimeout(left)
+                frame = _read_frame(conn)
+            except FrameTimeout:
+                cut = f"sent part of a frame and not the rest within {budget:g} s"
+            except TimeoutError:
+                cut = f"sent no data frame for {budget:g} s"
+            except ConnectionError:
+                cut = "reset the connection"
+            except CutFrame:
+                cut = "closed the connection in the middle of a frame"
+            except InputError as exc:  # bytes that start no frame
+                off = f" (or data frame {len(data)}'s FRAMESIZE is off)" if data else ""
+                raise InputError(f"after {len(data)} data frames: {exc}{off}") from None
+            else:
+                if frame is not None:
+                    try:
+                        if not c37.check_stream_frame(cfg2, frame):
+                            continue  # a header, CFG-1, CFG-3, command or the same CFG-2
+                    except InputError as exc:
+                        last = (
+                            f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s"
+                            if data
+                            else ""
+                        )
+                        kind = c37.frame_kind(frame)
+                        at = f"data frame {len(data) + 1}" if kind == "data frame" else kind
+                        why = f"{at}: {exc}"
+                        return (
+                            f"the server sent a {kind} that is refused ({why}); the stream is "
+                            f"cut there: {len(data)} data frames before it{last}, before {end}",
+                            why,
+                        )
+                    data.append(frame)
+                    since = time.monotonic()
+                    if end.tf is not None and c37.frame_time(frame, cfg2) - soc >= end.tf - 0.5e-6:
+                        return "", ""
+                    if not end.given and len(data) > MAX_FRAMES:
+                        raise InputError(
+                            f"more than {MAX_FRAMES} frames without an end: give the frames "
+                            "or the last time stamp to receive"
+                        )
                     continue
-                try:
-                    c37.check_data_frame(cfg2, frame)
-                except InputError as exc:
-                    last = (
-                        f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
-                    )
-                    why = f"data frame {len(data) + 1}: {exc}"
-                    return (
-                        f"the server sent a data frame that is refused ({why}); the stream "
-                        f"is cut there: {len(data)} data frames before it{last}, before {end}",
-                        why,
-                    )
-                data.append(frame)
-                if end.tf is not None and c37.frame_time(frame) - soc >= end.tf - 0.5e-6:
+                if not end.given:
                     return "", ""
-                if not end.given and len(data) > MAX_FRAMES:
-                    raise InputError(
-                        f"more than {MAX_FRAMES} frames without an end: give the frames or "
-                        "the last time stamp to receive"
-                    )
-                continue
-            if not end.given:
-                return "", ""
-            cut = "closed the connection"
-        last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
-        return f"the server {cut} after {len(data)} data frames{last}, before {end}", ""
-    return "", ""
+                cut = "closed the connection"
+            last = (
+                f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s" if data else ""
+            )
+            return f"the server {cut} after {len(data)} data frames{last}, before {end}", ""
+        return "", ""
+    finally:
+        with contextlib.suppress(OSError):  # closed meanwhile
+            conn.settimeout(budget)
 
 
 class CutFrame(InputError):

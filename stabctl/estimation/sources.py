@@ -12,6 +12,7 @@ stamp (SOC), as `c37.config_frame` writes it.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import threading
 from dataclasses import dataclass
@@ -113,12 +114,15 @@ class Received:
     data_frames : int
         Data frames received over all streams.
     absent : int
-        PMU values the streams flagged absent (STAT bits 15-14 = 10: lost at the source).
+        PMU values whose STAT makes them unusable (`c37.unusable`: absent data, PMU
+        error, test mode, PMU sync lost, sorted by arrival): not used, as values lost.
     missing : int
         PMU values of a time stamp some streams sent and this PMU's did not.
     short : tuple of str
         Each stream that stopped before its stated end (`c37_tcp.End`), with what cut it;
         empty: every stream whole.
+    flagged : dict
+        `absent` by reason (`c37.STAT_UNUSABLE`'s), the reasons that occurred only.
     """
 
     frames: list
@@ -127,6 +131,7 @@ class Received:
     absent: int
     missing: int
     short: tuple = ()
+    flagged: dict = dataclasses.field(default_factory=dict)
 
     def summary(self) -> dict:
         """The counts, for a report (JSON)."""
@@ -135,6 +140,7 @@ class Received:
             "frames": len(self.frames),
             "data_frames": self.data_frames,
             "absent": self.absent,
+            "flagged": dict(self.flagged),
             "missing": self.missing,
             "short": list(self.short),
         }
@@ -226,9 +232,30 @@ def read_frames(
     if received.frames and not any(f.valid.any() for f in received.frames):
         raise InputError(
             f"--source {source}: every PMU value of its {len(received.frames)} frames is "
-            "flagged absent or missing: nothing was measured"
+            f"missing or not used: {unused_values(received.flagged) or 'none flagged'}, "
+            f"{received.missing} missing: nothing was measured"
         )
     return dataclasses.replace(received, short=tuple(s for _, _, s in streams if s))
+
+
+def unused_values(flagged: dict) -> str:
+    """The PMU values a stream's STAT words kept out (`Received.flagged`,
+    `c37_loop.Answered.flagged`), by reason, for a summary line.
+
+    Parameters
+    ----------
+    flagged : dict
+        Count of values per reason (`c37.unusable`).
+
+    Returns
+    -------
+    str
+        ``N PMU values not used by their STAT (n1 reason1, ...)``; '' if none.
+    """
+    if not flagged:
+        return ""
+    why = ", ".join(f"{n} {reason}" for reason, n in flagged.items())
+    return f"{sum(flagged.values())} PMU values not used by their STAT ({why})"
 
 
 def _recorded_to(end, cfg2, data, name: str) -> tuple:
@@ -237,16 +264,20 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
     if end.frames is not None:
         data = data[: end.frames]
     if end.tf is not None:
-        stamps = [c37.frame_time(d) - soc for d in data]
+        stamps = [c37.frame_time(d, cfg2) - soc for d in data]
         reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
         data = data[: reached[0] + 1] if reached else data
     # whichever end comes first, as a TCP stream's (`c37_tcp._data_frames`)
     whole = (
         not end.given
         or (end.frames is not None and len(data) == end.frames)
-        or (end.tf is not None and bool(data) and c37.frame_time(data[-1]) - soc >= end.tf - 0.5e-6)
+        or (
+            end.tf is not None
+            and bool(data)
+            and c37.frame_time(data[-1], cfg2) - soc >= end.tf - 0.5e-6
+        )
     )
-    last = f", the last stamped {c37.frame_time(data[-1]) - soc:.4f} s" if data else ""
+    last = f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s" if data else ""
     return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"
 
 
@@ -263,8 +294,9 @@ def merge(case, pmus, rate: float, streams) -> Received:
     labels = [p.label for p in pmus]
     owner: dict[str, int] = {}
     parsed = []
+    flagged: collections.Counter = collections.Counter()
     for s, (cfg2, data) in enumerate(streams):
-        check_order(data, f"stream {s + 1}")
+        check_order(data, cfg2, f"stream {s + 1}")
         names = cfg2.get_station_name()
         names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
         for name in names:
@@ -273,27 +305,28 @@ def merge(case, pmus, rate: float, streams) -> Received:
             if name in owner:
                 raise InputError(f"station {name!r} is in streams {owner[name] + 1} and {s + 1}")
             owner[name] = s
-        if cfg2.get_data_rate() != rate:
-            raise InputError(
-                f"stream {s + 1} sends {cfg2.get_data_rate()} frames/s, the run's PMUs {rate:g}"
-            )
         cols = [labels.index(n) for n in names]
         cfg = c37.stream_config(
             case, [pmus[c] for c in cols], rate, cfg2.get_id_code(), cfg2.get_soc()
         )
+        try:
+            c37.check_config(cfg2, cfg)
+        except InputError as exc:
+            raise InputError(f"stream {s + 1}: {exc}") from None
         frames = []
         for k, d in enumerate(data):
             try:
                 frames.append(c37.parse_frame(cfg, cfg2, d))
             except InputError as exc:
                 raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
+            flagged.update(why for why in c37.flags(cfg2, d) if why)
         parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
-    return _by_time_stamp(len(labels), parsed)
+    return dataclasses.replace(_by_time_stamp(len(labels), parsed), flagged=dict(flagged))
 
 
-def check_order(data, what: str) -> None:
+def check_order(data, cfg2, what: str) -> None:
     """Refuse data frames whose time stamps repeat or go backwards (a frame would replace
     or be sorted before another without a word, or a replay paced by them would wait a
     negative time).
@@ -302,6 +335,8 @@ def check_order(data, what: str) -> None:
     ----------
     data : sequence of bytes
         The data frames, in order.
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame (its TIME_BASE).
     what : str
         Their source, for messages (``stream 2``, a recording's path).
 
@@ -310,13 +345,17 @@ def check_order(data, what: str) -> None:
     InputError
         The first frame whose time stamp repeats or goes back, and how many do.
     """
-    stamps = np.array([round(c37.frame_time(d) * c37.TIME_BASE) for d in data], np.int64)
+    base = cfg2.get_time_base()
+    stamps = np.array(  # SOC and FRACSEC as one count of TIME_BASE
+        [int.from_bytes(d[6:10], "big") * base + int.from_bytes(d[11:14], "big") for d in data],
+        np.int64,
+    )
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
         how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
         raise InputError(
             f"{what}: data frame {k + 1} {how} the time stamp of frame {k} "
-            f"({stamps[k - 1] / c37.TIME_BASE:.6f} s, UNIX); {bad.size} such frame(s)"
+            f"({c37.frame_time(data[k - 1], cfg2):.6f} s, UNIX); {bad.size} such frame(s)"
         )
 
 

@@ -265,6 +265,34 @@ def test_bad_input_is_one_error_line(args, needle, tmp_path, monkeypatch):
     assert not (tmp_path / "r.c37").exists() and not (tmp_path / "t.csv").exists()
 
 
+_HUGE_PORT = "1" + "0" * 5000  # beyond Python's 4300-digit limit of int(str)
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["pmu", "record", f"127.0.0.1:{_HUGE_PORT}", "--frames", "5", "-o", "r.c37"],
+        ["estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{_HUGE_PORT}"]
+        + ["--frames", "5", "--out", "t.csv"],
+        ["pmu", "control", "kundur", f"127.0.0.1:{_HUGE_PORT}", "--esd-pct", "5"],
+    ],
+)
+def test_a_port_of_thousands_of_digits_is_refused_by_its_length(args, tmp_path, monkeypatch):
+    """A port of 5001 digits was converted with int(), which Python refuses beyond 4300
+    digits: a ValueError traceback (exit 1).  It is out of range by its length alone:
+    refused naming the port's digits and the range, one error line, exit 2; a port
+    written with leading zeros is still its number."""
+    from stabctl.estimation.c37_tcp import port_number
+
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2, (res.output, res.exception)
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr[-300:]
+    assert "port of 5001 digits is out of range (1-65535)" in lines[0]
+    assert port_number("0" * 5000 + "4712") == 4712
+
+
 def test_each_pmu_ports_beyond_65535_are_refused_by_name():
     """`pmu serve --each-pmu --port 65534` on Kundur (4 PMUs) needs ports 65534-65537: refused
     before any work (exit 2, the range and the largest port that fits), not an

@@ -120,7 +120,7 @@ def test_a_controller_of_other_pmus_is_refused(kundur_loop):
         with pytest.raises(InputError, match=r"1 peer.s. dropped, .*closed before 'start'"):
             link(0.05, sim.run(events, t_end=0.1))
         thread.join(timeout=10)
-    assert "not the controller's" in str(errors[0])
+    assert "its CFG-2 station names" in str(errors[0])
 
 
 def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
@@ -154,6 +154,45 @@ def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
         else:
             assert not out and isinstance(errors[0], c37_loop.PlantStopped)
             assert "after 3 frame(s) answered, the last at t = 0.0500 s" in str(errors[0])
+
+
+@pytest.mark.parametrize(
+    "t_end, whole",
+    [(3 / 60, True), (3.9 / 60, True), (30.0, False), (4.5 / 60, False), (2 / 60, False)],
+)
+def test_an_end_of_run_that_is_not_the_last_frame_s_is_a_partial_run(kundur_loop, t_end, whole):
+    """A plant that sent frames to 0.05 s and then the end-of-run header 'end of run at
+    t = 30 s' was answered with exit 0 ('answered 3 frames'): the header was taken as the
+    end whatever its t.  The last frame answered must be the last reporting instant at or
+    before the announced end (within 1/60 s before it); else the run is named partial
+    (PlantStopped, exit 2), with the end announced and the last frame answered."""
+    sim, events = kundur_loop
+    from stabctl.storage.devices import uniform_fleet
+
+    partial = sim.run(events, t_end=0.1)
+    devices = uniform_fleet(sim.case, 10).devices
+    ctrl = cl.LoopController(sim.case, devices, "ekf", *_rest())
+    remote = cl.LoopController(sim.case, devices, "ekf", *_rest())
+    cfg = c37.stream_config(sim.case, ctrl.pmus, 60)
+    out: list = []
+    errors: list = []
+    with c37_loop.PlantLink(ctrl, cfg, timeout=5) as link:
+        thread = threading.Thread(
+            target=_catch, args=(errors, _serve_into, out, remote, cfg, *link.address)
+        )
+        thread.start()
+        for k in (1, 2, 3):
+            link(k / 60, partial)
+        link.finish(t_end)
+    thread.join(timeout=10)
+    if whole:
+        assert out == [3] and not errors
+    else:
+        assert not out and isinstance(errors[0], c37_loop.PlantStopped)
+        assert f"announced the end of its run at t = {t_end:.4f} s, after 3 frame(s) " in str(
+            errors[0]
+        )
+        assert "the last at t = 0.0500 s" in str(errors[0])
 
 
 def test_a_paced_plant_sends_at_its_time_stamps(kundur_loop):
@@ -193,8 +232,8 @@ def _rest():
 
 
 def _serve_into(out, *args):
-    """`serve_controller(*args)`, its count appended to out."""
-    out.append(c37_loop.serve_controller(*args))
+    """`serve_controller(*args)`, its count of frames answered appended to out."""
+    out.append(c37_loop.serve_controller(*args).frames)
 
 
 def _catch(errors, func, *args):

@@ -63,6 +63,7 @@ def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
         "frames": len(drawn),
         "data_frames": len(drawn),
         "absent": int((~drawn.valid).sum()),
+        "flagged": {"absent (STAT bits 15-14 = 10)": int((~drawn.valid).sum())},
         "missing": 0,
         "short": [],
     }
@@ -128,7 +129,7 @@ def test_a_stream_missing_time_stamps_marks_them_missing(kundur_run):
     [
         ("foreign", "station 'B9:G9' is not a PMU of this run"),
         ("twice", "station 'B1:G1' is in streams 1 and 2"),
-        ("rate", "stream 1 sends 30 frames/s, the run's PMUs 60"),
+        ("rate", "stream 1: its CFG-2 DATA_RATE 30, not the 60 expected"),
         ("half", "PMU B3:G3, B4:G4 in no stream"),
     ],
 )

@@ -154,6 +154,85 @@ def test_receive_keeps_the_frames_before_one_refused(wire):
     assert "the stream is cut there: 3 data frames before it" in got.short
 
 
+def _header(text: str = "hello") -> bytes:
+    from pyc37.frame import HeaderFrame
+
+    return HeaderFrame(1, text).convert2bytes()
+
+
+def _stamped(frame: bytes, soc: int) -> bytes:
+    """frame with another SOC, its CRC valid."""
+    return _crc(frame[:6] + soc.to_bytes(4, "big") + frame[10:])
+
+
+def test_frames_other_than_data_frames_after_start_are_checked(wire):
+    """Frames after 'start' that were not data frames were skipped unread: a header frame
+    with a bad CRC passed, and a CFG-2 that changed the stream's configuration mid-stream
+    (same size) was ignored, the data frames after it read by the old layout.  Every
+    frame's CRC is checked and a CFG-2 must be the one in use (resent with a new time
+    stamp it is): else the stream is cut there, the data frames before it kept and the
+    field that changed named."""
+    import dataclasses
+
+    cfg, _, head, body = wire
+    srv, port = _server(
+        head,
+        b"".join([*body[:3], _header(), _stamped(head, cfg.epoch + 7), *body[3:10]]),
+    )
+    with srv:
+        got = receive("127.0.0.1", port, End(frames=8), timeout=5)
+    assert got.data == body[:8] and not got.short and not got.refused
+    changed = c37.config_frame(dataclasses.replace(cfg, rate=30)).convert2bytes()
+    assert len(changed) == len(head)
+    for odd, kind, needle in (
+        (_bad_crc(_header()), "header frame", "C37.118.2 header frame not readable: CRC failed"),
+        (changed, "CFG-2", "changes the stream's configuration (DATA_RATE 30 where the CFG-2 in "
+         "use has 60)"),
+    ):  # fmt: skip
+        srv, port = _server(head, b"".join([*body[:3], odd, *body[3:10]]))
+        with srv:
+            got = receive("127.0.0.1", port, End(frames=8), timeout=5)
+        assert got.data == body[:3]
+        assert got.refused.startswith(f"{kind}: ") and needle in got.refused, got.refused
+        assert got.short.startswith(f"the server sent a {kind} that is refused ({kind}: ")
+        assert "the stream is cut there: 3 data frames before it" in got.short
+
+
+def test_a_server_sending_only_header_frames_is_timed_out(wire, tmp_path, monkeypatch):
+    """A server that answered 'start' with a header frame every 0.2 s and never a data
+    frame kept `pmu record` waiting for ever: each header frame restarted the time-out.
+    The time-out is the longest wait for a data frame, whatever comes meanwhile: the
+    stream ends after it, with the data frames that came (exit 2, the server named)."""
+    from pmu_streams import fake_server
+
+    _, _, head, body = wire
+    monkeypatch.setattr(c37_tcp, "RECEIVE_TIMEOUT_S", 1.0)
+    for before in (0, 2):
+        stop = threading.Event()
+
+        def talk(conn, before=before, stop=stop):
+            conn.recv(1000)
+            conn.sendall(head)
+            conn.recv(1000)
+            conn.sendall(b"".join(body[:before]))
+            while not stop.wait(0.2):
+                conn.sendall(_header())
+
+        srv, port = fake_server(talk)
+        out = tmp_path / f"r{before}.c37"
+        try:
+            t0 = time.monotonic()
+            res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 10, "-o", out)
+        finally:
+            stop.set()
+            srv.close()
+        assert time.monotonic() - t0 < 10
+        one_error(
+            res, f"127.0.0.1:{port}: the server sent no data frame for 1 s after {before} data"
+        )
+        assert out.exists() == bool(before)
+
+
 @pytest.mark.parametrize("frame", [7, 1])
 def test_replay_checks_every_frame_before_it_listens(wire, tmp_path, monkeypatch, frame):
     """`pmu replay` served a recording whose frame 7 fails its CRC (a reader refused it
