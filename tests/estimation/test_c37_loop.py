@@ -123,49 +123,10 @@ def test_a_controller_of_other_pmus_is_refused(kundur_loop):
     assert "its CFG-2 station names" in str(errors[0])
 
 
-def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
-    """Three frames answered, then the plant closes: after its end-of-run header (a header
-    frame, `end_of_run_frame`) the controller returns the count; without it (a plant
-    killed mid-run: the finding, exit 0 with a partial result presented as whole) it
-    raises PlantStopped naming the frames answered and the last time stamp."""
-    sim, events = kundur_loop
-    from stabctl.storage.devices import uniform_fleet
-
-    partial = sim.run(events, t_end=0.1)
-    devices = uniform_fleet(sim.case, 10).devices
-    for ends in (True, False):
-        ctrl = cl.LoopController(sim.case, devices, "ekf", *_rest())
-        remote = cl.LoopController(sim.case, devices, "ekf", *_rest())
-        cfg = c37.stream_config(sim.case, ctrl.pmus, 60)
-        out: list = []
-        errors: list = []
-        with c37_loop.PlantLink(ctrl, cfg, timeout=5) as link:
-            thread = threading.Thread(
-                target=_catch, args=(errors, _serve_into, out, remote, cfg, *link.address)
-            )
-            thread.start()
-            for k in (1, 2, 3):
-                link(k / 60, partial)
-            if ends:
-                link.finish(3 / 60)
-        thread.join(timeout=10)
-        if ends:
-            assert out == [3] and not errors
-        else:
-            assert not out and isinstance(errors[0], c37_loop.PlantStopped)
-            assert "after 3 frame(s) answered, the last at t = 0.0500 s" in str(errors[0])
-
-
-@pytest.mark.parametrize(
-    "t_end, whole",
-    [(3 / 60, True), (3.9 / 60, True), (30.0, False), (4.5 / 60, False), (2 / 60, False)],
-)
-def test_an_end_of_run_that_is_not_the_last_frame_s_is_a_partial_run(kundur_loop, t_end, whole):
-    """A plant that sent frames to 0.05 s and then the end-of-run header 'end of run at
-    t = 30 s' was answered with exit 0 ('answered 3 frames'): the header was taken as the
-    end whatever its t.  The last frame answered must be the last reporting instant at or
-    before the announced end (within 1/60 s before it); else the run is named partial
-    (PlantStopped, exit 2), with the end announced and the last frame answered."""
+def three_frames_then(kundur_loop, t_end):
+    """A plant link answered by a remote controller for three frames (1/60 to 3/60 s),
+    then ended with the end-of-run header at `t_end` (None: closed without it); returns
+    what the controller returned and what it raised."""
     sim, events = kundur_loop
     from stabctl.storage.devices import uniform_fleet
 
@@ -183,8 +144,37 @@ def test_an_end_of_run_that_is_not_the_last_frame_s_is_a_partial_run(kundur_loop
         thread.start()
         for k in (1, 2, 3):
             link(k / 60, partial)
-        link.finish(t_end)
+        if t_end is not None:
+            link.finish(t_end)
     thread.join(timeout=10)
+    return out, errors
+
+
+def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
+    """Three frames answered, then the plant closes: after its end-of-run header (a header
+    frame, `end_of_run_frame`) the controller returns the count; without it (a plant
+    killed mid-run: the finding, exit 0 with a partial result presented as whole) it
+    raises PlantStopped naming the frames answered and the last time stamp."""
+    for ends in (True, False):
+        out, errors = three_frames_then(kundur_loop, 3 / 60 if ends else None)
+        if ends:
+            assert out == [3] and not errors
+        else:
+            assert not out and isinstance(errors[0], c37_loop.PlantStopped)
+            assert "after 3 frame(s) answered, the last at t = 0.0500 s" in str(errors[0])
+
+
+@pytest.mark.parametrize(
+    "t_end, whole",
+    [(3 / 60, True), (3.9 / 60, True), (30.0, False), (4.5 / 60, False), (2 / 60, False)],
+)
+def test_an_end_of_run_that_is_not_the_last_frame_s_is_a_partial_run(kundur_loop, t_end, whole):
+    """A plant that sent frames to 0.05 s and then the end-of-run header 'end of run at
+    t = 30 s' was answered with exit 0 ('answered 3 frames'): the header was taken as the
+    end whatever its t.  The last frame answered must be the last reporting instant at or
+    before the announced end (within 1/60 s before it); else the run is named partial
+    (PlantStopped, exit 2), with the end announced and the last frame answered."""
+    out, errors = three_frames_then(kundur_loop, t_end)
     if whole:
         assert out == [3] and not errors
     else:
