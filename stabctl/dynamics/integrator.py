@@ -11,8 +11,8 @@ Event semantics (`RunOptions.pst`):
   interval after the first is evaluated once more before it is taken (its limiter clamps
   persist).
 
-Numerical health is checked after every step (`_healthy`): a non-finite state, a speed
-outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or Heun's local error estimate above EST_TOL for
+Numerical health is checked after every step (`_healthy`): a non-finite state, the speed
+of a machine the stage judges outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or Heun's local error estimate above EST_TOL for
 more than EST_STEPS steps in a row (the signature of an explicit method beyond its
 stability region) stops the run (UNSTABLE_STEP), so that a loss of synchronism (an angle
 more than `RunOptions.limit` rad from the centre of inertia, eq. 40) is only ever judged on
@@ -355,15 +355,18 @@ def _local_error(x, f_k, f_j, hh, where, skip):
 
 
 @kernel
-def _healthy(x, est, nm, health):
+def _healthy(x, est, nm, health, judged):
     """Numerical health after a step with local error estimate est (module docstring);
-    returns False with the offending state index in health.bad[0]."""
+    returns False with the offending state index in health.bad[0].  The speed band holds
+    for the machines the stage judges (judged, bool (n_mac,)): one tripped or cut off from
+    the main grid may run up with no load on it (miniWECC's G4, alone on line 9-10 and
+    without a governor, passes 1.5 pu 15 s after that line opens)."""
     for q in range(x.size):
         if not np.isfinite(x[q]):
             health.bad[0] = q
             return False
     for i in range(nm):
-        if abs(x[nm + i] - 1.0) > SPEED_BAND:
+        if judged[i] and abs(x[nm + i] - 1.0) > SPEED_BAND:
             health.bad[0] = nm + i
             return False
     health.n_big[0] = health.n_big[0] + 1 if est > EST_TOL else 0
@@ -606,9 +609,10 @@ def _step(kn, grid, sa, ds, opts, w, rec, health, x, k):
 def _after_step(kn, grid, sa, ds, opts, w, rec, health, x, k):
     """Numerical health and loss of synchronism after the step from k (the state at
     k + 1, judged by its stage, `_judged_stage`): (status, index)."""
-    if not _healthy(x, health.est[k + 1], kn.p.n_mac, health):
+    stage = _judged_stage(grid, k + 1)
+    if not _healthy(x, health.est[k + 1], kn.p.n_mac, health, opts.judged[stage]):
         return UNSTABLE_STEP, k
-    if opts.stop and _separated(x, kn.p.n_mac, opts, _judged_stage(grid, k + 1)):
+    if opts.stop and _separated(x, kn.p.n_mac, opts, stage):
         sw.delivered(sa, ds.P, kn.kept, w.P_b)
         _record(rec, k + 1, x, kn.out, w.P_b)
         return SEPARATED, k + 1

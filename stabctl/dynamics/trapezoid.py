@@ -97,7 +97,7 @@ from stabctl.dynamics.model import (
     kernel_network,
     kernel_outputs,
 )
-from stabctl.dynamics.partition import judged_deviation
+from stabctl.dynamics.partition import judged_deviation, stage_at
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import NumericalInstabilityError, SimulationError
 from stabctl.network.solution import V_RELEASE, L
@@ -497,7 +497,7 @@ def run(
             _fail(sim, grid, rec, k, wall, limit, why, SimulationError, partitions)
         why = "Newton's iteration did not converge"
         if bad < 0:
-            bad = _unhealthy_state(x, nm)
+            bad = _unhealthy_state(x, nm, _judged_now(partitions, grid.t[k + 1], nm))
             why = symptom(x[bad], bad, nm) if bad >= 0 else ""
         if why:
             msg = (
@@ -575,14 +575,23 @@ def _separated(sim, x, nm, limit, partitions=(), t=0.0) -> bool:
     return bool(np.max(np.abs(angle - coi_of_islands(angle, sim.inertia, sim.island))) > limit)
 
 
-def _unhealthy_state(x, nm) -> int:
-    """The first non-finite state, else the machine speed more than SPEED_BAND pu from
-    synchronous (the integrator's health rule, `symptom`), else -1."""
+def _unhealthy_state(x, nm, judged) -> int:
+    """The first non-finite state, else the speed of a judged machine (judged, bool
+    (nm,)) more than SPEED_BAND pu from synchronous (the integrator's health rule,
+    `symptom`), else -1."""
     bad = np.flatnonzero(~np.isfinite(x))
     if bad.size:
         return int(bad[0])
-    q = nm + int(np.argmax(np.abs(x[nm : 2 * nm] - 1.0)))
-    return q if abs(x[q] - 1.0) > SPEED_BAND else -1
+    off = np.where(judged, np.abs(x[nm : 2 * nm] - 1.0), 0.0)
+    q = nm + int(np.argmax(off))
+    return q if off[q - nm] > SPEED_BAND else -1
+
+
+def _judged_now(partitions, t: float, nm: int) -> np.ndarray:
+    """The machines the partition of time t judges (every machine without partitions)."""
+    if not partitions:
+        return np.ones(nm, bool)
+    return partitions[int(stage_at(np.array([t]), partitions)[0])].judged
 
 
 def _fail(sim, grid, rec, k, wall, limit, why, error, partitions=()) -> None:
