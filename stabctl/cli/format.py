@@ -551,7 +551,7 @@ def print_placement(case_name, d) -> None:
             f"{c['cct_s']:8.3f}  {'yes' if c['met'] else 'NO'}"
         )
     for m in d.get("damping", []):
-        click.echo(f"mode {m['freq_hz']:.3f} Hz: damping ratio {m['damping']:.4f}")
+        click.echo(f"mode {m['freq_hz']:.3f} Hz: damping ratio {m['damping_ratio']:.4f}")
     solve = max(d["solve_times_s"], default=0.0)
     click.echo(
         f"{len(d['iterations'])} allocation(s) simulated, wall {d['wall_time_s']:.1f} s, "

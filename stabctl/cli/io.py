@@ -333,8 +333,8 @@ def import_psse(
     buses; a warning above 1e-3).
 
     \b
-    Example:
-      stabctl import-psse kundur.raw kundur_full.dyr -o kundur_psse.json
+    Example (ANDES's cases/kundur files; their TOGGLE record, a disturbance, is left out):
+      stabctl import-psse kundur.raw kundur_full.dyr --skip-unsupported -o kundur_psse.json
       stabctl simulate kundur_psse.json --fault 7 --far-bus 8 --tf 5
     """
     from stabctl.io.psse import import_psse as run_import

@@ -116,7 +116,7 @@ class PlacementResult:
         }
         if self.damping is not None:
             out["damping"] = [
-                {"freq_hz": float(f), "damping": float(z)} for f, z in zip(*self.damping)
+                {"freq_hz": float(f), "damping_ratio": float(z)} for f, z in zip(*self.damping)
             ]
         return out
 

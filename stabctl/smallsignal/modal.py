@@ -185,7 +185,7 @@ class ModalAnalysis:
                 j = int(idx[np.argmin(self.damping[idx])])
                 out[key] = {
                     "mode": j,
-                    "damping": float(self.damping[j]),
+                    "damping_ratio": float(self.damping[j]),
                     "freq_hz": float(self.freq_hz[j]),
                 }
         return out
@@ -195,10 +195,10 @@ class ModalAnalysis:
         lam = self.eigenvalues[i]
         rec = {
             "mode": i,
-            "real": float(lam.real),
-            "imag": float(lam.imag),
+            "real_per_s": float(lam.real),
+            "imag_rad_per_s": float(lam.imag),
             "freq_hz": float(self.freq_hz[i]),
-            "damping": float(self.damping[i]),
+            "damping_ratio": float(self.damping[i]),
             "kind": str(self.kind[i]),
             "dominant_states": [
                 {"state": s, "participation": p} for s, p in self.dominant_states(i)

@@ -118,7 +118,7 @@ def write_validation(out: str | Path, ref_dir: Path, progress=None) -> Path:
         summary.append(
             f"| [{path.name}]({path.name}) | {study.sys.nstates} | {em.size} | "
             f"{int(np.sum(ma.kind[em] == 'inter-area'))} | {worst['freq_hz']:.3f} Hz, "
-            f"zeta {worst['damping']:.4f} |"
+            f"zeta {worst['damping_ratio']:.4f} |"
         )
         if ref_file:
             lines += pstess_section(study, ref_dir / ref_file)

@@ -194,7 +194,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         s = stats["electromechanical"]
         lines.append(
             f"- Least-damped electromechanical mode: {s['freq_hz']:.3f} Hz, "
-            f"damping ratio {s['damping']:.4f}" + (" (unstable)" if s["damping"] < 0 else "") + "."
+            f"damping ratio {s['damping_ratio']:.4f}"
+            + (" (unstable)" if s["damping_ratio"] < 0 else "")
+            + "."
         )
     lines += [
         "",

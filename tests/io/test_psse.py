@@ -837,3 +837,24 @@ def test_transformer_and_bus_data_pss_e_refuses_are_refused_naming_the_field(
     own tables)."""
     with pytest.raises(CaseError, match=message):
         read_raw(_edit(tmp_path, old, new))
+
+
+def test_the_import_help_example_runs_as_written(tmp_path, monkeypatch):
+    """`import-psse --help`'s example, on ANDES's cases/kundur files it names, run line by
+    line as printed: the import exits 0 (its TOGGLE record, a disturbance, left out by
+    name) and the simulation of the imported case too."""
+    import shutil
+
+    andes = pytest.importorskip("andes")
+    for name in ("kundur.raw", "kundur_full.dyr"):
+        shutil.copy(andes.get_case(f"kundur/{name}"), tmp_path / name)
+    monkeypatch.chdir(tmp_path)
+    text = CliRunner().invoke(main, ["import-psse", "--help"]).output
+    lines = [x.split() for x in text.splitlines() if x.strip().startswith("stabctl ")]
+    assert [x[1] for x in lines] == ["import-psse", "simulate"]
+    outputs = []
+    for line in lines:
+        res = CliRunner().invoke(main, line[1:])
+        assert res.exit_code == 0, (line, res.output)
+        outputs.append(res.output)
+    assert "kundur_full.dyr:37 TOGGLE" in outputs[0] and "stable" in outputs[1]
