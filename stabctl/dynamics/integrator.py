@@ -11,17 +11,16 @@ Event semantics (`RunOptions.pst`):
   interval after the first is evaluated once more before it is taken (its limiter clamps
   persist).
 
-Numerical health is checked after every step (`_healthy`): a non-finite state, the speed
-of a machine the stage judges outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or Heun's local error estimate above EST_TOL for
-more than EST_STEPS steps in a row (the signature of an explicit method beyond its
-stability region) stops the run (UNSTABLE_STEP), so that a loss of synchronism (an angle
-more than `RunOptions.limit` rad from the centre of inertia, eq. 40) is only ever judged on
-a numerically healthy run.  Both the loss of synchronism and the storage devices' relative
-speeds use the islands of the current network stage (`RunOptions`, from
-`stabctl.dynamics.partition`): after a trip or a split the machines the stage's partition
-does not judge never stop a run, and each device follows its machine's island as it is
-now.  The storage devices are advanced by `stabctl.dynamics.switching`.
-"""
+Numerical health is checked after every step (`_healthy`): a non-finite state, the speed of
+a machine the stage judges outside [1 - SPEED_BAND, 1 + SPEED_BAND] pu or Heun's local
+error estimate above EST_TOL for more than EST_STEPS steps in a row (the signature of an
+explicit method beyond its stability region) stops the run (UNSTABLE_STEP), so that a loss
+of synchronism (an angle more than `RunOptions.limit` rad from the centre of inertia, eq.
+40) is only ever judged on a numerically healthy run. Both the loss of synchronism and the
+storage devices' relative speeds use the islands of the current network stage
+(`RunOptions`, from `stabctl.dynamics.partition`): after a trip or a split the machines the
+stage's partition does not judge never stop a run, and each device follows its machine's
+island as it is now. The storage devices are advanced by `stabctl.dynamics.switching`."""
 
 from __future__ import annotations
 

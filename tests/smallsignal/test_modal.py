@@ -178,7 +178,8 @@ def test_eig_json_lists_every_mode():
     assert out["n_states"] == 44 and out["pss"] is False and out["files"] == []
     modes = out["modes"]
     assert len(modes) > 25 and [m["mode"] for m in modes] == list(range(len(modes)))
-    assert all({"real_per_s", "imag_rad_per_s", "freq_hz", "damping_ratio", "kind"} <= set(m) for m in modes)
+    keys = {"real_per_s", "imag_rad_per_s", "freq_hz", "damping_ratio", "kind"}
+    assert all(keys <= set(m) for m in modes)
     em = [modes[i] for i in out["electromechanical_modes"]]
     ia = [m for m in em if m["kind"] == "inter-area"]
     assert len(ia) == 1 and ia[0]["damping_ratio"] < 0 and ia[0]["best_esd_bus"].startswith("B")
