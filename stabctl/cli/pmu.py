@@ -4,7 +4,9 @@ TCP, a recording served again, and a received stream recorded."""
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import json
+import socket
 
 import click
 
@@ -91,8 +93,9 @@ _LOOPBACK = ("127.0.0.1", "::1", "localhost")
 def _allowed(host: str, allow: str | None) -> tuple:
     """The --allow list as a tuple of addresses (None, the option left out: empty, any
     peer); InputError for an empty or blank value (it names no peer: it must not mean
-    any), an item that is not an address, an empty item or a repeat (`comma_list`); warns
-    when listening beyond loopback to any peer."""
+    any), an item that is not an address, an empty item or a repeat (`comma_list`), or an
+    unspecified address (0.0.0.0, ::: no peer's); warns when listening beyond loopback
+    to any peer, and for each address no peer of `host` can have (`_unreachable`)."""
     from stabctl.estimation.c37_tcp import plain_ip
 
     if not host.strip():
@@ -106,13 +109,46 @@ def _allowed(host: str, allow: str | None) -> tuple:
             "let any peer connect"
         )
     peers = tuple(() if allow is None else comma_list(allow, "--allow", plain_ip, "an IP address"))
-    if host not in _LOOPBACK and not peers:  # said now, before the server waits for peers
+    for peer in peers:  # said now, before the server waits for peers
+        if ipaddress.ip_address(peer).is_unspecified:
+            raise InputError(
+                f"--allow {peer}: the unspecified address is no peer's (it means 'every "
+                "interface' where a server listens); leave --allow out to let any peer "
+                "connect, or name the peers' addresses"
+            )
+        if why := _unreachable(host, peer):
+            click.echo(f"warning: --allow {peer}: {why}: it admits no one", err=True)
+    if host not in _LOOPBACK and not peers:
         click.echo(
             f"warning: listening on {host}: any host that reaches this port may connect "
             "(name the peers with --allow IP[,IP...])",
             err=True,
         )
     return peers
+
+
+def _unreachable(host: str, peer: str) -> str:
+    """Why no peer of a server listening on `host` can have the address `peer` ('' if
+    one can, or if `host` is a name other than localhost, which is not resolved here):
+    a multicast address, an address beyond loopback for a loopback listener, or an
+    address of the other IP version than the listener's (an IPv4 peer reaches ``::``
+    where the system listens on both)."""
+    ip = ipaddress.ip_address(peer)
+    if ip.is_multicast:
+        return "a multicast address, no TCP peer's"
+    if host == "localhost":
+        return "" if ip.is_loopback else f"a server on {host} has loopback peers only"
+    try:
+        bound = ipaddress.ip_address(host)
+    except ValueError:
+        return ""
+    if bound.is_loopback and not ip.is_loopback:
+        return f"not a loopback address, and a server on {host} has loopback peers only"
+    dual = bound.version == 6 and bound.is_unspecified and socket.has_dualstack_ipv6()
+    if ip.version != bound.version and not (dual and ip.version == 4):
+        has = f"IPv{bound.version} peers only"
+        return f"an IPv{ip.version} address, and a server on {host} has {has}"
+    return ""
 
 
 def _serving(func):
@@ -129,7 +165,8 @@ def _serving(func):
         default=60.0,
         show_default=True,
         help="Longest wait for a whole command frame from a peer (silent or sending it "
-        "byte by byte), and for it to take a frame (s); a peer past it is dropped.",
+        "byte by byte), and for it to take a frame (s); a peer past it is dropped.  With "
+        "every PDC session cut, the server ends when no peer has come for this long.",
     )
     return _apply(func, (*_LISTEN, speed, timeout))
 
@@ -186,10 +223,14 @@ def serve(
     stream IDCODE 1, its PMU's block 2, 3, ... as in the one stream.
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
-    noise, lost frames as absent data).  Exits once the PDC has been sent every frame
-    (exit status 0).  A PDC that says 'stop', closes the connection or takes no frame for
-    --timeout s before the last frame ends it too, as a stream not sent whole: an error
-    naming the PDC and the frames sent (exit status 2).
+    noise, lost frames as absent data).  Each PDC that says 'start' has a session of its
+    own, named on stderr as it ends: whole (every frame sent, and the last taken: the PDC
+    says 'stop' or closes after it), or cut by what the PDC did (said 'stop', closed the
+    connection, reset it with frames unread, took no frame for --timeout s) and the frames
+    sent; each peer refused or dropped is named as it is.  Exits once a PDC has been sent
+    the stream whole and none is streaming (exit status 0, "sent N of N frames"); if
+    every session was cut and no peer comes for --timeout s after the last, exits with an
+    error naming each cut session (exit status 2: the stream was not sent whole).
 
     \b
     Example:
@@ -245,9 +286,9 @@ def replay(recording, host, port, allow, speed, timeout):
     size against the CFG-2): a frame refused is an error naming RECORDING and the data
     frame's number.  The stream's IDCODE is the recording's (printed): commands
     addressed to another drop their peer.  Ends as `pmu serve` does: exit status 0 once
-    the PDC has been sent every frame, 2 with an error naming the PDC and the frames sent
-    if it said 'stop', closed the connection or took no frame for --timeout s before the
-    last.
+    a PDC has been sent the stream whole (every PDC session named as it ends, whole or
+    cut, each peer dropped named as it is), 2 with an error naming each cut session if
+    every session was cut and no peer came for --timeout s after.
 
     \b
     Example:
@@ -270,8 +311,12 @@ def replay(recording, host, port, allow, speed, timeout):
 
 
 def _serve(servers) -> None:
-    """Announce each listening server, wait until each has ended its session; InputError
-    if a PDC ended one before its last frame (`StreamServer.short`)."""
+    """Announce each listening server and wait until each is done (`StreamServer.done`),
+    printing on stderr what each reports as it happens (`StreamServer.news`: each peer
+    refused, each PDC session's end, whole or cut); InputError if a server's every
+    session was cut (no PDC was sent its stream whole), naming each."""
+    import time
+
     from stabctl.estimation.c37_tcp import hostport
 
     for server in servers:
@@ -280,13 +325,31 @@ def _serve(servers) -> None:
             f"IDCODE {server.idcode}); waiting for a PDC",
             err=True,
         )
-    for server in servers:
-        while not server.finished.wait(0.2):  # a wait with a time-out lets Ctrl-C through
-            pass
-    for server in servers:
-        for peer in server.refused:
-            click.echo(f"dropped {peer}", err=True)
-    if short := [f"{hostport(*s.address)}: {s.short}" for s in servers if s.short]:
+    said = [0] * len(servers)
+
+    def tell() -> None:
+        for k, server in enumerate(servers):
+            news = server.news[said[k] :]
+            said[k] += len(news)
+            where = f"{hostport(*server.address)}: " if len(servers) > 1 else ""
+            for line in news:
+                click.echo(where + line, err=True)
+
+    try:
+        while not all(server.done() for server in servers):
+            tell()
+            time.sleep(0.2)  # a wait with a time-out lets Ctrl-C through
+    finally:
+        for server in servers:
+            server.close()
+        tell()
+    if short := [
+        f"{hostport(*s.address)}: no PDC was sent the stream whole "
+        f"({'; '.join(map(str, s.cut))}) and none came for it within --timeout "
+        f"{s.guard.timeout:g} s"
+        for s in servers
+        if not s.finished.is_set()
+    ]:
         raise InputError(f"{'; '.join(short)}: the stream was not sent whole")
     sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
     click.echo(
