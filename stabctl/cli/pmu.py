@@ -165,10 +165,18 @@ def _serving(func):
         default=60.0,
         show_default=True,
         help="Longest wait for a whole command frame from a peer (silent or sending it "
-        "byte by byte), and for it to take a frame (s); a peer past it is dropped.  With "
-        "every PDC session cut, the server ends when no peer has come for this long.",
+        "byte by byte), and for it to take a frame (s); a peer past it is dropped.",
     )
-    return _apply(func, (*_LISTEN, speed, timeout))
+    wait = click.option(
+        "--wait",
+        type=FLOAT,
+        default=60.0,
+        show_default=True,
+        help="With every PDC session so far cut (the PDC said 'stop' or left before the "
+        "last frame), the longest wait for another peer (s); then the server ends, exit "
+        "status 2.",
+    )
+    return _apply(func, (*_LISTEN, speed, timeout, wait))
 
 
 def _listening(func):
@@ -213,6 +221,7 @@ def serve(
     allow,
     speed,
     timeout,
+    wait,
     each_pmu,
 ):
     """Simulate CASE through a line fault and serve one PMU per generator as one IEEE
@@ -229,7 +238,7 @@ def serve(
     connection, reset it with frames unread, took no frame for --timeout s) and the frames
     sent; each peer refused or dropped is named as it is.  Exits once a PDC has been sent
     the stream whole and none is streaming (exit status 0, "sent N of N frames"); if
-    every session was cut and no peer comes for --timeout s after the last, exits with an
+    every session was cut and no peer comes for --wait s after the last, exits with an
     error naming each cut session (exit status 2: the stream was not sent whole).
 
     \b
@@ -239,9 +248,9 @@ def serve(
     from stabctl.dynamics.driver import Simulator
     from stabctl.estimation import c37
     from stabctl.estimation import pmu as pm
-    from stabctl.estimation.c37_tcp import Guard, StreamServer
+    from stabctl.estimation.c37_tcp import StreamServer
 
-    guard = Guard(_allowed(host, allow), timeout)
+    guard = _guard(host, allow, timeout, wait)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     pmus = pm.machine_pmus(case, pmu_at)
@@ -279,7 +288,7 @@ def serve(
 @click.argument("recording", type=click.Path(dir_okay=False))
 @_serving
 @reports_errors
-def replay(recording, host, port, allow, speed, timeout):
+def replay(recording, host, port, allow, speed, timeout, wait):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
     CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.  Every
     frame is checked before the server listens (CRC; each data frame's IDCODE, type and
@@ -288,18 +297,18 @@ def replay(recording, host, port, allow, speed, timeout):
     addressed to another drop their peer.  Ends as `pmu serve` does: exit status 0 once
     a PDC has been sent the stream whole (every PDC session named as it ends, whole or
     cut, each peer dropped named as it is), 2 with an error naming each cut session if
-    every session was cut and no peer came for --timeout s after.
+    every session was cut and no peer came for --wait s after.
 
     \b
     Example:
       stabctl pmu replay wecc.c37 --speed 0
     """
     from stabctl.estimation import c37
-    from stabctl.estimation.c37_tcp import Guard, StreamServer
+    from stabctl.estimation.c37_tcp import StreamServer
     from stabctl.estimation.sources import check_order
     from stabctl.io.inputs import input_file
 
-    guard = Guard(_allowed(host, allow), timeout)
+    guard = _guard(host, allow, timeout, wait)
     path = input_file(recording, "RECORDING")
     cfg2, data = c37.recorded_frames(path)
     if not data:
@@ -308,6 +317,17 @@ def replay(recording, host, port, allow, speed, timeout):
     check_order(data, cfg2, f"RECORDING {path}")
     with StreamServer(cfg2, data, host=host, port=port, speed=speed or _INF, guard=guard) as server:
         _serve([server])
+
+
+def _guard(host: str, allow, timeout: float, wait: float):
+    """The servers' `c37_tcp.Guard` of the options; InputError for a --timeout or --wait
+    that is not > 0."""
+    from stabctl.estimation.c37_tcp import Guard
+
+    for name, value in (("--timeout", timeout), ("--wait", wait)):
+        if not value > 0:
+            raise InputError(f"{name} must be > 0 s, got {value:g}")
+    return Guard(_allowed(host, allow), timeout, wait=wait)
 
 
 def _serve(servers) -> None:
@@ -345,8 +365,8 @@ def _serve(servers) -> None:
         tell()
     if short := [
         f"{hostport(*s.address)}: no PDC was sent the stream whole "
-        f"({'; '.join(map(str, s.cut))}) and none came for it within --timeout "
-        f"{s.guard.timeout:g} s"
+        f"({'; '.join(map(str, s.cut))}) and none came for it within --wait "
+        f"{s.guard.wait:g} s"
         for s in servers
         if not s.finished.is_set()
     ]:

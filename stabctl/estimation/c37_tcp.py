@@ -56,11 +56,15 @@ class Guard:
         frame (s); a peer past it is dropped.
     max_peers : int
         Peers served at once; one more is closed at once.
+    wait : float
+        Once every streaming session so far was cut (`StreamServer.done`), the longest
+        wait for another peer (s) before the server is done.
     """
 
     allow: tuple = ()
     timeout: float = 30.0
     max_peers: int = 8
+    wait: float = 60.0
 
     def admits(self, peer) -> bool:
         """True if the peer's address (a socket's ``getpeername``) may connect."""
@@ -213,7 +217,7 @@ class StreamServer:
     closed the connection after it, or its TCP acknowledged every byte within the
     time-out), else cut by what the PDC did.  One PDC's session never decides another's:
     the server is done (`done`) once one session was whole and none streams, or, with
-    every session cut, once no peer has been connected for `Guard.timeout` s.
+    every session cut, once no peer has been connected for `Guard.wait` s.
 
     Parameters
     ----------
@@ -333,11 +337,11 @@ class StreamServer:
     def done(self) -> bool:
         """True when the server has nothing more to do: a session was whole and none is
         streaming, or every session that streamed was cut and no peer has been connected
-        for `Guard.timeout` s (no PDC came for the stream again)."""
+        for `Guard.wait` s (no PDC came for the stream again)."""
         with self._lock:
             if self.finished.is_set():
                 return self._streaming == 0
-            idle = self._open == 0 and time.monotonic() - self._idle_since >= self.guard.timeout
+            idle = self._open == 0 and time.monotonic() - self._idle_since >= self.guard.wait
             return bool(self.sessions) and idle
 
     @property

@@ -427,13 +427,13 @@ def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
     """A PDC's 'stop' after a few frames ended `pmu replay` with exit 0 and "sent 18 of 121
     frames", a partial stream presented as a normal end.  The session is cut, as it is
     when the PDC closes the connection mid-stream: named as the PDC's when it ends, and,
-    no other PDC coming for the stream within --timeout, the server ends with one error
+    no other PDC coming for the stream within --wait, the server ends with one error
     naming the PDC and the frames sent (exit status 2)."""
     import socket
 
     from pyc37.frame import CommandFrame
 
-    proc, address = serving("replay", str(kundur_recording), "--speed", "1", "--timeout", "1")
+    proc, address = serving("replay", str(kundur_recording), "--speed", "1", "--wait", "1")
     host, port = address.rsplit(":", 1)
     with socket.create_connection((host, int(port)), timeout=10) as pdc:
         pdc.sendall(CommandFrame(1, "cfg2").convert2bytes())
@@ -450,7 +450,7 @@ def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
     assert re.fullmatch(rf"the PDC {me} {re.escape(said)} after \d+ of 73 frames", cut), cut
     assert line == (
         f"error: {address}: no PDC was sent the stream whole ({cut}) and none came for it "
-        "within --timeout 1 s: the stream was not sent whole"
+        "within --wait 1 s: the stream was not sent whole"
     )
 
 
