@@ -553,7 +553,10 @@ def track(
     --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2: the result is partial), unless --out
     exists: a file there is replaced only by the track of a whole stream (the file left
-    as it was, refused before any tracking), as `pmu record` does.
+    as it was, refused before any tracking), as `pmu record` does.  Frames stamped off
+    the reporting instants of their CFG-2's DATA_RATE refuse the source; reporting
+    instants no stream sent are counted and said: a gap of at most 1 s is filled with
+    missing values, after a longer one the estimator starts again.
 
     \b
     Example:
@@ -596,7 +599,7 @@ def track(
     kept = f"{len(got.frames)} frames tracked"
     if got.short:
         refuse_short_over(out_path, why, kept)
-    d = cl.track(ctrl, got.frames)
+    d = cl.track(ctrl, got.frames, got.breaks)
     head, rows = _track_columns(ctrl, d, esd_pct is not None)
     atomic_write(
         out_path,
@@ -613,6 +616,7 @@ def track(
         )
         + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
         + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
+        + (f"; {gaps}" if (gaps := sources.gap_line(got)) else "")
         + f"; wrote {out_path}"
     )
     if got.short:

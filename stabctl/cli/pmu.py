@@ -4,7 +4,9 @@ TCP, a recording served again, and a received stream recorded."""
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import json
+import socket
 
 import click
 
@@ -91,8 +93,9 @@ _LOOPBACK = ("127.0.0.1", "::1", "localhost")
 def _allowed(host: str, allow: str | None) -> tuple:
     """The --allow list as a tuple of addresses (None, the option left out: empty, any
     peer); InputError for an empty or blank value (it names no peer: it must not mean
-    any), an item that is not an address, an empty item or a repeat (`comma_list`); warns
-    when listening beyond loopback to any peer."""
+    any), an item that is not an address, an empty item or a repeat (`comma_list`), or an
+    unspecified address (0.0.0.0, ::: no peer's); warns when listening beyond loopback
+    to any peer, and for each address no peer of `host` can have (`_unreachable`)."""
     from stabctl.estimation.c37_tcp import plain_ip
 
     if not host.strip():
@@ -106,13 +109,46 @@ def _allowed(host: str, allow: str | None) -> tuple:
             "let any peer connect"
         )
     peers = tuple(() if allow is None else comma_list(allow, "--allow", plain_ip, "an IP address"))
-    if host not in _LOOPBACK and not peers:  # said now, before the server waits for peers
+    for peer in peers:  # said now, before the server waits for peers
+        if ipaddress.ip_address(peer).is_unspecified:
+            raise InputError(
+                f"--allow {peer}: the unspecified address is no peer's (it means 'every "
+                "interface' where a server listens); leave --allow out to let any peer "
+                "connect, or name the peers' addresses"
+            )
+        if why := _unreachable(host, peer):
+            click.echo(f"warning: --allow {peer}: {why}: it admits no one", err=True)
+    if host not in _LOOPBACK and not peers:
         click.echo(
             f"warning: listening on {host}: any host that reaches this port may connect "
             "(name the peers with --allow IP[,IP...])",
             err=True,
         )
     return peers
+
+
+def _unreachable(host: str, peer: str) -> str:
+    """Why no peer of a server listening on `host` can have the address `peer` ('' if
+    one can, or if `host` is a name other than localhost, which is not resolved here):
+    a multicast address, an address beyond loopback for a loopback listener, or an
+    address of the other IP version than the listener's (an IPv4 peer reaches ``::``
+    where the system listens on both)."""
+    ip = ipaddress.ip_address(peer)
+    if ip.is_multicast:
+        return "a multicast address, no TCP peer's"
+    if host == "localhost":
+        return "" if ip.is_loopback else f"a server on {host} has loopback peers only"
+    try:
+        bound = ipaddress.ip_address(host)
+    except ValueError:
+        return ""
+    if bound.is_loopback and not ip.is_loopback:
+        return f"not a loopback address, and a server on {host} has loopback peers only"
+    dual = bound.version == 6 and bound.is_unspecified and socket.has_dualstack_ipv6()
+    if ip.version != bound.version and not (dual and ip.version == 4):
+        has = f"IPv{bound.version} peers only"
+        return f"an IPv{ip.version} address, and a server on {host} has {has}"
+    return ""
 
 
 def _serving(func):
@@ -131,7 +167,16 @@ def _serving(func):
         help="Longest wait for a whole command frame from a peer (silent or sending it "
         "byte by byte), and for it to take a frame (s); a peer past it is dropped.",
     )
-    return _apply(func, (*_LISTEN, speed, timeout))
+    wait = click.option(
+        "--wait",
+        type=FLOAT,
+        default=60.0,
+        show_default=True,
+        help="With every PDC session so far cut (the PDC said 'stop' or left before the "
+        "last frame), the longest wait for another peer (s); then the server ends, exit "
+        "status 2.",
+    )
+    return _apply(func, (*_LISTEN, speed, timeout, wait))
 
 
 def _listening(func):
@@ -176,6 +221,7 @@ def serve(
     allow,
     speed,
     timeout,
+    wait,
     each_pmu,
 ):
     """Simulate CASE through a line fault and serve one PMU per generator as one IEEE
@@ -186,10 +232,14 @@ def serve(
     stream IDCODE 1, its PMU's block 2, 3, ... as in the one stream.
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
-    noise, lost frames as absent data).  Exits once the PDC has been sent every frame
-    (exit status 0).  A PDC that says 'stop', closes the connection or takes no frame for
-    --timeout s before the last frame ends it too, as a stream not sent whole: an error
-    naming the PDC and the frames sent (exit status 2).
+    noise, lost frames as absent data).  Each PDC that says 'start' has a session of its
+    own, named on stderr as it ends: whole (every frame sent, and the last taken: the PDC
+    says 'stop' or closes after it), or cut by what the PDC did (said 'stop', closed the
+    connection, reset it with frames unread, took no frame for --timeout s) and the frames
+    sent; each peer refused or dropped is named as it is.  Exits once a PDC has been sent
+    the stream whole and none is streaming (exit status 0, "sent N of N frames"); if
+    every session was cut and no peer comes for --wait s after the last, exits with an
+    error naming each cut session (exit status 2: the stream was not sent whole).
 
     \b
     Example:
@@ -198,9 +248,9 @@ def serve(
     from stabctl.dynamics.driver import Simulator
     from stabctl.estimation import c37
     from stabctl.estimation import pmu as pm
-    from stabctl.estimation.c37_tcp import Guard, StreamServer
+    from stabctl.estimation.c37_tcp import StreamServer
 
-    guard = Guard(_allowed(host, allow), timeout)
+    guard = _guard(host, allow, timeout, wait)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
     pmus = pm.machine_pmus(case, pmu_at)
@@ -238,27 +288,27 @@ def serve(
 @click.argument("recording", type=click.Path(dir_okay=False))
 @_serving
 @reports_errors
-def replay(recording, host, port, allow, speed, timeout):
+def replay(recording, host, port, allow, speed, timeout, wait):
     """Serve RECORDING (a file `pmu record` wrote, or any capture of C37.118.2 frames,
     CFG-2 first) to one PDC, its frames as recorded, paced by their time stamps.  Every
     frame is checked before the server listens (CRC; each data frame's IDCODE, type and
     size against the CFG-2): a frame refused is an error naming RECORDING and the data
     frame's number.  The stream's IDCODE is the recording's (printed): commands
     addressed to another drop their peer.  Ends as `pmu serve` does: exit status 0 once
-    the PDC has been sent every frame, 2 with an error naming the PDC and the frames sent
-    if it said 'stop', closed the connection or took no frame for --timeout s before the
-    last.
+    a PDC has been sent the stream whole (every PDC session named as it ends, whole or
+    cut, each peer dropped named as it is), 2 with an error naming each cut session if
+    every session was cut and no peer came for --wait s after.
 
     \b
     Example:
       stabctl pmu replay wecc.c37 --speed 0
     """
     from stabctl.estimation import c37
-    from stabctl.estimation.c37_tcp import Guard, StreamServer
+    from stabctl.estimation.c37_tcp import StreamServer
     from stabctl.estimation.sources import check_order
     from stabctl.io.inputs import input_file
 
-    guard = Guard(_allowed(host, allow), timeout)
+    guard = _guard(host, allow, timeout, wait)
     path = input_file(recording, "RECORDING")
     cfg2, data = c37.recorded_frames(path)
     if not data:
@@ -269,9 +319,24 @@ def replay(recording, host, port, allow, speed, timeout):
         _serve([server])
 
 
+def _guard(host: str, allow, timeout: float, wait: float):
+    """The servers' `c37_tcp.Guard` of the options; InputError for a --timeout or --wait
+    that is not > 0."""
+    from stabctl.estimation.c37_tcp import Guard
+
+    for name, value in (("--timeout", timeout), ("--wait", wait)):
+        if not value > 0:
+            raise InputError(f"{name} must be > 0 s, got {value:g}")
+    return Guard(_allowed(host, allow), timeout, wait=wait)
+
+
 def _serve(servers) -> None:
-    """Announce each listening server, wait until each has ended its session; InputError
-    if a PDC ended one before its last frame (`StreamServer.short`)."""
+    """Announce each listening server and wait until each is done (`StreamServer.done`),
+    printing on stderr what each reports as it happens (`StreamServer.news`: each peer
+    refused, each PDC session's end, whole or cut); InputError if a server's every
+    session was cut (no PDC was sent its stream whole), naming each."""
+    import time
+
     from stabctl.estimation.c37_tcp import hostport
 
     for server in servers:
@@ -280,13 +345,31 @@ def _serve(servers) -> None:
             f"IDCODE {server.idcode}); waiting for a PDC",
             err=True,
         )
-    for server in servers:
-        while not server.finished.wait(0.2):  # a wait with a time-out lets Ctrl-C through
-            pass
-    for server in servers:
-        for peer in server.refused:
-            click.echo(f"dropped {peer}", err=True)
-    if short := [f"{hostport(*s.address)}: {s.short}" for s in servers if s.short]:
+    said = [0] * len(servers)
+
+    def tell() -> None:
+        for k, server in enumerate(servers):
+            news = server.news[said[k] :]
+            said[k] += len(news)
+            where = f"{hostport(*server.address)}: " if len(servers) > 1 else ""
+            for line in news:
+                click.echo(where + line, err=True)
+
+    try:
+        while not all(server.done() for server in servers):
+            tell()
+            time.sleep(0.2)  # a wait with a time-out lets Ctrl-C through
+    finally:
+        for server in servers:
+            server.close()
+        tell()
+    if short := [
+        f"{hostport(*s.address)}: no PDC was sent the stream whole "
+        f"({'; '.join(map(str, s.cut))}) and none came for it within --wait "
+        f"{s.guard.wait:g} s"
+        for s in servers
+        if not s.finished.is_set()
+    ]:
         raise InputError(f"{'; '.join(short)}: the stream was not sent whole")
     sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
     click.echo(

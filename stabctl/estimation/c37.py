@@ -251,6 +251,32 @@ STAT_UNUSABLE = (
 )
 
 
+#: FRACSEC's message time quality (C37.118.2-2011 clause 6.2.2: the byte before the
+#: fraction-of-second count, bits 3-0 its time quality code): code 0xF is "fault, clock
+#: failure, time not reliable": every PMU value of the frame is then treated as one whose
+#: STAT says PMU sync lost (not used, counted by this reason).  The leap-second bits
+#: (6-4) and the other codes (the clock's accuracy) leave the values used.
+TIME_QUALITY_FAULT = (0x0F, 0x0F, "clock failure (FRACSEC time quality 0xF)")
+
+
+def time_unusable(data: bytes) -> str:
+    """Why a data frame's time stamp makes its every PMU value unusable, by its FRACSEC
+    message time quality (`TIME_QUALITY_FAULT`), or ''.
+
+    Parameters
+    ----------
+    data : bytes
+        A data frame (FRACSEC's time quality byte at offset 10, C37.118.2-2011 Table 2).
+
+    Returns
+    -------
+    str
+        The reason, or ''.
+    """
+    mask, value, why = TIME_QUALITY_FAULT
+    return why if data[10] & mask == value else ""
+
+
 def unusable(stat: int) -> str:
     """Why a PMU's values with STAT word `stat` are not used ('' if they are).
 
@@ -460,7 +486,8 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     """A data frame of the stream back to a `pmu.Frame` (pu, Hz, Hz/s), read as cfg2
     says (`check_config`; its checks first, and `check_data_frame`'s).  A PMU whose STAT
     makes its values unusable (`unusable`: absent, PMU error, test mode, sync lost,
-    sorted by arrival) is invalid, its values NaN.
+    sorted by arrival) is invalid, its values NaN, as is every PMU of a frame whose
+    FRACSEC time quality says clock failure (`time_unusable`).
 
     Raises
     ------
@@ -477,8 +504,9 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     v, i = np.full(n, np.nan + 0j), np.full(n, np.nan + 0j)
     freq, rocof = np.full(n, np.nan), np.full(n, np.nan)
     at = 14
+    clock = time_unusable(data)
     for k, b in enumerate(lay.blocks):
-        if not unusable(int.from_bytes(data[at : at + 2], "big")):
+        if not clock and not unusable(int.from_bytes(data[at : at + 2], "big")):
             valid[k] = True
             ph = _phasors(b, data, at + 2)
             v[k] = ph[lay.voltage[k]] / cfg.v_base[k]
@@ -531,8 +559,8 @@ def _frequency(b: Block, data: bytes, at: int) -> tuple[float, float]:
 
 
 def flags(cfg2, data: bytes) -> list[str]:
-    """Why each PMU's values in a data frame are not used, by its STAT (`unusable`; ''
-    for those used).
+    """Why each PMU's values in a data frame are not used, by its STAT (`unusable`) or,
+    STAT aside, the frame's FRACSEC time quality (`time_unusable`); '' for those used.
 
     Parameters
     ----------
@@ -546,9 +574,9 @@ def flags(cfg2, data: bytes) -> list[str]:
     list of str
         One per PMU, in block order.
     """
-    out, at = [], 14
+    out, at, clock = [], 14, time_unusable(data)
     for b in blocks(cfg2):
-        out.append(unusable(int.from_bytes(data[at : at + 2], "big")))
+        out.append(unusable(int.from_bytes(data[at : at + 2], "big")) or clock)
         at += b.size
     return out
 

@@ -19,6 +19,7 @@ import ipaddress
 import math
 import os
 import socket
+import struct
 import threading
 import time
 from dataclasses import dataclass
@@ -28,6 +29,15 @@ from stabctl.estimation import c37
 
 #: C37.118.2-2011 Table 15 command words this server acts on
 COMMANDS = {1: "stop", 2: "start", 3: "header", 5: "cfg2"}
+#: Table 15 command words for a configuration this server does not send (it sends its
+#: stream's CFG-2 only): not answered, and named as the peer's if it is dropped
+NOT_SENT = {4: "CFG-1 (command 4)", 6: "CFG-3 (command 6)"}
+#: distinct peer addresses a server names as it refuses them (`StreamServer.news`); the
+#: refusals beyond are counted, so a scan from many addresses cannot flood the terminal
+NAMED_PEERS = 64
+#: refusals of one address named in `RENAME_S` s, the others counted (a scan from one
+#: address)
+NAMED_PER_WINDOW, RENAME_S = 5, 10.0
 
 
 @dataclass(frozen=True)
@@ -46,11 +56,15 @@ class Guard:
         frame (s); a peer past it is dropped.
     max_peers : int
         Peers served at once; one more is closed at once.
+    wait : float
+        Once every streaming session so far was cut (`StreamServer.done`), the longest
+        wait for another peer (s) before the server is done.
     """
 
     allow: tuple = ()
     timeout: float = 30.0
     max_peers: int = 8
+    wait: float = 60.0
 
     def admits(self, peer) -> bool:
         """True if the peer's address (a socket's ``getpeername``) may connect."""
@@ -198,6 +212,13 @@ class StreamServer:
     dripping bytes), speaks another protocol or connects and closes is dropped without
     ending the server's session.
 
+    Each PDC that says 'start' has a session of its own, and its own verdict (`Session`):
+    whole once every data frame was sent and the PDC took the last (it said 'stop' or
+    closed the connection after it, or its TCP acknowledged every byte within the
+    time-out), else cut by what the PDC did.  One PDC's session never decides another's:
+    the server is done (`done`) once one session was whole and none streams, or, with
+    every session cut, once no peer has been connected for `Guard.wait` s.
+
     Parameters
     ----------
     cfg2 : pyc37 ConfigFrame2
@@ -216,20 +237,19 @@ class StreamServer:
 
     Attributes
     ----------
-    sent_at : list of float
-        ``time.perf_counter()`` when each data frame was handed to the socket in the last
-        session that streamed (NaN until).
-    due_at : list of float
-        ``time.perf_counter()`` at which each frame was due by its time stamp.
+    sessions : list of Session
+        Every session that streamed, as each ended: whole, or cut by what its PDC did.
     finished : threading.Event
-        Set when a session that streamed has ended (every frame sent, the peer said
-        'stop' or went away).
-    short : str
-        Empty if the last session that streamed sent every frame; else the PDC's address,
-        what ended it before the last frame (it said 'stop', closed the connection, took
-        no frame for the time-out) and the frames sent.
+        Set once a session has delivered the stream whole (`Session.whole`).
     refused : list of str
-        Peers refused or dropped, each with the reason.
+        Peers refused or dropped, each with the reason (at most `NAMED_PEERS` x 16 kept;
+        `unlisted` counts the others).
+    news : list of str
+        What happened, in order, for a caller to print as it happens: each session's end
+        (`Session`), and each refused peer as it is refused: at most `NAMED_PER_WINDOW`
+        of one address in `RENAME_S` s (the next named says how many were not), and of
+        at most `NAMED_PEERS` addresses (then one line saying the rest are counted
+        only); `close` adds the counts never named.
 
     Raises
     ------
@@ -247,11 +267,17 @@ class StreamServer:
             raise InputError("a stream server needs at least one data frame")
         self.speed, self._cfg2, self._data, self.guard = float(speed), cfg2, list(data), guard
         self._t = [c37.frame_time(d, cfg2) for d in self._data]
-        self.sent_at = [float("nan")] * len(self._data)
-        self.due_at = [float("nan")] * len(self._data)
+        self.sessions: list[Session] = []
         self.refused: list[str] = []
-        self.short = ""
+        self.unlisted = 0
+        self.news: list[str] = []
+        self._lock = threading.Lock()
+        self._named: dict[str, list] = {}  # address -> [last named at, refusals since]
+        self._open = self._streaming = 0
+        self._idle_since = time.monotonic()
+        self._shown: _Shown | None = None  # the session `sent_at`, `due_at` show
         self._sock = listen(host, port)
+        self._address = self._sock.getsockname()[:2]
         self._stop, self.finished = threading.Event(), threading.Event()
         self._peers = threading.BoundedSemaphore(guard.max_peers)
         self._thread = threading.Thread(target=self._accept, daemon=True)
@@ -286,13 +312,42 @@ class StreamServer:
 
     @property
     def n_sent(self) -> int:
-        """Data frames handed to the socket in the last session."""
-        return sum(t == t for t in self.sent_at)  # NaN until sent
+        """Data frames sent in the first session that was whole, else the most any session
+        sent (0 before any)."""
+        whole = [s.sent for s in self.sessions if s.whole]
+        return whole[0] if whole else max((s.sent for s in self.sessions), default=0)
+
+    @property
+    def sent_at(self) -> list:
+        """``time.perf_counter()`` when each data frame was handed to the socket, in the
+        first session that was whole, else the last that began streaming (NaN until)."""
+        return list(self._shown.sent_at) if self._shown else [math.nan] * len(self._data)
+
+    @property
+    def due_at(self) -> list:
+        """``time.perf_counter()`` at which each frame was due by its time stamp, in the
+        session `sent_at` shows."""
+        return list(self._shown.due_at) if self._shown else [math.nan] * len(self._data)
+
+    @property
+    def cut(self) -> list:
+        """The sessions that were not whole, each as `Session` says it."""
+        return [s for s in self.sessions if not s.whole]
+
+    def done(self) -> bool:
+        """True when the server has nothing more to do: a session was whole and none is
+        streaming, or every session that streamed was cut and no peer has been connected
+        for `Guard.wait` s (no PDC came for the stream again)."""
+        with self._lock:
+            if self.finished.is_set():
+                return self._streaming == 0
+            idle = self._open == 0 and time.monotonic() - self._idle_since >= self.guard.wait
+            return bool(self.sessions) and idle
 
     @property
     def address(self) -> tuple[str, int]:
-        """(host, port) the server listens on."""
-        host, port = self._sock.getsockname()[:2]
+        """(host, port) the server listens on (or listened on, once closed)."""
+        host, port = self._address
         return host, port
 
     def close(self) -> None:
@@ -300,12 +355,48 @@ class StreamServer:
         self._stop.set()
         self._sock.close()
         self._thread.join(timeout=5)
+        with self._lock:
+            for addr, (_, _, since) in self._named.items():
+                if since:
+                    who = addr or f"the other addresses (beyond {NAMED_PEERS})"
+                    self.news.append(f"dropped {who} {since} more time(s) (not named above)")
+            self._named.clear()
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
         self.close()
+
+    def _refuse(self, peer, why: str) -> None:
+        """A peer refused or dropped: kept in `refused`, named in `news` as the class says."""
+        addr, now = plain_ip(peer[0]), time.monotonic()
+        line = f"{hostport(*peer[:2])}: {why}"
+        with self._lock:
+            if len(self.refused) < 16 * NAMED_PEERS:
+                self.refused.append(line)
+            else:
+                self.unlisted += 1
+            seen = self._named.get(addr)
+            if seen is None and len(self._named) >= NAMED_PEERS:
+                if len(self._named) == NAMED_PEERS:
+                    self._named[""] = [math.inf, math.inf, 0]  # said once
+                    self.news.append(
+                        f"dropped peers of more than {NAMED_PEERS} addresses: the others are "
+                        "counted, not named"
+                    )
+                self._named[""][2] += 1
+                return
+            if seen is None:
+                seen = self._named[addr] = [now, 0, 0]
+            if now - seen[0] >= RENAME_S:
+                seen[0], seen[1] = now, 0
+            if seen[1] < NAMED_PER_WINDOW:
+                again = f" ({seen[2]} more of {addr} not named before it)" if seen[2] else ""
+                seen[1], seen[2] = seen[1] + 1, 0
+                self.news.append(f"dropped {line}{again}")
+            else:
+                seen[2] += 1
 
     def _accept(self) -> None:
         while not self._stop.is_set():
@@ -314,40 +405,63 @@ class StreamServer:
             except OSError:  # closed
                 return
             if not self.guard.admits(peer):
-                self.refused.append(f"{hostport(*peer[:2])}: not in the allowed peers")
+                self._refuse(peer, "not in the allowed peers")
                 conn.close()
             elif not self._peers.acquire(blocking=False):
-                self.refused.append(f"{hostport(*peer[:2])}: {self.guard.max_peers} peers served")
+                self._refuse(peer, f"{self.guard.max_peers} peers served")
                 conn.close()
             else:
+                with self._lock:
+                    self._open += 1
                 threading.Thread(target=self._session, args=(conn, peer), daemon=True).start()
 
     def _session(self, conn: socket.socket, peer) -> None:
-        """One peer's session; the server's `finished` (and `short`) set if it streamed."""
-        ended = None
+        """One peer's session: its `Session` added to `sessions` (and `finished` set if it
+        was whole) if it streamed, else the peer named in `refused` if it was dropped."""
+        asked: list[str] = []  # configurations asked for that this server does not send
+        ended, dropped = None, True
         try:
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                ended = self._serve(conn)
+                ended = self._serve(conn, asked)
+                dropped = False
         except InputError as exc:  # another protocol, a cut frame: dropped, serve on
-            self.refused.append(f"{hostport(*peer[:2])}: {exc}")
+            self._refuse(peer, str(exc))
         except FrameTimeout as exc:  # a frame begun, dripped and not finished
-            self.refused.append(f"{hostport(*peer[:2])}: sent {exc}")
+            self._refuse(peer, f"sent {exc}")
         except TimeoutError:
-            self.refused.append(f"{hostport(*peer[:2])}: silent for {self.guard.timeout:g} s")
+            self._refuse(
+                peer,
+                f"{_asked(asked)}, then no command for {self.guard.timeout:g} s"
+                if asked
+                else f"silent for {self.guard.timeout:g} s",
+            )
         except OSError:  # the peer vanished mid-session
-            pass
+            dropped = False
         finally:
             self._peers.release()
+            with self._lock:
+                self._open -= 1
+                if self._open == 0:
+                    self._idle_since = time.monotonic()
+        if ended is None and asked and not dropped:
+            self._refuse(peer, f"{_asked(asked)}, then closed the connection")
         if ended is not None:
-            sent = f"{ended} after {self.n_sent} of {self.n_frames} frames"
-            self.short = f"the PDC {hostport(*peer[:2])} {sent}" if ended else ""
-            self.finished.set()
+            why, shown = ended
+            session = Session(hostport(*peer[:2]), shown.sent, len(self._data), why)
+            with self._lock:
+                self.sessions.append(session)
+                self._streaming -= 1
+                if session.whole and not self.finished.is_set():
+                    self._shown = shown
+                    self.finished.set()
+                self.news.append(str(session))
 
-    def _serve(self, conn: socket.socket) -> str | None:
+    def _serve(self, conn: socket.socket, asked: list):
         """Commands until the peer closes; a 'start' streams every frame (commands
         received meanwhile are read between frames).  None if it did not stream, else
-        `_stream`'s result."""
+        (`_stream`'s verdict, the session's `_Shown`).  A request for a configuration this
+        server does not send (`NOT_SENT`) is not answered and is added to `asked`."""
         while not self._stop.is_set():
             command = self._command(conn, block=True)
             if command is None:
@@ -356,26 +470,35 @@ class StreamServer:
                 conn.sendall(self._cfg2.convert2bytes())
             elif command == "header":
                 conn.sendall(self._header())
+            elif command in NOT_SENT.values():
+                asked.append(command)
             elif command == "start":
-                return self._stream(conn)
+                shown = _Shown([math.nan] * len(self._data), [math.nan] * len(self._data))
+                with self._lock:
+                    self._streaming += 1
+                    if not self.finished.is_set():
+                        self._shown = shown
+                return self._stream(conn, shown), shown
         return None
 
-    def _stream(self, conn: socket.socket) -> str:
-        """Send the data frames paced by their time stamps: '' once every frame is sent,
-        else what the peer did before the last (said 'stop', closed the connection, ...)."""
+    def _stream(self, conn: socket.socket, shown: _Shown) -> str:
+        """Send the data frames paced by their time stamps (each recorded in `shown`), then
+        wait for the PDC to take the last (`_taken`): '' once it did, else what the peer
+        did before (said 'stop', closed the connection, ...)."""
         start = time.perf_counter()
-        self.sent_at[:] = [float("nan")] * len(self._data)
         try:
             for k, data in enumerate(self._data):
                 due = start + (self._t[k] - self._t[0]) / self.speed
-                self.due_at[k] = due
+                shown.due_at[k] = due
                 while (wait := due - time.perf_counter()) > 0:
                     command = self._command(conn, block=False, timeout=min(wait, 0.05))
                     if command in ("stop", None):
                         return "said 'stop'" if command else "closed the connection"
                 conn.settimeout(self.guard.timeout)
                 conn.sendall(data)
-                self.sent_at[k] = time.perf_counter()
+                shown.sent_at[k] = time.perf_counter()
+                shown.sent = k + 1
+            return self._taken(conn)
         except FrameTimeout as exc:  # a command begun and not finished
             return f"sent {exc}"
         except TimeoutError:  # not reading
@@ -390,6 +513,28 @@ class StreamServer:
             return "closed the connection"
         except OSError as exc:
             return f"failed ({exc.strerror or exc})"
+
+    def _taken(self, conn: socket.socket) -> str:
+        """After the last frame: the server's side of the connection closed (the end of
+        the stream, for a PDC that reads to it), then '' once the PDC says 'stop' or
+        closes in turn, or when its TCP has acknowledged every byte `Guard.timeout` s
+        later; else what it did: reset the connection (it closed with frames unread: a
+        peer that said 'start' and read nothing), or left bytes unacknowledged."""
+        with contextlib.suppress(OSError):
+            conn.shutdown(socket.SHUT_WR)
+        deadline = time.monotonic() + self.guard.timeout
+        while (left := deadline - time.monotonic()) > 0 and not self._stop.is_set():
+            try:
+                command = self._command(conn, block=False, timeout=min(left, 0.2))
+            except ConnectionError:
+                return "reset the connection with frames unread (it closed without reading them)"
+            if command in ("stop", None):
+                return ""
+        if (unacked := _unacknowledged(conn)) > 0:
+            return (
+                f"left {unacked} bytes unacknowledged {self.guard.timeout:g} s after the last "
+                "frame was sent"
+            )
         return ""
 
     def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
@@ -417,7 +562,8 @@ class StreamServer:
             return ""
         if frame is None:
             return None
-        return COMMANDS.get(command_word(frame, self.idcode), "")
+        word = command_word(frame, self.idcode)
+        return COMMANDS.get(word) or NOT_SENT.get(word, "")
 
     def _header(self) -> bytes:
         from pyc37.frame import HeaderFrame
@@ -425,6 +571,71 @@ class StreamServer:
         c = self._cfg2
         text = f"stabctl simulated PMUs: {c.get_num_pmu()}, {c.get_data_rate()} frames/s"
         return HeaderFrame(c.get_id_code(), text, c.get_soc(), (0, "+")).convert2bytes()
+
+
+@dataclass
+class _Shown:
+    """One streaming session's times (`StreamServer.sent_at`, `StreamServer.due_at`) and
+    the data frames it has sent."""
+
+    sent_at: list
+    due_at: list
+    sent: int = 0
+
+
+@dataclass(frozen=True)
+class Session:
+    """One PDC's streaming session of a `StreamServer` and its verdict.
+
+    Attributes
+    ----------
+    peer : str
+        The PDC's address, ``host:port``.
+    sent : int
+        Data frames handed to its connection.
+    frames : int
+        Data frames of the stream.
+    ended : str
+        Empty if the session was whole (every frame sent and the last taken); else what
+        the PDC did that cut it (said 'stop', closed the connection, took no frame for
+        the time-out, reset the connection with frames unread, ...).
+    """
+
+    peer: str
+    sent: int
+    frames: int
+    ended: str
+
+    @property
+    def whole(self) -> bool:
+        """Every frame sent and taken."""
+        return not self.ended
+
+    def __str__(self) -> str:
+        if self.whole:
+            return f"the PDC {self.peer} was sent {self.sent} of {self.frames} frames, whole"
+        return f"the PDC {self.peer} {self.ended} after {self.sent} of {self.frames} frames"
+
+
+def _asked(asked: list) -> str:
+    """What a peer asked for that a `StreamServer` does not send (C37.118.2-2011
+    Table 15), for its drop's reason."""
+    return (
+        f"asked for {' and '.join(dict.fromkeys(asked))}, which this server does not send "
+        "(it sends its stream's CFG-2 only, command 5)"
+    )
+
+
+def _unacknowledged(conn: socket.socket) -> int:
+    """Bytes sent on conn that its peer's TCP has not acknowledged (Linux SIOCOUTQ); 0
+    where the system cannot tell."""
+    try:
+        import fcntl
+        import termios
+
+        return struct.unpack("i", fcntl.ioctl(conn.fileno(), termios.TIOCOUTQ, bytes(4)))[0]
+    except (ImportError, OSError, AttributeError):
+        return 0
 
 
 class ForeignCommand(InputError):

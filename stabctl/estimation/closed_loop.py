@@ -131,6 +131,13 @@ class LoopController:
         #: frame -> frame as on the wire (transport "codec"), None: as measured
         self.wire: Callable | None = None
 
+    def restart(self) -> None:
+        """Start the estimator again, as at the first frame, and the ESDs idle, keeping
+        the rows recorded (`track` after a gap in the frames too long to predict across)."""
+        self.filter = _make_filter(self.estimator, self.models, self.settings)
+        self.held = np.full(self.models.n, np.nan)
+        self.mode = np.zeros_like(self.mode)
+
     def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
         """Modes (n_dev,) to take effect at t_f + latency."""
         if self.estimator == "ideal":
@@ -210,10 +217,10 @@ class LoopController:
         )
 
 
-def track(controller: LoopController, frames) -> Diagnostics:
+def track(controller: LoopController, frames, breaks=()) -> Diagnostics:
     """The controller fed frames with no plant to act on (open loop): a recording or a
     received stream, field data included, through its estimator and Table 3, frame by
-    frame in order.
+    frame in order, the estimator started again at each of `breaks`.
 
     Parameters
     ----------
@@ -221,6 +228,11 @@ def track(controller: LoopController, frames) -> Diagnostics:
         A fresh controller (its estimator not yet fed); not "ideal", which needs the truth.
     frames : iterable of Frame
         One column per PMU of the controller (`LoopController.pmus`).
+    breaks : sequence of int, optional
+        Indices of the frames before which the estimator starts again and the ESDs go
+        idle (`LoopController.restart`): after a gap in the time stamps too long to
+        predict across (`sources.Received.breaks`; a filter predicting over an hour gave
+        a relative speed of a kilohertz).
 
     Returns
     -------
@@ -236,9 +248,12 @@ def track(controller: LoopController, frames) -> Diagnostics:
     if controller.estimator == "ideal":
         raise InputError("the ideal estimator reads the true speeds: it cannot track frames")
     n = len(controller.pmus)
-    for frame in frames:
+    again = set(breaks)
+    for k, frame in enumerate(frames):
         if frame.valid.size != n:
             raise InputError(f"a frame of {frame.valid.size} PMUs for a controller of {n}")
+        if k in again:
+            controller.restart()
         controller.act(frame)
     return controller.diagnostics()
 

@@ -117,12 +117,23 @@ class Received:
         PMU values whose STAT makes them unusable (`c37.unusable`: absent data, PMU
         error, test mode, PMU sync lost, sorted by arrival): not used, as values lost.
     missing : int
-        PMU values of a time stamp some streams sent and this PMU's did not.
+        PMU values of a time stamp some streams sent and this PMU's did not, and of each
+        reporting instant of a gap filled (`gaps`).
     short : tuple of str
         Each stream that stopped before its stated end (`c37_tcp.End`), with what cut it;
         empty: every stream whole.
     flagged : dict
-        `absent` by reason (`c37.STAT_UNUSABLE`'s), the reasons that occurred only.
+        `absent` by reason (`c37.STAT_UNUSABLE`'s, `c37.TIME_QUALITY_FAULT`'s), the
+        reasons that occurred only.
+    gaps : tuple of Gap
+        Each run of reporting instants (k / DATA_RATE) between the first and the last
+        time stamp that no stream sent, in order.  One of at most `FILL_S` s is in
+        `frames` as frames whose every value is missing (the estimators predict across
+        it frame by frame, as across lost frames); a longer one is not (`breaks`).
+    breaks : tuple of int
+        The index in `frames` of the first frame after each gap longer than `FILL_S` s:
+        an estimator fed the frames starts again there (`closed_loop.track`), as a
+        filter predicting across it would give figures of no meaning.
     """
 
     frames: list
@@ -132,6 +143,13 @@ class Received:
     missing: int
     short: tuple = ()
     flagged: dict = dataclasses.field(default_factory=dict)
+    gaps: tuple = ()
+    breaks: tuple = ()
+
+    @property
+    def gap_frames(self) -> int:
+        """Reporting instants no stream sent, over every gap."""
+        return sum(g.frames for g in self.gaps)
 
     def summary(self) -> dict:
         """The counts, for a report (JSON)."""
@@ -142,8 +160,56 @@ class Received:
             "absent": self.absent,
             "flagged": dict(self.flagged),
             "missing": self.missing,
+            "gaps": [dataclasses.asdict(g) for g in self.gaps],
             "short": list(self.short),
         }
+
+
+#: longest gap (s) of a source's reporting instants filled with frames whose every value is
+#: missing; a longer one breaks the frames in two (`Received.breaks`)
+FILL_S = 1.0
+
+
+@dataclass(frozen=True)
+class Gap:
+    """Reporting instants (k / DATA_RATE) that no stream of a source sent, between two
+    time stamps that one did.
+
+    Attributes
+    ----------
+    after : float
+        The time stamp before the gap (s; t = 0 is the CFG-2's).
+    until : float
+        The time stamp after it (s).
+    frames : int
+        Reporting instants missing.
+    filled : bool
+        In `Received.frames` as frames of missing values (at most `FILL_S` s), else a
+        break (`Received.breaks`).
+    """
+
+    after: float
+    until: float
+    frames: int
+    filled: bool
+
+    def __str__(self) -> str:
+        what = "filled with missing values" if self.filled else "the estimator restarts after it"
+        return f"{self.frames} after t = {self.after:.4f} s, to {self.until:.4f} s ({what})"
+
+
+def gap_line(received: Received) -> str:
+    """The gaps of a source (`Received.gaps`) for a summary line: ``N reporting instants
+    missing in G gap(s): n1 after t = ... s, to ... s (...); ...`` (the first five
+    named); '' if none."""
+    if not received.gaps:
+        return ""
+    named = "; ".join(map(str, received.gaps[:5]))
+    more = f"; {len(received.gaps) - 5} more" if len(received.gaps) > 5 else ""
+    return (
+        f"{received.gap_frames} reporting instants missing (sent by no stream) in "
+        f"{len(received.gaps)} gap(s): {named}{more}"
+    )
 
 
 def read_frames(
@@ -239,8 +305,8 @@ def read_frames(
 
 
 def unused_values(flagged: dict) -> str:
-    """The PMU values a stream's STAT words kept out (`Received.flagged`,
-    `c37_loop.Answered.flagged`), by reason, for a summary line.
+    """The PMU values a stream's STAT words (or a frame's FRACSEC time quality) kept out
+    (`Received.flagged`, `c37_loop.Answered.flagged`), by reason, for a summary line.
 
     Parameters
     ----------
@@ -250,12 +316,14 @@ def unused_values(flagged: dict) -> str:
     Returns
     -------
     str
-        ``N PMU values not used by their STAT (n1 reason1, ...)``; '' if none.
+        ``N PMU values not used by their STAT (n1 reason1, ...)`` (``STAT or time
+        quality`` when a clock failure is among the reasons); '' if none.
     """
     if not flagged:
         return ""
     why = ", ".join(f"{n} {reason}" for reason, n in flagged.items())
-    return f"{sum(flagged.values())} PMU values not used by their STAT ({why})"
+    by = "STAT or time quality" if c37.TIME_QUALITY_FAULT[2] in flagged else "STAT"
+    return f"{sum(flagged.values())} PMU values not used by their {by} ({why})"
 
 
 def _recorded_to(end, cfg2, data, name: str) -> tuple:
@@ -323,33 +391,49 @@ def merge(case, pmus, rate: float, streams) -> Received:
         parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
-    return dataclasses.replace(_by_time_stamp(len(labels), parsed), flagged=dict(flagged))
+    return dataclasses.replace(_by_time_stamp(len(labels), parsed, rate), flagged=dict(flagged))
 
 
 def check_order(data, cfg2, what: str) -> None:
     """Refuse data frames whose time stamps repeat or go backwards (a frame would replace
     or be sorted before another without a word, or a replay paced by them would wait a
-    negative time).
+    negative time), or are not reporting instants of the stream's DATA_RATE: a PMU
+    reports at k / DATA_RATE s into each second, frame 0 at the second's rollover
+    (C37.118.1-2011 clause 5.3), each stamp within one FRACSEC count of its instant (a
+    stream sent at another rate than its CFG-2 says would be read with a wrong time
+    step).
 
     Parameters
     ----------
     data : sequence of bytes
         The data frames, in order.
     cfg2 : pyc37 ConfigFrame2
-        Their stream's configuration frame (its TIME_BASE).
+        Their stream's configuration frame (its TIME_BASE and DATA_RATE; a DATA_RATE of
+        0 or less, a period, is refused elsewhere and its grid not checked here).
     what : str
         Their source, for messages (``stream 2``, a recording's path).
 
     Raises
     ------
     InputError
-        The first frame whose time stamp repeats or goes back, and how many do.
+        The first frame whose time stamp repeats or goes back, or is off the DATA_RATE
+        grid, and how many are.
     """
-    base = cfg2.get_time_base()
-    stamps = np.array(  # SOC and FRACSEC as one count of TIME_BASE
-        [int.from_bytes(d[6:10], "big") * base + int.from_bytes(d[11:14], "big") for d in data],
-        np.int64,
-    )
+    base, rate = cfg2.get_time_base(), cfg2.get_data_rate()
+    counts = np.array([int.from_bytes(d[11:14], "big") for d in data], np.int64)
+    stamps = np.array([int.from_bytes(d[6:10], "big") for d in data], np.int64) * base + counts
+    if rate > 0 and len(data):
+        # counts * rate / base is the instant's number in its second: an integer, within
+        # one count (rate / base of a frame) of one
+        off = np.abs(counts * rate - np.round(counts * rate / base).astype(np.int64) * base)
+        if (bad := np.flatnonzero(off > rate)).size:
+            k = int(bad[0])
+            raise InputError(
+                f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
+                f"second, not a reporting instant of its CFG-2's DATA_RATE {rate} (k / "
+                f"{rate} s into each second, within one FRACSEC count); {bad.size} such "
+                "frame(s): a stream at another rate than its CFG-2 says"
+            )
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
         how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
@@ -359,8 +443,11 @@ def check_order(data, cfg2, what: str) -> None:
         )
 
 
-def _by_time_stamp(n: int, parsed) -> Received:
-    """Frames of every (columns, frames) stream filled in at their time stamps (us)."""
+def _by_time_stamp(n: int, parsed, rate: float) -> Received:
+    """Frames of every (columns, frames) stream filled in at their time stamps (us), the
+    reporting instants no stream sent between them counted as gaps (`Received.gaps`):
+    those of a gap of at most `FILL_S` s added as frames of missing values, a longer one
+    a break (`Received.breaks`)."""
     at = {round(f.t * c37.TIME_BASE): f.t for _, frames in parsed for f in frames}
     stamps = sorted(at)
     row = {stamp: k for k, stamp in enumerate(stamps)}
@@ -373,11 +460,30 @@ def _by_time_stamp(n: int, parsed) -> Received:
             k = row[round(f.t * c37.TIME_BASE)]
             came[k, cols], valid[k, cols] = True, f.valid
             v[k, cols], i[k, cols], freq[k, cols], rocof[k, cols] = f.v, f.i, f.freq, f.rocof
-    frames = [Frame(at[s], valid[k], v[k], i[k], freq[k], rocof[k]) for k, s in enumerate(stamps)]
+    out: list[Frame] = []
+    gaps, breaks = [], []
+    fill = int(round(FILL_S * rate))
+    for k, s in enumerate(stamps):
+        if k and (lost := round(at[s] * rate) - round(at[stamps[k - 1]] * rate) - 1) > 0:
+            gaps.append(Gap(at[stamps[k - 1]], at[s], lost, lost <= fill))
+            if lost <= fill:
+                first = round(at[stamps[k - 1]] * rate) + 1
+                out += [_nothing((first + j) / rate, n) for j in range(lost)]
+            else:
+                breaks.append(len(out))
+        out.append(Frame(at[s], valid[k], v[k], i[k], freq[k], rocof[k]))
     return Received(
-        frames,
+        out,
         len(parsed),
         sum(len(f) for _, f in parsed),
         int(np.sum(came & ~valid)),
-        int(np.sum(~came)),
+        int(np.sum(~came)) + n * sum(g.frames for g in gaps if g.filled),
+        gaps=tuple(gaps),
+        breaks=tuple(breaks),
     )
+
+
+def _nothing(t: float, n: int) -> Frame:
+    """A frame at t of n PMUs whose every value is missing."""
+    nan = np.full(n, np.nan)
+    return Frame(t, np.zeros(n, bool), nan + 0j, nan + 0j, nan.copy(), nan.copy())

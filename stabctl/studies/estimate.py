@@ -135,7 +135,8 @@ def estimator_errors(
     InputError
         ``t_end`` before the errors start; a source as
         `stabctl.estimation.sources.read_frames`, or one whose streams stop before the
-        run's end.
+        run's end, or with a gap of reporting instants longer than
+        `stabctl.estimation.sources.FILL_S` (`stabctl.estimation.sources.Received.breaks`).
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import ambient as am
@@ -189,6 +190,11 @@ def _received(case, res, settings, source, mc: ErrorRuns, window) -> dict:
     if got.short:
         raise InputError(
             f"--source {source} is short of the run's {res.t[-1]:g} s: {'; '.join(got.short)}"
+        )
+    if got.breaks:
+        raise InputError(
+            f"--source {source}: {sources.gap_line(got)}: a gap longer than "
+            f"{sources.FILL_S:g} s, which the estimators cannot be evaluated across"
         )
     truth = pm.phasor_truth(case, res, pmus, settings.window_cycles)
     drawn = pm.measure(truth, settings, mc.seed)

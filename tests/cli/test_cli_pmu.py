@@ -342,6 +342,27 @@ def test_listening_beyond_loopback_without_allow_list_warns(capsys):
         _allowed("", None)
 
 
+def test_an_allow_list_no_peer_can_match_is_named(capsys):
+    """`--allow 10.1.2.3` with `--host 127.0.0.1` (a loopback listener's peers are
+    loopback) or `--allow ::1` on an IPv4 listener admitted no one without a word: each
+    such address is a warning as the server starts; `--allow 0.0.0.0`, no peer's address,
+    is refused."""
+    from stabctl.cli.pmu import _allowed
+    from stabctl.errors import InputError
+
+    assert _allowed("127.0.0.1", "10.1.2.3,127.0.0.1, ::1") == ("10.1.2.3", "127.0.0.1", "::1")
+    assert _allowed("::1", "::1") == ("::1",)
+    assert capsys.readouterr().err.splitlines() == [
+        "warning: --allow 10.1.2.3: not a loopback address, and a server on 127.0.0.1 has "
+        "loopback peers only: it admits no one",
+        "warning: --allow ::1: an IPv6 address, and a server on 127.0.0.1 has IPv4 peers "
+        "only: it admits no one",
+    ]
+    for unspecified in ("0.0.0.0", "::"):
+        with pytest.raises(InputError, match=f"--allow {unspecified}: the unspecified address"):
+            _allowed("127.0.0.1", unspecified)
+
+
 def test_a_peer_that_resets_the_controller_is_named_by_its_address():
     """`pmu control` against a server that is not a plant (a `pmu serve`) ended with
     exit 141 and no message: the connection's BrokenPipeError was taken for a closed
@@ -404,14 +425,15 @@ def test_a_server_listens_on_ipv6(kundur_recording, tmp_path):
 @pytest.mark.parametrize("how, said", [("stop", "said 'stop'"), ("close", "closed the connection")])
 def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
     """A PDC's 'stop' after a few frames ended `pmu replay` with exit 0 and "sent 18 of 121
-    frames", a partial stream presented as a normal end.  The session ends, as it does
-    when the PDC closes the connection mid-stream, and both are one error naming the PDC
-    and the frames sent (exit status 2)."""
+    frames", a partial stream presented as a normal end.  The session is cut, as it is
+    when the PDC closes the connection mid-stream: named as the PDC's when it ends, and,
+    no other PDC coming for the stream within --wait, the server ends with one error
+    naming the PDC and the frames sent (exit status 2)."""
     import socket
 
     from pyc37.frame import CommandFrame
 
-    proc, address = serving("replay", str(kundur_recording), "--speed", "1")
+    proc, address = serving("replay", str(kundur_recording), "--speed", "1", "--wait", "1")
     host, port = address.rsplit(":", 1)
     with socket.create_connection((host, int(port)), timeout=10) as pdc:
         pdc.sendall(CommandFrame(1, "cfg2").convert2bytes())
@@ -424,12 +446,108 @@ def test_a_pdc_that_ends_the_stream_early_is_named(kundur_recording, how, said):
             time.sleep(0.3)
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 2 and out == "", (out, err)
-    [line] = err.splitlines()
-    assert re.fullmatch(
-        rf"error: {address}: the PDC {me} {re.escape(said)} after \d+ of 73 frames: the "
-        "stream was not sent whole",
-        line,
-    ), line
+    cut, line = err.splitlines()
+    assert re.fullmatch(rf"the PDC {me} {re.escape(said)} after \d+ of 73 frames", cut), cut
+    assert line == (
+        f"error: {address}: no PDC was sent the stream whole ({cut}) and none came for it "
+        "within --wait 1 s: the stream was not sent whole"
+    )
+
+
+def test_a_peer_that_leaves_does_not_decide_the_stream_of_another(kundur_recording, tmp_path):
+    """A PDC recording the stream while a second peer says 'start' and closes at once:
+    the second peer's session ended the server with exit 2 ("the PDC ... closed the
+    connection after 8 of 73 frames: the stream was not sent whole") though the first got
+    every frame.  Now each session has its own verdict: the cut one is named as its
+    peer's, the whole one's count is the server's, exit status 0."""
+    import socket
+    import threading
+
+    from pyc37.frame import CommandFrame
+
+    proc, address = serving("replay", str(kundur_recording), "--speed", "0.5", "--timeout", "5")
+    host, port = address.rsplit(":", 1)
+    got = {}
+    pdc = threading.Thread(target=lambda: got.update(res=record(address, 73, tmp_path / "a.c37")))
+    pdc.start()
+    time.sleep(1.0)  # the PDC is streaming (2.4 s of frames at half speed)
+    with socket.create_connection((host, int(port)), timeout=5) as stranger:
+        stranger.sendall(CommandFrame(1, "cfg2").convert2bytes())
+        stranger.sendall(CommandFrame(1, "start").convert2bytes())
+        time.sleep(0.3)
+        me = f"127.0.0.1:{stranger.getsockname()[1]}"
+    pdc.join(60)
+    out, err = proc.communicate(timeout=60)
+    assert "res" in got and (tmp_path / "a.c37").read_bytes() == kundur_recording.read_bytes()
+    assert proc.returncode == 0 and out == "sent 73 of 73 frames\n", (out, err)
+    assert any(
+        re.fullmatch(rf"the PDC {me} closed the connection after \d+ of 73 frames", x)
+        for x in err.splitlines()
+    ), err
+    assert re.search(r"the PDC 127\.0\.0\.1:\d+ was sent 73 of 73 frames, whole", err), err
+
+
+def test_a_peer_that_says_start_and_reads_nothing_is_not_the_stream_s_pdc(
+    kundur_recording, tmp_path
+):
+    """Unpaced (--speed 0), a first peer that says 'start' three times, reads nothing and
+    closes had every frame "sent" into the socket buffers: the server said "sent 73 of 73
+    frames", exit 0, and the PDC connecting next was reset.  The session is whole only once
+    the PDC has taken the last frame: this one reset the connection with the frames
+    unread, it is named so, and the next PDC gets the stream whole."""
+    import socket
+
+    from pyc37.frame import CommandFrame
+
+    proc, address = serving("replay", str(kundur_recording), "--speed", "0", "--timeout", "2")
+    host, port = address.rsplit(":", 1)
+    with socket.create_connection((host, int(port)), timeout=5) as peer:
+        peer.sendall(CommandFrame(1, "start").convert2bytes() * 3)
+        time.sleep(0.5)
+        me = f"127.0.0.1:{peer.getsockname()[1]}"
+    record(address, 73, tmp_path / "a.c37")
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0 and out == "sent 73 of 73 frames\n", (out, err)
+    assert f"the PDC {me} reset the connection with frames unread" in err, err
+
+
+def test_configurations_the_server_does_not_send_are_named(kundur_recording, tmp_path):
+    """A CFG-1 (command 4) or CFG-3 (command 6) request got no answer and its peer was
+    later dropped as "silent for 2 s", a wrong reason: the drop names the request and that
+    the server sends CFG-2 only."""
+    import socket
+
+    from pyc37.frame import CommandFrame
+
+    proc, address = serving("replay", str(kundur_recording), "--speed", "0", "--timeout", "1")
+    host, port = address.rsplit(":", 1)
+    mes = []
+    for word in (4, 6):
+        with socket.create_connection((host, int(port)), timeout=5) as peer:
+            frame = bytearray(CommandFrame(1, "cfg2").convert2bytes())
+            frame[15] = word
+            frame[-2:] = c37_crc(bytes(frame[:-2]))
+            peer.sendall(bytes(frame))
+            mes.append(f"127.0.0.1:{peer.getsockname()[1]}")
+            time.sleep(1.5)
+    record(address, 73, tmp_path / "a.c37")
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    for me, what in zip(mes, ("CFG-1 (command 4)", "CFG-3 (command 6)")):
+        assert (
+            f"dropped {me}: asked for {what}, which this server does not send (it sends its "
+            "stream's CFG-2 only, command 5), then no command for 1 s"
+        ) in err.splitlines(), err
+
+
+def c37_crc(data: bytes) -> bytes:
+    """CRC-CCITT of a frame's bytes (C37.118.2-2011 Annex B), as its CHK."""
+    crc = 0xFFFF
+    for b in data:
+        crc ^= b << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    return crc.to_bytes(2, "big")
 
 
 @pytest.mark.parametrize("kind", ["replay", "serve"])

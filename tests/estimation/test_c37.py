@@ -183,7 +183,8 @@ def _as_sent(data: bytes, cfg2) -> bytes:
 
 def test_unpaced_stream_ends_the_session_and_serves_the_next(wecc_stream):
     """speed = inf sends as fast as the socket takes the frames; a session ends once every
-    frame is sent (`finished`), and the next client gets the whole stream again."""
+    frame is sent and the client has taken the last (`finished`), and the next client gets
+    the whole stream again."""
     from stabctl.estimation.c37_tcp import StreamServer, pdc_client
 
     _case, cfg, stream = wecc_stream
@@ -194,9 +195,9 @@ def test_unpaced_stream_ends_the_session_and_serves_the_next(wecc_stream):
             pdc.start()
             frames = [pdc.get() for _ in range(len(stream))]
             assert [f.get_soc() for f in frames[:2]] == [cfg.epoch, cfg.epoch]
+            pdc.quit()  # the last frame taken: the session is whole
             assert server.finished.wait(10) and server.n_sent == len(stream)
             server.finished.clear()
-            pdc.quit()
     with pytest.raises(InputError, match="speed must be > 0"):
         StreamServer.of_frames(cfg, stream, speed=0)
 

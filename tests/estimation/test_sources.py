@@ -65,6 +65,7 @@ def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
         "absent": int((~drawn.valid).sum()),
         "flagged": {"absent (STAT bits 15-14 = 10)": int((~drawn.valid).sum())},
         "missing": 0,
+        "gaps": [],
         "short": [],
     }
     assert got.absent > 0

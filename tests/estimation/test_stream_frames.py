@@ -399,8 +399,9 @@ def test_a_server_drops_a_peer_that_drips_a_command(wire):
 
 def test_a_command_dripped_mid_stream_ends_the_session_by_name(wire):
     """A PDC that, while paced frames come, sends a command a byte at a time: the session
-    ends (`finished`), the PDC named with what it did, instead of the frame's bytes being
-    lost at the pacing's poll and the PDC dropped without the session ending."""
+    ends, cut (`StreamServer.cut`), the PDC named with what it did, instead of the
+    frame's bytes being lost at the pacing's poll and the PDC dropped without the session
+    ending."""
     _, cfg2, _, body = wire
     stop = threading.Event()
     with (
@@ -411,9 +412,9 @@ def test_a_command_dripped_mid_stream_ends_the_session_by_name(wire):
         pdc.settimeout(5)
         assert pdc.recv(4)[:1] == b"\xaa"
         _drip(pdc, CommandFrame(1, "stop").convert2bytes(), 0.1, stop)
-        assert server.finished.wait(3), "the session did not end"
+        assert _eventually(lambda: server.cut, 3), "the session did not end"
         stop.set()
-    assert "sent part of a frame and not the rest within 0.5 s" in server.short
+    assert "sent part of a frame and not the rest within 0.5 s" in server.cut[0].ended
 
 
 def test_a_controller_times_out_a_dripping_plant_and_a_plant_a_dripping_answer(wire):

@@ -149,6 +149,59 @@ def test_server_drops_scans_silent_peers_bad_crc_and_strangers(kundur_stream):
         assert s.refused and "not in the allowed peers" in s.refused[0]
 
 
+def test_refused_peers_are_named_as_refused_and_a_scan_cannot_flood(kundur_stream):
+    """Refused peers were named only once the server ended (and never after Ctrl-C): each
+    is in `news` as it is refused.  Twenty refusals of one address name five
+    (`NAMED_PER_WINDOW`); the fifteen others are counted, their count said as the server
+    closes."""
+    from stabctl.estimation.c37_tcp import NAMED_PER_WINDOW
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames[:5])
+    with StreamServer(cfg2, data, speed=float("inf"), guard=Guard(allow=("10.9.9.9",))) as s:
+        socket.create_connection(s.address).close()
+        deadline = time.monotonic() + 5
+        while not s.news and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert s.news and s.news[0].endswith(": not in the allowed peers")  # while serving
+        for _ in range(19):
+            socket.create_connection(s.address).close()
+        while len(s.refused) < 20 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        named = [x for x in s.news if x.endswith("not in the allowed peers")]
+        assert len(s.refused) == 20 and len(named) == NAMED_PER_WINDOW == 5
+    assert s.news[-1] == "dropped 127.0.0.1 15 more time(s) (not named above)"
+
+
+def test_each_session_has_its_own_verdict(kundur_stream):
+    """A peer that says 'start' and closes while a PDC streams set the server's one
+    verdict (`short`) and ended its session: now its session is cut and named as its own,
+    the PDC's is whole, and the server is done only once no session streams."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    with StreamServer(cfg2, data, speed=1.0, guard=Guard(timeout=2)) as server:
+        got = {}
+        pdc = threading.Thread(target=lambda: got.update(s=receive(*server.address, End(61))))
+        pdc.start()
+        time.sleep(0.3)
+        with socket.create_connection(server.address, timeout=5) as stranger:
+            stranger.sendall(CommandFrame(1, "start").convert2bytes())
+            time.sleep(0.2)
+            me = f"127.0.0.1:{stranger.getsockname()[1]}"
+        time.sleep(0.2)
+        assert not server.done() and not server.finished.is_set()
+        pdc.join(10)
+        assert server.finished.wait(5) and len(got["s"].data) == 61 and not got["s"].short
+        deadline = time.monotonic() + 5
+        while not server.done() and time.monotonic() < deadline:
+            time.sleep(0.01)
+    [cut] = server.cut
+    assert cut.peer == me and cut.ended == "closed the connection" and 0 < cut.sent < 61
+    assert [s.whole for s in server.sessions] == [False, True] and server.n_sent == 61
+
+
 def _plant(case, timeout, allow=()):
     from stabctl.storage.devices import uniform_fleet
 

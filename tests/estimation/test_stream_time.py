@@ -1,0 +1,123 @@
+"""Time stamps and time quality of a received stream: a frame whose FRACSEC time quality
+says clock failure is not used, as one whose STAT says sync lost; frames off the reporting
+instants of the CFG-2's DATA_RATE are refused by name; reporting instants no stream sent
+are counted and said, a short gap filled with missing values and a long one restarting
+the estimator, never predicted across."""
+
+import binascii
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+pytest.importorskip("pyc37")
+
+from stabctl.cli import main
+from stabctl.estimation import c37
+
+
+@pytest.fixture(scope="module")
+def wire():
+    """Kundur's 4-PMU stream for 1.5 s (91 frames): its CFG-2 (pyc37) and the CFG-2 and
+    data frames as bytes."""
+    from pmu_streams import kundur_stream, on_the_wire
+
+    _, _, cfg, frames = kundur_stream(t_end=1.5)
+    head, body = on_the_wire(cfg, frames)
+    return c37.config_frame(cfg), head, body
+
+
+def _crc(frame: bytes) -> bytes:
+    return frame[:-2] + binascii.crc_hqx(frame[:-2], 0xFFFF).to_bytes(2, "big")
+
+
+def _later(frame: bytes, us: int) -> bytes:
+    """frame stamped `us` microseconds later, its CRC valid."""
+    t = int.from_bytes(frame[6:10], "big") * 1_000_000 + int.from_bytes(frame[11:14], "big")
+    t += us
+    soc, count = divmod(t, 1_000_000)
+    return _crc(
+        frame[:6] + soc.to_bytes(4, "big") + frame[10:11] + count.to_bytes(3, "big") + frame[14:]
+    )
+
+
+def _quality(frame: bytes, byte: int) -> bytes:
+    """frame with FRACSEC's time quality byte set, its CRC valid."""
+    return _crc(frame[:10] + bytes([byte]) + frame[11:])
+
+
+def _track(tmp_path, head, body):
+    path = tmp_path / "r.c37"
+    path.write_bytes(head + b"".join(body))
+    args = ["estimate", "track", "kundur", "--source", str(path), "--out", str(tmp_path / "t.csv")]
+    return CliRunner().invoke(main, args)
+
+
+def _largest_mhz(res) -> float:
+    return float(res.stdout.split("largest |f_i - f_COI| ")[1].split(" mHz")[0])
+
+
+def test_a_clock_failure_makes_the_frame_s_values_unusable(wire, tmp_path):
+    """FRACSEC time quality 0xF (C37.118.2-2011 clause 6.2.2: clock failure, time not
+    reliable) was never read: such frames were tracked as good data.  Their values are now
+    not used and counted by that reason, as a STAT's sync lost are; the leap-second bits
+    leave them used."""
+    cfg2, head, body = wire
+    bad = _quality(body[50], 0x0F)
+    assert c37.flags(cfg2, bad) == [c37.TIME_QUALITY_FAULT[2]] * 4
+    assert c37.flags(cfg2, _quality(body[50], 0x30)) == [""] * 4
+    res = _track(tmp_path, head, body[:45] + [_quality(f, 0x0F) for f in body[45:]])
+    assert res.exit_code == 0, res.output
+    assert (
+        "184 PMU values not used by their STAT or time quality (184 clock failure (FRACSEC "
+        "time quality 0xF))" in res.stdout
+    )
+    leap = _track(tmp_path, head, [_quality(f, 0x30) for f in body])
+    assert leap.exit_code == 0 and "not used" not in leap.stdout, leap.output
+
+
+def test_frames_off_the_data_rate_s_instants_are_refused(wire, tmp_path):
+    """Frames 1/50 s apart in a stream whose CFG-2 says 60 frames/s were tracked, exit 0:
+    the second frame is refused by name, with the count of such frames."""
+    _, head, body = wire
+    off = [_later(f, k * 20_000 - round(k * 1e6 / 60)) for k, f in enumerate(body)]
+    res = _track(tmp_path, head, off)
+    assert res.exit_code == 2, res.output
+    assert (
+        "stream 1: data frame 2 is stamped 0.020000 s into its second, not a reporting "
+        "instant of its CFG-2's DATA_RATE 60" in res.stderr
+    )
+
+
+def test_a_short_gap_is_filled_and_said(wire, tmp_path):
+    """Frames 40 on stamped 0.5 s later (30 reporting instants missing) were tracked with
+    no word: the gap is said (count, where) and filled with frames of missing values."""
+    _, head, body = wire
+    res = _track(tmp_path, head, body[:40] + [_later(f, 500_000) for f in body[40:]])
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith("tracked 121 frames")
+    assert (
+        "30 reporting instants missing (sent by no stream) in 1 gap(s): 30 after t = 0.6500 "
+        "s, to 1.1667 s (filled with missing values)" in res.stdout
+    )
+    rows = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
+    assert rows.shape[0] == 121 and np.allclose(np.diff(rows[:, 0]), 1 / 60)
+
+
+@pytest.mark.parametrize("seconds", [10, 3600])
+def test_a_long_gap_restarts_the_estimator(wire, tmp_path, seconds):
+    """A stream followed by itself an hour later was tracked with a relative speed of
+    1.1 kHz (the filter predicted across the hour), exit 0, and a 10 s gap with no word:
+    the gap is said, and the estimator starts again after it, so the relative speeds stay
+    those of the stream."""
+    _, head, body = wire
+    whole = _track(tmp_path, head, body)
+    res = _track(tmp_path, head, body + [_later(f, seconds * 1_000_000) for f in body])
+    assert res.exit_code == 0, res.output
+    missing = seconds * 60 - 91
+    assert (
+        f"{missing} reporting instants missing (sent by no stream) in 1 gap(s): {missing} "
+        "after t = 1.5000 s" in res.stdout
+    )
+    assert "(the estimator restarts after it)" in res.stdout
+    assert _largest_mhz(res) == pytest.approx(_largest_mhz(whole), rel=0.05)
