@@ -270,7 +270,7 @@ def screening_brackets(path, case: str, digest: str) -> dict:
     """
     from stabctl.io.inputs import input_file
     from stabctl.parallel import check_records_case, read_records
-    from stabctl.stability.cct import LineFault, cct_record_problem
+    from stabctl.stability.cct import LineFault
     from stabctl.stability.screening import ABOVE, verdict
 
     try:
@@ -278,7 +278,7 @@ def screening_brackets(path, case: str, digest: str) -> dict:
         check_records_case(
             path, {case: digest}, f"give the records of a screening of {case} as it is now"
         )
-        records = read_records(path, whole="screening records", check=cct_record_problem)
+        records = read_records(path, whole="screening records")
     except InputError:  # it names the file
         raise
     except (OSError, ValueError) as exc:
