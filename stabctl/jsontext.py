@@ -1,21 +1,69 @@
-"""JSON text read strictly: an object that gives one key twice is refused instead of
-keeping its last value, and an integer of more digits than Python converts (4300, its
+"""Input files and JSON text read strictly, for every reader of stabctl.
+
+Every input file is a regular file of at most :data:`MAX_INPUT_BYTES` (`input_file`).
+In JSON text an object that gives one key twice is refused instead of keeping its last
+value, and an integer of more digits than Python converts (4300, its
 ``sys.get_int_max_str_digits``) is refused naming the file instead of escaping as
 Python's ValueError (`parse_json`), for every JSON file stabctl reads (case files,
-records files, ANDES JSON).  It sits low in the layers, just above
-`stabctl.errors`, so that the sweep records (`stabctl.parallel`) and the case readers
-(`stabctl.io`) read JSON alike.
+records files, ANDES JSON).  It sits low in the layers, just above `stabctl.errors`, so
+that the sweep records (`stabctl.parallel`) and the case readers (`stabctl.io`, which
+gives both under `stabctl.io.inputs`) read files alike.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import stat
 import sys
+from pathlib import Path
 from typing import Any
 
 from stabctl.errors import InputError
 
-__all__ = ["parse_json"]
+__all__ = ["MAX_INPUT_BYTES", "input_file", "parse_json"]
+
+#: largest input file read, bytes (the largest case shipped, ACTIVSg2000's RAW, is 0.7 MB)
+MAX_INPUT_BYTES = 256 * 2**20
+
+
+def input_file(path: str | os.PathLike, what: str) -> Path:
+    """``path`` after checking that it is a regular file of at most MAX_INPUT_BYTES
+    (links followed).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What it is, for messages (``"fault list"``).
+
+    Returns
+    -------
+    Path
+        ``path``.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable, not a regular file (a device, a pipe, a directory), or too
+        large; the message names ``what`` and the path.
+    """
+    path = Path(path)
+    try:
+        st = os.stat(path)
+    except OSError as exc:
+        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(
+            f"{what} {path}: not a regular file (a device, a pipe or a directory); give a file"
+        )
+    if st.st_size > MAX_INPUT_BYTES:
+        raise InputError(
+            f"{what} {path}: {st.st_size / 2**20:.0f} MiB, above the "
+            f"{MAX_INPUT_BYTES / 2**20:.0f} MiB an input file may have"
+        )
+    return path
 
 
 class _KeyTwice(ValueError):

@@ -42,6 +42,7 @@ import ctypes
 import io
 import json
 import logging
+import math
 import multiprocessing
 import os
 import re
@@ -58,10 +59,10 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
 from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
-from stabctl.jsontext import parse_json
+from stabctl.jsontext import input_file, parse_json
 from stabctl.locking import exclusive
 from stabctl.progress import bar as progress_bar
 
@@ -72,11 +73,16 @@ _log = logging.getLogger(__name__)
 class Job:
     """One unit of work: `func(inputs)` -> JSON-able dict, identified by `key` in the
     output file.  func must be importable by name (a module-level function); `inputs` is
-    recorded with its result, so a rerun resumes only jobs with the same inputs."""
+    recorded with its result, so a rerun resumes only jobs with the same inputs.
+    `check`, if given, is the schema of the job's records: ``check(record)`` says what
+    makes a record of the job one its func cannot have written (a CCT out of its range, a
+    list of machines that is text), or None; a resumed sweep handles such a record as a
+    damaged line (`set_aside_damaged`), never as the job's result."""
 
     key: str
     func: Callable[..., dict]
     inputs: Mapping = field(default_factory=dict)
+    check: Callable[[dict], str | None] | None = None
 
 
 @dataclass(frozen=True)
@@ -116,7 +122,8 @@ class RunnerOptions:
 class SweepReport:
     """Outcome of `run_sweep`: `records` maps every job key (in job order) to its line in
     the output file (finished now or before); ran / skipped / failed count this call's
-    jobs (failed: among those run now); wall_time_s is this call's."""
+    jobs (failed: among those run now); failed_before counts the jobs recorded as failed
+    before and not run again (without `retry_failed`); wall_time_s is this call's."""
 
     out: Path
     records: dict
@@ -124,6 +131,7 @@ class SweepReport:
     skipped: int
     failed: int
     wall_time_s: float
+    failed_before: int = 0
 
 
 #: Dask runs a job again this many times when its task fails outside `run_job` (which
@@ -197,12 +205,18 @@ MAX_RECORD_LINE = 16 * 2**20
 REAP_TIMEOUT = 30.0  # s a stopped pool waits for its killed workers to be reaped
 
 
-def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
-    """(line number, line, the record or None if the line is not a whole sweep record) of
-    every non-blank line of a records file (UTF-8, a byte-order mark before the first
-    line skipped: an editor's, not part of the record), each read in at most
-    MAX_RECORD_LINE bytes.  Raises InputError at a longer line, or a line giving a key
-    twice."""
+def _record_lines(
+    path: Path, check: Callable[[dict], str | None] | None = None
+) -> Iterator[tuple[int, str, dict | None, str]]:
+    """(line number, line, the record or None, why not) of every non-blank line of a
+    records file (UTF-8, a byte-order mark before the first line skipped: an editor's, not
+    part of the record), each read in at most MAX_RECORD_LINE bytes: the record is None,
+    and `why` says why, when the line is not a whole sweep record (`_record`; `check` the
+    schema of the records' kind, see `Job`).  Raises InputError, before a byte is read,
+    for a file that is not a regular one of at most
+    `stabctl.jsontext.MAX_INPUT_BYTES` (as every input file), and at a longer line or a
+    line giving a key twice."""
+    input_file(path, "records file")
     with path.open(encoding="utf-8-sig", errors="replace") as f:
         for n, line in enumerate(iter(lambda: f.readline(MAX_RECORD_LINE + 1), ""), start=1):
             if len(line) > MAX_RECORD_LINE:
@@ -211,37 +225,106 @@ def _record_lines(path: Path) -> Iterator[tuple[int, str, dict | None]]:
                     "file of sweep records; give another file"
                 )
             if line.strip():
-                yield n, line, _record(line, f"{path} line {n}")
+                rec, why = _record(line, f"{path} line {n}", check)
+                yield n, line, rec, why
 
 
-def _record(line: str, where: str) -> dict | None:
-    """The sweep record of a line (a dict with a string key and a known status), or None.
-    Raises InputError, naming ``where``, for a line giving a key twice (no kill cuts a
-    line so: an edited record, whose value json would take the last of)."""
+#: why a line that is not JSON is no record (the last line of a sweep killed mid-write)
+_CUT = "cut by a kill?"
+
+
+def _record(line: str, where: str, check=None) -> tuple[dict | None, str]:
+    """(the sweep record of a line, "") or (None, why it is none): the record must be a
+    JSON object with a string key, a known status and that status's field of its type
+    (`_problem`), and pass `check`, the schema of its kind, if given.  Raises InputError,
+    naming ``where``, for a line giving a key twice (no kill cuts a line so: an edited
+    record, whose value json would take the last of)."""
     try:
         rec = parse_json(line, where)
     except InputError:
         raise
     except (ValueError, RecursionError):  # a damaged or absurdly nested line
-        return None
-    ok = (
-        isinstance(rec, dict)
-        and isinstance(rec.get("key"), str)
-        and rec.get("status") in _STATUS_FIELD
-        and isinstance(rec.get(_STATUS_FIELD[rec["status"]]), (dict, str))
-    )
-    return rec if ok else None
+        return None, _CUT
+    why = _problem(rec) or (check(rec) if check is not None else None)
+    return (None, why) if why else (rec, "")
 
 
-#: what a whole record of each status holds: its result, its verdict or its error
-_STATUS_FIELD = {"ok": "result", "verdict": "verdict", "failed": "error"}
+#: what a whole record of each status holds: its result, its verdict or its error, and
+#: of which type (`run_job`, `_failure_fields`)
+_STATUS_FIELD: dict[str, tuple[str, type]] = {
+    "ok": ("result", dict),
+    "verdict": ("verdict", str),
+    "failed": ("error", str),
+}
 
 
-def read_records(path: str | Path, whole: str | None = None) -> dict[str, dict]:
+def _problem(rec) -> str | None:
+    """What makes a parsed line no sweep record of any kind, or None: not an object, no
+    string key, an unknown status, the status's field missing or of another type (the
+    result an object, the verdict and error texts), inputs that are not an object, a
+    wall time that is not one."""
+    if not isinstance(rec, dict):
+        return "not a JSON object"
+    if not isinstance(rec.get("key"), str):
+        return "no job key"
+    status = rec.get("status")
+    if not isinstance(status, str) or status not in _STATUS_FIELD:  # a list is unhashable
+        return f"status {shown(status)} is none of {', '.join(_STATUS_FIELD)}"
+    name, kind = _STATUS_FIELD[status]
+    value = rec.get(name)
+    if not isinstance(value, kind) or (kind is str and not value):
+        what = "an object" if kind is dict else "a text"
+        return f"status {status} without its {name} ({what}; {shown(value)} there)"
+    if not isinstance(rec.get("inputs", {}), dict):
+        return f"inputs {shown(rec['inputs'])} is not an object"
+    wall = rec.get("wall_time_s")
+    if wall is not None and not (is_number(wall) and wall >= 0):
+        return f"wall_time_s {shown(wall)} is not a time in s"
+    if not isinstance(rec.get("reason", ""), str):
+        return f"reason {shown(rec['reason'])} is not a text"
+    return None
+
+
+def is_number(x) -> TypeGuard[float]:
+    """Whether a value read from JSON is a finite number (not a bool, which JSON keeps
+    apart but Python counts as an int).
+
+    Parameters
+    ----------
+    x : object
+
+    Returns
+    -------
+    bool
+    """
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def shown(value) -> str:
+    """A value read from a record, for a message: as JSON, cut at 40 characters.
+
+    Parameters
+    ----------
+    value : object
+
+    Returns
+    -------
+    str
+    """
+    try:
+        text = json.dumps(value)
+    except (TypeError, ValueError):  # pragma: no cover - records are read from JSON
+        text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def read_records(
+    path: str | Path, whole: str | None = None, check: Callable[[dict], str | None] | None = None
+) -> dict[str, dict]:
     """Records of an output file: key -> last line of that key (a retry's record after
     its failed one).  Lines that are not whole sweep records (a line cut by a kill, a
-    record without its result) are skipped with a warning, unless `whole` is given; a
-    missing file gives {}.
+    record without its result, one `check` refuses) are skipped with a warning, unless
+    `whole` is given; a missing file gives {}.
 
     Parameters
     ----------
@@ -251,6 +334,9 @@ def read_records(path: str | Path, whole: str | None = None) -> dict[str, dict]:
         The file is an input that must be whole (e.g. ``"--screening"``, named in the
         message): a line that is not a sweep record is an error, not skipped (the records
         read would be part of the file's, presented as all of them).
+    check : callable, optional
+        The schema of the records' kind (`Job`): ``check(record)`` says what makes a
+        record one its job cannot have written, or None.
 
     Returns
     -------
@@ -260,24 +346,25 @@ def read_records(path: str | Path, whole: str | None = None) -> dict[str, dict]:
     Raises
     ------
     InputError
-        A line longer than MAX_RECORD_LINE, a line giving a key twice, a job recorded
-        twice other than after a failure (a file edited by hand: which result holds?),
-        or with `whole` a line that is not a sweep record (its number named).
+        A file that is not a regular one or is larger than
+        `stabctl.jsontext.MAX_INPUT_BYTES`, a line longer than MAX_RECORD_LINE, a line
+        giving a key twice, a job recorded twice other than after a failure (a file
+        edited by hand: which result holds?), or with `whole` a line that is not a sweep
+        record (its number named, and why).
     """
     path = Path(path)
     if not path.exists():
         return {}
     records: dict[str, dict] = {}
     first: dict[str, int] = {}
-    for n, _, rec in _record_lines(path):
+    for n, _, rec, why in _record_lines(path, check):
         if rec is None and whole is not None:
             raise InputError(
-                f"{whole} {path} line {n}: not a whole sweep record (a damaged or cut "
-                "line): the records must be whole; repair or remove the line, or rerun the "
-                "screening"
+                f"{whole} {path} line {n}: not a whole sweep record ({why}): the records "
+                "must be whole; repair or remove the line, or rerun the screening"
             )
         if rec is None:
-            warnings.warn(f"{path} line {n}: not a sweep record, ignored", stacklevel=2)
+            warnings.warn(f"{path} line {n}: not a sweep record ({why}), ignored", stacklevel=2)
             continue
         key = rec["key"]
         if key in records and records[key]["status"] != "failed":  # a retry follows a failure
@@ -290,20 +377,28 @@ def read_records(path: str | Path, whole: str | None = None) -> dict[str, dict]:
     return records
 
 
-def set_aside_damaged(path: str | Path) -> list[int]:
+def set_aside_damaged(
+    path: str | Path, check: Callable[[dict], str | None] | None = None
+) -> list[int]:
     """Move the lines of an output file that are not sweep records (a last line cut by a
-    kill, a damaged line) to ``<path>.damaged`` with a warning, so that their jobs run
-    again and the file holds only whole records; returns their line numbers.  The file is
-    rewritten atomically (a temporary file renamed over it).  Raises InputError for a line
-    longer than MAX_RECORD_LINE, or a file of more than one line none of which is a record
-    (another file given as the output: nothing moved)."""
+    kill, a damaged line, a record whose fields its job cannot have written: `check`, the
+    schema of the records' kind, see `Job`) to ``<path>.damaged`` with a warning naming
+    each line and why, so that their jobs run again and the file holds only whole
+    records; returns their line numbers.  The file is rewritten atomically (a temporary
+    file renamed over it).  Raises InputError for a file `read_records` refuses (not a
+    regular file, above the size cap, a line longer than MAX_RECORD_LINE), or a file of
+    more than one line none of which is a record (another file given as the output:
+    nothing moved)."""
     path = Path(path)
     if not path.exists():
         return []
     good: list = []
     bad: list = []
-    for n, line, rec in _record_lines(path):
+    whys: dict[str, list[int]] = {}
+    for n, line, rec, why in _record_lines(path, check):
         (good if rec is not None else bad).append((n, line if line.endswith("\n") else line + "\n"))
+        if rec is None:
+            whys.setdefault(why, []).append(n)
     if not bad:
         return []
     if not good and len(bad) > 1:
@@ -312,13 +407,17 @@ def set_aside_damaged(path: str | Path) -> list[int]:
             "earlier run (left as it is); give another file or remove it"
         )
     aside = path.with_name(path.name + ".damaged")
-    with aside.open("a") as f:
+    with naming(aside), aside.open("a") as f:
         f.writelines(line for _, line in bad)
     atomic_write(path, lambda f: f.writelines(line for _, line in good))
     numbers = [n for n, _ in bad]
+    reasons = "; ".join(
+        why if len(whys) == 1 else f"line(s) {', '.join(map(str, ns))}: {why}"
+        for why, ns in whys.items()
+    )
     warnings.warn(
         f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
-        f"(cut by a kill?): moved to {aside}; their jobs run again",
+        f"({reasons}): moved to {aside}; their jobs run again",
         stacklevel=2,
     )
     return numbers
@@ -353,32 +452,65 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
     ------
     OSError
         The directory cannot be created or written; `path` is a symbolic link that is
-        broken or loops; whatever `write` raises.
+        broken or loops; whatever `write` raises.  One that names no file (a full disk,
+        the file size limit: ``write`` fails without a name), or names the temporary
+        file, names `path` (`naming`).
     """
     given = Path(path)
-    path = Path(os.path.realpath(given, strict=True)) if given.is_symlink() else given
-    if path.exists() and not (path.is_file() or path.is_dir()):
-        if mode is None:
-            write(str(path))
-        else:
-            with open(path, mode) as f:
-                write(f)
-        return given
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
-    try:
-        if mode is None:
-            os.close(fd)
-            write(tmp)
-        else:
-            with os.fdopen(fd, mode) as f:
-                write(f)
-        os.chmod(tmp, 0o666 & ~_umask())  # as open() makes a new file (mkstemp: 0o600)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with naming(given):
+        path = Path(os.path.realpath(given, strict=True)) if given.is_symlink() else given
+        if path.exists() and not (path.is_file() or path.is_dir()):
+            if mode is None:
+                write(str(path))
+            else:
+                with open(path, mode) as f:
+                    write(f)
+            return given
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+        try:
+            with naming(given, tmp):
+                if mode is None:
+                    os.close(fd)
+                    write(tmp)
+                else:
+                    with os.fdopen(fd, mode) as f:
+                        write(f)
+                os.chmod(tmp, 0o666 & ~_umask())  # as open() makes a new file (mkstemp: 0o600)
+                os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
     return given
+
+
+@contextmanager
+def naming(path: str | Path, *also: str | Path) -> Iterator[None]:
+    """An OSError raised in the block names `path`: one that names no file (``write``
+    failing on a full disk, ENOSPC, or past the file size limit, EFBIG: Python ignores
+    SIGXFSZ, so the write fails instead of the process being killed) or names one of
+    `also` (the temporary file written in its place) gets `path` as its ``filename``, so
+    that the message says which output could not be written.  Errors naming another
+    file are left as they are.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output being written.
+    *also : str or Path
+        Files written for it (its temporary file), named as `path`.
+
+    Yields
+    ------
+    None
+    """
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is None or str(exc.filename) in {str(p) for p in also}:
+            exc.filename = str(path)
+            exc.filename2 = None
+        raise
 
 
 def _umask() -> int:
@@ -665,14 +797,17 @@ def run_sweep(
 
 def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, pool) -> SweepReport:
     """`run_sweep`'s work once it holds `out`'s lock: repair, read, run, append."""
-    set_aside_damaged(out)
-    done = read_records(out)
+    check = _schema(jobs)
+    set_aside_damaged(out, check)
+    done = read_records(out, check=check)
     _check_jobs(jobs, done, out)
     todo = [
         j
         for j in jobs
         if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
     ]
+    rerun = {j.key for j in todo}
+    failed_before = sum(j.key not in rerun and done[j.key]["status"] == "failed" for j in jobs)
     wall = time.perf_counter()
     failed = written = 0
     if todo:
@@ -700,7 +835,22 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         skipped=len(jobs) - len(todo),
         failed=failed,
         wall_time_s=time.perf_counter() - wall,
+        failed_before=failed_before,
     )
+
+
+def _schema(jobs) -> Callable[[dict], str | None] | None:
+    """The check of a record by the schema of its job's kind (`Job.check`), for the
+    records of these jobs; those of other keys are checked as any record only."""
+    checks = {j.key: j.check for j in jobs if j.check is not None}
+    if not checks:
+        return None
+
+    def check(rec: dict) -> str | None:
+        mine = checks.get(rec["key"])
+        return None if mine is None else mine(rec)
+
+    return check
 
 
 #: Record fields that change from run to run (timings, process ids, tracebacks with the
@@ -802,7 +952,7 @@ def check_records_case(path: str | Path, cases: Mapping, remedy: str) -> None:
         `cases`, or on one whose digest differs from the given (the case changed since,
         or the record has none: made before records carried it).
     """
-    for n, _, rec in _record_lines(Path(path)):
+    for n, _, rec, _why in _record_lines(Path(path)):
         inputs = (rec or {}).get("inputs")
         if rec is None or not isinstance(inputs, dict) or inputs.get("case") is None:
             continue
@@ -899,8 +1049,9 @@ class _appender:
         start = os.fstat(fd).st_size
         data = memoryview(line.encode())
         try:
-            while data:
-                data = data[self.f.write(data) :]
+            with naming(self.path):
+                while data:
+                    data = data[self.f.write(data) :]
         except OSError:
             os.ftruncate(fd, start)
             raise

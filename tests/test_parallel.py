@@ -1282,3 +1282,220 @@ def test_a_record_giving_a_key_twice_is_refused_naming_its_line(tmp_path):
     for read in (read_records, set_aside_damaged, lambda p: check_records_case(p, {}, "")):
         with pytest.raises(InputError, match=needle):
             read(out)
+
+
+# ------------------------------------------------------- records of impossible types
+
+
+def square_record_problem(rec):
+    """The schema of `square`'s records, for the tests: y is x squared."""
+    if rec["status"] == "ok" and rec["result"].get("y") != rec["inputs"]["x"] ** 2:
+        return f"result.y {rec['result'].get('y')!r} is not x squared"
+    return None
+
+
+@pytest.mark.parametrize(
+    ("edit", "why"),
+    [
+        (lambda r: r.update(result={}), r"result\.y None is not x squared"),
+        (lambda r: r["result"].update(y="abc"), r"result\.y 'abc' is not x squared"),
+        (
+            lambda r: r.update(status="verdict", verdict={"a": 1}),
+            r"status verdict without its verdict \(a text",
+        ),
+        (
+            lambda r: (r.pop("result"), r.update(status="failed", error={"a": 1})),
+            r"status failed without its error \(a text",
+        ),
+        (lambda r: r.update(status=["ok"]), r'status \["ok"\] is none of ok, verdict, failed'),
+        (lambda r: r.update(inputs=[1]), r"inputs \[1\] is not an object"),
+        (lambda r: r.update(wall_time_s=-1), r"wall_time_s -1 is not a time in s"),
+    ],
+)
+def test_a_record_its_job_cannot_have_written_is_set_aside_and_its_job_rerun(tmp_path, edit, why):
+    """A record line of valid JSON with fields of the wrong types (result {}, a CCT as
+    text, a verdict or error that is an object) crashed the formatters of a resumed sweep
+    with a traceback, or was shown as the job's result; it is a damaged line: moved aside
+    with a warning naming the line and why, and its job run again."""
+    out = tmp_path / "t.jsonl"
+    jobs = [Job(f"square/{x}", square, {"x": x}, check=square_record_problem) for x in (2, 3)]
+    run_sweep(jobs, out, workers=1, progress=False)
+    recs = lines(out)
+    edit(recs[1])
+    out.write_text("".join(json.dumps(r) + "\n" for r in recs))
+    damaged = rf"t\.jsonl: line\(s\) 2 not a whole sweep record \({why}"
+    with pytest.warns(UserWarning, match=damaged):
+        rep = run_sweep(jobs, out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 1)
+    assert rep.records["square/3"]["result"] == {"y": 9}
+    assert [r["key"] for r in lines(out)] == ["square/2", "square/3"]
+    assert json.loads((tmp_path / "t.jsonl.damaged").read_text()) == recs[1]
+    with pytest.raises(InputError, match=rf"screening records .*t\.jsonl\.damaged line 1: .*{why}"):
+        read_records(tmp_path / "t.jsonl.damaged", "screening records", square_record_problem)
+
+
+def _cct_record(**result):
+    """A CCT record as `cct_job` writes it (Kundur 3-101), with `result` changed."""
+    r = {
+        "cct_s": 0.14,
+        "cct_cycles": 8.4,
+        "numerical_error_s": 0.0,
+        "cct_half_step_s": 0.14,
+        "t_stable_s": 0.14,
+        "t_unstable_s": 0.16,
+        "t_unstable_cycles": 9.6,
+        "n_simulations": 7,
+        "separated_machines": [3, 4],
+        "islanded": [],
+    }
+    r.update(result)
+    return {"key": "k", "inputs": {"t_max": 1.0}, "status": "ok", "result": r}
+
+
+@pytest.mark.parametrize(
+    ("rec", "why"),
+    [
+        (_cct_record(cct_s=-5.0, cct_cycles=-300), r"result\.cct_s -5\.0 is not a clearing time"),
+        (_cct_record(cct_s=1e300), r"result\.cct_s 1e\+300 is not a clearing time in \[0, 1\]"),
+        (_cct_record(cct_s=None), r"result\.cct_s null"),
+        (_cct_record(cct_s="abc"), r"result\.cct_s \"abc\""),
+        (_cct_record(t_unstable_s=0.1), r"result\.t_unstable_s 0\.1 is not"),
+        (_cct_record(cct_cycles=float("nan")), r"result\.cct_cycles NaN"),
+        (_cct_record(n_simulations=True), r"result\.n_simulations true"),
+        (_cct_record(separated_machines="x"), r"result\.separated_machines \"x\""),
+        (_cct_record(islanded=[{"buses": "4"}]), r"result\.islanded"),
+        (
+            {"key": "k", "status": "verdict", "verdict": "robust"},
+            r"verdict \"robust\" is none of a CCT search's",
+        ),
+    ],
+)
+def test_the_schema_of_cct_records_refuses_what_no_search_writes(rec, why):
+    from stabctl.stability.cct import cct_record_problem
+
+    assert cct_record_problem(_cct_record()) is None
+    assert re.search(why, cct_record_problem(rec) or "")
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda r: r.update(result={}),
+        lambda r: r["result"].update(cct_s="abc"),
+        lambda r: r["result"].update(cct_s=None),
+        lambda r: r["result"].update(cct_s=-5.0, cct_cycles=-300),
+        lambda r: r["result"].update(cct_s=1e300),
+        lambda r: r["result"].update(separated_machines="x"),
+        lambda r: r.update(status="verdict", verdict={"a": 1}),
+        lambda r: (r.pop("result"), r.update(status="failed", error={"a": 1})),
+    ],
+)
+def test_sweep_cct_reruns_a_record_of_impossible_fields_instead_of_showing_it(tmp_path, edit):
+    """`stabctl sweep-cct` resumed on a record edited to impossible fields: no traceback,
+    no CCT of -5 s or 1e300 s shown; the line is moved aside by name and the job runs
+    again."""
+    out = tmp_path / "t.jsonl"
+    faults = tmp_path / "f1.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    args = ["sweep-cct", "kundur", "--faults", faults, "--workers", 1, "--tol-ms", 20]
+    assert run(*args, "--out", out).exit_code == 0
+    good = lines(out)[0]
+    edit(rec := json.loads(json.dumps(good)))
+    out.write_text(json.dumps(rec) + "\n")
+    res = run(*args, "--out", out)
+    assert res.exit_code == 0, res.output
+    assert "1 run now, 0 already" in res.output
+    assert re.search(r"warning: .*t\.jsonl: line\(s\) 1 not a whole sweep record \(", res.output)
+    assert f"{good['result']['cct_s']:7.3f}" in res.output
+    assert lines(out)[0]["result"]["cct_s"] == good["result"]["cct_s"]
+
+
+def test_a_records_file_above_the_input_cap_is_refused_before_it_is_read(tmp_path):
+    """A sweep's own --out, 280 MB of blank lines, was read for 112 s without a word (only
+    its lines were bounded) before the sweep appended to it; it is refused at once by the
+    cap of every input file, naming it, and left as it is."""
+    from stabctl.jsontext import MAX_INPUT_BYTES
+
+    out = tmp_path / "big.jsonl"
+    with out.open("wb") as f:
+        f.truncate(MAX_INPUT_BYTES + 2**20)  # sparse: no disk used
+    t0 = time.perf_counter()
+    for read in (set_aside_damaged, read_records):
+        with pytest.raises(InputError, match=r"big\.jsonl: 257 MiB, above the 256 MiB"):
+            read(out)
+    with pytest.raises(InputError, match=r"big\.jsonl: 257 MiB, above the 256 MiB"):
+        run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+    assert time.perf_counter() - t0 < 5
+    assert out.stat().st_size == MAX_INPUT_BYTES + 2**20
+    assert not (tmp_path / "big.jsonl.damaged").exists()
+
+
+def test_failures_recorded_before_and_not_rerun_are_counted_and_told(tmp_path):
+    """A failed record resumed without --retry-failed was shown as failed with no word
+    that it had not been run again: the report counts them, and sweep-cct says that
+    --retry-failed reruns them (exit status 0, as a fresh sweep with a failed job)."""
+    out = tmp_path / "f.jsonl"
+    run_sweep(jobs_of(boom, 1) + jobs_of(square, 2), out, workers=1, progress=False)
+    rep = run_sweep(jobs_of(boom, 1) + jobs_of(square, 2), out, workers=1, progress=False)
+    assert (rep.ran, rep.failed, rep.failed_before) == (0, 0, 1)
+    rep = run_sweep(jobs_of(boom, 1), out, workers=1, progress=False, retry_failed=True)
+    assert (rep.ran, rep.failed, rep.failed_before) == (1, 1, 0)
+
+    faults = tmp_path / "f1.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    args = ["sweep-cct", "kundur", "--faults", faults, "--workers", 1, "--tol-ms", 20]
+    cct = tmp_path / "c.jsonl"
+    assert run(*args, "--out", cct).exit_code == 0
+    rec = lines(cct)[0]
+    rec.pop("result")
+    rec.update(status="failed", error="worker failed: BrokenProcessPool")
+    cct.write_text(json.dumps(rec) + "\n")
+    res = run(*args, "--out", cct)
+    assert res.exit_code == 0
+    assert res.output.splitlines()[-1] == (
+        "1 job(s) recorded as failed before were not run again; --retry-failed reruns them"
+    )
+    res = run(*args, "--out", cct, "--retry-failed")
+    assert res.exit_code == 0 and "--retry-failed" not in res.output
+
+
+_BIG_RECORDS = """
+import resource, sys
+from stabctl.parallel import Job, run_sweep
+resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+jobs = [Job(f"pad/{k}", dict, {"pad": "x" * 1500}) for k in range(4)]
+try:
+    run_sweep(jobs, sys.argv[1], workers=1, progress=False)
+except OSError as exc:
+    print(exc.filename, exc.strerror)
+"""
+
+
+def test_a_write_past_the_file_size_limit_names_the_file(tmp_path):
+    """Under ``ulimit -f`` (and on a full disk) write() fails naming no file, and every
+    output said only 'error: File too large': the records appender and the atomic writer
+    name the output (never their temporary file), and keep it whole."""
+    import errno
+
+    out = tmp_path / "u.jsonl"
+    res = subprocess.run(
+        [sys.executable, "-c", _BIG_RECORDS, str(out)], capture_output=True, text=True
+    )
+    assert res.stdout == f"{out} File too large\n", res.stderr
+    assert [r["key"] for r in lines(out)] == ["pad/0"]  # whole lines only: the next cut off
+
+    def full(f):
+        f.write("half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    with pytest.raises(OSError) as caught:
+        atomic_write(tmp_path / "x.csv", full)
+    assert caught.value.filename == str(tmp_path / "x.csv")
+    assert not [p for p in os.listdir(tmp_path) if "x.csv" in p]  # no temporary file left
+
+    def other(f):
+        (tmp_path / "missing" / "y").read_text()  # an error naming another file stays
+
+    with pytest.raises(FileNotFoundError) as caught:
+        atomic_write(tmp_path / "x.csv", other)
+    assert caught.value.filename == str(tmp_path / "missing" / "y")

@@ -317,7 +317,8 @@ def sweep_line(key, rec) -> str:
 
 
 def print_sweep(rep, n_jobs: int) -> None:
-    """Print the `sweep-cct` table and its summary line.
+    """Print the `sweep-cct` table and its summary line, then, if jobs recorded as failed
+    before were not run again, how many and that ``--retry-failed`` reruns them.
 
     Parameters
     ----------
@@ -337,6 +338,11 @@ def print_sweep(rep, n_jobs: int) -> None:
         f"limit (robust), {verdicts.count(INSECURE)} N-1 insecure (CCT 0), "
         f"{verdicts.count('failed')} failed; wall {rep.wall_time_s:.1f} s"
     )
+    if rep.failed_before:
+        click.echo(
+            f"{rep.failed_before} job(s) recorded as failed before were not run again; "
+            "--retry-failed reruns them"
+        )
 
 
 def print_screening(case, rows) -> None:

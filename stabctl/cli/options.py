@@ -63,8 +63,19 @@ class Terminated(KeyboardInterrupt):
         self.signum = int(signum)
 
 
+#: the signal that ended the running command (`_interrupt`), None while none came
+_received: list[int] = []
+
+
 def _raise_terminated(signum, frame):
+    _received.append(signum)
     raise Terminated(signum)
+
+
+def _raise_interrupt(signum, frame):
+    """SIGINT as Python's own handler (KeyboardInterrupt), remembered (`_received`)."""
+    _received.append(signum)
+    raise KeyboardInterrupt
 
 
 #: the signals a command ends on as on Ctrl-C (`Terminated`)
@@ -74,16 +85,53 @@ _ENDING_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 @contextmanager
 def _sigterm_as_interrupt():
     """SIGTERM and SIGHUP raise :class:`Terminated` while the block runs (main thread
-    only, where Python delivers signals), the previous handlers restored after."""
+    only, where Python delivers signals), the previous handlers restored after; SIGINT
+    raises KeyboardInterrupt as Python's handler does (when the process has that handler:
+    an ignored SIGINT, of a background job, stays ignored).  Each signal is remembered
+    (`_received`), so that an error the interrupt caused in code that does not let it
+    through ends the command as the interrupt does (`_interrupt`)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    _received.clear()
     previous = {sig: signal.signal(sig, _raise_terminated) for sig in _ENDING_SIGNALS}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        previous[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_interrupt)
     try:
         yield
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+
+
+def _interrupt(exc: BaseException) -> KeyboardInterrupt | None:
+    """The interrupt behind an error, if a signal that ends a command came while it ran:
+    an interrupt raised inside code that turns it into another error (numba's code
+    generation, Ctrl-C landing mid-compile, raised ``RuntimeError: no compiled object
+    yet``) or swallows it, or the error's cause or context (chained from the interrupt).
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error that ended the command.
+
+    Returns
+    -------
+    KeyboardInterrupt or None
+        The interrupt (`Terminated` for SIGTERM and SIGHUP) to end the command with, or
+        None when no signal came and none is chained to the error.
+    """
+    seen: set[int] = set()
+    cause: BaseException | None = exc
+    while cause is not None and id(cause) not in seen:
+        if isinstance(cause, KeyboardInterrupt):
+            return cause
+        seen.add(id(cause))
+        cause = cause.__cause__ or cause.__context__
+    if not _received:
+        return None
+    signum = _received[0]
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
 
 
 def _quiet_stdout() -> None:
@@ -113,8 +161,9 @@ def reports_errors(func):
         finished records stay), one saying ``cannot write to standard output`` when it
         is stdout that failed (closed, its disk full: `stabctl.cli.stdout`); Ctrl-C
         prints what was kept (exit status 130), and so do SIGTERM and SIGHUP (exit
-        status 143, 129); a closed pipe on stdout (``stabctl cases | head``) ends the
-        command without a word (exit status 141, as SIGPIPE).
+        status 143, 129), also when the interrupt surfaced as another error (raised in
+        code that turned it into one: `_interrupt`); a closed pipe on stdout (``stabctl
+        cases | head``) ends the command without a word (exit status 141, as SIGPIPE).
     """
 
     @functools.wraps(func)
@@ -122,10 +171,16 @@ def reports_errors(func):
         with warnings.catch_warnings(record=True) as caught, _sigterm_as_interrupt():
             warnings.simplefilter("default")
             try:
-                _check_numbers(kwargs)
-                _check_single_rate(kwargs)
-                _check_scheduler(kwargs)
-                out = func(*args, **kwargs)
+                try:
+                    _check_numbers(kwargs)
+                    _check_single_rate(kwargs)
+                    _check_scheduler(kwargs)
+                    out = func(*args, **kwargs)
+                except Exception as exc:  # re-raised, or the interrupt behind it
+                    stop = _interrupt(exc)
+                    if stop is None:
+                        raise
+                    raise stop from exc
             except StabctlError as exc:
                 click.echo(f"error: {one_line(exc)}", err=True)
                 sys.exit(2)
@@ -412,7 +467,10 @@ def _interrupted(kwargs) -> str:
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            out = f"{out} ({len(read_records(out))} recorded)"
+            try:
+                out = f"{out} ({len(read_records(out))} recorded)"
+            except (StabctlError, OSError):  # a file no longer read (above the size cap)
+                pass
     kept = _KEPT.get(name or "", "nothing is kept; the work starts again").format(out=out)
     return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
 

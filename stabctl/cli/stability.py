@@ -406,6 +406,7 @@ def sweep_cct(
                 "ran": rep.ran,
                 "skipped": rep.skipped,
                 "failed": rep.failed,
+                "failed_before": rep.failed_before,
                 "wall_time_s": rep.wall_time_s,
                 "records": list(rep.records.values()),
             }

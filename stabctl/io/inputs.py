@@ -21,12 +21,10 @@ from __future__ import annotations
 import csv
 import math
 import os
-import stat
 from dataclasses import dataclass
-from pathlib import Path
 
 from stabctl.errors import InputError
-from stabctl.jsontext import parse_json
+from stabctl.jsontext import MAX_INPUT_BYTES, input_file, parse_json
 
 __all__ = [
     "MAX_INPUT_BYTES",
@@ -38,36 +36,6 @@ __all__ = [
     "plain_number",
     "read_csv",
 ]
-
-#: largest input file read, bytes (the largest case shipped, ACTIVSg2000's RAW, is 0.7 MB)
-MAX_INPUT_BYTES = 256 * 2**20
-
-
-def input_file(path: str | os.PathLike, what: str) -> Path:
-    """``path`` after checking that it is a regular file of at most MAX_INPUT_BYTES
-    (links followed).
-
-    Raises
-    ------
-    InputError
-        Missing or unreadable, not a regular file (a device, a pipe, a directory), or too
-        large; the message names ``what`` and the path.
-    """
-    path = Path(path)
-    try:
-        st = os.stat(path)
-    except OSError as exc:
-        raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise InputError(
-            f"{what} {path}: not a regular file (a device, a pipe or a directory); give a file"
-        )
-    if st.st_size > MAX_INPUT_BYTES:
-        raise InputError(
-            f"{what} {path}: {st.st_size / 2**20:.0f} MiB, above the "
-            f"{MAX_INPUT_BYTES / 2**20:.0f} MiB an input file may have"
-        )
-    return path
 
 
 def number_ranges(numbers) -> list[tuple[int, int]]:

@@ -987,6 +987,90 @@ def cct_job(inputs: dict) -> dict:
     return res.to_dict()
 
 
+def cct_record_problem(rec: dict) -> str | None:
+    """The schema of a CCT sweep's records (`cct_job`, `stabctl.parallel.Job.check`):
+    what makes a record one no CCT search can have written, or None.
+
+    A CCT found holds its CCT and the unstable end of its bracket as finite clearing
+    times with 0 <= cct_s < t_unstable_s <= the search's limit t_max (of the record's
+    inputs; `T_MAX` without one), the CCT in cycles, the numerical error (None or >= 0),
+    the number of simulations (an integer >= 1) and the separated machines (a list of
+    machine numbers); a verdict is one a search gives (`AboveSearchLimit`,
+    `InsecureContingency`); an islanding log (``islanded``, of a CCT or a verdict) is a
+    list of stages, each with its buses (and machines) as lists of numbers.  The kinds of
+    the fields of any record (an object as result, texts as verdict and error) are checked
+    before (`stabctl.parallel`).
+
+    Parameters
+    ----------
+    rec : dict
+        A sweep record of a CCT job (status ok, verdict or failed).
+
+    Returns
+    -------
+    str or None
+        What is wrong, naming the field and its value; None for a record a search can
+        have written.
+    """
+    from stabctl.parallel import is_number, shown
+
+    given = (rec.get("inputs") or {}).get("t_max", T_MAX)
+    if not (is_number(given) and given > 0):
+        return f"inputs.t_max {shown(given)} is not a time in s"
+    t_max = given
+    slack = 1e-9 * max(1.0, t_max)  # the bracket's rounding
+    status = rec["status"]
+    if status == "verdict" and rec["verdict"] not in (
+        AboveSearchLimit.label,
+        InsecureContingency.label,
+    ):
+        return (
+            f"verdict {shown(rec['verdict'])} is none of a CCT search's "
+            f"({AboveSearchLimit.label!r}, {InsecureContingency.label!r})"
+        )
+    r: dict = rec["result"] if status == "ok" else {}
+    if status == "ok":
+        cct, t_u = r.get("cct_s"), r.get("t_unstable_s")
+        if not (is_number(cct) and 0 <= cct <= t_max + slack):
+            return f"result.cct_s {shown(cct)} is not a clearing time in [0, {t_max:g}] s"
+        if not (is_number(t_u) and cct < t_u <= t_max + slack):
+            return (
+                f"result.t_unstable_s {shown(t_u)} is not a clearing time in ({cct:g}, {t_max:g}] s"
+            )
+        for name in ("cct_cycles", "t_stable_s", "numerical_error_s", "cct_half_step_s"):
+            v = r.get(name)
+            if v is not None and not (is_number(v) and v >= 0):
+                return f"result.{name} {shown(v)} is not a number >= 0"
+        if "cct_cycles" not in r:
+            return "result without cct_cycles"
+        n = r.get("n_simulations")
+        if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
+            return f"result.n_simulations {shown(n)} is not a count >= 1"
+        if not _numbers(r.get("separated_machines")):
+            return (
+                f"result.separated_machines {shown(r.get('separated_machines'))} is not a "
+                "list of machine numbers"
+            )
+    islanded = r.get("islanded") if status == "ok" else rec.get("islanded")
+    if islanded is not None and not (
+        isinstance(islanded, list)
+        and all(
+            isinstance(e, dict)
+            and _numbers(e.get("buses"))
+            and ("machines" not in e or _numbers(e["machines"]))
+            for e in islanded
+        )
+    ):
+        field = "result.islanded" if status == "ok" else "islanded"
+        return f"{field} {shown(islanded)} is not a list of islanding stages with their buses"
+    return None
+
+
+def _numbers(v) -> bool:
+    """Whether a record's value is a list of integers (bus or machine numbers)."""
+    return isinstance(v, list) and all(isinstance(x, int) and not isinstance(x, bool) for x in v)
+
+
 def cct_key(
     case: str, fault: LineFault, esd_pct: float | None, model: ModelOptions = ModelOptions()
 ) -> str:
@@ -1043,6 +1127,7 @@ def cct_jobs(
         Job(
             key=cct_key(case_name, f, p, model),
             func=cct_job,
+            check=cct_record_problem,
             inputs={
                 "case": case_name,
                 "case_digest": digest,

@@ -18,6 +18,7 @@ import numpy as np
 
 from stabctl.case import Case, PssTable
 from stabctl.outdir import output_directory
+from stabctl.parallel import naming
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
     ModalAnalysis,
@@ -133,14 +134,17 @@ def write_report(st: EigStudy, out_dir) -> Path:
             ):
                 tmp[names[key]] = _temp(out, names[key])
                 if modes or key == "eigs":
-                    draw(tmp[names[key]])
+                    with naming(out / names[key], tmp[names[key]]):  # EFBIG names no file
+                        draw(tmp[names[key]])
             md = out / f"{st.stem}.md"
             tmp[md.name] = _temp(out, md.name)
-            Path(tmp[md.name]).write_text(report_markdown(st, names, bool(modes)))
+            with naming(md, tmp[md.name]):
+                Path(tmp[md.name]).write_text(report_markdown(st, names, bool(modes)))
             for final, t in tmp.items():
                 if Path(t).stat().st_size:
                     os.chmod(t, 0o644)
-                    os.replace(t, out / final)
+                    with naming(out / final, t):
+                        os.replace(t, out / final)
                 else:
                     Path(t).unlink()
         finally:

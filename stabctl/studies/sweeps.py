@@ -112,6 +112,11 @@ def controlled_cct_jobs(
     return [
         j
         if j.inputs["esd_pct"] is None
-        else Job(key=j.key + tag, func=controlled_cct_job, inputs={**j.inputs, **extra})
+        else Job(
+            key=j.key + tag,
+            func=controlled_cct_job,
+            inputs={**j.inputs, **extra},
+            check=j.check,
+        )
         for j in jobs
     ]

@@ -310,3 +310,54 @@ def test_sigint_or_sigterm_ends_estimate_track_of_an_endless_stream(
     ), err
     assert "Traceback" not in err and out == ""
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture
+def sigint_raises():
+    """SIGINT with Python's own handler for the test, as in a terminal (pytest started
+    with SIGINT ignored would ignore the Ctrl-C under test; an ignored SIGINT stays
+    ignored by the commands)."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+@pytest.mark.parametrize(
+    ("sig", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)]
+)
+def test_an_interrupt_that_surfaces_as_another_error_ends_as_an_interrupt(
+    sig, status, sigint_raises
+):
+    """Ctrl-C landing inside numba's code generation (a cold `stabctl compile`) surfaced
+    as ``RuntimeError: no compiled object yet`` with a traceback and exit status 1: an
+    error raised once an ending signal came (the interrupt swallowed, or chained to it)
+    ends the command as the interrupt does: one line, exit 128 + the signal."""
+    import click
+
+    from stabctl.cli.options import reports_errors
+
+    @click.command()
+    @click.option("--chained", is_flag=True)
+    @reports_errors
+    def codegen(chained):
+        try:
+            signal.raise_signal(sig)
+            time.sleep(5)  # the interrupt is raised at once, never reached
+        except KeyboardInterrupt as exc:  # code that turns the interrupt into an error
+            if chained:
+                raise RuntimeError("no compiled object yet") from exc
+        raise RuntimeError("no compiled object yet")
+
+    for chained in ([], ["--chained"]):
+        res = CliRunner().invoke(codegen, chained)
+        assert res.exit_code == status, (res.output, res.exception)
+        err = res.stderr.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("interrupted: nothing is kept"), err
+
+    @click.command()
+    @reports_errors
+    def plain():
+        raise RuntimeError("a bug, no signal")
+
+    res = CliRunner().invoke(plain, [])  # without a signal an error stays an error
+    assert res.exit_code == 1 and isinstance(res.exception, RuntimeError)
