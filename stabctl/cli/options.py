@@ -87,14 +87,20 @@ def _sigterm_as_interrupt():
     """SIGTERM and SIGHUP raise :class:`Terminated` while the block runs (main thread
     only, where Python delivers signals), the previous handlers restored after; SIGINT
     raises KeyboardInterrupt as Python's handler does (when the process has that handler:
-    an ignored SIGINT, of a background job, stays ignored).  Each signal is remembered
+    an ignored SIGINT, of a background job, stays ignored).  A signal the process was
+    started with ignored stays ignored: ``nohup stabctl screen ...`` goes on when its
+    terminal closes.  Each signal is remembered
     (`_received`), so that an error the interrupt caused in code that does not let it
     through ends the command as the interrupt does (`_interrupt`)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     _received.clear()
-    previous = {sig: signal.signal(sig, _raise_terminated) for sig in _ENDING_SIGNALS}
+    previous = {
+        sig: signal.signal(sig, _raise_terminated)
+        for sig in _ENDING_SIGNALS
+        if signal.getsignal(sig) is not signal.SIG_IGN  # nohup's SIGHUP stays ignored
+    }
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_interrupt)
     try:

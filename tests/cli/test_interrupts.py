@@ -361,3 +361,27 @@ def test_an_interrupt_that_surfaces_as_another_error_ends_as_an_interrupt(
 
     res = CliRunner().invoke(plain, [])  # without a signal an error stays an error
     assert res.exit_code == 1 and isinstance(res.exception, RuntimeError)
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX")
+def test_a_hangup_the_command_was_started_ignoring_is_still_ignored():
+    """``nohup stabctl ...`` starts with SIGHUP ignored, so that the command goes on when
+    its terminal closes; a command took SIGHUP over regardless and ended on it (exit
+    129).  A signal ignored at the start stays ignored while the command runs and after."""
+    import click
+
+    from stabctl.cli.options import reports_errors
+
+    @click.command()
+    @reports_errors
+    def long_work():
+        signal.raise_signal(signal.SIGHUP)
+        click.echo("went on")
+
+    old = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        res = CliRunner().invoke(long_work, [])
+        assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGHUP, old)
+    assert res.exit_code == 0 and "went on" in res.output, (res.output, res.exception)
