@@ -579,7 +579,7 @@ def _located(where: str) -> Iterator[None]:
     try:
         yield
     except CaseError as exc:
-        raise type(exc)(f"{where}: {exc}") from None
+        raise exc.relocated(f"{where}: {exc}") from None
 
 
 def _extra_field(extra, where: str) -> Mapping:
