@@ -100,10 +100,11 @@ class InitialLimitError(CaseError):
     """
 
     def __init__(self, table: str, rows, messages):
-        self.table, self.rows, self.messages = table, tuple(rows), tuple(messages)
-        more = len(self.rows) - 1
-        also = f" (and {more} more {table} row(s): {self.messages[1]}; ...)" if more else ""
-        super().__init__(self.messages[0] + also)
+        rows, messages = tuple(rows), tuple(messages)
+        more = len(rows) - 1
+        also = f" (and {more} more {table} row(s): {messages[1]}; ...)" if more else ""
+        super().__init__(messages[0] + also, table=table, row=rows[0] if rows else None)
+        self.rows, self.messages = rows, messages
 
 
 #: where `refuse_initial` records instead of raising (`run_on_suspect_starts`), or None

@@ -757,7 +757,9 @@ class ExciterTable(Table):
         each type's limits (its module's ``LIMITS``: Vrmax >= Vrmin and the other pairs of
         limits it reads, saturation points >= 0), a saturation that does not fall as the
         voltage rises (SE(E2) >= SE(E1) where E2 > E1), one exciter per machine (machine
-        existence is checked by :class:`Case`).
+        existence is checked by :class:`Case`), and what a run's models refuse
+        (:func:`stabctl.models.exciters.check_table`: a time constant its type needs below
+        1e-3 s, saturation points without a fit, ...).
     """
 
     def _check(self):
@@ -796,7 +798,8 @@ class PssTable(Table):
         Omitted columns are 0.  Validation: the declared types, one PSS per machine, the
         declared bounds (every time constant >= 0, IEEEST's filter denominator A1..A4 >= 0),
         ymax >= ymin and each type's limits (its module's ``LIMITS``), VCU > VCL where both
-        cut-offs are given, Tw > 0, T2 > 0 for types 1 and 2.
+        cut-offs are given, Tw > 0, T2 > 0 for types 1 and 2, and what a run's models
+        refuse (:func:`stabctl.models.pss.check_table`: input codes, M N > 8, ...).
     """
 
     def _check(self):
@@ -836,7 +839,9 @@ class GovernorTable(Table):
         time constants >= 0, the lead constants T3, T4 may be negative: miniWECC's hydro units
         use T4 = -1; 1/R, the damping and the power fractions >= 0; Uo >= 0 >= Uc), Tmax >=
         Tmin, and each type's limits (its module's ``LIMITS``: the speed set point wf 1 where
-        the speed error is wf - omega, ...).
+        the speed error is wf - omega, ...), and what a run's models refuse
+        (:func:`stabctl.models.governors.check_table`: a lag its type needs below 1e-3 s,
+        IEEEG1 fractions summing to 0, ...).
     """
 
     def _check(self):
@@ -1107,7 +1112,9 @@ class ConverterTable(Table):
         in an ANDES file: PVD1, ESD1 ialim > 0; ESD1 En, Tf, EtaC, EtaD > 0 and 0 <= SOCmin <
         SOCmax <= 1, SOCinit between them (a REGCA1 battery's too); REGCA1 Lvpnt0 < Lvpnt1,
         (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by the differences), Iqrmin <= 0
-        <= Iqrmax; its REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup).
+        <= Iqrmax; its REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup), and what a
+        run's models refuse (:func:`stabctl.models.converters.check_table`: a lag below
+        1e-3 s, a control on a device it cannot drive, ...).
     """
 
     def _check(self):
@@ -1239,10 +1246,11 @@ class Case:
     ------
     CaseError
         On construction: bus numbers referenced but not in ``buses`` (branches, machines,
-        loads, injections, converters), controllers on machines not in ``machines``, no swing bus, a
-        malformed ``sw_con``, a malformed event record, a table of the
-        wrong class, or a non-positive base or
-        frequency.
+        loads, injections, converters), controllers on machines not in ``machines``, a
+        governor on an infinite bus (a classical machine
+        of H = 0), no swing bus, a malformed ``sw_con``, a malformed event record, a table
+        of the wrong class, or a non-positive base or frequency.  Its ``table``, ``row``
+        and ``fields`` name the table row, as a table's own errors do.
     """
 
     name: str
@@ -1362,6 +1370,25 @@ class Case:
                     "share",
                     f"shares of bus {int(r)} sum to {reg.share[rows].sum():.12g}, not 1",
                 )
+
+    def check_stabilisers(self) -> None:
+        """Refuse a PSS on a machine without exciter: its output is an input of its
+        machine's exciter (PST ``pss``; a case being edited may hold one between two
+        replacements, so this is checked where a case is read and where a run starts).
+
+        Raises
+        ------
+        CaseError
+            Naming the pss_con row and its machine (``table``, ``row``, ``fields`` set).
+        """
+        bad = np.flatnonzero(~np.isin(self.pss.machine, self.exciters.machine))
+        if bad.size:
+            self.pss._fail(
+                bad[0],
+                "machine",
+                f"machine {_fmt(self.pss.machine[bad[0]])} has no exciter (exc_con) for the "
+                "PSS output",
+            )
 
     @staticmethod
     def _check_buses(tab: Table, fld: str, known: np.ndarray):

@@ -1159,11 +1159,15 @@ def _converters(ss, numbers: dict, file: str):
             sg = ss.PV if gen in ss.PV.idx.v else ss.Slack
             if gen not in sg.idx.v:
                 raise CaseError(
-                    f"{where}: its static generator {gen!r} is no PV or Slack of the case"
+                    f"{_device_where(ss, file, name, k)}: gen = {gen!r}: its static generator "
+                    "is no PV or Slack of the case"
                 )
             bus = sg.bus.v[list(sg.idx.v).index(gen)]
             if kind != REGCA1 and m.busfreq.v[k] not in ss.BusFreq.idx.v:
-                raise CaseError(f"{where}: its BusFreq {m.busfreq.v[k]!r} is not in the case")
+                raise CaseError(
+                    f"{_device_where(ss, file, name, k)}: its BusFreq {m.busfreq.v[k]!r} "
+                    "is not in the case"
+                )
             bf = 0 if kind == REGCA1 else list(ss.BusFreq.idx.v).index(m.busfreq.v[k])
             why = _converter_refusal(ss, m, k, bus, len(sg_bus.get(bus, ())) > 1, bf)
             if why == "shared":

@@ -252,24 +252,53 @@ def test_a_supported_input_code_of_an_unmodelled_signal_stays_unsupported(tmp_pa
     assert res.exit_code == 0 and out.exists(), res.output
 
 
-def test_a_case_json_value_a_run_refuses_is_refused_naming_the_case_file(tmp_path):
-    """A case file whose TGOV1's T1 (tg_con Ts) is 0: refused as it is loaded, naming the
-    file, table, row and field (simulate refused it at set-up without the file)."""
-    res, _, out = imported(tmp_path, [record("GENROU"), INFINITE, record("SEXS"), record("TGOV1")])
+@pytest.mark.parametrize(
+    "table, column, value, fields, expected",
+    [
+        # simulate refused these at its set-up, without naming the case file
+        (
+            "governors",
+            "Ts",
+            0,
+            ("Ts",),
+            "tg_con row 1 (machine 1), field 'Ts': must be >= 0.001 s for governor type 2, got 0",
+        ),
+        (
+            "pss",
+            "machine",
+            2,
+            ("machine",),
+            "pss_con row 1 (machine 2), field 'machine': machine 2 has no exciter (exc_con) "
+            "for the PSS output",
+        ),
+        (
+            "governors",
+            "machine",
+            2,
+            ("machine",),
+            "tg_con row 1 (machine 2), field 'machine': machine 2 is an infinite bus",
+        ),
+    ],
+)
+def test_a_case_json_value_a_run_refuses_is_refused_naming_the_case_file(
+    tmp_path, table, column, value, fields, expected
+):
+    """A case file (SEXS, TGOV1, STAB1 on the SMIB machine) with a value a run cannot
+    take: refused as it is loaded, naming the file, table, row and field."""
+    lines = [record("GENROU"), INFINITE, record("SEXS"), record("TGOV1"), record("STAB1")]
+    res, _, out = imported(tmp_path, lines)
     assert res.exit_code == 0, res.output
     data = json.loads(out.read_text())
-    gov = data["tables"]["governors"]
-    gov["rows"][0][gov["columns"].index("Ts")] = 0
-    bad = tmp_path / "ts0.json"
+    rows = data["tables"][table]
+    rows["rows"][0][rows["columns"].index(column)] = value
+    bad = tmp_path / "bad_case.json"
     bad.write_text(json.dumps(data))
     with pytest.raises(CaseError) as err:
         load_case(bad)
-    assert (err.value.table, err.value.row, err.value.fields) == ("tg_con", 0, ("Ts",))
+    assert (err.value.row, err.value.fields) == (0, fields)
     res = CliRunner().invoke(main, ["simulate", str(bad), "--fault", "1", "--tf", "1.2"])
-    assert error_line(res) == (
-        f"error: {bad}: tg_con row 1 (machine 1), field 'Ts': must be >= 0.001 s for governor "
-        "type 2, got 0"
-    )
+    line = error_line(res)
+    assert line.startswith(f"error: {bad}: {expected}"), line
 
 
 def andes_edited(tmp_path, case: str, model: str, field: str, value):
@@ -301,6 +330,14 @@ def andes_edited(tmp_path, case: str, model: str, field: str, value):
         # simulate refused them at set-up after the import wrote them
         ("ieee14/ieee14_wt3.xlsx", "REPCA1", "Tp", 0, r"Tp = 0: must be >= 0.001 s \(a lag"),
         ("ieee14/ieee14_pvd1.xlsx", "PVD1", "tiq", 0, r"tiq = 0: must be >= 0.001 s \(a lag"),
+        # a link to a device the case lacks
+        (
+            "ieee14/ieee14_esd1.xlsx",
+            "ESD1",
+            "gen",
+            99,
+            r"gen = 99: its static generator is no PV or Slack of the case",
+        ),
     ],
 )
 def test_an_andes_value_is_refused_naming_file_model_row_idx_and_parameter(
