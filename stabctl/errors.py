@@ -48,7 +48,48 @@ class InsecureContingency(InputError, Verdict):
 
 
 class CaseError(StabctlError, ValueError):
-    """Malformed case data: names the table, the row and the field."""
+    """Malformed case data: names the table, the row and the field.
+
+    Raised by a case table (`stabctl.case.system.Table`) it also says so in attributes,
+    for an importer to name the source record and parameters instead
+    (`stabctl.io.provenance`): ``table`` (``"exc_con"``), ``row`` (0-based), ``fields``
+    (the table fields or ``alt`` names the rule reads, the one named first), ``values``
+    (their values on that row) and ``rule`` (what the data must be, without the
+    location); None and empty for an error of no one row.
+    """
+
+    def __init__(
+        self,
+        message: str = "",
+        *,
+        table: str | None = None,
+        row: int | None = None,
+        fields: tuple[str, ...] = (),
+        values: tuple[float, ...] = (),
+        rule: str = "",
+    ):
+        super().__init__(message)
+        self.table, self.row, self.fields = table, row, tuple(fields)
+        self.values, self.rule = tuple(values), rule
+
+    def relocated(self, message: str) -> "CaseError":
+        """The same error (type and attributes) with another message.
+
+        Parameters
+        ----------
+        message : str
+            The new message (the old one with its file named, or the source record's).
+
+        Returns
+        -------
+        CaseError
+            Of this error's type, with its attributes (``table``, ``row``, ``fields``,
+            ``values``, ``rule``, a subclass's own) copied.
+        """
+        exc = type(self).__new__(type(self))  # a subclass's own __init__ takes other args
+        exc.__dict__.update(self.__dict__)
+        exc.args = (message,)
+        return exc
 
 
 class InitialLimitError(CaseError):
@@ -59,10 +100,11 @@ class InitialLimitError(CaseError):
     """
 
     def __init__(self, table: str, rows, messages):
-        self.table, self.rows, self.messages = table, tuple(rows), tuple(messages)
-        more = len(self.rows) - 1
-        also = f" (and {more} more {table} row(s): {self.messages[1]}; ...)" if more else ""
-        super().__init__(self.messages[0] + also)
+        rows, messages = tuple(rows), tuple(messages)
+        more = len(rows) - 1
+        also = f" (and {more} more {table} row(s): {messages[1]}; ...)" if more else ""
+        super().__init__(messages[0] + also, table=table, row=rows[0] if rows else None)
+        self.rows, self.messages = rows, messages
 
 
 #: where `refuse_initial` records instead of raising (`run_on_suspect_starts`), or None

@@ -33,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,6 +44,10 @@ import numpy as np
 
 from stabctl.case.events import events_of_records
 from stabctl.errors import CaseError, UnknownBusError
+from stabctl.models import converters as _converters
+from stabctl.models import exciters as _exciters
+from stabctl.models import governors as _governors
+from stabctl.models import pss as _pss
 from stabctl.models.converters import CONVERTER
 from stabctl.models.converters.rules import COMPONENTS
 from stabctl.models.declaration import Family, array_dataclass, choices_message
@@ -91,6 +96,14 @@ def _where(table: str, row: int, key: str | None, value, fld: str, col: int | No
     its column, for a field named by another type's name of the column)."""
     ident = "" if key is None or value is None else f" ({key} {_fmt(value)})"
     return f"{table} row {row + 1}{ident}, field '{fld}'" + (f" (column {col})" if col else "")
+
+
+#: a model check's problem text: the fields it names (quoted, or bare names after a model's
+#: name: "ST8C field KIA: ..."), an aside in parentheses, then why
+_NAME = r"(?:'[^']+'|[A-Za-z_]\w*)"
+_PROBLEM = re.compile(
+    rf"(?:\w+ )?fields? ({_NAME}(?:(?:, |\.\.){_NAME})*)( \([^)]*\))?: (.*)", re.S
+)
 
 
 def _fmt(x) -> str:
@@ -243,23 +256,73 @@ class Table:
             return None
         return getattr(self, self.KEY)[row]
 
-    def _fail(self, row: int, fld: str, what: str, col: int | None = None):
-        key = self._key_value(int(row))
-        raise CaseError(f"{_where(self.TABLE, int(row), self.KEY_LABEL, key, fld, col)}: {what}")
+    def _fail(
+        self,
+        row: int,
+        fld: str,
+        what: str,
+        col: int | None = None,
+        *,
+        fields: tuple[str, ...] = (),
+        rule: str = "",
+    ):
+        """Raise the CaseError of row ``row`` (0-based), field ``fld`` (or an ``alt`` name,
+        its column ``col``): the message ``what``; its attributes (`CaseError`) the fields
+        the rule reads (``fields``, default ``fld`` alone), their values on the row and
+        the ``rule`` (default ``what``) for an importer to name its source."""
+        row = int(row)
+        key = self._key_value(row) if len(self) else None
+        names = tuple(fields) or (fld,)
+        raise CaseError(
+            f"{_where(self.TABLE, row, self.KEY_LABEL, key, fld, col)}: {what}",
+            table=self.TABLE,
+            row=row,
+            fields=names,
+            values=tuple(self._value(n, row) for n in names),
+            rule=rule or what,
+        )
 
-    def _require(self, mask: np.ndarray, fld: str, what: str):
-        """Raise for the first row where ``mask`` is False."""
+    def _value(self, name: str, row: int) -> float:
+        """The value of field (or ``alt`` name) ``name`` on ``row``; NaN for a name the
+        table has not."""
+        if name in self.columns() and row < len(self):
+            return float(getattr(self, name)[row])
+        if self.FAMILY is not None and row < len(self):
+            try:
+                return float(self._named(name)[0][row])
+            except KeyError:
+                pass
+        return float("nan")
+
+    def _refuse(self, row: int, problem: str):
+        """Raise for row ``row`` (0-based) what a model's own check says of it:
+        ``problem`` as the type modules' ``check`` give it, ``"field 'X': why"`` or
+        ``"fields 'X', 'Y': why"`` (the fields named first, each quoted)."""
+        m = _PROBLEM.match(problem)
+        if m is None:
+            raise CaseError(
+                f"{self.TABLE} row {int(row) + 1}, {problem}", table=self.TABLE, row=int(row)
+            )
+        names = tuple(a or b for a, b in re.findall(r"'([^']+)'|([A-Za-z_]\w*)", m.group(1)))
+        why = (f"{m.group(2)[2:-1]}: " if m.group(2) else "") + m.group(3)
+        self._fail(row, names[0], why, fields=names, rule=why)
+
+    def _require(self, mask: np.ndarray, fld: str, what: str, fields: tuple[str, ...] = ()):
+        """Raise for the first row where ``mask`` is False (``fields``: those the rule
+        reads, ``fld`` first; default ``fld`` alone)."""
         bad = np.flatnonzero(~np.asarray(mask, dtype=bool))
         if bad.size:
             val = getattr(self, fld)[bad[0]]
-            self._fail(bad[0], fld, f"{what}, got {_fmt(val)}")
+            self._fail(bad[0], fld, f"{what}, got {_fmt(val)}", fields=fields, rule=what)
 
-    def _require_row(self, mask: np.ndarray, fld: str, what):
-        """Raise for the first row where ``mask`` is False, ``what(row)`` saying why."""
+    def _require_row(self, mask: np.ndarray, fld: str, what, fields: tuple[str, ...] = ()):
+        """Raise for the first row where ``mask`` is False, ``what(row)`` saying why
+        (``fields`` as `_require`'s)."""
         bad = np.flatnonzero(~np.asarray(mask, dtype=bool))
         if bad.size:
             val = getattr(self, fld)[bad[0]]
-            self._fail(bad[0], fld, f"{what(bad[0])}, got {_fmt(val)}")
+            why = what(bad[0])
+            self._fail(bad[0], fld, f"{why}, got {_fmt(val)}", fields=fields, rule=why)
 
     def _nonnegative(self, *fields: str):
         for f in fields:
@@ -318,19 +381,22 @@ class Table:
                         bad = np.flatnonzero(rows & ~ok(v))
                         if bad.size:
                             r = bad[0]
-                            self._fail(r, name, f"must be {must} ({tail}), got {_fmt(v[r])}", col)
+                            what = f"must be {must} ({tail})"
+                            self._fail(r, name, f"{what}, got {_fmt(v[r])}", col, rule=what)
                 for hi, lo in lim.ordered:
                     (a, col), (b, _) = self._named(hi), self._named(lo)
                     bad = np.flatnonzero(rows & ~(a >= b))
                     if bad.size:
                         r = bad[0]
                         what = f"must be >= {lo} = {_fmt(b[r])} ({tail}), got {_fmt(a[r])}"
-                        self._fail(r, hi, what, col)
+                        rule = f"the upper limit must be >= the lower ({tail})"
+                        self._fail(r, hi, what, col, fields=(hi, lo), rule=rule)
                 for name in lim.one:
                     v, col = self._named(name)
                     bad = np.flatnonzero(rows & (v != 1))
                     if bad.size:
-                        self._fail(bad[0], name, f"must be 1 ({tail}), got {_fmt(v[bad[0]])}", col)
+                        what = f"must be 1 ({tail})"
+                        self._fail(bad[0], name, f"{what}, got {_fmt(v[bad[0]])}", col, rule=what)
 
     def _check(self):
         """Table-local validation (subclasses)."""
@@ -517,10 +583,27 @@ class BranchTable(Table):
     KEY: ClassVar[str | None] = None
     INTEGER: ClassVar[tuple[str, ...]] = ("from_bus", "to_bus")
 
-    def _fail(self, row: int, fld: str, what: str, col: int | None = None):
+    def _fail(
+        self,
+        row: int,
+        fld: str,
+        what: str,
+        col: int | None = None,
+        *,
+        fields: tuple[str, ...] = (),
+        rule: str = "",
+    ):
         row = int(row)
         ident = f" ({_fmt(self.from_bus[row])}-{_fmt(self.to_bus[row])})" if len(self) else ""
-        raise CaseError(f"line row {row + 1}{ident}, field '{fld}': {what}")
+        names = tuple(fields) or (fld,)
+        raise CaseError(
+            f"line row {row + 1}{ident}, field '{fld}': {what}",
+            table=self.TABLE,
+            row=row,
+            fields=names,
+            values=tuple(self._value(n, row) for n in names),
+            rule=rule or what,
+        )
 
     def _check(self):
         # r < 0 is allowed: network equivalents carry it (ANDES's EI_33, PSS/E's equivalencing)
@@ -599,11 +682,13 @@ class MachineTable(Table):
             (self.xd == 0) | (self.xd >= self.xdp),
             "xd",
             "x_d must be >= x'd (a transient or subtransient machine)",
+            ("xd", "xdp"),
         )
         self._require(
             (self.xd == 0) | (self.xdpp == 0) | (self.xdp >= self.xdpp),
             "xdp",
             "x'd must be >= x\"d (a subtransient machine)",
+            ("xdp", "xdpp"),
         )
         # the subtransient model (PST mac_sub, PSS/E GENROU, GENSAL) splits the flux linkages
         # through x'd - x_l and x'q - x_l and divides by them (PST mac_pot columns 8, 13):
@@ -614,6 +699,7 @@ class MachineTable(Table):
             ~sub | (self.xl < self.xdp),
             "xl",
             lambda r: f"leakage x_l must be < x'd = {_fmt(self.xdp[r])} (a subtransient machine)",
+            ("xl", "xdp"),
         )
         xqp = np.where(self.Tqopp == 0, self.xdpp, self.xqp)
         self._require_row(
@@ -623,6 +709,7 @@ class MachineTable(Table):
                 f'leakage x_l must be < x\'q = {_fmt(xqp[r])} (x"d where T"qo = 0; a '
                 "subtransient machine)"
             ),
+            ("xl", "xqp"),
         )
         # the q-axis reactances as seen ever sooner after a disturbance can only fall, as
         # the d axis's (PSS/E Model Library GENROU: Xq >= X'q)
@@ -632,6 +719,7 @@ class MachineTable(Table):
             lambda r: (
                 f"x'q must be <= x_q = {_fmt(self.xq[r])} (a subtransient machine with T\"qo > 0)"
             ),
+            ("xqp", "xq"),
         )
         # saturation grows with the flux: 0 <= S(1.0) <= S(1.2) (PSS/E Model Library GENROU,
         # GENSAL; PST mac_con columns 20-21) for every machine with a field winding
@@ -644,6 +732,7 @@ class MachineTable(Table):
                 f"saturation S(1.2) must be >= S(1.0) = {_fmt(self.S10[r])} (it grows "
                 "with the flux)"
             ),
+            ("S12", "S10"),
         )
 
 
@@ -668,7 +757,9 @@ class ExciterTable(Table):
         each type's limits (its module's ``LIMITS``: Vrmax >= Vrmin and the other pairs of
         limits it reads, saturation points >= 0), a saturation that does not fall as the
         voltage rises (SE(E2) >= SE(E1) where E2 > E1), one exciter per machine (machine
-        existence is checked by :class:`Case`).
+        existence is checked by :class:`Case`), and what a run's models refuse
+        (:func:`stabctl.models.exciters.check_table`: a time constant its type needs below
+        1e-3 s, saturation points without a fit, ...).
     """
 
     def _check(self):
@@ -689,7 +780,10 @@ class ExciterTable(Table):
                 f"{_fmt(SE1[r])}, SE(E2 = {_fmt(E2[r])}) = {_fmt(SE2[r])} (IEEE Std 421.5's "
                 "exciter saturation)",
                 EXCITER.col("SE2"),
+                fields=("E1", "SE1", "E2", "SE2"),
+                rule="saturation must grow with the voltage (IEEE Std 421.5's exciter saturation)",
             )
+        _exciters.check_table(self)  # the models' own: what a run would refuse
 
 
 @_declared(PSS)
@@ -704,7 +798,8 @@ class PssTable(Table):
         Omitted columns are 0.  Validation: the declared types, one PSS per machine, the
         declared bounds (every time constant >= 0, IEEEST's filter denominator A1..A4 >= 0),
         ymax >= ymin and each type's limits (its module's ``LIMITS``), VCU > VCL where both
-        cut-offs are given, Tw > 0, T2 > 0 for types 1 and 2.
+        cut-offs are given, Tw > 0, T2 > 0 for types 1 and 2, and what a run's models
+        refuse (:func:`stabctl.models.pss.check_table`: input codes, M N > 8, ...).
     """
 
     def _check(self):
@@ -719,6 +814,7 @@ class PssTable(Table):
                 f"must be > VCL = {_fmt(self.VCL[r])} where both cut-offs are given (else "
                 "the output is cut off at every voltage; PSS/E Model Library IEEEST)"
             ),
+            ("VCU", "VCL"),
         )
         self._require(self.Tw > 0, "Tw", "washout time constant must be > 0 s")
         self._require(
@@ -726,6 +822,7 @@ class PssTable(Table):
             "T2",
             "first lag time constant must be > 0 s for PST's pss (types 1, 2)",
         )
+        _pss.check_table(self)  # the models' own: what a run would refuse
 
 
 @_declared(GOVERNOR)
@@ -742,11 +839,14 @@ class GovernorTable(Table):
         time constants >= 0, the lead constants T3, T4 may be negative: miniWECC's hydro units
         use T4 = -1; 1/R, the damping and the power fractions >= 0; Uo >= 0 >= Uc), Tmax >=
         Tmin, and each type's limits (its module's ``LIMITS``: the speed set point wf 1 where
-        the speed error is wf - omega, ...).
+        the speed error is wf - omega, ...), and what a run's models refuse
+        (:func:`stabctl.models.governors.check_table`: a lag its type needs below 1e-3 s,
+        IEEEG1 fractions summing to 0, ...).
     """
 
     def _check(self):
         self._unique("machine", "governor on machine")
+        _governors.check_table(self)  # the models' own: what a run would refuse
 
 
 @_declared(SHAFT)
@@ -1012,7 +1112,9 @@ class ConverterTable(Table):
         in an ANDES file: PVD1, ESD1 ialim > 0; ESD1 En, Tf, EtaC, EtaD > 0 and 0 <= SOCmin <
         SOCmax <= 1, SOCinit between them (a REGCA1 battery's too); REGCA1 Lvpnt0 < Lvpnt1,
         (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by the differences), Iqrmin <= 0
-        <= Iqrmax; its REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup).
+        <= Iqrmax; its REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup), and what a
+        run's models refuse (:func:`stabctl.models.converters.check_table`: a lag below
+        1e-3 s, a control on a device it cannot drive, ...).
     """
 
     def _check(self):
@@ -1035,7 +1137,14 @@ class ConverterTable(Table):
                 if bad.size:
                     r = bad[0]
                     shown = ", ".join(f"{n} = {_fmt(getattr(self, n)[r])}" for n in rule.names)
-                    self._fail(r, rule.names[0], f"{model}: {shown}: it must be {rule.what}")
+                    self._fail(
+                        r,
+                        rule.names[0],
+                        f"{model}: {shown}: it must be {rule.what}",
+                        fields=tuple(rule.names),
+                        rule=f"it must be {rule.what}",
+                    )
+        _converters.check_table(self)  # the models' own: what a run would refuse
 
 
 #: table field of Case -> table class, in file order
@@ -1137,10 +1246,11 @@ class Case:
     ------
     CaseError
         On construction: bus numbers referenced but not in ``buses`` (branches, machines,
-        loads, injections, converters), controllers on machines not in ``machines``, no swing bus, a
-        malformed ``sw_con``, a malformed event record, a table of the
-        wrong class, or a non-positive base or
-        frequency.
+        loads, injections, converters), controllers on machines not in ``machines``, a
+        governor on an infinite bus (a classical machine
+        of H = 0), no swing bus, a malformed ``sw_con``, a malformed event record, a table
+        of the wrong class, or a non-positive base or frequency.  Its ``table``, ``row``
+        and ``fields`` name the table row, as a table's own errors do.
     """
 
     name: str
@@ -1220,6 +1330,18 @@ class Case:
                     "machine",
                     f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con",
                 )
+        # an infinite bus (a classical machine of H = 0) keeps its speed: a governor on it
+        # has no power to order (its start-up order is the bus's P, any sign)
+        infinite = self.machines.number[(self.machines.H == 0) & (self.machines.xd == 0)]
+        gov = self.governors
+        bad = np.flatnonzero(np.isin(gov.machine, infinite))
+        if bad.size:
+            gov._fail(
+                bad[0],
+                "machine",
+                f"machine {_fmt(gov.machine[bad[0]])} is an infinite bus (a classical machine "
+                "of H = 0, its speed fixed): a governor has nothing to govern there",
+            )
 
     def _check_regulation(self):
         """Remote regulation: PV generator buses, PQ regulated buses, one set point and
@@ -1248,6 +1370,25 @@ class Case:
                     "share",
                     f"shares of bus {int(r)} sum to {reg.share[rows].sum():.12g}, not 1",
                 )
+
+    def check_stabilisers(self) -> None:
+        """Refuse a PSS on a machine without exciter: its output is an input of its
+        machine's exciter (PST ``pss``; a case being edited may hold one between two
+        replacements, so this is checked where a case is read and where a run starts).
+
+        Raises
+        ------
+        CaseError
+            Naming the pss_con row and its machine (``table``, ``row``, ``fields`` set).
+        """
+        bad = np.flatnonzero(~np.isin(self.pss.machine, self.exciters.machine))
+        if bad.size:
+            self.pss._fail(
+                bad[0],
+                "machine",
+                f"machine {_fmt(self.pss.machine[bad[0]])} has no exciter (exc_con) for the "
+                "PSS output",
+            )
 
     @staticmethod
     def _check_buses(tab: Table, fld: str, known: np.ndarray):

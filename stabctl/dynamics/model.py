@@ -427,11 +427,9 @@ class DynamicModel:
         self.x0 = x
         self.V_nc0 = op.V[self.nc_idx].astype(complex)
         self.pss_of_exc = np.full(ep.n, -1)
+        self.case.check_stabilisers()  # each PSS's machine has its exciter
         for k, m in enumerate(self.pp.mac):
-            hit = np.nonzero(ep.mac == m)[0]
-            if hit.size == 0:
-                raise CaseError(f"pss_con row {k + 1}: machine has no exciter for the PSS output")
-            self.pss_of_exc[hit] = k
+            self.pss_of_exc[np.nonzero(ep.mac == m)[0]] = k
         self.params = KernelParams(
             MP=mp.packed(self.eqp0),
             basrad=mp.basrad,

@@ -112,11 +112,13 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import PQ, PV, SWING, Case
+from stabctl.case.params import FAMILIES
 from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError
 from stabctl.io.andes import _andes, _andes_log, _andes_said
-from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_tables
+from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_origin, dyr_tables
 from stabctl.io.inputs import number_ranges, parse_json
+from stabctl.io.provenance import Origin, locate
 from stabctl.io.pst import case_from_matrices
 from stabctl.models.converters import (
     CONVERTER,
@@ -371,11 +373,14 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     mats, numbers = _network(ss, path.name)
     pf_bus, pf_vmag, pf_vang = _powerflow(ss, numbers)  # its generators' P, Q: shares
     mats["load_con"], zip_changed = _zip_loads(ss, numbers, mats["bus"])
-    ibr_con, ibr_refused, with_converter, ibr_labels = _converters(ss, numbers, path.name)
+    ibr_con, ibr_refused, with_converter, ibr_labels, ibr_origins = _converters(
+        ss, numbers, path.name
+    )
     dropped, by_device, unchecked = ([], {}, []) if dyr is None else _dyr_against_andes(ss, dyr)
-    gens, records, refused, changed, unlike = _dynamic_records(
+    gens, records, refused, changed, unlike, by_record = _dynamic_records(
         ss, path.name, numbers, with_converter, by_device
     )
+    origins: dict[str, list] = {"ibr_con": ibr_origins}
     changed += unchecked
     refused = dropped + refused
     changed += _grouped(zip_changed + given.changed)
@@ -395,6 +400,9 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     if records:
         tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
         refused += [f"{r.label()}: {why}" for r, why in zip(tables.unsupported, tables.why)]
+        origins.update(
+            {table: [by_record.get(r) for r in recs] for table, recs in tables.records.items()}
+        )
         mats.update(
             {
                 k: getattr(tables, k)
@@ -431,12 +439,16 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
             )
         text = "; ".join(t for t in ((f"left out {listing}" if listing else ""), kept) if t)
         warnings.warn(f"{path.name}: {text}", UserWarning, stacklevel=4)
-    case = case_from_matrices(
-        mats,
-        path.stem,
-        description=f"ANDES case {path.name}",
-        source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
-    ).replace(events=tuple(events))
+    try:
+        case = case_from_matrices(
+            mats,
+            path.stem,
+            description=f"ANDES case {path.name}",
+            source=f"ANDES case {path.name}, imported by stabctl.io.andes_case.import_andes",
+        ).replace(events=tuple(events))
+    except CaseError as exc:  # the device and parameters the table's row came from
+        located = locate(exc, origins, {f.table: f for f in FAMILIES.values()})
+        raise (located if located is not exc else exc.relocated(f"{path.name}: {exc}")) from None
     solution = None
     if path.suffix.lower() == ".raw":
         on = _in_service(ss.Bus)
@@ -1122,12 +1134,14 @@ def _converters(ss, numbers: dict, file: str):
     """The converter table's rows (``ibr_con``, :data:`stabctl.models.converters.CONVERTER`
     order) of ANDES's PVD1, ESD1 and REGCA1 devices in service (a REGCA1 only without an
     electrical control: :data:`RENEWABLE_CONTROLS`), the devices refused (with why),
-    the static generators the mapped converters replace and each row's device (converter
-    number -> ``"MODEL idx"``).  CaseError (naming ``file``) for a static generator whose
-    machines and converters together take other than all of its P or Q: the rest would
-    be lost at a machine's bus (`_netted_shares` names the rest a bus without machine
-    nets)."""
+    the static generators the mapped converters replace, each row's device (converter
+    number -> ``"MODEL idx"``) and each row's origin (`stabctl.io.provenance.Origin`: the
+    device and the ANDES parameter of each column).  CaseError (naming ``file``) for a
+    static generator whose machines and converters together take other than all of its P
+    or Q: the rest would be lost at a machine's bus (`_netted_shares` names the rest a bus
+    without machine nets)."""
     rows, refused, replaced, protected = [], [], set(), set()
+    origins: list[Origin] = []
     share: dict = {}
     labels: dict[int, str] = {}
     sg_bus: dict = {}
@@ -1145,11 +1159,15 @@ def _converters(ss, numbers: dict, file: str):
             sg = ss.PV if gen in ss.PV.idx.v else ss.Slack
             if gen not in sg.idx.v:
                 raise CaseError(
-                    f"{where}: its static generator {gen!r} is no PV or Slack of the case"
+                    f"{_device_where(ss, file, name, k)}: gen = {gen!r}: its static generator "
+                    "is no PV or Slack of the case"
                 )
             bus = sg.bus.v[list(sg.idx.v).index(gen)]
             if kind != REGCA1 and m.busfreq.v[k] not in ss.BusFreq.idx.v:
-                raise CaseError(f"{where}: its BusFreq {m.busfreq.v[k]!r} is not in the case")
+                raise CaseError(
+                    f"{_device_where(ss, file, name, k)}: its BusFreq {m.busfreq.v[k]!r} "
+                    "is not in the case"
+                )
             bf = 0 if kind == REGCA1 else list(ss.BusFreq.idx.v).index(m.busfreq.v[k])
             why = _converter_refusal(ss, m, k, bus, len(sg_bus.get(bus, ())) > 1, bf)
             if why == "shared":
@@ -1161,18 +1179,22 @@ def _converters(ss, numbers: dict, file: str):
             v = {p.name: p.default for p in CONVERTER.params}
             v.update(number=number, bus=numbers[bus], type=kind, mva=m.Sn.v[k])
             v.update(pfrac=m.gammap.v[k], qfrac=m.gammaq.v[k])
+            src = {"mva": (name, k, "Sn"), "pfrac": (name, k, "gammap")}
+            src["qfrac"] = (name, k, "gammaq")
             if kind != REGCA1:
                 v.update(plim=m.config.plim, Tfm=ss.BusFreq.Tf.v[bf], Twm=ss.BusFreq.Tw.v[bf])
             for p in CONVERTER.params[6:]:
                 if p.name in m.params and p.name != "pll":  # REGCP1's pll: the PLL's idx
                     v[p.name] = float(m.params[p.name].vin[k])
+                    src[p.name] = (name, k, p.name)
             if kind == REGCA1:
-                v.update(_reeca1_values(ss, m.idx.v[k], numbers))
-                v.update(_pll_values(ss, m, k))
+                v.update(_reeca1_values(ss, m.idx.v[k], numbers, src))
+                v.update(_pll_values(ss, m, k, src))
             else:
-                v.update(_protection_values(ss, m, k, refused))
+                v.update(_protection_values(ss, m, k, refused, src))
                 protected.add(m.idx.v[k])
             rows.append([float(v[p.name]) for p in CONVERTER.params])
+            origins.append(_device_origin(ss, file, src, (name, k)))
             labels[number] = where
             got = share.setdefault(gen, [0.0, 0.0, [], False])
             got[0] += m.gammap.v[k]
@@ -1200,7 +1222,28 @@ def _converters(ss, numbers: dict, file: str):
                 "not 1 (ANDES drops the rest and starts off its power flow; stabctl nets "
                 "the rest into the load of a bus without machine only)"
             )
-    return rows, refused, replaced, labels
+    return rows, refused, replaced, labels, origins
+
+
+def _device_origin(ss, file: str, src: dict, device: tuple[str, int]) -> Origin:
+    """The `Origin` of a converter's ibr_con row: ``device`` (ANDES model, row) its
+    source, each column's ANDES parameter (``src``: field -> (model, row, parameter)) as
+    given, named in its own device (``file: REECA1 row 1 (idx REECA1_1)``) where that is
+    another."""
+    params: dict[int, tuple[tuple[str, float], ...]] = {}
+    places: dict[int, str] = {}
+    for fld, (model, j, param) in src.items():
+        k = CONVERTER.col(fld)
+        params[k] = ((param, float(ss.models[model].params[param].vin[j])),)
+        if (model, j) != device:
+            places[k] = _device_where(ss, file, model, j)
+    return Origin(_device_where(ss, file, *device), params, places=places)
+
+
+def _device_where(ss, file: str, model: str, j: int) -> str:
+    """``file: MODEL row R (idx I)``, ANDES device row j (0-based) of ``model``, as the
+    case file's sheet (json key) holds it (rows in device order)."""
+    return f"{file}: {model} row {j + 1} (idx {ss.models[model].idx.v[j]})"
 
 
 def _netted_shares(mats: dict, labels: dict[int, str]) -> list[str]:
@@ -1229,11 +1272,11 @@ def _netted_shares(mats: dict, labels: dict[int, str]) -> list[str]:
     return out
 
 
-def _protection_values(ss, m, k, refused: list) -> dict[str, float]:
+def _protection_values(ss, m, k, refused: list, src: dict) -> dict[str, float]:
     """The ibr_con ``relay`` columns of PVD1/ESD1 device ``k`` of model ``m`` from the
     DGPRCT1 or DGPRCTExt in service on it (its parameters by name, as given), {} without;
     a second one, or one reading another BusFreq than its device, is appended to
-    ``refused`` with why."""
+    ``refused`` with why.  ``src`` gets each column's (ANDES model, row, parameter)."""
     vals: dict[str, float] = {}
     for name, code in PROTECTIONS.items():
         r = ss.models.get(name)
@@ -1251,6 +1294,7 @@ def _protection_values(ss, m, k, refused: list) -> dict[str, float]:
             else:
                 vals = {f: float(r.params[f[3:]].vin[j]) for f in RELAY_FIELDS[1:]}
                 vals["relay"] = code
+                src.update({f: (name, j, f[3:]) for f in RELAY_FIELDS[1:]})
     return vals
 
 
@@ -1297,15 +1341,17 @@ def _pll_refusal(ss, pll, bus) -> str:
     return ""
 
 
-def _pll_values(ss, m, k) -> dict[str, float]:
+def _pll_values(ss, m, k, src: dict) -> dict[str, float]:
     """The ibr_con fields of REGCP1 row k's PLL1 (none without one; `_pll_refusal` has
-    passed): ``pll`` 1 and its gains and lags as given."""
+    passed): ``pll`` 1 and its gains and lags as given; ``src`` gets each field's (ANDES
+    model, row, parameter)."""
     if m.class_name != "REGCP1" or m.pll.v[k] is None:
         return {}
     pll = ss.PLL1
     j = list(pll.idx.v).index(m.pll.v[k])
     v = {"pll": float(PLL1)}
     v.update({f"pll_{n}": float(pll.params[n].vin[j]) for n in ("Kp", "Ki", "Tf", "Tp")})
+    src.update({f"pll_{n}": ("PLL1", j, n) for n in ("Kp", "Ki", "Tf", "Tp")})
     return v
 
 
@@ -1379,12 +1425,13 @@ def _plant_controls(ss, reec) -> list[int]:
     return [j for j in _in_service(m) if m.ree.v[j] == reec] if m is not None else []
 
 
-def _repca1_values(ss, j: int, numbers: dict) -> dict[str, float]:
+def _repca1_values(ss, j: int, numbers: dict, src: dict) -> dict[str, float]:
     """The ibr_con fields of REPCA1 row j: its parameters as given (``vin``; the
     compensation Rc, Xc the monitored line's where not given, ANDES NumSelect), config
     kqs, ksg and freeze, its line's end buses (numbered as stabctl's) and impedance (0
     buses: no line) and its frequency measurement's time constants (its BusFreq's, or
-    the one ANDES adds at its bus)."""
+    the one ANDES adds at its bus); ``src`` gets each parameter's (ANDES model, row,
+    parameter)."""
     m = ss.REPCA1
     f = list(ss.BusFreq.idx.v).index(m.busfreq.v[j])  # its own or the one ANDES added
     v: dict[str, float] = {"repc": float(REPCA1)}
@@ -1405,17 +1452,19 @@ def _repca1_values(ss, j: int, numbers: dict) -> dict[str, float]:
             v[field] = float(ends[field])
         else:
             v[field] = float(m.params[name].vin[j])
+            src[field] = ("REPCA1", j, name)
     for field, given in (("pc_Rc", m.Rc.v[j]), ("pc_Xc", m.Xc.v[j])):
         if given is None or not np.isfinite(given):
             v[field] = v["pc_r" if field == "pc_Rc" else "pc_x"]
     return v
 
 
-def _reeca1_values(ss, regc, numbers: dict) -> dict[str, float]:
+def _reeca1_values(ss, regc, numbers: dict, src: dict) -> dict[str, float]:
     """The ibr_con fields of renewable generator ``regc``'s REECA1 or REECB1 (none without
     one): its parameters as given (``vin``, before ANDES's base change) and its config
     (a REECB1's fields REECA1 alone has keep their defaults: no hold, no PFLAG), and its
-    REPCA1's (`_repca1_values`)."""
+    REPCA1's (`_repca1_values`); ``src`` gets each parameter's (ANDES model, row,
+    parameter)."""
     drivers = _electrical_controls(ss, regc)
     if not drivers:
         return {}
@@ -1423,14 +1472,15 @@ def _reeca1_values(ss, regc, numbers: dict) -> dict[str, float]:
     m = ss.models[name]
     v: dict[str, float] = {"reec": float(MAPPED_CONTROLS[name])}
     for field in REECA1_FIELDS:
-        src = _REECA1_NAMES.get(field, field)
+        given = _REECA1_NAMES.get(field, field)
         if field in _REECA1_CONFIG:
             v[field] = float(getattr(m.config, _REECA1_CONFIG[field]))
-        elif src in m.params:
-            v[field] = float(m.params[src].vin[j])
+        elif given in m.params:
+            v[field] = float(m.params[given].vin[j])
+            src[field] = (name, j, given)
     for plant in _plant_controls(ss, m.idx.v[j]):
-        v.update(_repca1_values(ss, plant, numbers))
-    v.update(_wind_values(ss, m.idx.v[j]))
+        v.update(_repca1_values(ss, plant, numbers, src))
+    v.update(_wind_values(ss, m.idx.v[j], src))
     return v
 
 
@@ -1442,11 +1492,12 @@ def _children(ss, name: str, parent_field: str, parent) -> list[int]:
     return [j for j in _in_service(m) if m.params[parent_field].v[j] == parent]
 
 
-def _wind_values(ss, reec) -> dict[str, float]:
+def _wind_values(ss, reec, src: dict) -> dict[str, float]:
     """The ibr_con fields of the wind turbine of REECA1 ``reec`` (its idx; none without
     one): its drive train (WTDTA1 or WTDS, ``wt_``: WTDS's D read as ``wt_DAMP``) and the
     models chained after it (`WIND_CHAIN`), parameters as given (``vin``, device base;
-    WTTQA1's Tn 0 where not given)."""
+    WTTQA1's Tn 0 where not given); ``src`` gets each parameter's (ANDES model, row,
+    parameter)."""
     links = _wind_links(ss, reec)
     if not links:
         return {}
@@ -1455,14 +1506,16 @@ def _wind_values(ss, reec) -> dict[str, float]:
     v: dict[str, float] = {"wind": float(DRIVE_TRAINS[name])}
     alias = {"wt_DAMP": "D"} if name == "WTDS" else {}
     for field in WIND_FIELDS[1:]:
-        src = alias.get(field, field[3:])
-        if field.startswith("wt_") and src in m.params:
-            v[field] = float(m.params[src].vin[j])
+        given = alias.get(field, field[3:])
+        if field.startswith("wt_") and given in m.params:
+            v[field] = float(m.params[given].vin[j])
+            src[field] = (name, j, given)
     for link, (_, _, flag, prefix) in zip(links[1:], WIND_CHAIN):
         name, j = link[0]
         v[flag] = 1.0
         for field in WIND_FIELDS:
             if field.startswith(prefix):
+                src[field] = (name, j, field[3:])
                 value = float(ss.models[name].params[field[3:]].vin[j])
                 v[field] = 0.0 if field == "wq_Tn" and not np.isfinite(value) else value
     return v
@@ -1482,7 +1535,9 @@ def _electrical_controls(ss, regc) -> list[tuple[str, int]]:
 def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), by_device=None):
     """The generators (dicts for :func:`stabctl.io.dyr.dyr_tables`), the PSS/E records of
     the mapped ANDES devices, the devices refused here (with why), those kept with a
-    change and the DYR values kept unlike ANDES; static generators in
+    change, the DYR values kept unlike ANDES and each record's origin (record ->
+    `stabctl.io.provenance.Origin`: the ANDES device, its parameters' ANDES names); static
+    generators in
     ``with_converter`` are replaced by converters, not machines.  ``by_device``: the
     DYR record of each ANDES device read from a DYR file (`_dyr_against_andes`), whose
     values ANDES's own are checked against (`_against_dyr`)."""
@@ -1565,17 +1620,20 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
                 )
             )
     records = []
+    origins: dict[DyrRecord, Origin] = {}
     for k in played:  # a playback source: a classical machine of H = 0 behind xs
         gens.append(_playback_source(ss, k, len(gens) + 1, numbers))
         records.append(
             DyrRecord(file, k + 1, gens[-1]["bus"], "GENCLS", gens[-1]["id"], (0.0, 0.0))
         )
+        origins[records[-1]] = Origin(_device_where(ss, file, "PLBVFU1", k))
     if machines:  # a Slack without machine holds its bus's voltage: an infinite bus
         for k in (k for _, sg, k in bare if sg is ss.Slack):
             gens.append(_infinite_bus(ss, k, len(gens) + 1, numbers))
             records.append(
                 DyrRecord(file, k + 1, gens[-1]["bus"], "GENCLS", gens[-1]["id"], (0.0, 0.0))
             )
+            origins[records[-1]] = Origin(_device_where(ss, file, "Slack", k))
     avr_syn = {}
     for name, psse in MAPPED_MODELS.items():
         m = ss.models.get(name)
@@ -1604,8 +1662,10 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
             fields = DYR_MODELS[psse].fields
             if psse in dyr:
                 params = _psse_params(ss, m, dyr[psse], fields, k)
+                names = _andes_names(dyr[psse])
             else:  # ANDES's own model (TG2, HYGOV4): its parameters by name, as given
                 params = tuple(float(m.params[f].vin[k]) for f in fields)
+                names = {}
             rec = (by_device or {}).get((name, k))
             decl = None if rec is None else DYR_MODELS.get(rec.model)
             if rec is not None and decl is not None and len(rec.params) == len(decl.fields):
@@ -1624,7 +1684,19 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
                     )
                 )
             records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
-    return gens, records, refused, _grouped(changed), unlike
+            where = _device_where(ss, file, name, k)
+            origins[records[-1]] = dyr_origin(records[-1], names, where)
+    return gens, records, refused, _grouped(changed), unlike, origins
+
+
+def _andes_names(spec: dict) -> dict[str, str]:
+    """PSS/E field -> the ANDES parameter it is (``psse-dyr.yaml``'s ``outputs``
+    inverted, as `_psse_params` reads them; H as ``M/2``)."""
+    names: dict[str, str] = {}
+    for param, expr in spec["outputs"].items():
+        given = expr.split(";")[0].split(".")[-1].strip() if isinstance(expr, str) else expr
+        names.setdefault(str(given), "M/2" if param == "M" else param)
+    return names
 
 
 def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict, list[str]]:

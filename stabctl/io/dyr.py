@@ -24,14 +24,17 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from contextvars import ContextVar
 from dataclasses import dataclass
+from dataclasses import field as _field
 from typing import NamedTuple
 
 import numpy as np
 
 from stabctl.errors import CaseError
 from stabctl.io.inputs import input_file, plain_float
+from stabctl.io.provenance import Origin
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
 from stabctl.models.exciters import EXCITER
@@ -105,6 +108,8 @@ class DyrTables:
     unsupported: tuple[DyrRecord, ...]
     why: tuple[str, ...] = ()
     changed: tuple[str, ...] = ()
+    #: table name ("mac_con", "exc_con", "pss_con", "tg_con") -> the record of each row
+    records: Mapping[str, tuple[DyrRecord, ...]] = _field(default_factory=dict)
 
 
 class _Unsupported(Exception):
@@ -376,7 +381,88 @@ def dyr_tables(
         unsupported=tuple(r for r, _ in skipped),
         why=tuple(why for _, why in skipped),
         changed=changed,
+        records={FAMILY[k].table: tuple(rows[k][n][0] for n in sorted(rows[k])) for k in FAMILY},
     )
+
+
+#: the DYR fields written as PSS/E's DYR documentation names them, where the declaration
+#: spells them otherwise (STAB1's ratios)
+_SHOWN = {"K_T": "K/T", "T1_T3": "T1/T3", "T2_T4": "T2/T4"}
+#: table field -> the DYR fields it is computed from, per model, for the columns a mapper
+#: computes rather than copies (`dyr_origin`; the mappers below)
+_DERIVED: dict[str, dict[str, tuple[str, ...]]] = {
+    "GENROU": {"xqpp": ("X''d",)},
+    "GENROE": {"xqpp": ("X''d",)},
+    "GENSAL": {"xqp": ("Xq",), "xqpp": ("X''d",)},
+    "GENSAE": {"xqp": ("Xq",), "xqpp": ("X''d",)},
+    "SEXS": {"TC": ("TA/TB", "TB")},
+    "SCRX": {"TC": ("TA/TB", "TB"), "bus_fed": ("CSWITCH",)},
+    **{
+        dc: dict.fromkeys(("E1", "SE1", "E2", "SE2"), ("E1", "SE(E1)", "E2", "SE(E2)"))
+        for dc in ("IEEEX1", "EXDC2", "ESDC1A", "ESDC2A", "IEEET1", "IEEET2")
+    },
+    "ESST3A": {"Efdmax": ("VBMAX", "VMMAX")},
+    "IEEEST": {
+        "type": ("ICS",),
+        "input1": ("ICS",),
+        "KTw": ("KS", "T5"),
+        **{t: (t,) for t in ("T1", "T2", "T3", "T4")},
+        **{f"A{k}": (f"A{k}",) for k in range(1, 7)},
+    },
+    "PSS1A": {"KTw": ("KS", "T5")},
+    "STAB2A": {"KTw": ("K2", "T2"), "ymin": ("HLIM",)},
+    "STAB1": {
+        "KTw": ("K_T", "T"),
+        "T1": ("T1_T3", "T3"),
+        "T3": ("T2_T4", "T4"),
+        "ymin": ("HLIM",),
+    },
+    **{m: {"invR": ("R",)} for m in ("TGOV1", "GAST", "TG2")},
+    "IEEEG1": {"invR": ("K",), "Tmax": ("PMAX",), "Tmin": ("PMIN",), "machine2": ("JBUS", "M")},
+    "HYGOV": {"Uc": ("VELM",), "Kg": ("r", "Tr")},
+    "IEESGO": {"K1": ("K2",), "K3": ("K2", "K3"), "K5": ("K2", "K3"), "invR": ("K1",)},
+    "WPIDHY": {"Rperm": ("REG",)},
+}
+
+
+def dyr_origin(rec: DyrRecord, names=None, where: str | None = None) -> Origin:
+    """The origin of the table row that record ``rec`` fills (`stabctl.io.provenance`):
+    each column its declaration copies (`DyrModel.copy`) or its mapper computes
+    (`_DERIVED`) with the DYR fields it holds, named as written and valued as read.
+
+    Parameters
+    ----------
+    rec : DyrRecord
+        A record of a model of :data:`DYR_MODELS`.
+    names : Mapping[str, str], optional
+        DYR field -> the name to give it (another format's name for the same parameter:
+        ANDES's); default the DYR documentation's (:data:`_SHOWN`, else the field).
+    where : str, optional
+        How to name the record; default ``rec.label()``.
+
+    Returns
+    -------
+    Origin
+        Its ``where``, the columns' parameters and which of them are computed.
+    """
+    decl = DYR_MODELS[rec.model]
+    family = FAMILY[_KIND[rec.model]]
+    values = decl.values(rec.params)
+    names = names or {}
+
+    def given(fields) -> tuple[tuple[str, float], ...]:
+        return tuple((names.get(f) or _SHOWN.get(f, f), values[f]) for f in fields if f in values)
+
+    params: dict[int, tuple[tuple[str, float], ...]] = {}
+    for col_name, src in decl.copy.items():
+        params[family.col(col_name)] = given((src,))
+    derived = set()
+    for col_name, srcs in _DERIVED.get(rec.model, {}).items():
+        k = family.col(col_name)
+        if k not in params:
+            params[k] = given(srcs)
+            derived.add(k)
+    return Origin(where or rec.label(), params, frozenset(derived))
 
 
 def _map_records(records, generators, conventions):
@@ -837,9 +923,33 @@ def _pss_row(rec, gen, **cols) -> list:
     return PSS.dyr_row(DYR_MODELS[rec.model], rec.params, machine=gen["number"], **cols)
 
 
-def _local_inputs(*pairs) -> None:
-    """PSS/E input codes and remote buses: only local speed (1) or electrical power (3)."""
-    for code, bus in pairs:
+#: PSS/E's stabiliser input codes (IEEEST ICS, PSS1A ICS, ST2CUT MODE, PSS2A ICS1, ...:
+#: PSS/E Model Library), 0 no input
+INPUT_CODES = {
+    0: "none",
+    1: "rotor speed deviation",
+    2: "bus frequency deviation",
+    3: "generator electrical power",
+    4: "generator accelerating power",
+    5: "bus voltage",
+    6: "derivative of the bus voltage",
+}
+
+
+def _local_inputs(rec, *pairs) -> None:
+    """PSS/E input codes and remote buses (``pairs`` of the record's field names, code
+    then bus, None for no bus): a code that is no input code (`INPUT_CODES`) refused as
+    invalid data (CaseError naming the parameter and the codes); only local speed (1) or
+    electrical power (3) supported."""
+    v = DYR_MODELS[rec.model].values(rec.params)
+    for name, _ in pairs:
+        if v[name] not in INPUT_CODES:
+            codes = ", ".join(f"{k} {what}" for k, what in INPUT_CODES.items())
+            raise CaseError(
+                f"{rec.label()}: {name} = {v[name]:g}: not a PSS/E input code (an integer "
+                f"0 to 6: {codes})"
+            )
+    for code, bus in ((v[c], 0.0 if b is None else v[b]) for c, b in pairs):
         if code not in (0.0, 1.0, 3.0) or bus != 0:
             raise _Unsupported(
                 f"input code {code:g} at bus {bus:g} (only local speed 1 or electrical power 3)"
@@ -861,7 +971,7 @@ def _ieeest(rec, gen):
     stabiliser (type 3); VCU/VCL: the output cut-off (pss_con columns 25-26)."""
     v = DYR_MODELS["IEEEST"].values(rec.params)
     ics, A = v["ICS"], [v[f"A{k}"] for k in range(1, 7)]
-    _local_inputs((ics, v["IB"]))
+    _local_inputs(rec, ("ICS", "IB"))
     _washout(v["T5"], v["T6"])
     if ics == 0:
         raise _Unsupported("no input (ICS 0)")
@@ -893,7 +1003,7 @@ def _pss1a(rec, gen):
     input lag (K1 = 1), the washout KS s T5/(1 + s T5) as K_w = KS T5, T_w = T5; inputs
     1 (speed) and 3 (electrical power) only, a washout T5 below 1e-3 s unsupported."""
     v = DYR_MODELS["PSS1A"].values(rec.params)
-    _local_inputs((v["ICS"], 0.0))
+    _local_inputs(rec, ("ICS", None))
     _washout(v["T5"], v["T5"])
     if v["ICS"] == 0:
         raise _Unsupported("no input (ICS 0)")
@@ -905,7 +1015,7 @@ def _st2cut(rec, gen):
     stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
     T5/T6, T7/T8, T9/T10; VCU/VCL: the output cut-off (pss_con columns 25-26)."""
     v = DYR_MODELS["ST2CUT"].values(rec.params)
-    _local_inputs((v["MODE"], v["BUSR"]), (v["MODE2"], v["BUSR2"]))
+    _local_inputs(rec, ("MODE", "BUSR"), ("MODE2", "BUSR2"))
     _washout(v["T3"], v["T4"])
     if v["MODE"] == 0:
         raise _Unsupported("no first input (MODE 0)")
@@ -939,8 +1049,7 @@ def _pss2(rec, gen):
     """PSS2A, PSS2B, PSS2C: ICS1 IB1 ICS2 IB2 M N then the CONs -> pss_con types 5-7 (the
     copies of stabctl.models.pss.pss2a, pss2b, pss2c); only local inputs (IB1 = IB2 = 0)
     of speed (1) or electrical power (3)."""
-    v = DYR_MODELS[rec.model].values(rec.params)
-    _local_inputs((v["ICS1"], v["IB1"]), (v["ICS2"], v["IB2"]))
+    _local_inputs(rec, ("ICS1", "IB1"), ("ICS2", "IB2"))
     return _pss_row(rec, gen)
 
 

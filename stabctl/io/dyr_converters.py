@@ -49,6 +49,7 @@ import numpy as np
 
 from stabctl.errors import CaseError
 from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, machine_id
+from stabctl.io.provenance import Origin
 from stabctl.models.converters import (
     CONVERTER,
     DERA1,
@@ -88,11 +89,15 @@ class ConverterRows:
         The (bus, machine id) of the generators the rows model (not machines).
     skipped : tuple of (DyrRecord, str)
         The converter records left out, each with why, in file order.
+    origins : tuple of Origin
+        Each row's records (`stabctl.io.provenance`): the REGCA1's (DERA1's) as the
+        row's, each column its record's parameter as written.
     """
 
     rows: list[list[float]]
     replaced: frozenset[tuple[int, str]]
     skipped: tuple[tuple[DyrRecord, str], ...]
+    origins: tuple[Origin, ...] = ()
 
 
 class _Refused(Exception):
@@ -150,6 +155,7 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
         plant[rec.model] = rec
     gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
     rows: list[list[float]] = []
+    origins: list[Origin] = []
     replaced: set[tuple[int, str]] = set()
     skipped: list[tuple[DyrRecord, str]] = []
     for key in sorted(plants, key=lambda k: list(gens).index(k) if k in gens else len(gens)):
@@ -177,9 +183,26 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
             skipped += [(rec, str(why)) for rec in plant.values()]
             continue
         rows.append(row)
+        origins.append(_plant_origin(plant))
         replaced.add(key)
     skipped.sort(key=lambda item: (item[0].file, item[0].line))
-    return ConverterRows(rows, frozenset(replaced), tuple(skipped))
+    return ConverterRows(rows, frozenset(replaced), tuple(skipped), tuple(origins))
+
+
+def _plant_origin(plant: dict[str, DyrRecord]) -> Origin:
+    """The `Origin` of a plant's ibr_con row: its REGCA1's (REGCB1's, DERA1's) record,
+    each column copied from a record (`DyrModel.copy`) with that record's parameter."""
+    main = next(plant[m] for m in (*_REGC, "DERA1", *plant) if m in plant)
+    params: dict[int, tuple[tuple[str, float], ...]] = {}
+    places: dict[int, str] = {}
+    for rec in plant.values():
+        values = CONVERTER_DYR[rec.model].values(rec.params)
+        for name, src in CONVERTER_DYR[rec.model].copy.items():
+            k = CONVERTER.col(name)
+            params[k] = ((src, values[src]),)
+            if rec is not main:
+                places[k] = rec.label()
+    return Origin(main.label(), params, places=places)
 
 
 def shares(generators, gen) -> tuple[float, float]:

@@ -134,12 +134,13 @@ def import_psse(
     mats = raw.matrices()
     unsupported = [str(s) for s in raw.unsupported]
     changed: tuple[str, ...] = ()
+    origins: dict = {}
     lost: list[str] = []
     off_network = [str(s) for s in raw.switched_off]
     if records is not None:
         records, ignored = _in_service(records, raw.out_of_service)
         off_network += ignored
-        dyn, dyr_unsupported, lost, changed = _dynamic_tables(raw, records, conventions)
+        dyn, dyr_unsupported, lost, changed, origins = _dynamic_tables(raw, records, conventions)
         mats.update(dyn)
         unsupported += dyr_unsupported
     where = _files(raw_path, dyr_path)
@@ -158,9 +159,12 @@ def import_psse(
             UserWarning,
             stacklevel=3,
         )
-    case = case_from_matrices(
-        mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
-    )
+    try:
+        case = case_from_matrices(
+            mats, raw.name, source=_source(raw_path, dyr_path), description=raw.title
+        )
+    except CaseError as exc:  # the record and parameters the table's row came from
+        raise _located(exc, origins, where) from None
     changed = (*(str(c) for c in raw.changed), *changed)
     if changed:
         warnings.warn(
@@ -170,6 +174,17 @@ def import_psse(
             stacklevel=3,
         )
     return PsseImport(case, tuple(unsupported), netted, raw.solution, changed, tuple(off_network))
+
+
+def _located(exc: CaseError, origins: dict, where: str) -> CaseError:
+    """A case table's error naming the DYR record and parameters its row came from
+    (`stabctl.io.provenance.locate`), or, for a row of no record (the RAW data's), the
+    files ``where``."""
+    from stabctl.case.params import FAMILIES
+    from stabctl.io.provenance import locate
+
+    located = locate(exc, origins, {f.table: f for f in FAMILIES.values()})
+    return located if located is not exc else exc.relocated(f"{where}: {exc}")
 
 
 def _in_service(records, out_of_service) -> tuple[list, list[str]]:
@@ -221,13 +236,16 @@ def _without_machine(records):
     return net
 
 
-def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str], list[str], tuple]:
+def _dynamic_tables(
+    raw: RawData, records, conventions
+) -> tuple[dict, list[str], list[str], tuple, dict]:
     """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
     the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
     ... in RAW order, the other generators), the unsupported records (as text), the
-    generators whose REGCA1 plant or DERA1 was left out (``bus B 'ID'``) and the records
-    read with a value other than the file's."""
-    from stabctl.io.dyr import SVC_DYR, compensator_rows, dyr_tables, machine_id
+    generators whose REGCA1 plant or DERA1 was left out (``bus B 'ID'``), the records
+    read with a value other than the file's and each table's row origins (table name ->
+    `stabctl.io.provenance.Origin` per row)."""
+    from stabctl.io.dyr import SVC_DYR, compensator_rows, dyr_origin, dyr_tables, machine_id
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
     gens = [{**g.as_dyr(), "sbase": raw.base_mva} for g in raw.generators]
@@ -254,11 +272,14 @@ def _dynamic_tables(raw: RawData, records, conventions) -> tuple[dict, list[str]
         [*conv.skipped, *svc.skipped, *zip(tables.unsupported, tables.why)],
         key=lambda item: (item[0].file, item[0].line),
     )
+    origins = {table: [dyr_origin(r) for r in recs] for table, recs in tables.records.items()}
+    origins["ibr_con"] = list(conv.origins)
     return (
         mats,
         [_dyr_text(r, why) for r, why in skipped],
         [f"bus {b} '{i}'" for b, i in sorted(lost)],
         tables.changed,
+        origins,
     )
 
 

@@ -519,7 +519,8 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
     CaseError
         A wrong format or version; an unknown top-level key, table, table key, column or
         ``extra`` matrix (not in :data:`EXTRA_MATRICES`); a column the model needs left
-        out; invalid data (the file, table, row and field named); an event of the case's
+        out; invalid data (the file, table, row and field named; a PSS on a machine without
+        exciter, `Case.check_stabilisers`); an event of the case's
         own that names a bus, line, machine or motor the case lacks (the file, the record,
         the event and what is missing named; UnknownBusError for a bus).
     """
@@ -570,6 +571,7 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
             **tables,
         )
         check_case_events(case)  # a stored event of a bus or line the case lacks
+        case.check_stabilisers()  # what a run refuses, refused naming the file
     return case
 
 
@@ -579,7 +581,7 @@ def _located(where: str) -> Iterator[None]:
     try:
         yield
     except CaseError as exc:
-        raise type(exc)(f"{where}: {exc}") from None
+        raise exc.relocated(f"{where}: {exc}") from None
 
 
 def _extra_field(extra, where: str) -> Mapping:

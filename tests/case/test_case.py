@@ -422,8 +422,12 @@ def test_tables_are_their_declaration(kind):
     given = np.ones((1, fam.min_columns))
     if kind == "machines":  # a subtransient machine's leakage lies below its x'd (x_l = 0.5)
         given[0, fam.col("xl") - 1] = 0.5
+    if kind == "exciters":  # a DC1 (type 1) needs its T_E and T_F (columns 11, 17) and
+        # saturation points with a fit (E2 = SE2 = 2, columns 14-15)
+        given = np.hstack([given, np.ones((1, 17 - fam.min_columns))])
+        given[0, 13:15] = 2.0
     tab = cls.from_matrix(given)  # omitted columns: the defaults
-    for p in fam.params[fam.min_columns :]:
+    for p in fam.params[given.shape[1] :]:
         assert getattr(tab, p.name)[0] == p.default
     for p in fam.params:
         assert p.name in cls.__doc__  # the docstring table comes from it

@@ -94,7 +94,9 @@ def test_a_rated_voltage_of_0_is_taken_as_not_given():
 
 def _base_row(fam, kind):
     """A row of type `kind` holding zeros but where its limits need more: a speed set point
-    of 1, a positive value where one must be > 0, a PSS's washout and first lag of 1 s."""
+    of 1, a positive value where one must be > 0, a PSS's washout and first lag of 1 s,
+    and 1 in each field the table names as it refuses the row for its model (a time
+    constant the model needs >= 1e-3 s, a PSS/E stabiliser's input code)."""
     row = np.zeros(len(fam.params))
     row[0], row[1] = kind, 1
     for lim in fam.limits[kind]:
@@ -102,7 +104,17 @@ def _base_row(fam, kind):
             row[fam.col(name) - 1] = 1.0
     if fam is PSS:
         row[fam.col("Tw") - 1] = row[fam.col("T2") - 1] = 1.0
-    return row
+    table = {"exc_con": ExciterTable, "tg_con": GovernorTable, "pss_con": PssTable}[fam.table]
+    ordered = {"G0": 0.2, "G1": 0.5, "G2": 0.8, "P1": 0.2, "P2": 0.5, "P3": 0.8, "Uc": -1.0}
+    for _ in range(20):
+        try:
+            table.from_matrix([row])
+            return row
+        except CaseError as exc:
+            assert exc.fields, exc
+            for name in exc.fields:  # PIDGOV's gate table, its gate velocity limits
+                row[fam.col(name) - 1] = ordered.get(name, 1.0)
+    raise AssertionError(f"no base row of {fam.table} type {kind}")
 
 
 def _breaking(fam):

@@ -122,9 +122,13 @@ def test_values_andes_copies_from_linked_devices_are_not_called_defaults():
 
 def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):
     """A PVD1 whose gen is no static generator of the case (the finding: a ValueError
-    traceback from list.index): refused naming the device and the generator."""
+    traceback from list.index): refused naming the file, the device and the generator."""
     path = edited(tmp_path, "ieee14/ieee14_pvd1.xlsx", "PVD1", gen=9999)
-    with pytest.raises(CaseError, match=r"PVD1 \S+: its static generator 9999 is no PV or Slack"):
+    with pytest.raises(
+        CaseError,
+        match=r"^PVD1_gen\.xlsx: PVD1 row 1 \(idx \S+\): gen = 9999: its static generator is "
+        "no PV or Slack",
+    ):
         read_andes_case(path, on_unsupported="skip")
 
 

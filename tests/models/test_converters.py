@@ -635,9 +635,9 @@ def test_dg_protection_inside_no_band_stays_at_rest():
 
 
 def test_dg_protection_on_a_regca1_is_refused():
-    case = make_case([1, 2, 3, 100.0, 1.0, 1.0, 0.0, 1], relay=1)
+    """Refused as the case's converter table is made (the models' check_table)."""
     with pytest.raises(CaseError, match=r"field 'relay'.*PVD1 or ESD1"):
-        conv.converter_params(case)
+        make_case([1, 2, 3, 100.0, 1.0, 1.0, 0.0, 1], relay=1)
 
 
 # -- REGCB1 (WECC REGC_B, stabctl.models.converters.regcb1) --------------------------------

@@ -379,8 +379,13 @@ def test_frequency_below_fl_beyond_tfl_trips_all(tmp_path, v, trips):
 
 
 def test_trip_bands_out_of_order_are_refused(tmp_path):
-    """VtripFlag 1 with vl0 0.5 above vl1 0.49: refused naming the field."""
-    with pytest.raises(CaseError, match=r"da_vl1.*vl0 < vl1 <= vh1 < vh0"):
+    """VtripFlag 1 with vl0 0.5 above vl1 0.49: refused naming the record and both
+    parameters as written, as the DYR import writes the table."""
+    with pytest.raises(
+        CaseError,
+        match=r"dera1\.dyr:\d+ DERA1 \(bus 102, id 1\): vl0 = 0\.5, vl1 = 0\.49: the DERA1's "
+        r"trip bands must be vl0 < vl1 <= vh1 < vh0",
+    ):
         _sim(tmp_path, (1, 0, 0, 1, 1, 0), vl0=0.5)
 
 

@@ -252,7 +252,9 @@ def test_ieesgo_step_response_is_its_t4_lag():
 def test_lag_time_constants_below_the_threshold_are_refused():
     """tg's lags always exist in PST: a T_s below 1e-3 s (which would make the lag
     absent) is refused, naming the field."""
-    with pytest.raises(CaseError, match=r"tg_con row 1, field 'Ts': must be >= 0\.001 s"):
+    with pytest.raises(
+        CaseError, match=r"tg_con row 1 \(machine 1\), field 'Ts': must be >= 0\.001 s"
+    ):
         params(TG[:5] + [5e-4] + TG[6:])
 
 

@@ -373,39 +373,28 @@ class ConverterParams(Declared):
 check_packed(ConverterParams, PACKED)
 
 
-def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
-    """Converter parameters on the system base, with the initial point of the power flow.
+def check_table(t) -> None:
+    """Refuse an ibr_con row stabctl does not model, as the table is made (CaseError
+    naming the row and field, the table's `_fail`): a lag time constant tip, tiq (PVD1,
+    ESD1), Tg, Tfltr (REGCA1), REECA1's (:data:`REECA1_LAGS`; its Tp other than 0, no
+    filter), REPCA1's or a DERA1's (`dera1.LAGS`) below 1e-3 s (the current would be an
+    algebraic function of the voltage inside the network solution); an electrical
+    control ``reec`` or a REGC_B (``regc`` 1) on a device other than a REGCA1; a REGC_B
+    with a PLL1, or with an internal voltage lag gb_Te and no source impedance
+    (gb_Rsource = gb_Xsource = 0); a DERA1 lag of a control it switches on
+    (`dera1.SWITCHED_LAGS`) below 1e-3 s or trip bands out of order (`dera1.check`); a
+    wind turbine its models cannot run (`wind.check`).
 
     Parameters
     ----------
-    case : Case
-        The case (its ``converters`` table).
-    V0 : ndarray of complex, shape (n_bus,), optional
-        Power-flow bus voltages, pu; None: the bus table's (flat) values.
-    S_gen : ndarray of complex, shape (n_bus,), optional
-        Power-flow bus generation, pu; None: the bus table's.
-
-    Returns
-    -------
-    ConverterParams
-        With ``pos`` -1 (set by the dynamic model).
+    t : stabctl.case.ConverterTable
+        The table being made.
 
     Raises
     ------
     CaseError
-        A lag time constant tip, tiq (PVD1, ESD1), Tg, Tfltr (REGCA1), REECA1's
-        (:data:`REECA1_LAGS`; its Tp other than 0, no filter) or a DERA1's
-        (`dera1.LAGS`) below 1e-3 s (the current
-        would be an algebraic function of the voltage inside the network solution); an
-        electrical control ``reec`` or a REGC_B (``regc`` 1) on a device other than a
-        REGCA1; a REGC_B with a PLL1, or with an internal voltage lag gb_Te and no source
-        impedance (gb_Rsource = gb_Xsource = 0); a DERA1 holding its
-        power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`, a DERA1 lag of a
-        control it switches on (`dera1.SWITCHED_LAGS`) below 1e-3 s or trip bands out
-        of order (`dera1.check`); naming the row and field.
+        For the first such row.
     """
-    t = case.converters
-    n = len(t)
     reg = t.type == REGCA1
     ree = t.reec != NO_REEC
     bad = np.flatnonzero(ree & ~reg)
@@ -446,9 +435,38 @@ def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
     wind.check(t, t.reec == REECA1)
     lags += [(n, getattr(t, flag) == 1) for flag, names in SWITCHED_LAGS for n in names]
     for name, sel in lags:
-        bad = np.flatnonzero(sel & (getattr(t, name) < LBND))
-        if bad.size:
-            t._fail(bad[0], name, f"must be >= {LBND:g} s (a lag of the converter)")
+        lag = f"must be >= {LBND:g} s (a lag of the converter)"
+        t._require(~sel | (getattr(t, name) >= LBND), name, lag)
+
+
+def converter_params(case: Case, V0=None, S_gen=None) -> ConverterParams:
+    """Converter parameters on the system base, with the initial point of the power flow.
+
+    Parameters
+    ----------
+    case : Case
+        The case (its ``converters`` table).
+    V0 : ndarray of complex, shape (n_bus,), optional
+        Power-flow bus voltages, pu; None: the bus table's (flat) values.
+    S_gen : ndarray of complex, shape (n_bus,), optional
+        Power-flow bus generation, pu; None: the bus table's.
+
+    Returns
+    -------
+    ConverterParams
+        With ``pos`` -1 (set by the dynamic model).
+
+    Raises
+    ------
+    CaseError
+        A DERA1 holding its power factor (PfFlag 1) with |P0| below `dera1.MIN_P_PF`,
+        naming the row and field (what the devices' data alone cannot be the table
+        refused as it was made, `check_table`).
+    """
+    t = case.converters
+    n = len(t)
+    reg = t.type == REGCA1
+    gb = t.regc == REGC_B
     b = case.buses
     if V0 is None:
         V0 = b.vmag * np.exp(1j * np.deg2rad(b.vang_deg))

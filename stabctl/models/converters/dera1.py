@@ -364,15 +364,16 @@ def check(t) -> None:
         Naming the row and field (through the table's ``_fail``).
     """
     vt = switched_on(t, ("da_VtripFlag",))
-    for name, bad in (
-        ("da_vl1", vt & ~(t.da_vl0 < t.da_vl1)),
-        ("da_vh1", vt & ~(t.da_vl1 <= t.da_vh1)),
-        ("da_vh0", vt & ~(t.da_vh1 < t.da_vh0)),
-        ("da_fh", switched_on(t, ("da_FtripFlag",)) & ~(t.da_fl < t.da_fh)),
+    for lower, name, bad in (
+        ("da_vl0", "da_vl1", vt & ~(t.da_vl0 < t.da_vl1)),
+        ("da_vl1", "da_vh1", vt & ~(t.da_vl1 <= t.da_vh1)),
+        ("da_vh1", "da_vh0", vt & ~(t.da_vh1 < t.da_vh0)),
+        ("da_fl", "da_fh", switched_on(t, ("da_FtripFlag",)) & ~(t.da_fl < t.da_fh)),
     ):
         rows = np.flatnonzero(bad)
         if rows.size:
-            t._fail(rows[0], name, "the DERA1's trip bands must be vl0 < vl1 <= vh1 < vh0, fl < fh")
+            why = "the DERA1's trip bands must be vl0 < vl1 <= vh1 < vh0, fl < fh"
+            t._fail(rows[0], name, why, fields=(lower, name))
 
 
 def initial(cp, x: np.ndarray, V: np.ndarray) -> None:

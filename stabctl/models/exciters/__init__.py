@@ -374,8 +374,9 @@ class ExciterParams(Declared):
 check_packed(ExciterParams, PACKED, ("Vref",))
 
 
-def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
-    """(Asat, Bsat) of the DC exciters' saturation from exc_con columns 12-15.
+def _dc_saturation(e, rows=None) -> tuple[np.ndarray, np.ndarray]:
+    """(Asat, Bsat) of the DC exciters' saturation from exc_con columns 12-15 (of the rows
+    of the boolean mask ``rows`` only, default all; the others 0).
 
     dc_sat 0, PST exc_dc12's SE(E) = Asat exp(Bsat |E|): E2 (column 14) = 0 means columns
     13, 15 are Asat, Bsat themselves; otherwise PST's fit through (E1, SE1), (E2, SE2) --
@@ -383,8 +384,9 @@ def _dc_saturation(e) -> tuple[np.ndarray, np.ndarray]:
     SE(E1) = SE1 but SE(E2) = SE2 E2 / E1 (docs 2.3).  dc_sat 1, and EXAC1/ESAC1A always, the
     quadratic SE(E) E = Bsat (E - Asat)^2 through both points (PSS/E; ANDES
     `ExcQuadSat`)."""
-    A, B = _exponential_fit(e)
-    quad = (e.dc_sat == 1) | np.isin(e.type, QUAD_KINDS)
+    rows = np.ones(len(e), bool) if rows is None else rows
+    A, B = _exponential_fit(e, rows)
+    quad = ((e.dc_sat == 1) | np.isin(e.type, QUAD_KINDS)) & rows
     if quad.any():
         Aq, Bq = quadratic_fit(
             *_dc_points(e),
@@ -406,13 +408,13 @@ def _dc_points(e):
     return tuple(_dc(e, name) for name in ("E1", "SE1", "E2", "SE2"))
 
 
-def _exponential_fit(e):
+def _exponential_fit(e, rows):
     E1, SE1, E2, SE2 = _dc_points(e)
     fit = (E2 != 0) & (e.dc_sat == 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         B = np.where(fit, np.log(SE2 * E2 / (SE1 * E1)) / (E2 - E1), SE2)
         A = np.where(fit, SE1 / np.exp(B * E1), SE1)
-    bad = np.nonzero(np.isin(e.type, DC_KINDS) & (e.dc_sat == 0))[0]
+    bad = np.nonzero(np.isin(e.type, DC_KINDS) & (e.dc_sat == 0) & rows)[0]
     bad = bad[~np.isfinite(A[bad] + B[bad])]
     if bad.size:
         raise CaseError(
@@ -422,11 +424,23 @@ def _exponential_fit(e):
     return A, B
 
 
-def _check(e) -> None:
-    """Raise CaseError naming row and field for an exc_con row stabctl does not model: a
-    time constant its type's ``NEEDS`` lists (and T_F with a :data:`RATE_FEEDBACK` type's
-    K_F != 0) below 1e-3 s, or a row its type module's ``check`` refuses (where it has
-    one)."""
+def check_table(e) -> None:
+    """Refuse an exc_con row stabctl does not model, as the table is made (CaseError
+    naming the row and field, the table's `_fail`): a time constant its type's ``NEEDS``
+    lists (and T_F with a :data:`RATE_FEEDBACK` type's K_F != 0) below 1e-3 s, a row its
+    type module's ``check`` refuses (where it has one), saturation points that give no
+    fit (`_dc_saturation`: E1 = E2, ...).
+
+    Parameters
+    ----------
+    e : stabctl.case.ExciterTable
+        The table being made.
+
+    Raises
+    ------
+    CaseError
+        For the first such row.
+    """
     for r in range(len(e)):
         kind = int(e.type[r])
         module = TYPES[kind]
@@ -434,21 +448,33 @@ def _check(e) -> None:
         for name, declared in module.NEEDS + extra:
             k = EXCITER.col(declared)
             if e.col(k)[r] < LBND:
-                raise CaseError(
-                    f"exc_con row {r + 1}, field '{name}' (column {k}): exciter "
-                    f"type {kind} needs {name} >= {LBND} s"
-                )
+                what = f"exciter type {kind} needs {name} >= {LBND} s"
+                if extra and name == "TF":
+                    what += " where KF != 0 (the rate feedback)"
+                    fields: tuple[str, ...] = (declared, "KF")
+                else:
+                    fields = (declared,)
+                e._fail(r, name, f"{what}, got {e.col(k)[r]:g}", k, fields=fields, rule=what)
         check = getattr(module, "check", None)
         problem = check(e, r) if check is not None else None
         if problem:
-            raise CaseError(f"exc_con row {r + 1}, {problem}")
+            e._refuse(r, problem)
+    try:
+        _dc_saturation(e)
+    except CaseError:  # the first row whose points give no fit, named
+        for r in range(len(e)):
+            try:
+                _dc_saturation(e, np.arange(len(e)) == r)
+            except CaseError as exc:
+                why = str(exc).split(": ", 1)[-1]
+                e._fail(r, "E1", why, fields=("E1", "SE1", "E2", "SE2"), rule=why)
+        raise
 
 
 def exciter_params(case: Case) -> ExciterParams:
-    """Exciter parameters; raises CaseError for a type or option stabctl does not model
-    (`_check`)."""
+    """Exciter parameters (the table refused the types and options stabctl does not
+    model as it was made, `check_table`)."""
     e = case.exciters
-    _check(e)
     A, B = _dc_saturation(e)
     dc = np.isin(e.type, DC_KINDS)
     ac = np.isin(e.type, QUAD_KINDS)

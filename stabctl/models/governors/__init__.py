@@ -221,40 +221,57 @@ check_packed(
 )
 
 
-def governor_params(case: Case) -> GovernorParams:
-    """Governor parameters.
-
-    Raises CaseError (tg_con row, field) for a time constant the type needs below 1e-3 s
+def check_table(g) -> None:
+    """Refuse a tg_con row stabctl does not model, as the table is made (CaseError naming
+    the row and field, the table's `_fail`): a time constant the type needs below 1e-3 s
     (each type module's ``NEEDS``; tg: Ts, Tc, T5; TGOV1: T1 = Ts, T3 = Tc; IEEEG1: T3 =
     Ts; HYGOV: T_g = Ts, T_f = Tc, T_w = T4; TG2: T2 = Tc: a lag below it would be absent,
     `blocks.LBND`), a row its module's ``check`` refuses (GGOV1's options, a DEGOV lead
-    without its lag), or an IEEEG1 without power fractions; the values no type can take
-    are the tg_con table's (`stabctl.case.GovernorTable`)."""
-    g = case.governors
+    without its lag), or an IEEEG1 without power fractions (K1 + ... + K8 <= 0); the
+    values no type can take are the table's declared bounds and limits.
+
+    Parameters
+    ----------
+    g : stabctl.case.GovernorTable
+        The table being made.
+
+    Raises
+    ------
+    CaseError
+        For the first such row.
+    """
     for r in range(len(g)):
         module = TYPES[int(g.type[r])]
         for name in module.NEEDS:
             if getattr(g, name)[r] < LBND:
-                raise CaseError(
-                    f"tg_con row {r + 1}, field '{name}': must be >= {LBND} s for "
-                    f"governor type {int(g.type[r])}"
-                )
+                what = f"must be >= {LBND} s for governor type {int(g.type[r])}"
+                g._fail(r, name, f"{what}, got {getattr(g, name)[r]:g}", rule=what)
         check = getattr(module, "check", None)
         problem = check(g, r) if check is not None else None
         if problem:
-            raise CaseError(f"tg_con row {r + 1}, {problem}")
+            g._refuse(r, problem)
+    fractions = tuple(f"K{i}" for i in range(1, 9))
+    total = sum(getattr(g, k) for k in fractions) if len(g) else np.zeros(0)
+    bad = np.nonzero((g.type == IEEEG1) & (total <= 0))[0]
+    if bad.size:
+        what = "IEEEG1 power fractions K1..K8 must sum to > 0 (no power reaches the shaft)"
+        g._fail(bad[0], "K1", f"{what}, got {total[bad[0]]:g}", fields=fractions, rule=what)
+
+
+def governor_params(case: Case) -> GovernorParams:
+    """Governor parameters (the table refused the types and options stabctl does not
+    model as it was made, `check_table`).
+
+    Raises CaseError (tg_con row, field) for a cross-compound IEEEG1 whose LP machine is
+    unknown, its own or governed by another."""
+    g = case.governors
     K = np.column_stack([g.K1 + g.K2, g.K3 + g.K4, g.K5 + g.K6, g.K7 + g.K8]).reshape(len(g), 4)
-    bad = np.nonzero((g.type == IEEEG1) & (K.sum(axis=1) <= 0))[0]
     cross = (g.type == IEEEG1) & (g.machine2 != 0)
     K_hp = np.column_stack([g.K1, g.K3, g.K5, g.K7]).reshape(len(g), 4)
     K_lp = np.column_stack([g.K2, g.K4, g.K6, g.K8]).reshape(len(g), 4)
     mac2 = _lp_machines(case, g, cross)
     mac = np.array([case.machine_index(m) for m in g.machine], int)
     mva = case.machines.mva
-    if bad.size:
-        raise CaseError(
-            f"tg_con row {bad[0] + 1}, fields 'K1'..'K8': IEEEG1 power fractions must sum to > 0"
-        )
     hy = (g.type == HYGOV) | (g.type == HYGOV4)
     return GovernorParams(
         kind=g.type.astype(int),

@@ -23,9 +23,10 @@ if TYPE_CHECKING:
 
 HYGOV = 4
 KINDS = {HYGOV: "HYGOV"}
-#: HYGOV's temporary droop r > 0 (the desired gate is e/r) and its filter time constant
-#: T_r >= 0 (PSS/E Model Library HYGOV)
-LIMITS = Limits("PSS/E Model Library HYGOV", positive=("rt",), nonnegative=("T3",))
+#: HYGOV's temporary droop r > 0 (the desired gate is e/r), its turbine gain A_t > 0 (the
+#: start-up flow is P_m0/A_t + q_NL) and its filter time constant T_r >= 0 (PSS/E Model
+#: Library HYGOV)
+LIMITS = Limits("PSS/E Model Library HYGOV", positive=("rt", "At"), nonnegative=("T3",))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields: T_g, T_f, T_w)
 NEEDS = ("Ts", "Tc", "T4")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

@@ -28,7 +28,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.errors import CaseError
 from stabctl.models.blocks import LBND
 from stabctl.models.declaration import (
     Declared,
@@ -228,24 +227,40 @@ class PssParams(Declared):
 check_packed(PssParams, PACKED, (*(f"fa_{i}" for i in range(4)), *(f"fc_{i}" for i in range(4))))
 
 
-def pss_params(case: Case) -> PssParams:
-    """PSS parameters of a case.
+def check_table(s) -> None:
+    """Refuse a pss_con row stabctl does not model, as the table is made (CaseError naming
+    the row and field, the table's `_fail`): a type of :data:`NEEDS_TW` (the PSS/E types
+    3-7) whose washout is below 1e-3 s, or a row its type module's ``check`` refuses: a
+    PST pss (types 1, 2) whose first lead-lag has no lag (T_2 below 1e-3 s; PST has no
+    such case); a type-3 or PSS2 lead-lag with a lead but no lag, an input code other
+    than 1 (speed) or 3 (power); an improper type-3 filter (A6 without a second-order
+    denominator); a PSS2 ramp-tracking filter with N > 0 and M = 0, M N > 8 or T9 below
+    1e-3 s.
 
-    Raises CaseError (pss_con row, field) for a type of :data:`NEEDS_TW` (the PSS/E
-    types 3-7) whose washout is below 1e-3 s, or a row its type module's ``check``
-    refuses: a PST pss (types 1, 2) whose first lead-lag has no lag (T_2 below 1e-3 s;
-    PST has no such case); a type-3 or PSS2 lead-lag with a lead but no lag, an input
-    code other than 1 (speed) or 3 (power); an improper type-3 filter (A6 without a
-    second-order denominator); a PSS2 ramp-tracking filter with N > 0 and M = 0, M N > 8
-    or T9 below 1e-3 s."""
-    s = case.pss
+    Parameters
+    ----------
+    s : stabctl.case.PssTable
+        The table being made.
+
+    Raises
+    ------
+    CaseError
+        For the first such row.
+    """
     for r in range(len(s)):
         kind = int(s.type[r])
         if kind in NEEDS_TW and s.Tw[r] < LBND:
-            raise CaseError(f"pss_con row {r + 1}, field 'Tw': washout needs Tw >= {LBND} s")
+            what = f"washout needs Tw >= {LBND} s"
+            s._fail(r, "Tw", f"{what}, got {s.Tw[r]:g}", rule=what)
         problem = TYPES[kind].check(s, r)
         if problem:
-            raise CaseError(f"pss_con row {r + 1}, {problem}")
+            s._refuse(r, problem)
+
+
+def pss_params(case: Case) -> PssParams:
+    """PSS parameters of a case (the table refused the types and options stabctl does not
+    model as it was made, `check_table`)."""
+    s = case.pss
     nf, fa, fc, fe = ieeest.filters(s)
     e = np.isin(s.type, PSSE_INPUTS)
     limited = np.isin(s.type, INPUT_LIMITED)

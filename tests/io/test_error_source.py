@@ -1,0 +1,353 @@
+"""Bad dynamic data is refused by an import naming where the user wrote it: the DYR record
+(``file:line MODEL (bus B, id I)``), the ANDES device (``file: MODEL row R (idx I)``) or
+the case file, with the parameter(s) as that format names them and their values as
+written (exit status 2, one ``error:`` line, nothing written).  The values a run's model
+cannot take are refused there, at import, not first by ``simulate``.
+
+Sources of the limits: the PSS/E Model Library (GENROU X'd >= X''d; SEXS, IEEEST, IEEEG1
+upper limits at or above their lower; HYGOV At, the turbine gain its start-up flow
+divides by; PSS2A's ramp-tracking filter M N <= 8; the stabiliser input codes 0 to 6),
+IEEE Std 421.5 (the exciters' saturation points and rate feedback), and stabctl's own
+modelling floor of 1e-3 s for a lag its model needs (`stabctl.models.blocks.LBND`).
+"""
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from stabctl.cli import main
+from stabctl.errors import CaseError
+from stabctl.io import load_case
+
+RAW = Path(__file__).parents[1] / "data" / "psse" / "smib_v33.raw"
+
+#: a valid record of each model used (PSS/E Model Library parameter order)
+RECORDS = {
+    "GENROU": (
+        "T'do T''do T'qo T''qo H D Xd Xq X'd X'q X''d Xl S10 S12",
+        "4.6385 0.0626 0.4384 0.0541 6.5385 0 1.8689 1.7795 0.2426 0.2884 0.1508 0.1158 "
+        "0.1152 0.441",
+    ),
+    "SEXS": ("TA/TB TB K TE EMIN EMAX", "0.1 10 100 0.05 -5 5"),
+    "IEEET1": (
+        "TR KA TA VRMAX VRMIN KE TE KF TF Switch E1 SE1 E2 SE2",
+        "0 50 0.04 5 -5 1 0.5 0.05 1 0 2.8 0.04 3.73 0.33",
+    ),
+    "EXST1": (
+        "TR VIMAX VIMIN TC TB KA TA VRMAX VRMIN KC KF TF",
+        "0.02 0.2 -0.2 1 10 200 0.02 5 -5 0.05 0 1",
+    ),
+    "EXAC1": (
+        "TR TB TC KA TA VRMAX VRMIN TE KF TF KC KD KE E1 SE1 E2 SE2",
+        "0 0 0 400 0.02 9 -5 0.8 0.03 1 0.2 0.48 1 3.14 0.03 4.18 0.1",
+    ),
+    "TGOV1": ("R T1 VMAX VMIN T2 T3 Dt", "0.05 0.5 1.0 0.0 2.1 7.0 0.0"),
+    "IEEEG1": (
+        "JBUS M K T1 T2 T3 Uo Uc PMAX PMIN T4 K1 K2 T5 K3 K4 T6 K5 K6 T7 K7 K8",
+        "0 0 20 0 0 0.1 1 -1 1 0 0.3 0.3 0 7 0.4 0 0.6 0.3 0 0 0 0",
+    ),
+    "HYGOV": (
+        "R r Tr Tf Tg VELM GMAX GMIN TW At Dturb qNL",
+        "0.05 0.3 5 0.05 0.5 0.2 1 0 1 1.2 0.5 0.08",
+    ),
+    "GAST": ("R T1 T2 T3 AT KT VMAX VMIN Dturb", "0.05 0.4 0.1 3 1 2 1 0 0"),
+    "STAB1": ("K/T T T1/T3 T3 T2/T4 T4 HLIM", "20 10 1 0.05 1 0.05 0.1"),
+    "IEEEST": (
+        "ICS IB A1 A2 A3 A4 A5 A6 T1 T2 T3 T4 T5 T6 KS LSMAX LSMIN VCU VCL",
+        "1 0 0 0 0 0 0 0 0.1 0.02 0.2 0.02 10 10 1 0.1 -0.1 0 0",
+    ),
+    "PSS2A": (
+        "ICS1 IB1 ICS2 IB2 M N TW1 TW2 T6 TW3 TW4 T7 KS2 KS3 T8 T9 KS1 T1 T2 T3 T4 VSTMAX VSTMIN",
+        "1 0 3 0 5 1 10 10 0 10 0 10 1.13 1 0.3 0.15 20 0.15 0.03 0.15 0.03 0.1 -0.1",
+    ),
+}
+#: PSS/E's infinite bus at the SMIB case's bus 2 (GENCLS H = 0)
+INFINITE = "    2 'GENCLS' 1 0.0 0.0 /"
+
+
+def record(model: str, changes=None, bus: int = 1) -> str:
+    """A DYR record of `model` at `bus`, id 1: its valid values but `changes` (parameter
+    name -> value)."""
+    names, values = (part.split() for part in RECORDS[model])
+    given = dict(zip(names, values))
+    for name, value in (changes or {}).items():
+        assert name in given, name
+        given[name] = str(value)
+    return f"    {bus} '{model}' 1 " + " ".join(given[n] for n in names) + " /"
+
+
+def imported(tmp_path, lines, *options):
+    """import-psse of the SMIB RAW file with a DYR of `lines` (line 1 the machine, line
+    2 the infinite bus): (the CliRunner result, the DYR file, the case file to write)."""
+    dyr = tmp_path / "bad.dyr"
+    dyr.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "bad.json"
+    res = CliRunner().invoke(main, ["import-psse", str(RAW), str(dyr), "-o", str(out), *options])
+    return res, dyr, out
+
+
+def error_line(res) -> str:
+    """The one ``error:`` line of a refused command."""
+    errors = [line for line in res.output.splitlines() if line.startswith("error:")]
+    assert res.exit_code == 2 and len(errors) == 1, res.output
+    return errors[0]
+
+
+@pytest.mark.parametrize(
+    "machine, controls, expected",
+    [
+        # values the tables refused naming their own row and field (mac_con xdp, exc_con
+        # Vrmax for SEXS's EMAX, TC for TA/TB, tg_con Uo for HYGOV's VELM, Ts for TGOV1's T1)
+        (
+            record("GENROU", {"X''d": 0.3}),
+            [],
+            "bad.dyr:1 GENROU (bus 1, id 1): X'd = 0.2426, X''d = 0.3: x'd must be >= x\"d",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS", {"EMIN": 5, "EMAX": -5})],
+            "bad.dyr:3 SEXS (bus 1, id 1): EMAX = -5, EMIN = 5: the upper limit must be >= "
+            "the lower (exciter type 0",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS", {"TE": -0.05})],
+            "bad.dyr:3 SEXS (bus 1, id 1): TE = -0.05: must be >= 0",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS", {"TA/TB": -0.1})],
+            "bad.dyr:3 SEXS (bus 1, id 1): TA/TB = -0.1, TB = 10 (giving exc_con 'TC' = -1): "
+            "must be >= 0",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("HYGOV", {"VELM": -0.2})],
+            "bad.dyr:4 HYGOV (bus 1, id 1): VELM = -0.2: must be >= 0",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("TGOV1", {"T1": -0.5})],
+            "bad.dyr:4 TGOV1 (bus 1, id 1): T1 = -0.5: must be >= 0",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("STAB1", {"T3": -0.05})],
+            "bad.dyr:4 STAB1 (bus 1, id 1): T1/T3 = 1, T3 = -0.05: must be >= 0",
+        ),
+        (
+            record("GENROU"),
+            [record("IEEET1"), record("IEEEST", {"LSMAX": -0.1, "LSMIN": 0.1})],
+            "bad.dyr:4 IEEEST (bus 1, id 1): LSMAX = -0.1, LSMIN = 0.1: the upper limit must "
+            "be >= the lower",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("IEEEG1", {"PMAX": 0, "PMIN": 1})],
+            "bad.dyr:4 IEEEG1 (bus 1, id 1): PMAX = 0, PMIN = 1: the upper limit must be >= "
+            "the lower",
+        ),
+        # values simulate refused at its set-up after the import wrote them
+        (
+            record("GENROU"),
+            [record("IEEET1", {"TE": 0})],
+            "bad.dyr:3 IEEET1 (bus 1, id 1): TE = 0: exciter type 1 needs TE >= 0.001 s",
+        ),
+        (
+            record("GENROU"),
+            [record("IEEET1", {"TF": 0})],
+            "bad.dyr:3 IEEET1 (bus 1, id 1): TF = 0: exciter type 1 needs TF >= 0.001 s",
+        ),
+        (
+            record("GENROU"),
+            [record("EXST1", {"KF": 0.1, "TF": 0})],
+            "bad.dyr:3 EXST1 (bus 1, id 1): TF = 0, KF = 0.1: exciter type 4 needs TF >= "
+            "0.001 s where KF != 0",
+        ),
+        (
+            record("GENROU"),
+            [record("EXAC1", {"TE": 0})],
+            "bad.dyr:3 EXAC1 (bus 1, id 1): TE = 0: exciter type",
+        ),
+        (
+            record("GENROU"),
+            [record("EXAC1", {"E1": 4.18, "SE1": 0.3})],
+            "bad.dyr:3 EXAC1 (bus 1, id 1): E1 = 4.18, SE(E1) = 0.3, E2 = 4.18, SE(E2) = 0.1: ",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("TGOV1", {"T3": 0})],
+            "bad.dyr:4 TGOV1 (bus 1, id 1): T3 = 0: must be >= 0.001 s for governor type 2",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("IEEEG1", {"T3": 0})],
+            "bad.dyr:4 IEEEG1 (bus 1, id 1): T3 = 0: must be >= 0.001 s for governor type 3",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("IEEEG1", {"K1": 0, "K3": 0, "K5": 0})],
+            "bad.dyr:4 IEEEG1 (bus 1, id 1): K1 = 0, K2 = 0, K3 = 0, K4 = 0, K5 = 0, K6 = 0, "
+            "K7 = 0, K8 = 0: IEEEG1 power fractions K1..K8 must sum to > 0",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("GAST", {"T1": 0})],
+            "bad.dyr:4 GAST (bus 1, id 1): T1 = 0: must be >= 0.001 s for governor type 6",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("HYGOV", {"At": 0})],
+            "bad.dyr:4 HYGOV (bus 1, id 1): At = 0: must be > 0 (governor type 4, HYGOV",
+        ),
+        (
+            record("GENROU"),
+            [record("SEXS"), record("TGOV1", bus=2)],
+            "bad.dyr:4 TGOV1 (bus 2, id 1): tg_con 'machine' = 2: machine 2 is an infinite bus",
+        ),
+        (
+            record("GENROU"),
+            [record("IEEET1"), record("PSS2A", {"M": 9, "N": 9})],
+            "bad.dyr:4 PSS2A (bus 1, id 1): M = 9, N = 9, T9 = 0.15: a ramp-tracking filter "
+            "(N = 9) needs 1 <= M, M N <= 8",
+        ),
+    ],
+)
+def test_a_dyr_value_is_refused_naming_its_record_and_parameters(
+    tmp_path, machine, controls, expected
+):
+    """One error line naming file:line, model, bus and id, then the DYR parameters (as
+    the PSS/E Model Library names them) with their values as written; nothing written."""
+    res, _, out = imported(tmp_path, [machine, INFINITE, *controls])
+    line = error_line(res)
+    assert line.startswith(f"error: {expected}"), line
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("code", ["7", "2.5", "-1"])
+@pytest.mark.parametrize("skip", [(), ("--skip-unsupported",)])
+def test_a_stabiliser_input_code_that_is_none_is_invalid_not_unsupported(tmp_path, code, skip):
+    """IEEEST ICS 7 or 2.5 is no PSS/E input code (0 to 6): invalid data, named with the
+    codes there are, refused even with --skip-unsupported, which it does not suggest."""
+    lines = [record("GENROU"), INFINITE, record("IEEET1"), record("IEEEST", {"ICS": code})]
+    res, _, out = imported(tmp_path, lines, *skip)
+    line = error_line(res)
+    assert line.startswith(
+        f"error: bad.dyr:4 IEEEST (bus 1, id 1): ICS = {code}: not a PSS/E input code (an "
+        "integer 0 to 6: 0 none, 1 rotor speed deviation,"
+    ), line
+    assert "--skip-unsupported" not in res.output and not out.exists()
+
+
+def test_a_supported_input_code_of_an_unmodelled_signal_stays_unsupported(tmp_path):
+    """ICS 2 (bus frequency) is a PSS/E input code stabctl does not model: unsupported,
+    left out by --skip-unsupported."""
+    lines = [record("GENROU"), INFINITE, record("IEEET1"), record("IEEEST", {"ICS": 2})]
+    res, _, out = imported(tmp_path, lines)
+    assert "unsupported record" in error_line(res) and "--skip-unsupported" in res.output
+    res, _, out = imported(tmp_path, lines, "--skip-unsupported")
+    assert res.exit_code == 0 and out.exists(), res.output
+
+
+@pytest.mark.parametrize(
+    "table, column, value, fields, expected",
+    [
+        # simulate refused these at its set-up, without naming the case file
+        (
+            "governors",
+            "Ts",
+            0,
+            ("Ts",),
+            "tg_con row 1 (machine 1), field 'Ts': must be >= 0.001 s for governor type 2, got 0",
+        ),
+        (
+            "pss",
+            "machine",
+            2,
+            ("machine",),
+            "pss_con row 1 (machine 2), field 'machine': machine 2 has no exciter (exc_con) "
+            "for the PSS output",
+        ),
+        (
+            "governors",
+            "machine",
+            2,
+            ("machine",),
+            "tg_con row 1 (machine 2), field 'machine': machine 2 is an infinite bus",
+        ),
+    ],
+)
+def test_a_case_json_value_a_run_refuses_is_refused_naming_the_case_file(
+    tmp_path, table, column, value, fields, expected
+):
+    """A case file (SEXS, TGOV1, STAB1 on the SMIB machine) with a value a run cannot
+    take: refused as it is loaded, naming the file, table, row and field."""
+    lines = [record("GENROU"), INFINITE, record("SEXS"), record("TGOV1"), record("STAB1")]
+    res, _, out = imported(tmp_path, lines)
+    assert res.exit_code == 0, res.output
+    data = json.loads(out.read_text())
+    rows = data["tables"][table]
+    rows["rows"][0][rows["columns"].index(column)] = value
+    bad = tmp_path / "bad_case.json"
+    bad.write_text(json.dumps(data))
+    with pytest.raises(CaseError) as err:
+        load_case(bad)
+    assert (err.value.row, err.value.fields) == (0, fields)
+    res = CliRunner().invoke(main, ["simulate", str(bad), "--fault", "1", "--tf", "1.2"])
+    line = error_line(res)
+    assert line.startswith(f"error: {bad}: {expected}"), line
+
+
+def andes_edited(tmp_path, case: str, model: str, field: str, value):
+    """ANDES's case file as json with `field` of `model`'s first row set to `value`."""
+    andes = pytest.importorskip("andes")
+    pd = pytest.importorskip("pandas")
+    sheets = pd.read_excel(andes.get_case(case), sheet_name=None)
+    data = {
+        name: [
+            {k: v for k, v in row.items() if not (isinstance(v, float) and v != v)}
+            for row in rows.dropna(axis=0, how="all").to_dict("records")
+        ]
+        for name, rows in sheets.items()
+    }
+    data[model][0][field] = value
+    out = tmp_path / f"{model}_{field}.json"
+    out.write_text(json.dumps(data, default=str))
+    return out
+
+
+@pytest.mark.parametrize(
+    "case, model, field, value, expected",
+    [
+        # the table named its own column: ibr_con 'mva', 'pc_fdbd1', 'wq_Twref', 'dbd1'
+        ("ieee14/ieee14_wt3.xlsx", "REGCA1", "Sn", -100, r"Sn = -100: must be >= 0"),
+        ("ieee14/ieee14_wt3.xlsx", "REECA1", "dbd1", 0.05, r"dbd1 = 0.05: must be <= 0"),
+        ("ieee14/ieee14_wt3.xlsx", "REPCA1", "fdbd1", 0.05, r"fdbd1 = 0.05: must be <= 0"),
+        ("ieee14/ieee14_wt3.xlsx", "WTTQA1", "Twref", -30, r"Twref = -30: must be >= 0"),
+        # simulate refused them at set-up after the import wrote them
+        ("ieee14/ieee14_wt3.xlsx", "REPCA1", "Tp", 0, r"Tp = 0: must be >= 0.001 s \(a lag"),
+        ("ieee14/ieee14_pvd1.xlsx", "PVD1", "tiq", 0, r"tiq = 0: must be >= 0.001 s \(a lag"),
+        # a link to a device the case lacks
+        (
+            "ieee14/ieee14_esd1.xlsx",
+            "ESD1",
+            "gen",
+            99,
+            r"gen = 99: its static generator is no PV or Slack of the case",
+        ),
+    ],
+)
+def test_an_andes_value_is_refused_naming_file_model_row_idx_and_parameter(
+    tmp_path, case, model, field, value, expected
+):
+    """One error line naming the case file, the ANDES model (its sheet or json key), the
+    row and idx of the device and ANDES's parameter name with its value as given."""
+    path = andes_edited(tmp_path, case, model, field, value)
+    out = tmp_path / "a.json"
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(out)])
+    line = error_line(res)
+    assert re.fullmatch(rf"error: {path.name}: {model} row 1 \(idx [^)]+\): {expected}.*", line)
+    assert not out.exists()
