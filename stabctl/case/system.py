@@ -45,7 +45,7 @@ from stabctl.case.events import events_of_records
 from stabctl.errors import CaseError, UnknownBusError
 from stabctl.models.converters import CONVERTER
 from stabctl.models.converters.rules import COMPONENTS
-from stabctl.models.declaration import Family, array_dataclass, choices_message
+from stabctl.models.declaration import LEAD_LAG_MIN, Family, array_dataclass, choices_message
 from stabctl.models.exciters import EXCITER, SATURATED_EXCITERS
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
@@ -331,6 +331,16 @@ class Table:
                     bad = np.flatnonzero(rows & (v != 1))
                     if bad.size:
                         self._fail(bad[0], name, f"must be 1 ({tail}), got {_fmt(v[bad[0]])}", col)
+                for lead, lag in lim.leads:
+                    (a, col), (b, _) = self._named(lead), self._named(lag)
+                    bad = np.flatnonzero(rows & (a != 0) & (b < LEAD_LAG_MIN))
+                    if bad.size:
+                        r = bad[0]
+                        what = (
+                            f"must be 0 where {lag} = {_fmt(b[r])} (below {LEAD_LAG_MIN:g} s: no "
+                            f"lag, the lead-lag bypassed) ({tail}), got {_fmt(a[r])}"
+                        )
+                        self._fail(r, lead, what, col)
 
     def _check(self):
         """Table-local validation (subclasses)."""
