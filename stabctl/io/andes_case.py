@@ -758,8 +758,9 @@ def _default_text(m, p) -> str:
 
 def _check_finders(where: str, m, row: dict, ss) -> None:
     """CaseError for a row naming a device its model finds by idx (ANDES's
-    ``DeviceFinder``: a PVD1's, ESD1's or REPCA1's ``busf``, a BusFreq) that the case
-    does not hold: ANDES would add one with its defaults at the device's bus instead."""
+    ``DeviceFinder``: a PVD1's, ESD1's or REPCA1's ``busf``, a frequency measurement)
+    that the case does not hold: ANDES would add a BusFreq with its defaults at the
+    device's bus instead."""
     from andes.core.service import DeviceFinder
 
     for svc in vars(m).values():  # ANDES keeps its DeviceFinder services as attributes
@@ -769,11 +770,15 @@ def _check_finders(where: str, m, row: dict, ss) -> None:
         v = row.get(name)
         if v is None or (isinstance(v, float) and v != v):
             continue  # none named: ANDES finds or adds one at the bus, as documented
-        target = ss.models.get(svc.default_model)
-        if target is None or v not in target.idx.v:
+        # ANDES looks it up in the parameter's model or group (busf: any FreqMeasurement)
+        if svc.model in ss.models:
+            known = ss.models[svc.model].idx.v
+        else:
+            known = ss.groups[svc.model].get_all_idxes()
+        if v not in known:
             raise CaseError(
-                f"{where}: {name} = {v!r}: no {svc.default_model} of that idx in the case "
-                f"(ANDES would add one with its defaults at the device's bus instead)"
+                f"{where}: {name} = {v!r}: no {svc.model} of that idx in the case (ANDES "
+                f"would add a {svc.default_model} with its defaults at the device's bus instead)"
             )
 
 
