@@ -50,7 +50,7 @@ from stabctl.models import governors as _governors
 from stabctl.models import pss as _pss
 from stabctl.models.converters import CONVERTER
 from stabctl.models.converters.rules import COMPONENTS
-from stabctl.models.declaration import Family, array_dataclass, choices_message
+from stabctl.models.declaration import LEAD_LAG_MIN, Family, array_dataclass, choices_message
 from stabctl.models.exciters import EXCITER, SATURATED_EXCITERS
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
@@ -397,6 +397,20 @@ class Table:
                     if bad.size:
                         what = f"must be 1 ({tail})"
                         self._fail(bad[0], name, f"{what}, got {_fmt(v[bad[0]])}", col, rule=what)
+                for lead, lag in lim.leads:
+                    (a, col), (b, _) = self._named(lead), self._named(lag)
+                    bad = np.flatnonzero(rows & (a != 0) & (b < LEAD_LAG_MIN))
+                    if bad.size:
+                        r = bad[0]
+                        rule = (
+                            f"{lead} must be 0 where {lag} is below {LEAD_LAG_MIN:g} s (no lag: "
+                            f"the lead-lag bypassed) ({tail})"
+                        )
+                        what = (
+                            f"must be 0 where {lag} = {_fmt(b[r])} (below {LEAD_LAG_MIN:g} s: no "
+                            f"lag, the lead-lag bypassed) ({tail}), got {_fmt(a[r])}"
+                        )
+                        self._fail(r, lead, what, col, fields=(lead, lag), rule=rule)
 
     def _check(self):
         """Table-local validation (subclasses)."""
@@ -1110,11 +1124,15 @@ class ConverterTable(Table):
         dqdv < 0, and each component's rules
         (:data:`stabctl.models.converters.rules.RULES`, the same that ``import-andes`` checks
         in an ANDES file: PVD1, ESD1 ialim > 0; ESD1 En, Tf, EtaC, EtaD > 0 and 0 <= SOCmin <
-        SOCmax <= 1, SOCinit between them (a REGCA1 battery's too); REGCA1 Lvpnt0 < Lvpnt1,
-        (Lvplsw 1) Zerox < Brkpt (the piecewise gains divide by the differences), Iqrmin <= 0
-        <= Iqrmax; its REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup), and what a
-        run's models refuse (:func:`stabctl.models.converters.check_table`: a lag below
-        1e-3 s, a control on a device it cannot drive, ...).
+        SOCmax <= 1, SOCinit between them (a REGCA1 battery's too), EtaC, EtaD <= 1; PVD1,
+        ESD1 qmx >= qmn, v0 <= v1, pmx >= 0; REGCA1 Lvpnt0 < Lvpnt1, (Lvplsw 1) Zerox <
+        Brkpt (the piecewise gains divide by the differences), Iqrmin <= 0 <= Iqrmax; its
+        REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup, limit pairs upper >= lower,
+        dPmin <= 0 <= dPmax; its REPCA1's limit pairs, pc_Kc, pc_Vfrz >= 0; its wind
+        turbine's damping >= 0, wt_Freq1, wt_w0 > 0, pitch and torque limit pairs, rising
+        power points wq_p1..wq_p4, the initial pitch wa_theta0 within [wp_thmin, wp_thmax]),
+        and what a run's models refuse (:func:`stabctl.models.converters.check_table`: a
+        lag below 1e-3 s, a control on a device it cannot drive, ...).
     """
 
     def _check(self):

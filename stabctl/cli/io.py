@@ -516,7 +516,7 @@ def import_andes(
         ("left out", imported.left_out),
         ("changed", imported.changed),
         ("kept as the file gives, unlike ANDES", imported.unlike_andes),
-        ("not in the file, ANDES's default", imported.defaulted),
+        ("not given in the file, run at ANDES's", imported.defaulted),
     ):
         for item in items:
             click.echo(f"  {what}: {item}")

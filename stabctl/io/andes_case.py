@@ -251,8 +251,10 @@ class AndesImport:
     defaulted : tuple of str
         Converter, plant-control, wind and battery parameters, and those of the machines
         and their controls, that an xlsx or json case file leaves out (no column, an empty
-        cell, NaN), run with ANDES's default: ``"MODEL NAME = default (rows ...)"`` per
-        model and parameter (`_file_inputs`).
+        cell, NaN), run with ANDES's default: ``"MODEL NAME = default (rows ...: how)"``
+        per model, parameter and how the file leaves it out ("not in the file", "empty in
+        the file", "NaN in the file"); a default that is no number is what ANDES uses
+        instead, its ``NumSelect`` fallback (``REPCA1 Rc = r, ...``) (`_file_inputs`).
     data_solution : numpy.ndarray or None
         The RAW file's own power-flow solution, shape (n, 3): bus number, VM (pu), VA
         (degrees) (ANDES's ``Bus.v0``, ``a0``); None unless the case is a PSS/E RAW.
@@ -671,7 +673,7 @@ def _file_inputs(path: Path, ss) -> _Given:
     r and x) are not parameters of the file."""
     from andes.core.param import ExtParam, NumParam
 
-    missing: dict[tuple[str, str, str], list[int]] = {}
+    missing: dict[tuple[str, str, str, str], list[int]] = {}
     given = _Given([], [], [])
     for sheet, rows in _input_rows(path).items():
         if sheet == "_config":  # ANDES's settings, in the files it writes
@@ -694,6 +696,8 @@ def _file_inputs(path: Path, ss) -> _Given:
         for k, row in enumerate(rows, start=1):
             where = f"{path.name}: {sheet} row {k} (idx {row.get('idx')})"
             _check_row(where, model, row)
+            if dynamic or model in _CONVERTER_FAMILY:
+                _check_finders(where, m, row, ss)
             values = {}
             for name, p in m.params.items():
                 if not isinstance(p, NumParam) or isinstance(p, ExtParam):
@@ -713,7 +717,8 @@ def _file_inputs(path: Path, ss) -> _Given:
                         why = f"{name} left empty, run at ANDES's default {p.default!r}"
                         given.changed.append((sheet, str(row.get("idx")), f"{why} ({_must(p)})"))
                     elif dynamic or model in _CONVERTER_FAMILY:
-                        missing.setdefault((model, name, repr(p.default)), []).append(k)
+                        key = (model, name, _default_text(m, p), _how_left_out(path, row, name))
+                        missing.setdefault(key, []).append(k)
                     continue
                 if not number:
                     continue  # text: ANDES's own reading names it
@@ -730,10 +735,63 @@ def _file_inputs(path: Path, ss) -> _Given:
                     raise CaseError(f"{where}: {shown}: it must be {law.what}")
             _check_limits(where, model, values)
     given.defaulted.extend(
-        f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)})"
-        for (model, name, default), rows in missing.items()
+        f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)}: {how})"
+        for (model, name, default, how), rows in missing.items()
     )
     return given
+
+
+def _how_left_out(path: Path, row: dict, name: str) -> str:
+    """How a case file's row leaves parameter ``name`` out, for the summary: no such key
+    or column, an empty cell (xlsx: pandas reads it as NaN) or JSON null, a JSON NaN."""
+    if name not in row:
+        return "not in the file"
+    v = row[name]
+    if path.suffix.lower() == ".json" and isinstance(v, float) and v != v:
+        return "NaN in the file"
+    return "empty in the file"
+
+
+def _default_text(m, p) -> str:
+    """What ANDES runs parameter ``p`` of model ``m`` at where a file leaves it out: its
+    default, or where that is no number (None, NaN) the value its ``NumSelect`` takes
+    instead (REPCA1's Rc: its line's r; WTTQA1's Tn: its generator's Sn)."""
+    from andes.core.service import NumSelect
+
+    d = p.default
+    if d is not None and not (isinstance(d, float) and d != d):
+        return repr(d)
+    for svc in vars(m).values():  # ANDES keeps its NumSelect services as attributes
+        if isinstance(svc, NumSelect) and svc.optional is p:
+            fallback = getattr(svc.fallback, "name", svc.fallback)
+            return f"{fallback}, ANDES's value where {p.name} is not given ({svc.info})"
+    return f"{d!r}, unset"
+
+
+def _check_finders(where: str, m, row: dict, ss) -> None:
+    """CaseError for a row naming a device its model finds by idx (ANDES's
+    ``DeviceFinder``: a PVD1's, ESD1's or REPCA1's ``busf``, a frequency measurement)
+    that the case does not hold: ANDES would add a BusFreq with its defaults at the
+    device's bus instead."""
+    from andes.core.service import DeviceFinder
+
+    for svc in vars(m).values():  # ANDES keeps its DeviceFinder services as attributes
+        if not isinstance(svc, DeviceFinder):
+            continue
+        name = svc.u.name
+        v = row.get(name)
+        if v is None or (isinstance(v, float) and v != v):
+            continue  # none named: ANDES finds or adds one at the bus, as documented
+        # ANDES looks it up in the parameter's model or group (busf: any FreqMeasurement)
+        if svc.model in ss.models:
+            known = ss.models[svc.model].idx.v
+        else:
+            known = ss.groups[svc.model].get_all_idxes()
+        if v not in known:
+            raise CaseError(
+                f"{where}: {name} = {v!r}: no {svc.model} of that idx in the case (ANDES "
+                f"would add a {svc.default_model} with its defaults at the device's bus instead)"
+            )
 
 
 def _check_row(where: str, model: str, row: dict) -> None:
@@ -1318,8 +1376,10 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
             return f"its angle comes from PLL {m.pll.v[k]}: {why}"
     if regca1:
         return _electrical_control_refusal(ss, m.idx.v[k])
-    if ss.config.freq not in (m.fn.v[k], ss.BusFreq.fn.v[bf]):
-        return f"fn differs from the system frequency {ss.config.freq:g} Hz"
+    if m.fn.v[k] != ss.config.freq:  # fHz = fn f: its trip points, in Hz, read at fn
+        return f"fn = {m.fn.v[k]:g} Hz differs from the system frequency {ss.config.freq:g} Hz"
+    if ss.BusFreq.fn.v[bf] != ss.config.freq:
+        return f"its BusFreq's fn {ss.BusFreq.fn.v[bf]:g} Hz differs from the system frequency"
     if ss.BusFreq.Tw.v[bf] <= 0:
         return f"its BusFreq {m.busfreq.v[k]} has Tw = 0"
     return ""

@@ -825,6 +825,10 @@ def _scrx(rec, gen):
     v = DYR_MODELS["SCRX"].values(rec.params)
     if v["rc/rfd"] < 0:
         raise CaseError(f"{rec.label()}: rc/rfd = {v['rc/rfd']:g} must be >= 0")
+    if v["CSWITCH"] not in (0, 1):  # PSS/E Model Library SCRX: 0 bus fed, 1 solid fed
+        raise CaseError(
+            f"{rec.label()}: CSWITCH = {v['CSWITCH']:g} must be 0 (bus fed) or 1 (solid fed)"
+        )
     return _exc_row(rec, gen, TC=v["TA/TB"] * v["TB"], bus_fed=float(v["CSWITCH"] == 0))
 
 
@@ -852,13 +856,20 @@ def _scrx_andes(rec, gen):
 def _esst1a(rec, gen, andes=False, psse=False):
     """ESST1A: UEL VOS TR VIMAX VIMIN TC TB TC1 TB1 KA TA VAMAX VAMIN VRMAX VRMIN KC KF TF
     KLR ILR -> stabctl type 6 (columns as declared).  UEL, the under-excitation limiter's
-    input location, is free: no limiter model feeds it.  VOS = 2 (the stabiliser after
+    input location, is read for no limiter model feeds it, but must be one of PSS/E's
+    codes 1, 2, 3.  VOS = 2 (the stabiliser after
     V_A) is not modelled (only 1, at the voltage error); andes: ANDES 2.0's ``esst1a.py``
     adds the stabiliser at the voltage error whatever VOS, and so does stabctl.  psse:
     VOS = 2 adds it to the regulator output after V_A (exc_con column 20
     ``vos_after_va`` = 1, PSS/E Model Library; PowerSimulationsDynamics.jl's ESST1A
     ``Va_sum``), VOS other than 1, 2 refused."""
-    vos = DYR_MODELS["ESST1A"].values(rec.params)["VOS"]
+    v = DYR_MODELS["ESST1A"].values(rec.params)
+    vos = v["VOS"]
+    if v["UEL"] not in (1, 2, 3):  # PSS/E Model Library ESST1A ICON UEL; ANDES's UELc 1-3
+        raise CaseError(
+            f"{rec.label()}: UEL = {v['UEL']:g} must be 1, 2 or 3 (the under-excitation "
+            "limiter's input: the summing point, the HV gate, the LV gate)"
+        )
     if psse and vos == 2:
         return _exc_row(rec, gen, vos_after_va=1.0)
     if vos != 1 and not andes:

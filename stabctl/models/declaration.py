@@ -50,6 +50,7 @@ __all__ = [
     "Param",
     "DyrModel",
     "Limits",
+    "LEAD_LAG_MIN",
     "Family",
     "choices_message",
     "array_dataclass",
@@ -163,6 +164,11 @@ class DyrModel:  # fields of a dataclass: numpydoc ignore=PR02
         return dict(zip(self.fields, params))
 
 
+#: the lag time constant below which a lead-lag block is bypassed (`Limits.leads`; the
+#: kernels' ``stabctl.models.blocks.LBND``, s)
+LEAD_LAG_MIN = 1e-3
+
+
 @dataclass(frozen=True)
 class Limits:  # fields of a dataclass: numpydoc ignore=PR02
     """The values a model type's equations cannot take, refused by name when a case table
@@ -184,6 +190,10 @@ class Limits:  # fields of a dataclass: numpydoc ignore=PR02
         (upper, lower) pairs of limits: upper >= lower.
     one : tuple of str, optional
         Fields that must be 1 (a set point the model's start takes as 1).
+    leads : tuple of (str, str), optional
+        (lead, lag) time constants of a lead-lag (1 + s lead)/(1 + s lag): the lead must
+        be 0 where the lag is below `LEAD_LAG_MIN` (the block is then bypassed: a lead
+        without its lag is a derivative no lead-lag has).
     """
 
     source: str
@@ -191,10 +201,11 @@ class Limits:  # fields of a dataclass: numpydoc ignore=PR02
     positive: tuple[str, ...] = ()
     ordered: tuple[tuple[str, str], ...] = ()
     one: tuple[str, ...] = ()
+    leads: tuple[tuple[str, str], ...] = ()
 
     def names(self) -> tuple[str, ...]:
         """Every field the limits name, in their order."""
-        pairs = (n for pair in self.ordered for n in pair)
+        pairs = (n for pair in (*self.ordered, *self.leads) for n in pair)
         return (*self.nonnegative, *self.positive, *pairs, *self.one)
 
 

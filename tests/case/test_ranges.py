@@ -1,9 +1,10 @@
 """Physically impossible control-system, machine and bus data in a case is refused when
 the case is made, naming the table, the row, its machine or bus, the field, the value and
-the allowed range: a gain whose sign the model cannot have, an upper limit below its
-lower, a speed set point the start cannot honour, a saturation falling with the flux, a
-leakage reactance the machine's equations divide by, a negative rated voltage.  Every
-type's declared limits (`stabctl.models.declaration.Limits`) are checked here one by one."""
+the allowed range: a gain whose sign the model cannot have, a regulator gain of 0 the
+start divides by, a lead without its lag, an upper limit below its lower, a speed set
+point the start cannot honour, a saturation falling with the flux, a leakage reactance
+the machine's equations divide by, a negative rated voltage.  Every type's declared
+limits (`stabctl.models.declaration.Limits`) are checked here one by one."""
 
 import re
 
@@ -35,6 +36,16 @@ def _col(fam, name):
             dict(exc=modified(modified(EXC, 0, 7, -5.0), 0, 8, 5.0)),
             r"exc_con row 1 \(machine 1\), field 'Vrmax': must be >= Vrmin = 5 \(exciter "
             r"type 0, .*IEEE Std 421.5.*\), got -5",
+        ),
+        (  # V_ref = V_t + V_R0/K_A: a gain of 0 ran (IEEET1 KA 0, exit 0)
+            dict(exc=modified(EXC, 0, _col(EXCITER, "KA"), 0.0)),
+            r"exc_con row 1 \(machine 1\), field 'KA': must be > 0 \(exciter type 0, .*"
+            r"V_R0/K_A\), got 0",
+        ),
+        (  # smpexc bypasses its lead-lag without T_B: T_C = 0, 1, 5 ran alike
+            dict(exc=modified(EXC, 0, _col(EXCITER, "TC"), 5.0)),
+            r"exc_con row 1 \(machine 1\), field 'TC': must be 0 where TB = 0 \(below "
+            r"0.001 s: no lag, the lead-lag bypassed\) \(exciter type 0, .*SEXS.*\), got 5",
         ),
         (
             dict(tg=modified(TG, 0, _col(GOVERNOR, "invR"), -25.0)),
@@ -130,6 +141,8 @@ def _breaking(fam):
                 yield kind, {hi: -1.0, lo: 1.0}, hi, rf"must be >= {lo} = 1 \(", lim.source
             for name in lim.one:
                 yield kind, {name: 0.0}, name, r"must be 1 \(", lim.source
+            for lead, lag in lim.leads:
+                yield kind, {lead: 1.0, lag: 0.0}, lead, rf"must be 0 where {lag} = 0 ", lim.source
 
 
 @pytest.mark.parametrize(

@@ -8,6 +8,7 @@ states what the written case holds."""
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,12 +16,15 @@ from click.testing import CliRunner
 
 from stabctl.cli import main
 from stabctl.dynamics.driver import Simulator
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, InputError
 from stabctl.io import load_case
 from stabctl.io.andes_case import read_andes_case
 
 andes = pytest.importorskip("andes")
 pd = pytest.importorskip("pandas")
+
+
+WT3, ESD1, PVD1 = "ieee14/ieee14_wt3.xlsx", "ieee14/ieee14_esd1.xlsx", "ieee14/ieee14_pvd1.xlsx"
 
 
 def edited(tmp_path, case: str, model: str, **values):
@@ -71,6 +75,38 @@ def edited(tmp_path, case: str, model: str, **values):
             {"Iqrmax": -999.0},
             "Iqrmax = -999, Iqrmin = -999: it must be Iqrmin <= 0 <= Iqrmax",
         ),
+        # limit pairs out of order, rates excluding the rest rate 0, a lag of 0, a negative
+        # droop, no shaft, an efficiency above 1, a flag or frequency out of its range:
+        # each imported and ran without a word
+        (
+            WT3,
+            "REECA1",
+            {"QMax": -1000.0},
+            "QMax = -1000, QMin = -999: it must be QMax >= QMin (the limits of the Q reference)",
+        ),
+        (WT3, "REECA1", {"Iqh1": -1000.0}, "Iqh1 = -1000, Iql1 = -999: it must be Iqh1 >= Iql1"),
+        (WT3, "REECA1", {"dPmax": -1000.0}, "it must be dPmin <= 0 <= dPmax"),
+        (WT3, "REECA1", {"Tpord": 0.0}, "Tpord = 0: it must be Tpord >= 0.001 s"),
+        (WT3, "REPCA1", {"emax": -1000.0}, "emax = -1000, emin = -999: it must be emax >= emin"),
+        (WT3, "REPCA1", {"Kc": -1.0}, "Kc = -1: it must be Kc >= 0 (a reactive droop gain)"),
+        (WT3, "WTDTA1", {"Dshaft": -1.0}, "Dshaft = -1: it must be Dshaft >= 0"),
+        (WT3, "WTDTA1", {"Freq1": 0.0}, "Freq1 = 0: it must be Freq1 > 0"),
+        (WT3, "WTDTA1", {"w0": 0.0}, "w0 = 0: it must be w0 > 0"),
+        (WT3, "WTPTA1", {"thmax": -10.0}, "thmax = -10, thmin = 0: it must be thmax >= thmin"),
+        (WT3, "WTPTA1", {"Tp": 0.0}, "Tp = 0: it must be Tp >= 0.001 s"),
+        (WT3, "WTTQA1", {"Temax": -1.0}, "Temax = -1, Temin = 0: it must be Temax >= Temin"),
+        (
+            WT3,
+            "WTTQA1",
+            {"p2": 0.1},
+            "p1 = 0.2, p2 = 0.1, p3 = 0.6, p4 = 0.8: it must be p1 < p2 < p3 < p4",
+        ),
+        (ESD1, "ESD1", {"EtaC": 1.5}, "EtaC = 1.5: it must be 0 < EtaC <= 1 (an efficiency)"),
+        (ESD1, "ESD1", {"qmx": -0.5}, "qmx = -0.5, qmn = "),
+        (ESD1, "ESD1", {"pmx": -1.0}, "pmx = -1: it must be pmx >= 0"),
+        (PVD1, "PVD1", {"v0": 1.2}, "v0 = 1.2, v1 = 1.1: it must be v0 <= v1"),
+        (PVD1, "PVD1", {"fn": 0.0}, "fn = 0: it must be fn > 0 (the rated frequency)"),
+        (PVD1, "PVD1", {"frflag": 2.0}, "frflag = 2: it must be 0 <= frflag <= 1"),
     ],
 )
 def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
@@ -87,13 +123,50 @@ def test_parameters_left_out_are_named_with_andes_s_default(tmp_path):
     word): the import names it, with the default and the row."""
     path = edited(tmp_path, "kundur/kundur_reg.xlsx", "REGCA1", Tg=float("nan"))
     got = read_andes_case(path, on_unsupported="skip")
-    assert "REGCA1 Tg = 0.1 (row 1)" in got.defaulted
-    assert (
-        "REGCA1 Tg = 0.1 (row 1)"
-        not in read_andes_case(
+    assert "REGCA1 Tg = 0.1 (row 1: empty in the file)" in got.defaulted
+    assert not any(
+        d.startswith("REGCA1 Tg = ")
+        for d in read_andes_case(
             andes.get_case("kundur/kundur_reg.xlsx"), on_unsupported="skip"
         ).defaulted
     )
+
+
+def test_the_summary_says_how_a_file_leaves_a_parameter_out_and_what_andes_uses(tmp_path):
+    """A NaN in a json file was summarised as "not in the file"; a default that is no
+    number as "REPCA1 Rc = None", "WTTQA1 Tn = nan": each says how the file leaves it out
+    and, for those, the value ANDES takes instead (its NumSelect fallback)."""
+    data = json.loads(Path(andes.get_case("ieee14/ieee14_pvd1.json")).read_text())
+    data["PVD1"][0]["tip"] = float("nan")
+    data["PVD1"][0].pop("tiq", None)
+    path = tmp_path / "pvd1_nan.json"
+    path.write_text(json.dumps(data))
+    got = read_andes_case(path, on_unsupported="skip").defaulted
+    assert "PVD1 tip = 0.02 (row 1: NaN in the file)" in got
+    assert "PVD1 tiq = 0.02 (row 1: not in the file)" in got
+    wt3 = read_andes_case(andes.get_case(WT3), on_unsupported="skip").defaulted
+    tn = [d for d in wt3 if d.startswith("WTTQA1 Tn")]
+    assert tn == [
+        "WTTQA1 Tn = Sngo, ANDES's value where Tn is not given (Turbine or RenGovernor "
+        "rating) (row 1: empty in the file)"
+    ]
+
+
+@pytest.mark.parametrize("case, model", [(PVD1, "PVD1"), (ESD1, "ESD1"), (WT3, "REPCA1")])
+def test_a_busf_naming_no_busfreq_of_the_case_is_refused(tmp_path, case, model):
+    """A busf naming a BusFreq the case does not hold: ANDES adds one with its defaults at
+    the bus instead (its DeviceFinder), and the import ran without a word."""
+    path = edited(tmp_path, case, model, busf="BusFreq_99")
+    with pytest.raises(CaseError, match=rf"{model} row 1 \(idx .*\): busf = 'BusFreq_99': no "):
+        read_andes_case(path, on_unsupported="skip")
+
+
+def test_a_converter_at_another_rated_frequency_is_refused_naming_fn(tmp_path):
+    """A PVD1 of fn 50 Hz in the 60 Hz case (ANDES reads its frequency trip points, in Hz,
+    at fn times the per-unit frequency) was imported at 60 Hz without a word."""
+    path = edited(tmp_path, PVD1, "PVD1", fn=50.0)
+    with pytest.raises(InputError, match=r"PVD1 1: fn = 50 Hz differs from the system freq"):
+        read_andes_case(path)
 
 
 def test_values_andes_copies_from_linked_devices_are_not_called_defaults():
@@ -117,7 +190,7 @@ def test_values_andes_copies_from_linked_devices_are_not_called_defaults():
     }
     assert "REPCA1 r " in linked and "REECA1 bus " in linked
     assert not [d for d in got.defaulted if any(d.startswith(x) for x in linked)]
-    assert "REGCA1 gammap = 1.0 (row 1)" in got.defaulted
+    assert "REGCA1 gammap = 1.0 (row 1: not in the file)" in got.defaulted
 
 
 def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):

@@ -185,7 +185,7 @@ def test_a_required_control_parameter_left_empty_is_a_change_refused_unless_skip
         read_andes_case(path)
     with pytest.warns(UserWarning, match=re.escape(change)):
         got = read_andes_case(path, on_unsupported="skip")
-    assert change in got.changed and "EXDC2 TA = 0.04 (row 1)" in got.defaulted
+    assert change in got.changed and "EXDC2 TA = 0.04 (row 1: empty in the file)" in got.defaulted
 
 
 def test_a_sheet_that_is_no_model_or_a_column_that_is_no_parameter_is_named(tmp_path):

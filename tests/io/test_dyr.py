@@ -234,6 +234,21 @@ def test_esst1a_vos_2_read_by_psse_refused_by_pst(tmp_path):
         load_psse(raw, dyr, conventions="pst")
 
 
+@pytest.mark.parametrize("uel", [0, 5])
+def test_esst1a_uel_outside_psse_s_codes_is_refused(tmp_path, uel):
+    """ESST1A's UEL, the under-excitation limiter's input (PSS/E Model Library: 1, 2 or
+    3), given 0 or 5 ran without a word: refused naming the record, UEL and its value."""
+    run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "ESST1A"
+    dyr = tmp_path / "uel.dyr"
+    dyr.write_text(
+        (run / "TVC_System.dyr")
+        .read_text()
+        .replace("'ESST1A'  1   1  1", f"'ESST1A'  1   {uel}  1")
+    )
+    with pytest.raises(CaseError, match=rf"ESST1A.*UEL = {uel} must be 1, 2 or 3"):
+        load_psse(run / "TVC_System_32.raw", dyr)
+
+
 def test_andes_conventions_change_only_what_andes_reads_differently():
     pst = dyr_tables(
         read_dyr(KUNDUR_DYR), kundur_generators(), on_unsupported="skip", conventions="pst"

@@ -276,6 +276,81 @@ def test_regca1_piecewise_points_are_checked(field, value, message):
             dict(reec=1, storage=1, En=10.0, SOCmax=1.5),
             r"field 'SOCmax': REGCA1 battery: SOCmax = 1.5: it must be SOCmax <= 1",
         ),
+        # limit pairs out of order, rate limits that exclude the rest rate 0, a negative
+        # droop or damping, an efficiency above 1: each ran without a word
+        (
+            REG_ROW,
+            dict(reec=1, QMax=-1000.0),
+            r"field 'QMax': REECA1: QMax = -1000, QMin = -999: it must be QMax >= QMin",
+        ),
+        (
+            REG_ROW,
+            dict(reec=1, Iqh1=-1000.0),
+            r"field 'Iqh1': REECA1: Iqh1 = -1000, Iql1 = -999: it must be Iqh1 >= Iql1",
+        ),
+        (REG_ROW, dict(reec=2, VMAX=-1000.0), r"field 'VMAX': REECB1: VMAX = -1000, VMIN"),
+        (REG_ROW, dict(reec=1, PMAX=-1.0), r"field 'PMAX': REECA1: PMAX = -1, PMIN = 0"),
+        (
+            REG_ROW,
+            dict(reec=1, dPmax=-1.0),
+            r"field 'dPmax': REECA1: dPmax = -1, dPmin = -999: it must be dPmin <= 0 <= dPmax",
+        ),
+        (
+            REG_ROW,
+            dict(reec=1, repc=1, pc_Qmax=-1000.0),
+            r"field 'pc_Qmax': REPCA1: pc_Qmax = -1000, pc_Qmin = -999: it must be pc_Qmax "
+            r">= pc_Qmin",
+        ),
+        (REG_ROW, dict(reec=1, repc=1, pc_emax=-1000.0), r"field 'pc_emax': REPCA1"),
+        (REG_ROW, dict(reec=1, repc=1, pc_femax=-0.1), r"field 'pc_femax': REPCA1"),
+        (REG_ROW, dict(reec=1, repc=1, pc_Pmax=-1000.0), r"field 'pc_Pmax': REPCA1"),
+        (REG_ROW, dict(reec=1, repc=1, pc_Kc=-1.0), r"field 'pc_Kc': .*pc_Kc >= 0"),
+        (REG_ROW, dict(reec=1, repc=1, pc_Vfrz=-0.8), r"field 'pc_Vfrz': .*pc_Vfrz >= 0"),
+        (
+            REG_ROW,
+            dict(reec=1, wind=1, wt_Dshaft=-1.0),
+            r"field 'wt_Dshaft': WTDTA1: wt_Dshaft = -1: it must be wt_Dshaft >= 0",
+        ),
+        (REG_ROW, dict(reec=1, wind=1, wt_Freq1=0.0), r"field 'wt_Freq1': WTDTA1: .*> 0"),
+        (REG_ROW, dict(reec=1, wind=2, wt_DAMP=-1.0), r"field 'wt_DAMP': WTDTA1/WTDS"),
+        (REG_ROW, dict(reec=1, wind=1, wt_w0=0.0), r"field 'wt_w0': WTDTA1/WTDS"),
+        (
+            REG_ROW,
+            dict(reec=1, wind=1, aero=1, pitch=1, wp_thmax=-10.0),
+            r"field 'wp_thmax': WTPTA1: wp_thmax = -10, wp_thmin = 0",
+        ),
+        (
+            REG_ROW,
+            dict(reec=1, wind=1, aero=1, pitch=1, wp_dthmax=-10.0),
+            r"field 'wp_dthmax': WTPTA1: .*wp_dthmin <= 0 <= wp_dthmax",
+        ),
+        (
+            REG_ROW,
+            dict(reec=1, wind=1, aero=1, pitch=1, wa_theta0=-45.0),
+            r"field 'wa_theta0': WTPTA1: wa_theta0 = -45, wp_thmin = 0, wp_thmax = 30",
+        ),
+        (
+            REG_ROW,
+            dict(reec=1, wind=1, aero=1, pitch=1, torque=1, wq_Temax=-1.0),
+            r"field 'wq_Temax': WTTQA1: wq_Temax = -1, wq_Temin = 0",
+        ),
+        (
+            REG_ROW,
+            dict(reec=1, wind=1, aero=1, pitch=1, torque=1, wq_p2=0.1),
+            r"field 'wq_p1': WTTQA1: wq_p1 = 0.2, wq_p2 = 0.1, .*wq_p1 < wq_p2 < wq_p3 < wq_p4",
+        ),
+        (
+            [1, 2, 2, 100.0, 1.0, 1.0, 0.0, 1],
+            dict(EtaC=1.5),
+            r"field 'EtaC': ESD1: EtaC = 1.5: it must be 0 < EtaC <= 1",
+        ),
+        (ROW, dict(qmx=-0.5), r"field 'qmx': PVD1: qmx = -0.5, qmn = -0.33: it must be qmx"),
+        (ROW, dict(v0=1.2), r"field 'v0': PVD1: v0 = 1.2, v1 = 1.1: it must be v0 <= v1"),
+        (
+            [1, 2, 2, 100.0, 1.0, 1.0, 0.0, 1],
+            dict(pmx=-1.0),
+            r"field 'pmx': ESD1: pmx = -1: it must be pmx >= 0",
+        ),
     ],
 )
 def test_converter_data_import_andes_refuses_is_refused_in_a_case_too(row, cols, message):

@@ -156,3 +156,13 @@ def test_bad_values_are_refused_by_name(tmp_path):
         _started(_row(rc_rfd=-1.0))
     with pytest.raises(CaseError, match=r"SCRX's start-up field current -0.1000 pu"):
         _started(_row(), efd0=-0.1)
+
+
+def test_a_cswitch_other_than_0_or_1_is_refused(tmp_path):
+    """CSWITCH 2 (PSS/E Model Library SCRX: 0 bus fed, 1 solid fed) was read as solid fed
+    and ran without a word: refused naming the record, CSWITCH and its value."""
+    dyr = tmp_path / "cswitch2.dyr"
+    text = (DATA / RUNS["plain"][0]).read_text()
+    dyr.write_text(text.replace("50.0     1     0.0/", "50.0     2     0.0/"))
+    with pytest.raises(CaseError, match=r"SCRX.*CSWITCH = 2 must be 0 \(bus fed\) or 1"):
+        load_psse(RAW, dyr)

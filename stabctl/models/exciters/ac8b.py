@@ -18,7 +18,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import nonwindup_lag, pid_track_aw
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
-from stabctl.models.exciters.table import IEEE_RULE, PID_TRACKING, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, PID_TRACKING, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -27,7 +27,10 @@ AC8B = 10
 KINDS = {AC8B: "AC8B (IEEE 421.5 AC8B, PID regulator)"}
 #: AC8B's saturation point E2 and exciter time constant T_E >= 0, its PID output limits
 #: ordered (IEEE Std 421.5-2016 AC8B)
-LIMITS = Limits("IEEE Std 421.5 AC8B", nonnegative=("E2", "TE"), ordered=(("VPmax", "VPmin"),))
+LIMITS = (
+    Limits("IEEE Std 421.5 AC8B", nonnegative=("E2", "TE"), ordered=(("VPmax", "VPmin"),)),
+    REGULATOR_GAIN,
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

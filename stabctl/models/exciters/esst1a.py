@@ -20,7 +20,7 @@ from stabctl.models.blocks import GAIN_OVER_T, clip, leadlag_input_state, nonwin
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters import exst1
 from stabctl.models.exciters.exst1 import check_start
-from stabctl.models.exciters.table import IEEE_RULE, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -28,7 +28,10 @@ if TYPE_CHECKING:
 ST1A = 6
 KINDS = {ST1A: "ESST1A (IEEE 421.5 ST1A)"}
 #: ST1A's V_I and V_A limits ordered (IEEE Std 421.5-2016 ST1A)
-LIMITS = Limits("IEEE Std 421.5 ST1A", ordered=(("VImax", "VImin"), ("VAmax", "VAmin")))
+LIMITS = (
+    Limits("IEEE Std 421.5 ST1A", ordered=(("VImax", "VImin"), ("VAmax", "VAmin"))),
+    REGULATOR_GAIN,
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

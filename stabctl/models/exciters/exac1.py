@@ -30,7 +30,7 @@ from stabctl.models.blocks import (
 )
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.dc import dc_feedback
-from stabctl.models.exciters.table import IEEE_RULE, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -40,8 +40,11 @@ KINDS = {AC1: "EXAC1 (IEEE AC1)", AC1A: "ESAC1A (IEEE 421.5 AC1A)"}
 #: AC1's and AC1A's saturation point E2 and T_E >= 0, AC1A's V_A limits ordered (IEEE Std
 #: 421.5-2016 AC1A; PSS/E Model Library EXAC1)
 LIMITS = {
-    AC1: Limits("PSS/E Model Library EXAC1", nonnegative=("E2", "TE")),
-    AC1A: Limits("IEEE Std 421.5 AC1A", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
+    AC1: (Limits("PSS/E Model Library EXAC1", nonnegative=("E2", "TE")), REGULATOR_GAIN),
+    AC1A: (
+        Limits("IEEE Std 421.5 AC1A", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
+        REGULATOR_GAIN,
+    ),
 }
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

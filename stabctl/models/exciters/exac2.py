@@ -35,7 +35,7 @@ from stabctl.models.blocks import (
 )
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
-from stabctl.models.exciters.table import IEEE_RULE, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -47,8 +47,9 @@ UNLIMITED_VE = np.bool_(False)
 KINDS = {AC2: "EXAC2 (IEEE AC2)"}
 #: AC2's saturation point E2 and T_E >= 0, its V_A limits ordered (PSS/E Model Library
 #: EXAC2; IEEE Std 421.5 AC2A)
-LIMITS = Limits(
-    "PSS/E Model Library EXAC2", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)
+LIMITS = (
+    Limits("PSS/E Model Library EXAC2", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
+    REGULATOR_GAIN,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

@@ -12,7 +12,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, lag, leadlag_input_state
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exst1 import check_start
-from stabctl.models.exciters.table import E, upper
+from stabctl.models.exciters.table import REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -20,7 +20,10 @@ if TYPE_CHECKING:
 AC4 = 8
 KINDS = {AC4: "EXAC4 (IEEE AC4)"}
 #: AC4's V_I limits ordered (PSS/E Model Library EXAC4; IEEE Std 421.5 AC4A)
-LIMITS = Limits("PSS/E Model Library EXAC4", ordered=(("VImax", "VImin"),))
+LIMITS = (
+    Limits("PSS/E Model Library EXAC4", ordered=(("VImax", "VImin"),)),
+    REGULATOR_GAIN,
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -35,7 +35,7 @@ from stabctl.models.blocks import (
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.dc import dc_feedback
 from stabctl.models.exciters.esst4b import source_voltage as rectified_source
-from stabctl.models.exciters.table import E, upper
+from stabctl.models.exciters.table import REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -44,10 +44,13 @@ PIC1 = 15
 KINDS = {PIC1: "EXPIC1 (PSS/E proportional-integral exciter)"}
 #: EXPIC1's saturation point E2 and T_E >= 0, its PI (VR1, VR2) and E_0 limits ordered
 #: (PSS/E Model Library EXPIC1)
-LIMITS = Limits(
-    "PSS/E Model Library EXPIC1",
-    nonnegative=("E2", "TE"),
-    ordered=(("VAmax", "VAmin"), ("Efdmax", "Efdmin")),
+LIMITS = (
+    Limits(
+        "PSS/E Model Library EXPIC1",
+        nonnegative=("E2", "TE"),
+        ordered=(("VAmax", "VAmin"), ("Efdmax", "Efdmin")),
+    ),
+    REGULATOR_GAIN,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

@@ -16,7 +16,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_OVER_T, LBND, clip, lag, leadlag_input_state, washout
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import E, upper
+from stabctl.models.exciters.table import REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -24,7 +24,10 @@ if TYPE_CHECKING:
 ST1 = 4
 KINDS = {ST1: "EXST1"}
 #: EXST1's V_I limits ordered (PSS/E Model Library EXST1)
-LIMITS = Limits("PSS/E Model Library EXST1", ordered=(("VImax", "VImin"),))
+LIMITS = (
+    Limits("PSS/E Model Library EXST1", ordered=(("VImax", "VImin"),)),
+    REGULATOR_GAIN,
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

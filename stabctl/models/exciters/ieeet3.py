@@ -16,7 +16,7 @@ from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_OVER_T, clip, nonwindup_lag, washout
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import IEEE_RULE, E, potential_source, upper
+from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, potential_source, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -24,7 +24,10 @@ if TYPE_CHECKING:
 T3 = 11
 KINDS = {T3: "IEEET3 (IEEE 1968 type 3, compound source)"}
 #: IEEET3's exciter time constant T_E >= 0 (PSS/E Model Library IEEET3)
-LIMITS = Limits("PSS/E Model Library IEEET3", nonnegative=("TE",))
+LIMITS = (
+    Limits("PSS/E Model Library IEEET3", nonnegative=("TE",)),
+    REGULATOR_GAIN,
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -21,8 +21,8 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import LBND, clip, lag, leadlag_input_state, nonwindup_lag
-from stabctl.models.declaration import DyrModel, Param, states
-from stabctl.models.exciters.table import E, own
+from stabctl.models.declaration import DyrModel, Limits, Param, states
+from stabctl.models.exciters.table import REGULATOR_GAIN, E, own
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -42,6 +42,13 @@ SOURCE = False
 EXCITER_COLUMNS = ""
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = ()
+#: K_A > 0, and no lead T_C without its lag T_B: smpexc bypasses its lead-lag where T_B
+#: is below 1e-3 s (PSTess smpexc.m: T_C is then not read), and PSS/E's SEXS and SCRX
+#: give T_C = (TA/TB) TB, 0 with TB (PSS/E Model Library SEXS, SCRX)
+LIMITS = (
+    REGULATOR_GAIN,
+    Limits("PSS/E Model Library SEXS: T_C = (TA/TB) TB", leads=(("TC", "TB"),)),
+)
 #: smpexc's own exc_con column
 PARAMS = (
     Param(

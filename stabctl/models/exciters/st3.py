@@ -19,7 +19,7 @@ from stabctl.errors import refuse_initial
 from stabctl.models import machines as mac
 from stabctl.models.blocks import LBND, clip, leadlag_input_state, nonwindup_lag
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import IEEE_RULE, E, potential_source
+from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, potential_source
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -28,10 +28,13 @@ ST3 = 3
 KINDS = {ST3: "ST3 (exc_st3)"}
 #: the ST3's field voltage ceiling Efdmax >= 0 and its V_I and (ESST3A) V_R limits
 #: ordered (PST manual 3.13 Table 3; IEEE Std 421.5-2016 ST3A)
-LIMITS = Limits(
-    "PST exc_st3; IEEE Std 421.5 ST3A",
-    nonnegative=("Efdmax",),
-    ordered=(("VImax", "VImin"), ("VAmax", "VAmin")),
+LIMITS = (
+    Limits(
+        "PST exc_st3; IEEE Std 421.5 ST3A",
+        nonnegative=("Efdmax",),
+        ordered=(("VImax", "VImin"), ("VAmax", "VAmin")),
+    ),
+    REGULATOR_GAIN,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = False

@@ -28,7 +28,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import clip, lag, nonwindup_lag, pi_nonwindup, rectifier_loading
 from stabctl.models.declaration import DyrModel, Limits, Param, beyond, states
-from stabctl.models.exciters.table import E, own, upper
+from stabctl.models.exciters.table import REGULATOR_GAIN, E, own, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -36,7 +36,10 @@ if TYPE_CHECKING:
 ST8C = 17
 KINDS = {ST8C: "ST8C (IEEE 421.5 ST8C, field current regulator)"}
 #: ST8C's V_A and voltage PI limits ordered (IEEE Std 421.5-2016 ST8C)
-LIMITS = Limits("IEEE Std 421.5 ST8C", ordered=(("VAmax", "VAmin"), ("VPmax", "VPmin")))
+LIMITS = (
+    Limits("IEEE Std 421.5 ST8C", ordered=(("VAmax", "VAmin"), ("VPmax", "VPmin"))),
+    REGULATOR_GAIN,
+)
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)

@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl._jit.decorators import njit
-from stabctl.models.declaration import Param, layout, own_columns
+from stabctl.models.declaration import Limits, Param, layout, own_columns
 
 
 def upper(*names: str, **renamed: str) -> dict[str, str]:
@@ -386,3 +386,11 @@ class StatorQuantities(NamedTuple):
     cq: float
     et: float
     vt: complex
+
+
+#: the regulator gain K_A > 0 of the types whose start divides by it (the regulator's
+#: input at rest V_R0/K_A sets V_ref = V_t + V_R0/K_A: a gain of 0 holds no field
+#: voltage; IEEE Std 421.5-2016, PSS/E Model Library: K_A is a regulator gain, > 0)
+REGULATOR_GAIN = Limits(
+    "IEEE Std 421.5: the regulator's input at rest is V_R0/K_A", positive=("KA",)
+)
