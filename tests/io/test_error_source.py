@@ -326,10 +326,22 @@ def andes_edited(tmp_path, case: str, model: str, field: str, value):
         ("ieee14/ieee14_wt3.xlsx", "REGCA1", "Sn", -100, r"Sn = -100: must be >= 0"),
         ("ieee14/ieee14_wt3.xlsx", "REECA1", "dbd1", 0.05, r"dbd1 = 0.05: must be <= 0"),
         ("ieee14/ieee14_wt3.xlsx", "REPCA1", "fdbd1", 0.05, r"fdbd1 = 0.05: must be <= 0"),
-        ("ieee14/ieee14_wt3.xlsx", "WTTQA1", "Twref", -30, r"Twref = -30: must be >= 0"),
+        (
+            "ieee14/ieee14_wt3.xlsx",
+            "WTTQA1",
+            "Twref",
+            -30,
+            r"Twref = -30: it must be Twref >= 0\.001 s",
+        ),
         # simulate refused them at set-up after the import wrote them
-        ("ieee14/ieee14_wt3.xlsx", "REPCA1", "Tp", 0, r"Tp = 0: must be >= 0.001 s \(a lag"),
-        ("ieee14/ieee14_pvd1.xlsx", "PVD1", "tiq", 0, r"tiq = 0: must be >= 0.001 s \(a lag"),
+        ("ieee14/ieee14_wt3.xlsx", "REPCA1", "Tp", 0, r"Tp = 0: it must be Tp >= 0\.001 s \(a lag"),
+        (
+            "ieee14/ieee14_pvd1.xlsx",
+            "PVD1",
+            "tiq",
+            0,
+            r"tiq = 0: it must be tiq >= 0\.001 s \(a lag",
+        ),
         # a link to a device the case lacks
         (
             "ieee14/ieee14_esd1.xlsx",
