@@ -271,16 +271,21 @@ class Table:
         the rule reads (``fields``, default ``fld`` alone), their values on the row and
         the ``rule`` (default ``what``) for an importer to name its source."""
         row = int(row)
-        key = self._key_value(row) if len(self) else None
         names = tuple(fields) or (fld,)
         raise CaseError(
-            f"{_where(self.TABLE, row, self.KEY_LABEL, key, fld, col)}: {what}",
+            f"{self._location(row, fld, col)}: {what}",
             table=self.TABLE,
             row=row,
             fields=names,
             values=tuple(self._value(n, row) for n in names),
             rule=rule or what,
         )
+
+    def _location(self, row: int, fld: str, col: int | None) -> str:
+        """Where an error is, for messages: table, row (0-based ``row``), its key and the
+        field ``fld`` (or column ``col``)."""
+        key = self._key_value(row) if len(self) else None
+        return _where(self.TABLE, row, self.KEY_LABEL, key, fld, col)
 
     def _value(self, name: str, row: int) -> float:
         """The value of field (or ``alt`` name) ``name`` on ``row``; NaN for a name the
@@ -597,27 +602,9 @@ class BranchTable(Table):
     KEY: ClassVar[str | None] = None
     INTEGER: ClassVar[tuple[str, ...]] = ("from_bus", "to_bus")
 
-    def _fail(
-        self,
-        row: int,
-        fld: str,
-        what: str,
-        col: int | None = None,
-        *,
-        fields: tuple[str, ...] = (),
-        rule: str = "",
-    ):
-        row = int(row)
+    def _location(self, row: int, fld: str, col: int | None) -> str:
         ident = f" ({_fmt(self.from_bus[row])}-{_fmt(self.to_bus[row])})" if len(self) else ""
-        names = tuple(fields) or (fld,)
-        raise CaseError(
-            f"line row {row + 1}{ident}, field '{fld}': {what}",
-            table=self.TABLE,
-            row=row,
-            fields=names,
-            values=tuple(self._value(n, row) for n in names),
-            rule=rule or what,
-        )
+        return f"line row {row + 1}{ident}, field '{fld}'"
 
     def _check(self):
         # r < 0 is allowed: network equivalents carry it (ANDES's EI_33, PSS/E's equivalencing)
