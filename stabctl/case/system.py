@@ -1112,7 +1112,7 @@ class ConverterTable(Table):
         (:data:`stabctl.models.converters.rules.RULES`, the same that ``import-andes`` checks
         in an ANDES file: PVD1, ESD1 ialim > 0; ESD1 En, Tf, EtaC, EtaD > 0 and 0 <= SOCmin <
         SOCmax <= 1, SOCinit between them (a REGCA1 battery's too), EtaC, EtaD <= 1; PVD1,
-        ESD1 qmx >= qmn, v0 <= v1, pmx >= 0; REGCA1 Lvpnt0 < Lvpnt1, (Lvplsw 1) Zerox <
+        ESD1 qmx >= qmn, v0 <= v1, pmx >= 0; REGCA1 Lvpnt0 < Lvpnt1, Volim > 0, (Lvplsw 1) Zerox <
         Brkpt (the piecewise gains divide by the differences), Iqrmin <= 0 <= Iqrmax; its
         REECA1's (REECB1's, REECD1's) Imax > 0, Vdip < Vup, limit pairs upper >= lower,
         dPmin <= 0 <= dPmax; its REPCA1's limit pairs, pc_Kc, pc_Vfrz >= 0; its wind

@@ -239,6 +239,8 @@ def test_regca1_start_with_a_limit_active_is_refused():
     [
         ("Lvpnt1", 0.3, r"field 'Lvpnt1': REGCA1: .*it must be Lvpnt1 > Lvpnt0"),
         ("Brkpt", 0.4, r"field 'Brkpt': REGCA1: .*it must be Brkpt > Zerox"),
+        # a negative voltage magnitude was taken as written
+        ("Volim", -1.2, r"field 'Volim': REGCA1: Volim = -1.2: it must be Volim > 0"),
     ],
 )
 def test_regca1_piecewise_points_are_checked(field, value, message):

@@ -209,6 +209,7 @@ _PVD_FILE = (
 #: 2.0 regca1.py)
 _REGC = (
     Rule(("Lvpnt1", "Lvpnt0"), lambda hi, lo: hi > lo, "Lvpnt1 > Lvpnt0"),
+    _positive("Volim", "a voltage magnitude: the high-voltage management acts above it"),
     Rule(
         ("Brkpt", "Zerox", "Lvplsw"),
         lambda b, z, on: (on == 0) | (b > z),
