@@ -241,8 +241,9 @@ class AndesImport:
         50 Hz system), GENROU's ``xq2`` read as ``xd2``, a DYR parameter ANDES replaced
         by its default (``file:line MODEL (bus B, id I): NAME = v read by ANDES as w``),
         converters alone on a bus without machine taking other than all of its generation
-        (``"MODEL idx (converter n), ...: take pfrac p, qfrac q of the generation of bus
-        B, which has no machine; the rest, ..."``, from the written converter table), a
+        (``"MODEL idx (converter n), ...: take gammap p, gammaq q (summed: ...) of the
+        generation of bus B, which has no machine; the rest, ..."``, from the written
+        converter table), a
         parameter of a machine or its controls that ANDES requires non-zero or of one sign
         left empty in an xlsx or json file (``NAME left empty, run at ANDES's default d``).
     unlike_andes : tuple of str
@@ -1323,7 +1324,8 @@ def _netted_shares(mats: dict, labels: dict[int, str]) -> list[str]:
             continue
         devs = ", ".join(f"{labels[int(n)]} (converter {int(n)})" for n in rows[:, col["number"]])
         out.append(
-            f"{devs}: take pfrac {fp:.12g}, qfrac {fq:.12g} of the generation of bus {b}, "
+            f"{devs}: take gammap {fp:.12g}, gammaq {fq:.12g} (summed: ibr_con pfrac, "
+            f"qfrac) of the generation of bus {b}, "
             f"which has no machine; the rest, {1 - fp:.12g} of its P and {1 - fq:.12g} of "
             "its Q (power flow), netted into the bus's load in runs (ANDES drops it)"
         )

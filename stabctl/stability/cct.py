@@ -721,7 +721,7 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
         raise InputError(f"fault time must be >= 0 s, got {fault.t_fault:g}")
     if not t_end > fault.t_fault + t_max:
         raise InputError(
-            f"run end {t_end:g} s must come after the latest clearing "
+            f"run end {t_end:g} s (t_end, --tf) must come after the latest clearing "
             f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)"
         )
 

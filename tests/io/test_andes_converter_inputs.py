@@ -207,7 +207,8 @@ def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):
 
 #: a share statement of the summary: its devices, shares, bus and rest
 SHARE = re.compile(
-    r"^(?P<devs>.+): take pfrac (?P<fp>\S+), qfrac (?P<fq>\S+) of the generation of bus "
+    r"^(?P<devs>.+): take gammap (?P<fp>\S+), gammaq (?P<fq>\S+) \(summed: ibr_con pfrac, "
+    r"qfrac\) of the generation of bus "
     r"(?P<bus>\d+), which has no machine; the rest, (?P<rp>\S+) of its P and (?P<rq>\S+) "
     r"of its Q \(power flow\), netted into the bus's load in runs"
 )

@@ -205,7 +205,7 @@ def test_cct_above_t_max_is_an_error(kundur):
         ({"tol": 0}, "tolerance must be > 0"),
         ({"t_lo": 0.2, "t_hi": 0.1}, "0 <= t_lo < t_hi <= t_max"),
         ({"t_hi": 2.0}, "0 <= t_lo < t_hi <= t_max"),
-        ({"t_end": 1.5}, "must come after the latest clearing"),
+        ({"t_end": 1.5}, r"run end 1.5 s \(t_end, --tf\) must come after the latest clearing"),
         ({"tol": 0.5, "t_hi": 0.1, "t_max": 0.2}, "narrower than the tolerance"),
     ],
 )
