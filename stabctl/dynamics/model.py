@@ -1036,6 +1036,7 @@ def evaluate_kernel(x, p, net, kept, want_vbus, dx, out):
         np.empty(ne),
         np.empty(ne),
         np.zeros(ne),
+        np.empty(ne),
     )
     return _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch)
 
@@ -1044,7 +1045,8 @@ class _Scratch(NamedTuple):
     """The per-evaluation arrays of `_evaluate_into`: per machine its internal voltage psi,
     rotation exp(j delta), current from the kept buses, terminal voltage (complex), field
     voltage handed to it, field current and air-gap saturation; per PSS its output; per
-    exciter its algebraic field voltage, field current, source term and PSS input."""
+    exciter its algebraic field voltage, field current, source term, PSS input and its
+    machine's terminal voltage magnitude as PST exc_st3 recomputes it (`exc.stator`)."""
 
     psi: np.ndarray
     rot: np.ndarray
@@ -1058,6 +1060,7 @@ class _Scratch(NamedTuple):
     ifd: np.ndarray
     vb: np.ndarray
     pss_exc: np.ndarray
+    et: np.ndarray
 
 
 @kernel
@@ -1066,7 +1069,7 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
     is borrowed (`stabctl._jit.borrow`; the caller holds them for the whole call), so that
     the per-element calls below count no references: half of a run's time before."""
     x, p, net, kept, dx, out, scratch = borrowed((x, p, net, kept, dx, out, scratch))
-    psi, rot, I_kept, V_mac, pss_out, vex, ifd_mac, gap, efd_alg, ifd, vb, pss_exc = scratch
+    psi, rot, I_kept, V_mac, pss_out, vex, ifd_mac, gap, efd_alg, ifd, vb, pss_exc, et = scratch
     nm, ne, nps, ng, ni = p.n_mac, p.n_exc, p.n_pss, p.n_tg, p.n_ibr
     Y11, Y12, Y21, Y22, Z22, R, R_mac, Z_mac, on, targets, steps = net
     EP = _stepped(p.EP, steps[:ne], _VREF)
@@ -1152,8 +1155,10 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
         if p.pss_of_exc[i] >= 0:
             pss_exc[i] = pss_out[p.pss_of_exc[i]]
         ifd[i] = exc.field_current(EP, i, ifd_mac)
-        vb[i] = exc.source_voltage(EP, i, p.MP, xm, cur, V_mac[m], ifd[i])
-        efd_alg[i] = exc.field_voltage(EP, xe, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], p.ieee)
+        stator = exc.stator(p.MP, xm, cur, rot, m, V_mac[m])
+        et[i] = stator.et
+        vb[i] = exc.source_voltage(EP, i, p.MP, xm, cur, rot, stator, ifd[i])
+        efd_alg[i] = exc.field_voltage(EP, xe, i, xm, et[i], pss_exc[i], ifd[i], vb[i], p.ieee)
         vex[m] = efd_alg[i]
     assign(pmech, p.pmech0)
     for k in range(ng):
@@ -1187,9 +1192,7 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
             pot = p.MP[m, mac.K.POT]
             vc = exc.compensated(EP, i, V_mac[m], cur[m] * pot)
         if p.exc_hmax[i] < np.inf:  # integrated in sub-intervals: its inputs held
-            exc.frozen_inputs(
-                EP, i, p.MP, xm, cur, pss_exc[i], ifd[i], vb[i], vc, eterm[m], exc_in[i]
-            )
+            exc.frozen_inputs(EP, i, xm, et[i], pss_exc[i], ifd[i], vb[i], vc, eterm[m], exc_in[i])
         exc.derivatives(
             EP, xe, i, vc, eterm[m], pss_exc[i], efd_alg[i], ifd[i], vb[i], dxe, p.ieee, p.reach
         )

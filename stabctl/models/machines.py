@@ -637,9 +637,10 @@ def _field_current(P, x, i, cdg, gap):
 
 
 @kernel
-def field_current(P, x, cur, i):
-    """Field current of machine i (machine base) at network current cur[i] (system base)."""
-    cdg = _dq(x[S.delta, i], cur[i])[0] * P[i, K.POT]
+def field_current(P, x, cur, rot, i):
+    """Field current of machine i (machine base) at network current cur[i] (system base);
+    rot: each machine's exp(j delta) (`internal_voltage`)."""
+    cdg = _dq_at(np.conj(rot[i]), cur[i])[0] * P[i, K.POT]
     return _field_current(P, x, i, cdg, _air_gap_saturation(P, x, i))
 
 
@@ -731,10 +732,11 @@ def derivatives(P, basrad, x, cur, rot, ifd, gap, vex, pmech, target, dx, pelect
 
 
 @kernel
-def stator_without_speed(P, x, cur, i):
+def stator_without_speed(P, x, cur, rot, i):
     """(ed, eq, curd, curq) of machine i from the subtransient stator equations without the
-    speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base."""
-    curd, curq = _dq(x[S.delta, i], cur[i])
+    speed factor (PST `exc_st3` flag 1 recomputes them this way); currents system base;
+    rot: each machine's exp(j delta) (`internal_voltage`)."""
+    curd, curq = _dq_at(np.conj(rot[i]), cur[i])
     pot = P[i, K.POT]
     psidpp, psiqpp = _fluxes(P, x, i)
     ed = -P[i, K.RA] * curd * pot - (psiqpp - P[i, K.XQPP] * curq * pot)
@@ -743,9 +745,10 @@ def stator_without_speed(P, x, cur, i):
 
 
 @kernel
-def st3_field_current(P, x, cur, i):
-    """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d."""
+def st3_field_current(P, x, cur, rot, i):
+    """PST exc_st3's own field-current estimate E_Isat + p6 (E'q - psi_kd) + p7 i_d; rot:
+    each machine's exp(j delta) (`internal_voltage`)."""
     e = x[S.eqp, i]
     esat = max(e, P[i, K.SA] * e * e + P[i, K.SB] * e + P[i, K.SC])
-    curd = _dq(x[S.delta, i], cur[i])[0]
+    curd = _dq_at(np.conj(rot[i]), cur[i])[0]
     return esat + P[i, K.P6] * (e - x[S.psikd, i]) + P[i, K.P7] * curd * P[i, K.POT]

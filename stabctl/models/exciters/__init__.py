@@ -98,6 +98,7 @@ __all__ = [
     "recorded_efd",
     "field_current",
     "source_voltage",
+    "stator",
     "source_voltage_of",
     "compensated",
     "E",
@@ -562,20 +563,40 @@ def field_current(P, i, ifd):
 
 
 @kernel(inline="always")
-def source_voltage(P, i, MP, xm, cur, vt, ifd):
+def stator(MP, xm, cur, rot, m, vt):
+    """Machine m's terminal quantities as PST exc_st3 flag 1 recomputes them
+    (`StatorQuantities`, `machines.stator_without_speed`), computed once per exciter and
+    evaluation for `source_voltage`, `field_voltage` and `frozen_inputs`.
+
+    Parameters
+    ----------
+    MP, xm, cur : ndarray
+        The machines' packed parameters (machines.PACKED), states (6, n_mac) and network
+        currents (n_mac,) complex, system base.
+    rot : ndarray, shape (n_mac,)
+        Each machine's exp(j delta) (`machines.internal_voltage`).
+    m : int
+        The machine.
+    vt : complex
+        Its terminal bus voltage, pu (its angle sets an ST3 source phasor).
+    """
+    ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, rot, m)
+    return StatorQuantities(ed, eq, cd, cq, np.hypot(ed, eq), vt)
+
+
+@kernel(inline="always")
+def source_voltage(P, i, MP, xm, cur, rot, stator, ifd):
     """The source term V_B of exciter i (`source_voltage_of`; :data:`SOURCE_KINDS`), 1 for
-    the other types: from its machine's terminal quantities as PST exc_st3 flag 1
-    recomputes them (`machines.stator_without_speed`), vt the machine's terminal bus
-    voltage (complex; its angle sets the source phasor), ifd the field current
-    (`field_current`; the ST3 reads its own, `st3.field_current`); at most VBmax (PSS/E
-    ESST3A's and ESST4B's ``VB`` limiter; inf without); MP, xm, cur as `field_voltage`."""
+    the other types: from its machine's terminal quantities `stator` (`stator`: as PST
+    exc_st3 flag 1 recomputes them, with the terminal bus voltage, whose angle sets the
+    source phasor), ifd the field current (`field_current`; the ST3 reads its own,
+    `st3.field_current`, from MP, xm, cur, rot as `stator`); at most VBmax (PSS/E ESST3A's
+    and ESST4B's ``VB`` limiter; inf without)."""
     kind = P[i, E.KIND]
     if kind not in SOURCE_KINDS:
         return 1.0
     m = int(P[i, E.MAC])
-    ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, m)
-    stator = StatorQuantities(ed, eq, cd, cq, np.hypot(ed, eq), vt)
-    fld = st3.field_current(P, i, MP, xm, cur, m) if kind == ST3 else ifd
+    fld = st3.field_current(P, i, MP, xm, cur, rot, m) if kind == ST3 else ifd
     return source_voltage_of(
         kind,
         P[i, E.KPR] + 1j * P[i, E.KPI],
@@ -596,7 +617,7 @@ def _source_machine(MP, m, stator, fld):
 
 
 @kernel(inline="always")
-def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
+def field_voltage(P, x, i, xm, et, pss_out, ifd, VB, ieee):
     """Field voltage exciter i hands its machine (PST flag 1), pu on the machine base:
     `field_voltage_at` with its machine's terminal voltage (times its speed with
     exc_con column 45, ``efd_speed``, = 1).
@@ -605,11 +626,11 @@ def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
     ----------
     P, x, i : ndarray, ndarray, int
         The exciters' packed parameters, states (n_slots, n_exc), the exciter.
-    MP, xm, cur : ndarray
-        The machines' packed parameters (machines.PACKED), states (6, n_mac)
-        and network currents (n_mac,) complex, system base: the terminal voltage V_t
-        comes from them (PST exc_st3's speed-free stator equations,
-        `machines.stator_without_speed`).
+    xm : ndarray, shape (6, n_mac)
+        The machines' states.
+    et : float
+        The machine's terminal voltage V_t, pu (`stator`: PST exc_st3's speed-free
+        stator equations, `machines.stator_without_speed`).
     pss_out : float
         The output of the machine's PSS (0 without).
     ifd : float
@@ -620,8 +641,7 @@ def field_voltage(P, x, i, MP, xm, cur, pss_out, ifd, VB, ieee):
         The IEEE 421.5 convention (limited states are read clipped to their limits).
     """
     m = int(P[i, E.MAC])
-    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, m)
-    efd = field_voltage_at(P, x, i, np.hypot(ed, eq), pss_out, VB, ifd, ieee)
+    efd = field_voltage_at(P, x, i, et, pss_out, VB, ifd, ieee)
     return efd * xm[_OMEGA, m] if P[i, E.EFD_SPEED] == 1 else efd
 
 
@@ -672,13 +692,12 @@ _ROW = np.int64(0)
 
 
 @kernel(inline="always")
-def frozen_inputs(P, i, MP, xm, cur, pss_out, ifd, VB, vc, eterm, u):
+def frozen_inputs(P, i, xm, et, pss_out, ifd, VB, vc, eterm, u):
     """Write exciter i's inputs of this evaluation into the row u (N_FROZEN,): what
     `field_voltage` and `derivatives` read besides its own states (their arguments of the
     same names), for `advance_frozen`."""
     m = int(P[i, E.MAC])
-    ed, eq, _, _ = mac.stator_without_speed(MP, xm, cur, m)
-    u[U_VT] = np.hypot(ed, eq)
+    u[U_VT] = et
     u[U_SPEED] = xm[_OMEGA, m] if P[i, E.EFD_SPEED] == 1 else 1.0
     u[U_PSS], u[U_IFD], u[U_VB], u[U_VC], u[U_ETERM] = pss_out, ifd, VB, vc, eterm
     u[U_VREF] = P[i, E.VREF]

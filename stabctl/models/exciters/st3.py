@@ -199,13 +199,13 @@ def source_voltage(KP, KI, XL, KC, cap, machine, init):
 
 
 @kernel(inline="always")
-def field_current(P, i, MP, xm, cur, m):
+def field_current(P, i, MP, xm, cur, rot, m):
     """The field current of exciter i's source (ST3, machine m): exc_st3's own estimate
     (`machines.st3_field_current`) or, with ifd_machine, the machine's (ANDES
-    ``esst3a.py``); MP, xm, cur as `stabctl.models.exciters.field_voltage`."""
+    ``esst3a.py``); MP, xm, cur, rot as `stabctl.models.exciters.stator`."""
     if P[i, E.IFDM] > 0:
-        return mac.field_current(MP, xm, cur, m)
-    return mac.st3_field_current(MP, xm, cur, m)
+        return mac.field_current(MP, xm, cur, rot, m)
+    return mac.st3_field_current(MP, xm, cur, rot, m)
 
 
 @kernel(inline="always")
