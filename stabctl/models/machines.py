@@ -527,6 +527,15 @@ def _fluxes(P, x, i):
     )
 
 
+@kernel(inline="always")
+def magnitude(a, b):
+    """sqrt(a^2 + b^2), the magnitude of a phasor from its two parts (pu: no overflow).
+    libm's hypot, which guards against overflow and rounds correctly, cost 5 % of an
+    ACTIVSg2000 run in the machines' and exciters' per-evaluation magnitudes; this
+    differs from it in the last bit at most."""
+    return np.sqrt(a * a + b * b)
+
+
 @kernel
 def _dq(delta, X):
     """(d, q) of the network phasor X in the rotor frame: d + jq = j exp(-j delta) X."""
@@ -592,7 +601,7 @@ def _gap_saturation(P, i, psidpp, psiqpp):
     air-gap flux (ANDES ``genrou.py`` ``Se``); 0 without it and for GENSAL."""
     if P[i, K.GK] == 0.0 or P[i, K.GK] == 3.0:
         return 0.0
-    return _psse_saturation(P, i, np.hypot(psidpp, psiqpp))
+    return _psse_saturation(P, i, magnitude(psidpp, psiqpp))
 
 
 @kernel
@@ -718,7 +727,7 @@ def derivatives(P, basrad, x, cur, rot, ifd, gap, vex, pmech, target, dx, pelect
             te = (eq * curq + ed * curd) * pot
         pelect[i] = eq * curq + ed * curd
         qelect[i] = eq * curd - ed * curq
-        eterm[i] = np.hypot(ed, eq)
+        eterm[i] = magnitude(ed, eq)
         # H = 0: an infinite bus (classical, MachineTable), its speed held at 1 pu
         h2 = 2.0 * P[i, K.H]
         if P[i, K.SWING] > 0.0:  # PSS/E: (P_m - D (omega - 1)) / omega - T_e

@@ -1156,7 +1156,9 @@ def test_exst1_and_ieeeg1_initialisation_match_andes_wecc():
             e.KI.v[i],
             e.XL.v[i],
             0.0,
-            exc.ST3Machine(ss.Bus.v.v[b], ss.Bus.a.v[b], g.Pe.v[k], g.Qe.v[k], 1.0, 0.0),
+            exc.ST3Machine(
+                ss.Bus.v.v[b], np.exp(1j * ss.Bus.a.v[b]), g.Pe.v[k], g.Qe.v[k], 1.0, 0.0
+            ),
             True,
         )
         assert VE == pytest.approx(e.VE.v[i], rel=1e-12)

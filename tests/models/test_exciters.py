@@ -571,13 +571,13 @@ def test_ieeet3_rate_feedback_and_source_term():
     x[4, 0] = EFD0 - 0.5  # R_f behind Efd: feedback 0.1/1.0 * 0.5
     dx = derivatives(P, x)
     assert dx[2, 0] == pytest.approx((5.0 * (x[2, 0] / 5.0 - 0.05) - x[2, 0]) / 0.04, rel=1e-9)
-    machine = exc.ST3Machine(1.0, 0.0, 0.8, 0.1, 1.0, 2.0)
+    machine = exc.ST3Machine(1.0, 1.0 + 0j, 0.8, 0.1, 1.0, 2.0)
     VE = exc.potential_source(4.0 + 0j, 0.1, 0.0, machine)
     assert VE == pytest.approx(abs(4.0 + 1j * 0.1 * (0.8 - 0.1j)))
     assert exc.source_voltage_of(exc.T3, 4.0 + 0j, 0.1, 0.0, 0.0, np.inf, machine, False) == (
         pytest.approx(np.sqrt(VE**2 - 1.56**2))
     )
-    dead = exc.ST3Machine(1.0, 0.0, 0.8, 0.1, 1.0, VE / 0.78 + 0.1)
+    dead = exc.ST3Machine(1.0, 1.0 + 0j, 0.8, 0.1, 1.0, VE / 0.78 + 0.1)
     assert exc.source_voltage_of(exc.T3, 4.0 + 0j, 0.1, 0.0, 0.0, np.inf, dead, False) == 0.0
 
 

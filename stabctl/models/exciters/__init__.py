@@ -78,6 +78,7 @@ from stabctl.models.exciters.table import (
     ST3Machine,
     StatorQuantities,
     potential_source,
+    unit_phasor,
 )
 from stabctl.models.saturation import quadratic_fit
 
@@ -112,6 +113,7 @@ __all__ = [
     "ST3Machine",
     "StatorQuantities",
     "potential_source",
+    "unit_phasor",
     "st3_source_voltage",
     "dc_feedback",
     "st1a_regulator_output",
@@ -511,12 +513,12 @@ def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
     V_mac the complex terminal voltages, S_mac the machines' complex generation (system
     base), vex their field voltages (= field currents at rest), all (n_mac,); mp the
     MachineParams."""
-    eterm, theta = np.abs(V_mac), np.angle(V_mac)
+    eterm = np.abs(V_mac)
     VB = np.ones(p.n)
     for i in np.nonzero(np.isin(p.kind, SOURCE_KINDS))[0]:
         m = p.mac[i]
         machine = ST3Machine(
-            eterm[m], theta[m], S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
+            eterm[m], unit_phasor(V_mac[m]), S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
         )
         VB[i] = source_voltage_of(
             p.kind[i], p.KP[i], p.KI[i], p.XL[i], p.KC[i], p.VB_cap[i], machine, True
@@ -581,7 +583,7 @@ def stator(MP, xm, cur, rot, m, vt):
         Its terminal bus voltage, pu (its angle sets an ST3 source phasor).
     """
     ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, rot, m)
-    return StatorQuantities(ed, eq, cd, cq, np.hypot(ed, eq), vt)
+    return StatorQuantities(ed, eq, cd, cq, mac.magnitude(ed, eq), vt)
 
 
 @kernel(inline="always")
@@ -613,7 +615,8 @@ def source_voltage(P, i, MP, xm, cur, rot, stator, ifd):
 def _source_machine(MP, m, stator, fld):
     """`ST3Machine` of machine m from its `StatorQuantities` and field current fld."""
     ed, eq, cd, cq, et, vt = stator
-    return ST3Machine(et, np.angle(vt), eq * cq + ed * cd, eq * cd - ed * cq, MP[m, mac.K.POT], fld)
+    pot = MP[m, mac.K.POT]
+    return ST3Machine(et, unit_phasor(vt), eq * cq + ed * cd, eq * cd - ed * cq, pot, fld)
 
 
 @kernel(inline="always")

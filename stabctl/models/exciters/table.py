@@ -349,13 +349,13 @@ IEEE_RULE = np.bool_(True)
 
 class ST3Machine(NamedTuple):
     """The quantities of an ST3 exciter's machine its source voltage is computed from
-    (`st3_source_voltage`), floats: eterm the terminal voltage magnitude (pu), theta its
-    angle (rad), pelect, qelect the electrical power (pu on the system base), mac_pot the
-    system base / machine base ratio, fldcur the field current (pu on the machine
-    base)."""
+    (`st3_source_voltage`), floats but unit: eterm the terminal voltage magnitude (pu),
+    unit exp(j theta) of its angle theta (complex, `unit_phasor`), pelect, qelect the
+    electrical power (pu on the system base), mac_pot the system base / machine base
+    ratio, fldcur the field current (pu on the machine base)."""
 
     eterm: float
-    theta: float
+    unit: complex
     pelect: float
     qelect: float
     mac_pot: float
@@ -368,15 +368,25 @@ def potential_source(KP, KI, XL, machine):
     421.5-2016 ST3A, ST4B; IEEE 1968 type 3 with X_L = 0 and K_P real), pu: KP the complex
     K_P exp(j theta_P), KI, XL (pu), machine the `ST3Machine` quantities (pelect, qelect
     on the system base; I_t on the machine base)."""
-    eterm, theta, pelect, qelect, mac_pot, _ = machine
-    i_t = (pelect - 1j * qelect) / (eterm * np.exp(-1j * theta)) * mac_pot
-    return np.abs(KP * eterm * np.exp(1j * theta) + 1j * (KI + KP * XL) * i_t)
+    eterm, unit, pelect, qelect, mac_pot, _ = machine
+    vt = eterm * unit
+    i_t = (pelect - 1j * qelect) / np.conj(vt) * mac_pot
+    return np.abs(KP * vt + 1j * (KI + KP * XL) * i_t)
+
+
+@njit
+def unit_phasor(v):
+    """exp(j angle(v)) of a complex voltage v, v / |v| (1 for v = 0, as angle(0) = 0):
+    the terminal voltage's direction an ST3-type source is built on (`ST3Machine`),
+    without the arctangent and the sine and cosine of its angle."""
+    m = np.sqrt(v.real * v.real + v.imag * v.imag)
+    return v / m if m > 0.0 else 1.0 + 0.0j
 
 
 class StatorQuantities(NamedTuple):
     """A machine's terminal quantities as PST exc_st3 flag 1 recomputes them
     (`machines.stator_without_speed`, floats but vt): ed, eq the d, q terminal voltages
-    (pu), cd, cq the d, q currents (pu on the system base), et = hypot(ed, eq) the
+    (pu), cd, cq the d, q currents (pu on the system base), et = |ed + j eq| the
     terminal voltage magnitude (pu), vt the terminal bus voltage (complex pu; its angle
     sets the ST3 source phasor)."""
 
