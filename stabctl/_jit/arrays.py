@@ -3,6 +3,8 @@ numba's generic implementation (and its error-message code) of the numpy idiom."
 
 from __future__ import annotations
 
+import numpy as np
+
 from stabctl._jit.decorators import kernel
 
 
@@ -98,3 +100,13 @@ def dot(a, b):
     for j in range(a.size):
         acc += a[j] * b[j]
     return acc
+
+
+@kernel(inline="always")
+def magnitude(a, b):
+    """sqrt(a^2 + b^2): the magnitude of a phasor from its two parts (per unit: no
+    overflow).  libm's hypot (numba's ``abs`` of a complex), which guards against
+    overflow and rounds correctly, cost 5-10 % of an ACTIVSg2000 run in the machines',
+    exciters' and stabilisers' per-evaluation magnitudes; this differs from it in the last
+    bit at most."""
+    return np.sqrt(a * a + b * b)

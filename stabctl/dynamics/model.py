@@ -18,7 +18,7 @@ import numpy as np
 from numba import types
 
 from stabctl._jit.address import address_of, by_address
-from stabctl._jit.arrays import SMALL_MATVEC, assign, dot, matvec
+from stabctl._jit.arrays import SMALL_MATVEC, assign, dot, magnitude, matvec
 from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel, njit
 from stabctl.case import BranchTable, BusTable, Case
@@ -1147,7 +1147,7 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
     for k in range(nps):
         m = int(p.SP[k, pss_.S.MAC])
         pe = (psi[m] * np.conj(cur[m])).real * p.MP[m, mac.K.POT]
-        vt = np.abs(V_mac[m])
+        vt = magnitude(V_mac[m].real, V_mac[m].imag)
         pss_out[k] = pss_.output_and_derivatives(p.SP, xp, k, xm[1, m], pe, vt, dxp)
     mac.field_currents(p.MP, xm, cur, rot, ifd_mac, gap)
     for i in range(ne):

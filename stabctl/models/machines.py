@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from stabctl._jit.arrays import magnitude
 from stabctl._jit.decorators import kernel
 from stabctl.models.declaration import (
     Declared,
@@ -525,15 +526,6 @@ def _fluxes(P, x, i):
         P[i, K.P9] * x[S.eqp, i] + P[i, K.P10] * x[S.psikd, i],
         P[i, K.P14] * x[S.edp, i] + P[i, K.P15] * x[S.psikq, i],
     )
-
-
-@kernel(inline="always")
-def magnitude(a, b):
-    """sqrt(a^2 + b^2), the magnitude of a phasor from its two parts (pu: no overflow).
-    libm's hypot, which guards against overflow and rounds correctly, cost 5 % of an
-    ACTIVSg2000 run in the machines' and exciters' per-evaluation magnitudes; this
-    differs from it in the last bit at most."""
-    return np.sqrt(a * a + b * b)
 
 
 @kernel

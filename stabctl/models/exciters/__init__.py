@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stabctl._jit.arrays import magnitude
 from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
@@ -583,7 +584,7 @@ def stator(MP, xm, cur, rot, m, vt):
         Its terminal bus voltage, pu (its angle sets an ST3 source phasor).
     """
     ed, eq, cd, cq = mac.stator_without_speed(MP, xm, cur, rot, m)
-    return StatorQuantities(ed, eq, cd, cq, mac.magnitude(ed, eq), vt)
+    return StatorQuantities(ed, eq, cd, cq, magnitude(ed, eq), vt)
 
 
 @kernel(inline="always")

@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from stabctl._jit.arrays import magnitude
 from stabctl._jit.decorators import njit
 from stabctl.models.declaration import Limits, Param, layout, own_columns
 
@@ -371,7 +372,8 @@ def potential_source(KP, KI, XL, machine):
     eterm, unit, pelect, qelect, mac_pot, _ = machine
     vt = eterm * unit
     i_t = (pelect - 1j * qelect) / np.conj(vt) * mac_pot
-    return np.abs(KP * vt + 1j * (KI + KP * XL) * i_t)
+    ve = KP * vt + 1j * (KI + KP * XL) * i_t
+    return magnitude(ve.real, ve.imag)
 
 
 @njit
@@ -379,7 +381,7 @@ def unit_phasor(v):
     """exp(j angle(v)) of a complex voltage v, v / |v| (1 for v = 0, as angle(0) = 0):
     the terminal voltage's direction an ST3-type source is built on (`ST3Machine`),
     without the arctangent and the sine and cosine of its angle."""
-    m = np.sqrt(v.real * v.real + v.imag * v.imag)
+    m = magnitude(v.real, v.imag)
     return v / m if m > 0.0 else 1.0 + 0.0j
 
 
