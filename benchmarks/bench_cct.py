@@ -28,7 +28,8 @@ search, on 2 cores with perfect scaling, against the 30 min target.
 faults, seed 53) at ``--t-max`` (default 0.5 s, `stabctl screen`'s) with both methods and
 prints the verdicts, simulations per search (verdicts included) and per CCT, the wall per
 search with each fault's network stages built as a screening builds them, the N-1
-projection from that mean and how many faults end with the same verdict, cell and
+projection from that mean (and from the CPU time per search, which other work on the
+machine inflates less) and how many faults end with the same verdict, cell and
 half-step CCT in both (the two-fault projection above counts CCT searches only).
 ``--activsg-stages N`` times the network stages of N new bus and N new line faults of
 ACTIVSg2000 (a first run of a fault less a second), updated from the pre-event network's
@@ -139,7 +140,8 @@ def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
     )
     print(
         f"{'method':10} {'CCTs':>5} {'robust':>6} {'insec':>5} {'sims/search':>11} "
-        f"{'sims/CCT':>8} {'wall/search':>11} {'N-1 on 2 cores':>14}"
+        f"{'sims/CCT':>8} {'wall/search':>11} {'N-1 on 2 cores':>14} {'CPU/search':>10} "
+        f"{'N-1 from CPU':>12}"
     )
     runs = [0]
     run = sim.run
@@ -153,6 +155,7 @@ def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
     for m in ("bisection", "sime"):
         opts = SearchOptions(method=m, t_max=t_max)
         found, kinds, t0, runs[0] = [], [], time.perf_counter(), 0
+        c0 = time.process_time()
         for f in faults:  # each fault's stages evicted by the 8 faults after it
             try:
                 res = critical_clearing_time(sim, f, opts)
@@ -163,11 +166,13 @@ def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
                 kinds.append(type(exc).__name__)
                 outcomes.setdefault(m, []).append(type(exc).__name__)
         wall = (time.perf_counter() - t0) / len(faults)
-        print(
+        cpu = (time.process_time() - c0) / len(faults)  # a measure that a busy machine
+        print(  # inflates less than the wall time (one BLAS thread: CPU time of one core)
             f"{m:10} {kinds.count('cct'):5d} {kinds.count('AboveSearchLimit'):6d} "
             f"{kinds.count('InsecureContingency'):5d} {runs[0] / len(faults):11.2f} "
             f"{sum(found) / max(len(found), 1):8.2f} {wall:11.2f} "
-            f"{N1_SEARCHES * wall / 2 / 3600:12.2f} h",
+            f"{N1_SEARCHES * wall / 2 / 3600:12.2f} h {cpu:10.2f} "
+            f"{N1_SEARCHES * cpu / 2 / 3600:10.2f} h",
             flush=True,
         )
     same = sum(a == b for a, b in zip(outcomes["bisection"], outcomes["sime"]))
