@@ -263,7 +263,8 @@ def read_any(path: str | Path) -> Case:
 
     ``.m`` -> :func:`read_pst_m`; ``.json`` with ``"format": "stabctl-case"`` ->
     :func:`read_case_json`, with a ``bus`` key -> :func:`read_pstess_json`. Raises
-    :class:`CaseError` otherwise.
+    :class:`CaseError` otherwise, pointing an ANDES JSON case (a ``Bus`` list), an ANDES
+    xlsx or a PSS/E RAW file to its importer.
     """
     path = Path(path)
     if path.suffix == ".m":
@@ -274,8 +275,22 @@ def read_any(path: str | Path) -> Case:
             return case_from_dict(data, str(path))
         if isinstance(data, dict) and "bus" in data:
             return read_pstess_json(path)
+        if isinstance(data, dict) and isinstance(data.get("Bus"), list):
+            raise CaseError(
+                f"{path}: an ANDES JSON case (its model tables Bus, Line, ...), not a stabctl "
+                f"case: convert it first with `stabctl import-andes {path} -o case.json`"
+            )
         raise CaseError(f"{path}: neither a stabctl case nor a PSTess matrix JSON")
-    raise CaseError(f"{path}: unknown case file type (expected .json or .m)")
+    hint = _IMPORTERS.get(path.suffix.lower(), "").format(path=path, stem=path.with_suffix(""))
+    raise CaseError(f"{path}: unknown case file type (expected .json or .m){hint}")
+
+
+#: a file suffix of another tool's case -> how to convert it (`read_any`'s hint)
+_IMPORTERS = {
+    ".raw": "; a PSS/E RAW file: convert it with its DYR, `stabctl import-psse {path} "
+    "{stem}.dyr -o case.json`",
+    ".xlsx": "; an ANDES xlsx case: convert it with `stabctl import-andes {path} -o case.json`",
+}
 
 
 def _load_json(path: Path):

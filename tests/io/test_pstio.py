@@ -364,3 +364,24 @@ def test_a_motor_the_model_cannot_run_is_refused_as_the_file_is_read(tmp_path, f
     assert str(err.value) == (
         f"{p}: table 'motors' row 1 (motor 1), field '{field}': must be > 0, got 0"
     )
+
+
+def test_another_tool_s_case_is_pointed_to_its_importer(tmp_path):
+    """An ANDES JSON case given where a case is read was "neither a stabctl case nor a
+    PSTess matrix JSON" (finding O): named as ANDES's, with the command converting it;
+    an xlsx or RAW file the same."""
+    p = tmp_path / "a.json"
+    p.write_text(json.dumps({"Bus": [{"idx": 1, "u": 1.0, "Vn": 69.0}], "Line": []}))
+    with pytest.raises(CaseError) as err:
+        load_case(p)
+    assert str(err.value) == (
+        f"{p}: an ANDES JSON case (its model tables Bus, Line, ...), not a stabctl case: "
+        f"convert it first with `stabctl import-andes {p} -o case.json`"
+    )
+    for suffix, command in ((".xlsx", "import-andes"), (".raw", "import-psse")):
+        q = tmp_path / f"c{suffix}"
+        q.write_text("x")
+        with pytest.raises(CaseError) as err:
+            load_case(q)
+        assert str(err.value).startswith(f"{q}: unknown case file type (expected .json or .m); ")
+        assert f"`stabctl {command} {q} " in str(err.value)
