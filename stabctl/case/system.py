@@ -34,7 +34,9 @@ import dataclasses
 import hashlib
 import json
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -47,7 +49,10 @@ from stabctl.errors import CaseError, UnknownBusError
 from stabctl.models import converters as _converters
 from stabctl.models import exciters as _exciters
 from stabctl.models import governors as _governors
+from stabctl.models import motors as _motors
 from stabctl.models import pss as _pss
+from stabctl.models import shafts as _shafts
+from stabctl.models import svcs as _svcs
 from stabctl.models.converters import CONVERTER
 from stabctl.models.converters.rules import COMPONENTS
 from stabctl.models.declaration import LEAD_LAG_MIN, Family, array_dataclass, choices_message
@@ -80,6 +85,8 @@ __all__ = [
     "PV",
     "PQ",
     "CASE_DIR",
+    "table_label",
+    "tables_named",
 ]
 
 #: PST bus types (bus matrix column 10).
@@ -91,11 +98,58 @@ SWING, PV, PQ = 1, 2, 3
 # --------------------------------------------------------------------------------------
 
 
+#: the tables as the file being read names them: PST name -> the file's name (a stabctl
+#: case JSON names its tables by `Case` field, ``"machines"``); None: PST's names
+_FILE_TABLES: ContextVar[Mapping[str, str] | None] = ContextVar("stabctl_file_tables", default=None)
+
+
+@contextmanager
+def tables_named(names: Mapping[str, str]) -> Iterator[None]:
+    """Within this block, errors name each table as a file names it (`table_label`).
+
+    Parameters
+    ----------
+    names : Mapping[str, str]
+        PST table name (``"mac_con"``, a table's ``TABLE``) -> the file's name of it
+        (``"machines"``).
+
+    Yields
+    ------
+    None
+        Nothing: a block of errors naming the file's tables.
+    """
+    token = _FILE_TABLES.set(names)
+    try:
+        yield
+    finally:
+        _FILE_TABLES.reset(token)
+
+
+def table_label(table: str) -> str:
+    """A table as messages name it: ``table 'machines'`` inside `tables_named` (as the
+    file read names it), else the PST name (``mac_con``).
+
+    Parameters
+    ----------
+    table : str
+        The table's PST name (``TABLE``).
+
+    Returns
+    -------
+    str
+        For messages.
+    """
+    names = _FILE_TABLES.get()
+    return f"table '{names[table]}'" if names and table in names else table
+
+
 def _where(table: str, row: int, key: str | None, value, fld: str, col: int | None = None) -> str:
-    """Location prefix of an error: table, 1-based row, its bus/machine number, field (and
-    its column, for a field named by another type's name of the column)."""
+    """Location prefix of an error: table (`table_label`), 1-based row, its bus/machine
+    number, field (and its column, for a field named by another type's name of the
+    column)."""
     ident = "" if key is None or value is None else f" ({key} {_fmt(value)})"
-    return f"{table} row {row + 1}{ident}, field '{fld}'" + (f" (column {col})" if col else "")
+    where = f"{table_label(table)} row {row + 1}{ident}, field '{fld}'"
+    return where + (f" (column {col})" if col else "")
 
 
 #: a model check's problem text: the fields it names (quoted, or bare names after a model's
@@ -153,11 +207,15 @@ class Table:
             if arr.ndim == 0:
                 arr = arr.reshape(1)
             if arr.ndim != 1:
-                raise CaseError(f"{self.TABLE}: field '{name}' must be 1-D, has shape {arr.shape}")
+                raise CaseError(
+                    f"{table_label(self.TABLE)}: field '{name}' must be 1-D, has shape {arr.shape}"
+                )
             if n is None:
                 n = arr.size
             elif arr.size != n:
-                raise CaseError(f"{self.TABLE}: field '{name}' has {arr.size} rows, expected {n}")
+                raise CaseError(
+                    f"{table_label(self.TABLE)}: field '{name}' has {arr.size} rows, expected {n}"
+                )
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         for name in self.columns():
@@ -306,7 +364,9 @@ class Table:
         m = _PROBLEM.match(problem)
         if m is None:
             raise CaseError(
-                f"{self.TABLE} row {int(row) + 1}, {problem}", table=self.TABLE, row=int(row)
+                f"{table_label(self.TABLE)} row {int(row) + 1}, {problem}",
+                table=self.TABLE,
+                row=int(row),
             )
         names = tuple(a or b for a, b in re.findall(r"'([^']+)'|([A-Za-z_]\w*)", m.group(1)))
         why = (f"{m.group(2)[2:-1]}: " if m.group(2) else "") + m.group(3)
@@ -604,7 +664,7 @@ class BranchTable(Table):
 
     def _location(self, row: int, fld: str, col: int | None) -> str:
         ident = f" ({_fmt(self.from_bus[row])}-{_fmt(self.to_bus[row])})" if len(self) else ""
-        return f"line row {row + 1}{ident}, field '{fld}'"
+        return f"{table_label(self.TABLE)} row {row + 1}{ident}, field '{fld}'"
 
     def _check(self):
         # r < 0 is allowed: network equivalents carry it (ANDES's EI_33, PSS/E's equivalencing)
@@ -859,12 +919,13 @@ class ShaftTable(Table):
 
     {columns}
 
-        Omitted damping columns are 0.  Validation: inertias and stiffnesses >= 0 (> 0 is
-        checked when the model is built), one shaft per machine.
+        Omitted damping columns are 0.  Validation: inertias and stiffnesses > 0
+        (:func:`stabctl.models.shafts.check_table`), one shaft per machine.
     """
 
     def _check(self):
         self._unique("machine", "shaft on machine")
+        _shafts.check_table(self)  # the model's own: what a run would refuse
 
 
 @_declared(MOTOR)
@@ -876,11 +937,14 @@ class MotorTable(Table):
 
     {columns}
 
-        Validation: numbers unique, in_service 0 (a motor starts out of service).
+        Validation: numbers unique, in_service 0 (a motor starts out of service), and what
+        the model refuses (:func:`stabctl.models.motors.check_table`: resistances, x_m, Hm
+        and mva > 0).
     """
 
     def _check(self):
         self._unique("number", "motor number")
+        _motors.check_table(self)  # the model's own: what a run would refuse
 
 
 @_declared(SVC)
@@ -893,11 +957,13 @@ class SvcTable(Table):
 
     {columns}
 
-        Validation: numbers unique.
+        Validation: numbers unique, and what the model refuses
+        (:func:`stabctl.models.svcs.check_table`: mva, K > 0, leads with their lags, ...).
     """
 
     def _check(self):
         self._unique("number", "compensator number")
+        _svcs.check_table(self)  # the model's own: what a run would refuse
 
 
 @dataclass(frozen=True, eq=False)
@@ -1314,7 +1380,7 @@ class Case:
 
     def _check_references(self):
         if not np.any(self.buses.kind == SWING):
-            raise CaseError("bus: no swing bus (no row with field 'kind' = 1)")
+            raise CaseError(f"{table_label('bus')}: no swing bus (no row with field 'kind' = 1)")
         known = self.buses.number
         self._check_buses(self.branches, "from_bus", known)
         self._check_buses(self.branches, "to_bus", known)
@@ -1333,7 +1399,8 @@ class Case:
                 tab._fail(
                     bad[0],
                     "machine",
-                    f"machine {_fmt(tab.machine[bad[0]])} does not exist in mac_con",
+                    f"machine {_fmt(tab.machine[bad[0]])} does not exist in "
+                    f"{table_label('mac_con')}",
                 )
         # an infinite bus (a classical machine of H = 0) keeps its speed: a governor on it
         # has no power to order (its start-up order is the bus's P, any sign)
@@ -1391,8 +1458,8 @@ class Case:
             self.pss._fail(
                 bad[0],
                 "machine",
-                f"machine {_fmt(self.pss.machine[bad[0]])} has no exciter (exc_con) for the "
-                "PSS output",
+                f"machine {_fmt(self.pss.machine[bad[0]])} has no exciter "
+                f"({table_label('exc_con')}) for the PSS output",
             )
 
     @staticmethod
@@ -1400,7 +1467,8 @@ class Case:
         vals = getattr(tab, fld)
         bad = np.flatnonzero(~np.isin(vals, known))
         if bad.size:
-            tab._fail(bad[0], fld, f"bus {_fmt(vals[bad[0]])} does not exist in bus")
+            missing = f"bus {_fmt(vals[bad[0]])} does not exist in {table_label('bus')}"
+            tab._fail(bad[0], fld, missing)
 
     # -- lookup -----------------------------------------------------------------------
 

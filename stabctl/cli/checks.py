@@ -247,3 +247,41 @@ def model_settings(conventions: str, step, q_limits: bool = True):
     return ModelOptions(
         conventions=conventions, h=step, q_limits=q_limits, subintervals=subintervals_chosen()
     )
+
+
+def check_method(method: str, conventions: str, storage: bool) -> None:
+    """Refuse, before any work, an integration method with options it does not implement.
+
+    Parameters
+    ----------
+    method : str
+        ``--method`` (``"heun"`` or ``"trapezoid"``).
+    conventions : str
+        ``--conventions``.
+    storage : bool
+        Whether storage devices are asked for (``--esd-pct``).
+
+    Raises
+    ------
+    InputError
+        ``--method trapezoid`` with ``--conventions pstess`` (whose event semantics are
+        PSTess's: the corrector of the step ending at an event uses the post-event network;
+        the trapezoid's each step its own interval's) or with storage (its switchings
+        located inside Heun's steps), naming both options and what to give instead.
+    """
+    if method != "trapezoid":
+        return
+    if conventions == "pstess":
+        raise InputError(
+            "--method trapezoid cannot be used with --conventions pstess, whose event "
+            "semantics are PSTess's (the step ending at an event corrected on the post-event "
+            "network; the trapezoid's steps each use their own interval's): give --conventions "
+            "ieee (the default) with --method trapezoid, or --method heun (the default) to "
+            "reproduce PSTess's run"
+        )
+    if storage:
+        raise InputError(
+            "--method trapezoid cannot be used with --esd-pct: the storage devices' "
+            "switching instants are located inside Heun's steps; give --method heun (the "
+            "default)"
+        )

@@ -230,10 +230,10 @@ def print_cct(case, rating, d) -> None:
     f = d["fault"]
     circ = f" (circuit {f['circuit']})" if f["circuit"] != 1 else ""
     where = (
-        f"fault at bus {f['bus']} at {f['t_fault']:g} s, cleared without loss of a line"
+        f"fault at bus {f['bus']} at {f['t_fault_s']:g} s, cleared without loss of a line"
         if f["far_bus"] is None
         else f"fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}{circ} at "
-        f"{f['t_fault']:g} s, cleared at both ends, line tripped"
+        f"{f['t_fault_s']:g} s, cleared at both ends, line tripped"
     )
     click.echo(
         f"case {case.name}: {where}"

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import click
 
-from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_suffix
+from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_method, check_suffix
 from stabctl.cli.format import (
     describe_esd,
     islanding_lines,
@@ -450,6 +450,7 @@ def simulate(
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
+    check_method(method, conventions, esd_pct is not None)
     if not separation_limit > 0:
         raise InputError(f"--separation-limit must be > 0 rad, got {separation_limit:g}")
     case = load_case(case_name)

@@ -946,7 +946,10 @@ def _check_method(method: str, semantics: str, storage) -> None:
     if method not in ("heun", "trapezoid"):
         raise InputError(f"method must be 'heun' or 'trapezoid', got {method!r}")
     if method == "trapezoid" and semantics != "exact":
-        raise InputError("method 'trapezoid' takes the 'exact' event semantics only")
+        raise InputError(
+            f"method 'trapezoid' takes the 'exact' event semantics only, got {semantics!r} "
+            "(the pstess conventions' default): give semantics='exact' or method 'heun'"
+        )
     if method == "trapezoid" and storage is not None:
         raise InputError(
             "method 'trapezoid' takes no storage devices (their switching instants are"

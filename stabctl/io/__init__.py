@@ -40,7 +40,8 @@ def load_case(name_or_path: str | Path) -> Case:
         A built-in case name (see :func:`list_cases`), or the path of a file: ``.json`` in
         stabctl's own format or PSTess's evaluated-matrix JSON (told apart by content), or
         a PST ``.m`` data file of literal matrices.  A text with a path separator or a
-        ``.json``/``.m`` suffix is always taken as a path.
+        ``.json``/``.m`` suffix is always taken as a path, another text as a path when it
+        names no built-in but an existing file (refused as a file of another kind).
 
     Returns
     -------
@@ -65,7 +66,10 @@ def load_case(name_or_path: str | Path) -> Case:
     if "/" not in text and "\\" not in text and not text.endswith((".json", ".m")):
         if builtin.is_file():
             return pstio.read_case_json(builtin)
-        raise CaseError(f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}")
+        if not Path(text).is_file():  # a file of another kind is named as such (read_any)
+            raise CaseError(
+                f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}"
+            )
     path = Path(name_or_path)
     if not path.exists():
         raise CaseError(f"case file not found: {path}")

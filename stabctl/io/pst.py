@@ -33,6 +33,7 @@ import numpy as np
 
 from stabctl.case import TABLES, Case
 from stabctl.case.events import check_case_events
+from stabctl.case.system import tables_named
 from stabctl.errors import CaseError
 from stabctl.io.inputs import input_file, parse_json, plain_float
 
@@ -262,7 +263,8 @@ def read_any(path: str | Path) -> Case:
 
     ``.m`` -> :func:`read_pst_m`; ``.json`` with ``"format": "stabctl-case"`` ->
     :func:`read_case_json`, with a ``bus`` key -> :func:`read_pstess_json`. Raises
-    :class:`CaseError` otherwise.
+    :class:`CaseError` otherwise, pointing an ANDES JSON case (a ``Bus`` list), an ANDES
+    xlsx or a PSS/E RAW file to its importer.
     """
     path = Path(path)
     if path.suffix == ".m":
@@ -273,8 +275,22 @@ def read_any(path: str | Path) -> Case:
             return case_from_dict(data, str(path))
         if isinstance(data, dict) and "bus" in data:
             return read_pstess_json(path)
+        if isinstance(data, dict) and isinstance(data.get("Bus"), list):
+            raise CaseError(
+                f"{path}: an ANDES JSON case (its model tables Bus, Line, ...), not a stabctl "
+                f"case: convert it first with `stabctl import-andes {path} -o case.json`"
+            )
         raise CaseError(f"{path}: neither a stabctl case nor a PSTess matrix JSON")
-    raise CaseError(f"{path}: unknown case file type (expected .json or .m)")
+    hint = _IMPORTERS.get(path.suffix.lower(), "").format(path=path, stem=path.with_suffix(""))
+    raise CaseError(f"{path}: unknown case file type (expected .json or .m){hint}")
+
+
+#: a file suffix of another tool's case -> how to convert it (`read_any`'s hint)
+_IMPORTERS = {
+    ".raw": "; a PSS/E RAW file: convert it with its DYR, `stabctl import-psse {path} "
+    "{stem}.dyr -o case.json`",
+    ".xlsx": "; an ANDES xlsx case: convert it with `stabctl import-andes {path} -o case.json`",
+}
 
 
 def _load_json(path: Path):
@@ -552,8 +568,18 @@ def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
     for required in ("buses", "branches"):
         if required not in raw_tables:
             raise CaseError(f"{where}: tables: no '{required}' table")
+    with tables_named(_FILE_TABLES):  # errors name the tables as the file does
+        return _case_of_dict(data, raw_tables, where)
+
+
+#: PST table name -> the own format's name of it (a `Case` field), as its errors name it
+_FILE_TABLES: Mapping[str, str] = {cls.TABLE: field for field, cls in TABLES.items()}
+
+
+def _case_of_dict(data: Mapping, raw_tables: Mapping, where: str) -> Case:
+    """`case_from_dict`'s Case, its header and table names checked."""
     tables = {
-        field: _table_from_json(TABLES[field], raw_tables[field], where)
+        field: _table_from_json(field, raw_tables[field], where)
         for field in TABLES
         if field in raw_tables
     }
@@ -617,43 +643,46 @@ def _field_number(data: Mapping, key: str, where: str) -> float:
 _TABLE_KEYS = ("columns", "rows")
 
 
-def _table_from_json(cls, raw: Mapping, where: str):
+def _table_from_json(field: str, raw: Mapping, where: str):
+    """Table ``field`` of a case file (``raw``: its ``columns`` and ``rows``), every error
+    naming the file ``where`` and the table as the file names it."""
+    cls = TABLES[field]
     if not isinstance(raw, Mapping):
-        raise CaseError(f"{where}: table '{cls.TABLE}' must be an object with 'columns' and 'rows'")
+        raise CaseError(f"{where}: table '{field}' must be an object with 'columns' and 'rows'")
     unknown = sorted(set(raw) - set(_TABLE_KEYS))
     if unknown:
         raise CaseError(
-            f"{where}: table '{cls.TABLE}' has unknown key(s) {unknown} (a table holds "
+            f"{where}: table '{field}' has unknown key(s) {unknown} (a table holds "
             "'columns' and 'rows'; nothing else is read)"
         )
     cols = raw.get("columns")
     rows = raw.get("rows", [])
     if not isinstance(cols, list) or not all(isinstance(c, str) for c in cols):
-        raise CaseError(f"{where}: table '{cls.TABLE}' has no 'columns' list of names")
+        raise CaseError(f"{where}: table '{field}' has no 'columns' list of names")
     if len(set(cols)) != len(cols):
-        raise CaseError(f"{where}: table '{cls.TABLE}' names a column twice")
+        raise CaseError(f"{where}: table '{field}' names a column twice")
     if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
-        raise CaseError(f"{where}: table '{cls.TABLE}': 'rows' must be a list of rows")
+        raise CaseError(f"{where}: table '{field}': 'rows' must be a list of rows")
     known = cls.columns()
     bad = [c for c in cols if c not in known]
     if bad:
         raise CaseError(
-            f"{where}: table '{cls.TABLE}' has unknown column(s) {bad}; known: {list(known)}"
+            f"{where}: table '{field}' has unknown column(s) {bad}; known: {list(known)}"
         )
-    _check_numbers(rows, cols, f"{where}: table '{cls.TABLE}'")
+    _check_numbers(rows, cols, f"{where}: table '{field}'")
     for i, row in enumerate(rows, start=1):  # each row against the columns named
         if len(row) != len(cols):
             raise CaseError(
-                f"{where}: table '{cls.TABLE}' row {i}: {len(row)} value(s), the table "
+                f"{where}: table '{field}' row {i}: {len(row)} value(s), the table "
                 f"names {len(cols)} columns (wrong column count)"
             )
     from stabctl.case.system import _as_matrix
 
-    mat = _as_matrix(rows, cls.TABLE)
+    mat = _as_matrix(rows, f"{where}: table '{field}'")
     if mat.shape[0] == 0:
         return cls.empty()
     n = mat.shape[0]
-    _check_missing(cls, cols, where)
+    _check_missing(cls, field, cols, where)
     data = {
         c: mat[:, cols.index(c)] if c in cols else np.full(n, float(cls.DEFAULTS.get(c, 0.0)))
         for c in known
@@ -662,7 +691,7 @@ def _table_from_json(cls, raw: Mapping, where: str):
         return cls(**data)
 
 
-def _check_missing(cls, cols: list, where: str) -> None:
+def _check_missing(cls, field: str, cols: list, where: str) -> None:
     """CaseError naming the columns of ``cls`` among its first ``MIN_COLUMNS`` (those a
     PST matrix must give: no default) that ``cols`` leaves out; a warning naming the
     later ones it leaves out, which take their documented defaults (``DEFAULTS``, else
@@ -672,7 +701,7 @@ def _check_missing(cls, cols: list, where: str) -> None:
     needed = [c for c in missing if known.index(c) < cls.MIN_COLUMNS]
     if needed:
         raise CaseError(
-            f"{where}: table '{cls.TABLE}' has no column(s) {needed}: the model needs its "
+            f"{where}: table '{field}' has no column(s) {needed}: the model needs its "
             f"first {cls.MIN_COLUMNS} columns ({known[0]} to {known[cls.MIN_COLUMNS - 1]}); "
             "only later ones have defaults"
         )
@@ -682,7 +711,7 @@ def _check_missing(cls, cols: list, where: str) -> None:
             by_value.setdefault(float(cls.DEFAULTS.get(c, 0.0)), []).append(c)
         taken = "; ".join(f"{', '.join(c)} = {v:g}" for v, c in by_value.items())
         warnings.warn(
-            f"{where}: table '{cls.TABLE}' gives no column(s) {', '.join(missing)}: taken "
+            f"{where}: table '{field}' gives no column(s) {', '.join(missing)}: taken "
             f"at their defaults ({taken})",
             UserWarning,
             stacklevel=5,

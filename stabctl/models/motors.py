@@ -162,21 +162,44 @@ class MotorParams(Declared):
 check_packed(MotorParams, PACKED)
 
 
-def motor_params(case: Case) -> MotorParams:
-    """The motors of a case on the system base (impedances times Sb/Sn, Hm and the torque
-    coefficients times Sn/Sb).
+#: the columns the model divides by or needs positive: resistances, x_m, Hm, the base
+POSITIVE = ("rs", "rr1", "rr2", "xm", "Hm", "mva")
+
+
+def check_table(t) -> None:
+    """Refuse a mot_con row the model cannot run, as the table is made (the table's
+    `_require`, naming the row and field): a column of :data:`POSITIVE` not > 0.
+
+    Parameters
+    ----------
+    t : stabctl.case.MotorTable
+        The motors.
 
     Raises
     ------
     CaseError
-        A resistance, x_m, Hm or mva that is not positive, naming the mot_con row and
-        field.
+        The first row and field refused.
     """
-    t = case.motors
-    for name in ("rs", "rr1", "rr2", "xm", "Hm", "mva"):
-        bad = np.flatnonzero(getattr(t, name) <= 0)
-        if bad.size:
-            t._fail(bad[0], name, "must be > 0")
+    for name in POSITIVE:
+        t._require(getattr(t, name) > 0, name, "must be > 0")
+
+
+def motor_params(case: Case) -> MotorParams:
+    """The motors of a case on the system base (impedances times Sb/Sn, Hm and the torque
+    coefficients times Sn/Sb); the table refused, as it was made, what the model cannot
+    run (`check_table`).
+
+    Parameters
+    ----------
+    case : Case
+        The case (its ``motors``).
+
+    Returns
+    -------
+    MotorParams
+        The motors' constants.
+    """
+    t = case.motors  # its rows checked as the table was made (`check_table`)
     zs = case.base_mva / t.mva  # device-base impedance -> system base
     ps = 1.0 / zs
     rs, xs, rr1, xr1 = t.rs * zs, t.xs * zs, t.rr1 * zs, t.xr1 * zs

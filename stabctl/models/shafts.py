@@ -160,14 +160,37 @@ class ShaftParams(Declared):
 check_packed(ShaftParams, PACKED)
 
 
+#: the masses and stiffnesses the model divides by or needs positive
+POSITIVE = ("MHP", "MIP", "MLP", "MEX", "KHP", "KIP", "KLP", "KEX")
+
+
+def check_table(s) -> None:
+    """Refuse a shaft_con row the model cannot run, as the table is made (the table's
+    `_require`, naming the row and field): a mass or stiffness of :data:`POSITIVE` not
+    > 0.
+
+    Parameters
+    ----------
+    s : stabctl.case.ShaftTable
+        The shafts.
+
+    Raises
+    ------
+    CaseError
+        The first row and field refused.
+    """
+    for name in POSITIVE:
+        s._require(getattr(s, name) > 0, name, "must be > 0")
+
+
 def shaft_params(case: Case) -> ShaftParams:
     """Shaft parameters of a case.
 
     Raises
     ------
     CaseError
-        A shaft on an infinite bus (H = 0), a mass or stiffness that is not positive,
-        naming the shaft_con row.
+        A shaft on an infinite bus (H = 0), naming the shaft_con row (its masses and
+        stiffnesses checked as the table was made, `check_table`).
     """
     s = case.shafts
     rows = np.array([case.machine_index(m) for m in s.machine], int)
@@ -178,9 +201,6 @@ def shaft_params(case: Case) -> ShaftParams:
                 f"shaft_con row {r + 1}, field 'machine': machine {int(s.machine[r])} is an "
                 "infinite bus (H = 0); a shaft needs a rotor that moves"
             )
-        for name in ("MHP", "MIP", "MLP", "MEX", "KHP", "KIP", "KLP", "KEX"):
-            if getattr(s, name)[r] <= 0:
-                raise CaseError(f"shaft_con row {r + 1}, field '{name}': must be > 0")
     return ShaftParams(mac=rows, **{n: getattr(s, n).copy() for n in TABLE_FIELDS}, M_gen=2 * H)
 
 

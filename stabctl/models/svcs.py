@@ -182,6 +182,37 @@ class SvcParams(Declared):
 check_packed(SvcParams, PACKED)
 
 
+def check_table(t) -> None:
+    """Refuse a svc_con row the model cannot run, as the table is made (the table's
+    `_fail`, naming the row and field): mva or K not positive, T5 below 1e-3 s, a lead
+    (T1, T2) without its lag (T3, T4), VMAX < VMIN.
+
+    Parameters
+    ----------
+    t : stabctl.case.SvcTable
+        The compensators.
+
+    Raises
+    ------
+    CaseError
+        The first row and field refused.
+    """
+    for name in ("mva", "K"):
+        bad = np.flatnonzero(getattr(t, name) <= 0)
+        if bad.size:
+            t._fail(bad[0], name, "must be > 0")
+    for lead, lag in (("T1", "T3"), ("T2", "T4")):
+        bad = np.flatnonzero((getattr(t, lag) < LBND) & (getattr(t, lead) >= LBND))
+        if bad.size:
+            t._fail(bad[0], lead, f"a lead needs its lag {lag} >= {LBND} s")
+    bad = np.flatnonzero(t.T5 < LBND)
+    if bad.size:
+        t._fail(bad[0], "T5", f"the thyristor lag must be >= {LBND} s")
+    bad = np.flatnonzero(t.VMAX < t.VMIN)
+    if bad.size:
+        t._fail(bad[0], "VMAX", "must be >= VMIN")
+
+
 def svc_params(case: Case, V: np.ndarray, S_gen: np.ndarray) -> SvcParams:
     """The compensators of a case at the solved power flow (bus voltages V, generation
     S_gen, complex (n_bus,) pu): B0 = qfrac Im(S_gen)/|V|^2 at its bus and V_ref = |V| -
@@ -200,28 +231,11 @@ def svc_params(case: Case, V: np.ndarray, S_gen: np.ndarray) -> SvcParams:
 
     Raises
     ------
-    CaseError
-        mva or K not positive, T5 below 1e-3 s, a lead (T1, T2) without its lag (T3, T4),
-        VMAX < VMIN, naming the svc_con row and field.
     InitialLimitError
         The thyristor's start outside [RMIN/RBASE, 1] or the regulator's outside [VMIN,
         VMAX] (beyond `START_LIMIT_TOL`).
     """
-    t = case.svcs
-    for name in ("mva", "K"):
-        bad = np.flatnonzero(getattr(t, name) <= 0)
-        if bad.size:
-            t._fail(bad[0], name, "must be > 0")
-    for lead, lag in (("T1", "T3"), ("T2", "T4")):
-        bad = np.flatnonzero((getattr(t, lag) < LBND) & (getattr(t, lead) >= LBND))
-        if bad.size:
-            t._fail(bad[0], lead, f"a lead needs its lag {lag} >= {LBND} s")
-    bad = np.flatnonzero(t.T5 < LBND)
-    if bad.size:
-        t._fail(bad[0], "T5", f"the thyristor lag must be >= {LBND} s")
-    bad = np.flatnonzero(t.VMAX < t.VMIN)
-    if bad.size:
-        t._fail(bad[0], "VMAX", "must be >= VMIN")
+    t = case.svcs  # its rows checked as the table was made (`check_table`)
     sb = case.base_mva
     bus_idx = np.asarray(case.bus_indices(t.bus) if len(t) else np.zeros(0, int), np.int64)
     vm = np.abs(V[bus_idx])

@@ -296,7 +296,7 @@ def screening_brackets(path, case: str, digest: str) -> dict:
             fault = LineFault(
                 _whole(f["bus"]),
                 None if f["far_bus"] is None else _whole(f["far_bus"]),
-                _seconds(f["t_fault"]),
+                _seconds(f["t_fault_s"] if "t_fault_s" in f else f["t_fault"]),  # older records
                 _whole(f["circuit"]),
                 tuple((_whole(a), _whole(b)) for a, b in f["trips"]),
             )

@@ -240,6 +240,8 @@ class CCTResult:
     early_stops: int = 0
     #: exciters integrated in sub-intervals at the step (`stabctl.dynamics.subinterval`)
     sub_stepped: int = 0
+    #: the search's longest clearing time tried (`SearchOptions.t_max`, s); None: not given
+    t_max_s: float | None = None
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -265,8 +267,10 @@ class CCTResult:
 
     def to_dict(self) -> dict:
         """JSON-ready summary (times in s, cycles of the case frequency)."""
+        fault = asdict(self.fault)
+        fault["t_fault_s"] = fault.pop("t_fault")  # its unit in its name, as every time's
         return {
-            "fault": asdict(self.fault),
+            "fault": fault,
             "cct_s": self.cct_s,
             "cct_cycles": self.cct_cycles,
             "numerical_error_s": self.numerical_error_s,
@@ -277,6 +281,7 @@ class CCTResult:
             "t_unstable_cycles": self.t_unstable * self.freq_hz,
             "search_bracket_s": list(self.search_bracket),
             "tol_s": self.tol_s,
+            "t_max_s": self.t_max_s,
             "step_s": self.step_s,
             "n_simulations": self.n_simulations,
             "n_simulations_half_step": len(self.half_step_probes),
@@ -519,6 +524,7 @@ def critical_clearing_time(
         t_unstable=_lattice(k_hi, tol),
         search_bracket=start,
         tol_s=tol,
+        t_max_s=t_max,
         step_s=h,
         freq_hz=sim.case.freq_hz,
         n_simulations=len(probes[h]) + len(probes[h / 2]),

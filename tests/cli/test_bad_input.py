@@ -194,32 +194,47 @@ def _set(d, table, field, value, row=0):
             "machines",
             "H",
             0.0,
-            "mac_con row 1 (machine 1), field 'H': inertia constant must be > 0",
+            "table 'machines' row 1 (machine 1), field 'H': inertia constant must be > 0",
         ),
-        ("machines", "Tdop", 0.0, "mac_con row 1 (machine 1), field 'Tdop': T'do must be > 0"),
-        ("machines", "Tdopp", 0.0, "mac_con row 1 (machine 1), field 'Tdopp': T\"do must be > 0"),
+        (
+            "machines",
+            "Tdop",
+            0.0,
+            "table 'machines' row 1 (machine 1), field 'Tdop': T'do must be > 0",
+        ),
+        (
+            "machines",
+            "Tdopp",
+            0.0,
+            "table 'machines' row 1 (machine 1), field 'Tdopp': T\"do must be > 0",
+        ),
         (
             "pss",
             "Tw",
             0.0,
-            "pss_con row 1 (machine 1), field 'Tw': washout time constant must be > 0",
+            "table 'pss' row 1 (machine 1), field 'Tw': washout time constant must be > 0",
         ),
         (
             "pss",
             "T2",
             0.0,
-            "pss_con row 1 (machine 1), field 'T2': first lag time constant must be > 0",
+            "table 'pss' row 1 (machine 1), field 'T2': first lag time constant must be > 0",
         ),
         # "H": true ran as H = 1
-        ("machines", "H", True, "'mac_con' row 1, column 'H': true is not a number"),
-        ("machines", "H", "6.5", "'mac_con' row 1, column 'H': \"6.5\" is not a number"),
+        ("machines", "H", True, "'machines' row 1, column 'H': true is not a number"),
+        ("machines", "H", "6.5", "'machines' row 1, column 'H': \"6.5\" is not a number"),
         ("machines", "xd", 0.2, "field 'xd': x_d must be >= x'd"),
         ("machines", "xdpp", 0.35, "field 'xdp': x'd must be >= x\"d"),
         # reported as power-flow non-convergence
         ("buses", "qmin", 99.0, "field 'qmax': generator Q limits: qmax must be >= qmin"),
         ("buses", "vmin", 1.6, "field 'vmax': voltage limits: vmax must be >= vmin"),
         # a negative tap: "power flow did not converge"
-        ("branches", "tap", -1.0, "line row 1 (1-10), field 'tap': off-nominal tap ratio must be"),
+        (
+            "branches",
+            "tap",
+            -1.0,
+            "table 'branches' row 1 (1-10), field 'tap': off-nominal tap ratio must be",
+        ),
         # H = 1e308 ran, overflowing (numpy's warnings the only word)
         ("machines", "H", 1e308, "field 'H': 1e+308 is beyond +-1e+15: no datum is"),
         ("buses", "pload", -1e16, "field 'pload': -1e+16 is beyond +-1e+15"),
@@ -251,7 +266,7 @@ def test_a_negative_regulator_gain_is_refused_by_every_command(tmp_path, no_simu
     path.write_text(json.dumps(_set(_kundur_dict(), "exciters", "KA", -200.0)))
     assert_error(
         run(command[0], path, *command[1:]),
-        "bad.json: exc_con row 1 (machine 1), field 'KA': must be >= 0, got -200",
+        "bad.json: table 'exciters' row 1 (machine 1), field 'KA': must be >= 0, got -200",
     )
 
 
@@ -315,19 +330,19 @@ def _drop(d, table, column):
     "edit,where",
     [
         # x_d left out ran with x_d = 0 (a classical machine): 0.7145 rad, not 0.7480
-        (lambda d: _drop(d, "machines", "xd"), "table 'mac_con' has no column(s) ['xd']"),
-        (lambda d: _drop(d, "governors", "invR"), "table 'tg_con' has no column(s) ['invR']"),
-        (lambda d: _drop(d, "pss", "T1"), "table 'pss_con' has no column(s) ['T1']"),
+        (lambda d: _drop(d, "machines", "xd"), "table 'machines' has no column(s) ['xd']"),
+        (lambda d: _drop(d, "governors", "invR"), "table 'governors' has no column(s) ['invR']"),
+        (lambda d: _drop(d, "pss", "T1"), "table 'pss' has no column(s) ['T1']"),
         # K_A left out stopped the run with "initial point is not an equilibrium ... nan"
-        (lambda d: _drop(d, "exciters", "KA"), "table 'exc_con' has no column(s) ['KA']"),
+        (lambda d: _drop(d, "exciters", "KA"), "table 'exciters' has no column(s) ['KA']"),
         (
             lambda d: d["tables"]["machines"].update(units="pu"),
-            "table 'mac_con' has unknown key(s) ['units']",
+            "table 'machines' has unknown key(s) ['units']",
         ),
         (lambda d: d["extra"].update(foo=[[1.0]]), "extra: unknown matrix 'foo'"),
         (
             lambda d: _set(d, "machines", "D0", -50.0),
-            "mac_con row 1 (machine 1), field 'D0': must be >= 0, got -50",
+            "table 'machines' row 1 (machine 1), field 'D0': must be >= 0, got -50",
         ),
     ],
 )
@@ -354,7 +369,7 @@ def test_case_file_columns_left_to_their_defaults_are_named(tmp_path):
     path.write_text(json.dumps(_drop(_drop(_kundur_dict(), "machines", "pfrac"), "machines", "D1")))
     with pytest.warns(
         UserWarning,
-        match=r"short.json: table 'mac_con' gives no column\(s\) D1, pfrac: taken at their "
+        match=r"short.json: table 'machines' gives no column\(s\) D1, pfrac: taken at their "
         r"defaults \(D1 = 0; pfrac = 1\)",
     ):
         case = load_case(path)

@@ -339,7 +339,24 @@ def test_simulate_method_trapezoid_runs_and_matches_heun_within_the_step(tmp_pat
     bad = tmp_path / "bad"
     bad.mkdir()
     res = run(*args, "--method", "trapezoid", "--esd-pct", 5, "--out", bad / "x.csv")
-    assert_bad_input(res, bad, "method 'trapezoid' takes no storage devices")
+    assert_bad_input(res, bad, "--method trapezoid cannot be used with --esd-pct", "--method heun")
+
+
+def test_simulate_method_trapezoid_with_pstess_conventions_names_both_options(tmp_path):
+    """--method trapezoid --conventions pstess was refused as "method 'trapezoid' takes
+    the 'exact' event semantics only", naming neither option (finding M): both named,
+    why, and what to give instead, before any work."""
+    res = run(
+        "simulate", "kundur", "--fault", 3, "--far-bus", 101, "--tf", 1.5,
+        "--method", "trapezoid", "--conventions", "pstess", "--out", tmp_path / "x.csv",
+    )  # fmt: skip
+    assert_bad_input(
+        res,
+        tmp_path,
+        "--method trapezoid cannot be used with --conventions pstess, whose event semantics "
+        "are PSTess's",
+        "give --conventions ieee (the default) with --method trapezoid, or --method heun",
+    )
 
 
 def test_pss_e_study_events_in_any_number_and_order():

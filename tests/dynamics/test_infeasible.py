@@ -62,3 +62,28 @@ def test_leave_out_removes_and_names_them(crowded):
 def test_a_feasible_case_is_returned_as_it_is():
     case = load_case("kundur")
     assert leave_out_infeasible(case) == (case, ())
+
+
+def test_a_simple_exciter_whose_output_limit_is_below_its_field_voltage_is_named():
+    """A SEXS (smpexc, exc_con type 0) whose EMAX (Vrmax) = 0.5 pu is below the field
+    voltage its machine starts at passed the start checks: every run then stopped at
+    "the initial point is not an equilibrium ... a model's initialisation disagrees with
+    its dynamics", and --leave-out-infeasible left nothing out (finding F).  Refused
+    naming the limit and the value, and left out by name."""
+    case = load_case("kundur")
+    exc = case.exciters
+    assert set(exc.type) == {0} and (exc.TA >= 1e-3).all()
+    case = case.replace(exciters=exc.replace(Vrmax=np.where(exc.machine == 2, 0.5, exc.Vrmax)))
+    with pytest.raises(InitialLimitError) as err:
+        Simulator(case, background_compile=False)
+    assert (err.value.table, err.value.rows) == ("exc_con", (1,))
+    assert str(err.value).startswith(
+        "exc_con row 2: Vrmax = 0.5 below the initial field voltage E_fd0 = "
+    )
+    assert str(err.value).endswith(" pu: the regulator's output limit cannot deliver it")
+    kept, left = leave_out_infeasible(case)
+    assert len(left) == 1 and left[0].startswith(
+        "exciter of machine 2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0"
+    )
+    assert list(kept.exciters.machine) == [1, 3, 4]
+    assert Simulator(kept, background_compile=False).model.initial_residual[0] < 1e-8

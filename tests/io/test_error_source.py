@@ -261,22 +261,23 @@ def test_a_supported_input_code_of_an_unmodelled_signal_stays_unsupported(tmp_pa
             "Ts",
             0,
             ("Ts",),
-            "tg_con row 1 (machine 1), field 'Ts': must be >= 0.001 s for governor type 2, got 0",
+            "table 'governors' row 1 (machine 1), field 'Ts': must be >= 0.001 s for governor "
+            "type 2, got 0",
         ),
         (
             "pss",
             "machine",
             2,
             ("machine",),
-            "pss_con row 1 (machine 2), field 'machine': machine 2 has no exciter (exc_con) "
-            "for the PSS output",
+            "table 'pss' row 1 (machine 2), field 'machine': machine 2 has no exciter "
+            "(table 'exciters') for the PSS output",
         ),
         (
             "governors",
             "machine",
             2,
             ("machine",),
-            "tg_con row 1 (machine 2), field 'machine': machine 2 is an infinite bus",
+            "table 'governors' row 1 (machine 2), field 'machine': machine 2 is an infinite bus",
         ),
     ],
 )

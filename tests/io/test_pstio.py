@@ -146,7 +146,7 @@ def test_own_format_rejects_wrong_version_and_unknown_column(tmp_path):
         pstio.case_from_dict(data)
     data = pstio.case_to_dict(load_case("kundur"))
     data["tables"]["buses"]["columns"][1] = "voltage"
-    with pytest.raises(CaseError, match=r"table 'bus' has unknown column\(s\) \['voltage'\]"):
+    with pytest.raises(CaseError, match=r"table 'buses' has unknown column\(s\) \['voltage'\]"):
         pstio.case_from_dict(data)
 
 
@@ -163,7 +163,7 @@ def test_validation_errors_surface_through_the_readers(tmp_path):
     data["tables"]["machines"]["rows"][2][15] = -1.0
     p = tmp_path / "negH.json"
     p.write_text(json.dumps(data))
-    with pytest.raises(CaseError, match=r"mac_con row 3 \(machine 3\), field 'H'"):
+    with pytest.raises(CaseError, match=r"table 'machines' row 3 \(machine 3\), field 'H'"):
         load_case(p)
 
 
@@ -279,7 +279,7 @@ def test_a_table_row_of_another_width_is_named_with_file_table_and_counts(tmp_pa
     found = 15 if edit == "append" else 13
     p = tmp_path / "ragged.json"
     p.write_text(json.dumps(data))
-    want = rf"^{p}: table 'line' row 1: {found} value\(s\), the table names 14 columns "
+    want = rf"^{p}: table 'branches' row 1: {found} value\(s\), the table names 14 columns "
     want += r"\(wrong column count\)$"
     with pytest.raises(CaseError, match=want):
         load_case(p)
@@ -289,3 +289,99 @@ def test_a_table_row_of_another_width_is_named_with_file_table_and_counts(tmp_pa
     p.write_text(json.dumps({**mats, "basmva": 100.0, "sys_freq": 60.0}))
     with pytest.raises(CaseError, match=rf"^{p}: line row 1: {found} columns, 13 other row"):
         load_case(p)
+
+
+def _with_motor(d, **values):
+    """The case dict ``d`` with one motor at bus 1 (its declared defaults, ``values``)."""
+    from stabctl.models.motors import MOTOR
+
+    row = {p.name: p.default for p in MOTOR.params} | dict(number=1, bus=1) | values
+    d["tables"]["motors"] = {"columns": list(row), "rows": [list(row.values())]}
+    return d
+
+
+def _set_value(d, table, column, value):
+    t = d["tables"][table]
+    t["rows"][0][t["columns"].index(column)] = value
+    return d
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (lambda d: _set_value(d, "machines", "H", -1), "table 'machines' row 1 (machine 1), "),
+        (lambda d: _set_value(d, "exciters", "TA", -0.05), "table 'exciters' row 1 (machine 1)"),
+        (lambda d: _set_value(d, "governors", "invR", -20), "table 'governors' row 1 (machine"),
+        (lambda d: _set_value(d, "pss", "T2", 0), "table 'pss' row 1 (machine 1), field 'T2'"),
+        (lambda d: _with_motor(d, xm=-5), "table 'motors' row 1 (motor 1), field 'xm'"),
+        (
+            lambda d: d["tables"]["machines"]["rows"][0].pop(),
+            "table 'machines' row 1: 28 value(s), the table names 29 columns",
+        ),
+        (
+            lambda d: _set_value(d, "machines", "bus", 99),
+            "table 'machines' row 1 (machine 1), field 'bus': bus 99 does not exist in table "
+            "'buses'",
+        ),
+        (
+            lambda d: _set_value(d, "exciters", "machine", 9),
+            "table 'exciters' row 1 (machine 9), field 'machine': machine 9 does not exist "
+            "in table 'machines'",
+        ),
+    ],
+)
+def test_a_case_file_s_errors_name_its_tables_as_it_names_them(tmp_path, edit, needle):
+    """A stabctl case file names its tables machines, exciters, ...: its errors named
+    PST's mac_con, exc_con, ... instead (finding H).  A PSTess matrix file keeps PST's."""
+    d = pstio.case_to_dict(load_case("kundur"))
+    edit(d)
+    p = tmp_path / "c.json"
+    p.write_text(json.dumps(d))
+    with pytest.raises(CaseError) as err:
+        load_case(p)
+    assert str(err.value).startswith(f"{p}: {needle}"), str(err.value)
+    assert "_con" not in str(err.value)
+
+
+def test_a_pstess_matrix_file_s_errors_keep_pst_table_names(tmp_path):
+    mats = json.loads((DATA / "d2asbegp.json").read_text())
+    mats["mac_con"][0][15] = -1.0  # H
+    p = tmp_path / "m.json"
+    p.write_text(json.dumps(mats))
+    with pytest.raises(CaseError, match=r"m.json: mac_con row 1 \(machine 1\), field 'H'"):
+        load_case(p)
+
+
+@pytest.mark.parametrize("field", ["Hm", "rs", "rr1", "rr2", "xm", "mva"])
+def test_a_motor_the_model_cannot_run_is_refused_as_the_file_is_read(tmp_path, field):
+    """A motor's Hm = 0 was refused only when the model was built, its error without the
+    file (finding I): refused as the case is read, the file first."""
+    d = _with_motor(pstio.case_to_dict(load_case("kundur")), **{field: 0})
+    p = tmp_path / "m.json"
+    p.write_text(json.dumps(d))
+    with pytest.raises(CaseError) as err:
+        load_case(p)
+    assert str(err.value) == (
+        f"{p}: table 'motors' row 1 (motor 1), field '{field}': must be > 0, got 0"
+    )
+
+
+def test_another_tool_s_case_is_pointed_to_its_importer(tmp_path):
+    """An ANDES JSON case given where a case is read was "neither a stabctl case nor a
+    PSTess matrix JSON" (finding O): named as ANDES's, with the command converting it;
+    an xlsx or RAW file the same."""
+    p = tmp_path / "a.json"
+    p.write_text(json.dumps({"Bus": [{"idx": 1, "u": 1.0, "Vn": 69.0}], "Line": []}))
+    with pytest.raises(CaseError) as err:
+        load_case(p)
+    assert str(err.value) == (
+        f"{p}: an ANDES JSON case (its model tables Bus, Line, ...), not a stabctl case: "
+        f"convert it first with `stabctl import-andes {p} -o case.json`"
+    )
+    for suffix, command in ((".xlsx", "import-andes"), (".raw", "import-psse")):
+        q = tmp_path / f"c{suffix}"
+        q.write_text("x")
+        with pytest.raises(CaseError) as err:
+            load_case(q)
+        assert str(err.value).startswith(f"{q}: unknown case file type (expected .json or .m); ")
+        assert f"`stabctl {command} {q} " in str(err.value)

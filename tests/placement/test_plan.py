@@ -358,7 +358,8 @@ def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(
         "key": "k2",
         "result": {
             **ok["result"],
-            "fault": {"bus": 1, "far_bus": None, "t_fault": 1.0, "circuit": 1, "trips": []},
+            # records written since the fault's start is "t_fault_s" (ok's: before)
+            "fault": {"bus": 1, "far_bus": None, "t_fault_s": 1.0, "circuit": 1, "trips": []},
         },
     }
     stored = {**ok, "key": "k3", "inputs": {"esd_pct": 5.0}}  # with storage

@@ -21,7 +21,7 @@ import numpy as np
 from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import LBND, clip, lag, leadlag_input_state, nonwindup_lag
-from stabctl.models.declaration import DyrModel, Limits, Param, states
+from stabctl.models.declaration import DyrModel, Limits, Param, beyond, states
 from stabctl.models.exciters.table import REGULATOR_GAIN, E, own
 
 if TYPE_CHECKING:
@@ -112,13 +112,33 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     lag Efd0 (bus fed: Efd0/V_t); writes x, returns (V_ref - V_TR, p).
 
     Raises CaseError (`refuse_initial`) for an SCRX with rc/rfd != 0 whose Efd0 (its
-    field current at rest) is <= 0."""
+    field current at rest) is <= 0, and for a lag T_A whose output limits [Vrmin, Vrmax]
+    (PSS/E's EMIN, EMAX; bus fed, times V_t) do not hold Efd0."""
     refuse_initial(
         "exc_con",
         r & (p.rc_rfd != 0) & (vex <= 0),
         lambda k: (
             f"exc_con row {k + 1}: SCRX's start-up field current {vex[k]:.4f} pu is not "
             f"positive, where rc/rfd = {p.rc_rfd[k]:g} holds it on the discharge resistor"
+        ),
+    )
+    # the Efd state, limited to [Vrmin, Vrmax] where T_A gives it (both conventions clip
+    # it), must hold the field voltage the machine needs: a limit short of it starts the
+    # run off its rest point (PSS/E: "initial conditions suspect")
+    state = np.where(p.KG == 1, vex / np.where(eterm != 0, eterm, 1.0), vex)
+    refuse_initial(
+        "exc_con",
+        r & (p.TA >= LBND) & beyond(state, p.Vrmin, p.Vrmax),
+        lambda k: (
+            f"exc_con row {k + 1}: "
+            + (
+                f"Vrmax = {p.Vrmax[k]:.4g} below"
+                if state[k] > p.Vrmax[k]
+                else f"Vrmin = {p.Vrmin[k]:.4g} above"
+            )
+            + f" the initial field voltage E_fd0 = {state[k]:.4f} pu"
+            + (" (over V_t, bus fed)" if p.KG[k] == 1 else "")
+            + ": the regulator's output limit cannot deliver it"
         ),
     )
     bus_fed = p.KG[r] == 1
