@@ -28,6 +28,25 @@ from stabctl.parallel import atomic_write
 #: the `Partition` fields written to a .npz (`SimulationResult.to_npz`), in its order
 PARTITION_FIELDS = ("t_s", "island", "inertia", "judged", "tripped")
 
+#: the unit of each array `SimulationResult.to_npz` writes (its ``units`` array, "name:
+#: unit" strings); the class docstring's Attributes say the same
+NPZ_UNITS = {
+    "t": "s",
+    "speed": "pu (1 = synchronous)",
+    "angle": "rad (synchronous frame)",
+    "pelect": "pu on the system base",
+    "pmech": "pu on the machine base",
+    "efd": "pu",
+    "vmag": "pu",
+    "vang": "rad",
+    "inertia": "MW s (H * MVA)",
+    "pesd": "pu on the system base (+ absorbs)",
+    "ibr_p": "pu on the system base",
+    "ibr_q": "pu on the system base",
+    "verdict": "[stable (1/0), t_separation s or NaN]",
+    "partition_t_s": "s",
+}
+
 SERIES = ("speed", "angle", "pelect", "pmech", "efd")
 SERIES_UNITS = {
     "speed": "speed_pu",
@@ -383,7 +402,8 @@ class SimulationResult:
     def to_npz(self, path: str | os.PathLike) -> Path:
         """Write every array and the verdict to a compressed .npz, atomically (temporary
         file beside it, then rename); `meta` is not written, `partitions` (if any) as one
-        array per field (``partition_t_s``, ``partition_island``, ...).
+        array per field (``partition_t_s``, ``partition_island``, ...); ``units`` holds
+        each array's unit as "name: unit" strings (`NPZ_UNITS`).
 
         Parameters
         ----------
@@ -403,6 +423,7 @@ class SimulationResult:
         if self.partitions:  # files of runs without trips or splits as before
             for name in PARTITION_FIELDS:
                 arrays[f"partition_{name}"] = np.array([getattr(p, name) for p in self.partitions])
+        arrays["units"] = np.array([f"{k}: {NPZ_UNITS[k]}" for k in arrays if k in NPZ_UNITS])
         return atomic_write(path, lambda f: np.savez_compressed(f, **arrays), mode="wb")
 
     @classmethod
@@ -421,6 +442,7 @@ class SimulationResult:
         """
         with np.load(path) as z:
             d = {k: z[k] for k in z.files}
+        d.pop("units", None)  # (files written before it have none)
         stable, tsep = d.pop("verdict")
         sep = list(d.pop("separated"))
         parts = {name: d.pop(f"partition_{name}", ()) for name in PARTITION_FIELDS}

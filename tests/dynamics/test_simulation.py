@@ -352,6 +352,12 @@ def test_npz_round_trip(case1, tmp_path):
     assert back.t_separation == pytest.approx(case1.t_separation)
     assert back.columns()[0] == expected_columns(case1)
     assert [p.name for p in tmp_path.iterdir()] == ["run.npz"]
+    with np.load(path) as z:  # every array's unit in the file, as the docstring gives it
+        units = dict(u.split(": ", 1) for u in z["units"])
+    assert units["speed"] == "pu (1 = synchronous)" and units["angle"].startswith("rad")
+    assert units["pelect"] == "pu on the system base"
+    assert units["pmech"] == "pu on the machine base" and units["t"] == "s"
+    assert {"vmag", "vang", "efd", "inertia", "verdict"} <= set(units)
 
 
 def test_simultaneous_near_and_far_clearing_keeps_psts_zero_length_stage(kundur_pstess):
