@@ -233,11 +233,13 @@ def serve(
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
     noise, lost frames as absent data).  Each PDC that says 'start' has a session of its
-    own, named on stderr as it ends: whole (every frame sent, and the last taken: the PDC
-    says 'stop' or closes after it), or cut by what the PDC did (said 'stop', closed the
-    connection, reset it with frames unread, took no frame for --timeout s) and the frames
-    sent; each peer refused or dropped is named as it is.  Exits once a PDC has been sent
-    the stream whole and none is streaming (exit status 0, "sent N of N frames"); if
+    own, named on stderr as it ends: whole (every frame sent, and the PDC closed the
+    connection in order after the last, within --timeout s: the evidence it read them),
+    or cut by what the PDC did (said 'stop' and left: 'stop' pauses, 'start' resumes;
+    closed the connection, reset it with frames unread, took no frame for --timeout s,
+    stayed connected after the last frame) and the frames sent; each peer refused or
+    dropped is named as it is.  Exits once a PDC has been sent the stream whole and none
+    is streaming (exit status 0, "sent N of N frames"); if
     every session was cut and no peer comes for --wait s after the last, exits with an
     error naming each cut session (exit status 2: the stream was not sent whole).
 
