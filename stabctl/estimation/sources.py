@@ -322,7 +322,8 @@ def unused_values(flagged: dict) -> str:
     if not flagged:
         return ""
     why = ", ".join(f"{n} {reason}" for reason, n in flagged.items())
-    by = "STAT or time quality" if c37.TIME_QUALITY_FAULT[2] in flagged else "STAT"
+    fracsec = {why for _, _, why in c37.TIME_QUALITY_UNUSABLE}
+    by = "STAT or time quality" if fracsec.intersection(flagged) else "STAT"
     return f"{sum(flagged.values())} PMU values not used by their {by} ({why})"
 
 

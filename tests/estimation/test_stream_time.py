@@ -76,6 +76,43 @@ def test_a_clock_failure_makes_the_frame_s_values_unusable(wire, tmp_path):
     assert leap.exit_code == 0 and "not used" not in leap.stdout, leap.output
 
 
+def _stat(cfg2, frame: bytes, bits: int) -> bytes:
+    """frame with `bits` set in every PMU's STAT word, its CRC valid."""
+    out, at = bytearray(frame), 14
+    for b in c37.blocks(cfg2):
+        stat = int.from_bytes(out[at : at + 2], "big") | bits
+        out[at : at + 2] = stat.to_bytes(2, "big")
+        at += b.size
+    return _crc(bytes(out))
+
+
+@pytest.mark.parametrize(
+    "edit, reason",
+    [
+        ("q0B", "clock error up to 10 s (FRACSEC time quality 0xB)"),
+        ("q06", "clock error up to 100 us (FRACSEC time quality 0x6)"),
+        ("s0030", "clock unlocked for over 1000 s (STAT bits 5-4 = 11)"),
+        ("s01C0", "PMU time error over 10 ms or unknown (STAT bits 8-6 = 111)"),
+        ("s0100", "PMU time error up to 100 us (STAT bits 8-6 = 100)"),
+    ],
+)
+def test_time_quality_beyond_10_us_is_named_and_not_used(wire, tmp_path, edit, reason):
+    """FRACSEC time quality 0xB (clock unlocked, error up to 10 s), STAT bits 5-4 = 11
+    (unlocked over 1000 s) or bits 8-6 = 111 (time error over 10 ms) were tracked as
+    good data without a word.  A value is used only if its time is known to within 10 us
+    (1 % TVE is 26.5 us at 60 Hz): the others are not used, counted and named; FRACSEC
+    code 0x5 (10 us), STAT bits 8-6 = 011 and bits 5-4 = 10 leave the values used."""
+    cfg2, head, body = wire
+    value = int(edit[1:], 16)
+    mark = (lambda f: _quality(f, value)) if edit[0] == "q" else (lambda f: _stat(cfg2, f, value))
+    assert c37.flags(cfg2, mark(body[50])) == [reason] * 4
+    res = _track(tmp_path, head, body[:45] + [mark(f) for f in body[45:]])
+    assert res.exit_code == 0, res.output
+    assert "184 PMU values not used by their " in res.stdout and f"(184 {reason})" in res.stdout
+    for fine in (_quality(body[50], 0x05), _stat(cfg2, body[50], 0x00E0)):
+        assert c37.flags(cfg2, fine) == [""] * 4
+
+
 def test_frames_off_the_data_rate_s_instants_are_refused(wire, tmp_path):
     """Frames 1/50 s apart in a stream whose CFG-2 says 60 frames/s were tracked, exit 0:
     the second frame is refused by name, with the count of such frames."""
