@@ -862,18 +862,36 @@ def frame_time(data: bytes, cfg2) -> float:
 
 
 def recorded_frames(path) -> tuple:
-    """(CFG-2 as pyc37 reads it, the data frames' bytes) of a recording.
+    """(CFG-2 as pyc37 reads it, the data frames' bytes) of a recording.  The frames
+    after the first that are not data frames are checked as a receiver checks them on a
+    stream (`check_stream_frame`: their CRC; a CFG-2 must be the first one resent, its
+    time stamp aside) and left out: a header, CFG-1, CFG-3 or command frame carries no
+    measurement, and the data frames after a changed CFG-2 would be read by a layout
+    that is not theirs.
 
     Raises
     ------
     InputError
         An empty file, a first frame that is not a configuration frame, or a broken one
-        (`split_frames`).
+        (`split_frames`); a later frame other than a data frame whose CRC fails, or a
+        CFG-2 that changes the configuration, named by its place (the data frames before
+        it) and the field that changed (`config_change`).
     """
     frames = split_frames(Path(path).read_bytes(), f"C37.118.2 recording {path}")
     if not frames:
         raise InputError(f"{path}: empty C37.118.2 recording")
-    return read_config(frames[0], f"{path}: first frame"), frames[1:]
+    cfg2, data = read_config(frames[0], f"{path}: first frame"), []
+    for k, frame in enumerate(frames[1:]):
+        if frame_kind(frame) == "data frame":
+            data.append(frame)
+            continue
+        try:
+            check_stream_frame(cfg2, frame)
+        except InputError as exc:
+            raise InputError(
+                f"{path}: frame {k + 2}, after data frame {len(data)}: {exc}"
+            ) from None
+    return cfg2, data
 
 
 def read_config(data: bytes, what: str):

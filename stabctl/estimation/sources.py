@@ -409,8 +409,8 @@ def check_order(data, cfg2, what: str) -> None:
     data : sequence of bytes
         The data frames, in order.
     cfg2 : pyc37 ConfigFrame2
-        Their stream's configuration frame (its TIME_BASE and DATA_RATE; a DATA_RATE of
-        0 or less, a period, is refused elsewhere and its grid not checked here).
+        Their stream's configuration frame (its TIME_BASE and DATA_RATE: frames per
+        second, or, negative, seconds per frame; 0 is refused).
     what : str
         Their source, for messages (``stream 2``, a recording's path).
 
@@ -423,6 +423,21 @@ def check_order(data, cfg2, what: str) -> None:
     base, rate = cfg2.get_time_base(), cfg2.get_data_rate()
     counts = np.array([int.from_bytes(d[11:14], "big") for d in data], np.int64)
     stamps = np.array([int.from_bytes(d[6:10], "big") for d in data], np.int64) * base + counts
+    if rate == 0:
+        raise InputError(f"{what}: its CFG-2's DATA_RATE is 0, no rate (C37.118.2-2011 Table 8)")
+    if rate < 0 and len(data):
+        # a period: one frame every -rate s, each at a second's rollover (within a count)
+        soc = stamps // base - stamps[0] // base
+        off = np.minimum(counts, base - counts) > 1
+        if (bad := np.flatnonzero(off | (soc % -rate != 0))).size:
+            k = int(bad[0])
+            raise InputError(
+                f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
+                f"second, {int(soc[k])} s after the first, not a reporting instant of its "
+                f"CFG-2's DATA_RATE {rate} (negative: one frame every {-rate} s, at a "
+                f"second's rollover, C37.118.2-2011 Table 8); {bad.size} such frame(s): a "
+                "stream at another rate than its CFG-2 says"
+            )
     if rate > 0 and len(data):
         # counts * rate / base is the instant's number in its second: an integer, within
         # one count (rate / base of a frame) of one

@@ -158,3 +158,50 @@ def test_a_long_gap_restarts_the_estimator(wire, tmp_path, seconds):
     )
     assert "(the estimator restarts after it)" in res.stdout
     assert _largest_mhz(res) == pytest.approx(_largest_mhz(whole), rel=0.05)
+
+
+def _config(head: bytes, time_base=None, rate=None) -> bytes:
+    """The CFG-2 frame with TIME_BASE (bytes 14-17) or DATA_RATE (the int16 before its
+    CHK) changed, its CRC valid."""
+    out = bytearray(head)
+    if time_base is not None:
+        out[14:18] = time_base.to_bytes(4, "big")
+    if rate is not None:
+        out[-4:-2] = rate.to_bytes(2, "big", signed=True)
+    return _crc(bytes(out))
+
+
+def test_a_cfg2_inside_a_recording_is_named_not_read_as_a_data_frame(wire, tmp_path):
+    """A second CFG-2 after data frame 60 was called "data frame 61 goes back from the
+    time stamp of frame 60".  One that changes the configuration is refused naming the
+    frame, the data frames before it and the field; the same CFG-2 resent is left out,
+    as a receiver leaves it out of a stream."""
+    _, head, body = wire
+    res = _track(tmp_path, head, body[:60] + [_config(head, time_base=1000)] + body[60:])
+    assert res.exit_code == 2, res.output
+    assert (
+        "frame 62, after data frame 60: a CFG-2 that changes the stream's configuration "
+        "(TIME_BASE 1000 where the CFG-2 in use has 1000000)"
+    ) in res.stderr, res.stderr
+    res = _track(tmp_path, head, body[:60] + [head] + body[60:])
+    assert res.exit_code == 0 and "tracked 91 frames" in res.stdout, res.output
+
+
+def test_replay_refuses_a_negative_data_rate_its_frames_do_not_keep(wire, tmp_path):
+    """`pmu replay` of a recording whose CFG-2 says DATA_RATE -1 (one frame a second)
+    with frames 1/60 s apart listened and served it: the rate grid was not checked for a
+    DATA_RATE <= 0.  Refused before listening, naming DATA_RATE; a stream of one frame a
+    second is served."""
+    _, head, body = wire
+    path = tmp_path / "r.c37"
+    path.write_bytes(_config(head, rate=-1) + b"".join(body))
+    args = ["pmu", "replay", str(path), "--port", "0", "--wait", "1", "--timeout", "1"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and "serving" not in res.stderr, res.output
+    assert (
+        "data frame 2 is stamped 0.016667 s into its second, 0 s after the first, not a "
+        "reporting instant of its CFG-2's DATA_RATE -1 (negative: one frame every 1 s"
+    ) in res.stderr, res.stderr
+    from stabctl.estimation.sources import check_order
+
+    check_order(body[::60], c37.read_config(_config(head, rate=-1), "CFG-2"), "ok")
