@@ -49,6 +49,7 @@ import re
 import shutil
 import signal
 import socket
+import stat
 import sys
 import tempfile
 import time
@@ -426,8 +427,10 @@ def set_aside_damaged(
 def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -> Path:
     """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
     that writers choosing the format by extension still do), renamed over `path` only when
-    complete; the temporary file is removed if writing fails.  The file gets the mode
-    ``open`` gives a new one (0o666 less the umask).  The one atomic write of stabctl.
+    complete; the temporary file is removed if writing fails.  A file replaced keeps its
+    permission bits (a records file of mode 0640 repaired stays 0640); a new one gets the
+    mode ``open`` gives a new file (0o666 less the umask).  The one atomic write of
+    stabctl.
     A symbolic link stays: the file it points to is the one replaced; a link that leads
     nowhere (broken, or a loop) is an error, and no directory it points to is created.
     A path that is neither a file nor a directory (a device or pipe: ``/dev/stdout``, a
@@ -476,7 +479,11 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
                 else:
                     with os.fdopen(fd, mode) as f:
                         write(f)
-                os.chmod(tmp, 0o666 & ~_umask())  # as open() makes a new file (mkstemp: 0o600)
+                try:  # the file replaced keeps its mode; a new one as open() makes it
+                    keep = stat.S_IMODE(os.stat(path).st_mode) if path.is_file() else None
+                except OSError:
+                    keep = None
+                os.chmod(tmp, 0o666 & ~_umask() if keep is None else keep)  # mkstemp: 0o600
                 os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)

@@ -1158,6 +1158,26 @@ def test_a_job_recorded_twice_is_refused_unless_the_first_failed(tmp_path):
         read_records(out)
 
 
+def test_a_repaired_records_file_keeps_its_mode(tmp_path):
+    """A records file of mode 0640 repaired (a cut last line set aside) under umask 0002
+    became 0664: `atomic_write` gave the file it replaced a new file's mode.  A file
+    replaced keeps its permission bits; a new one still follows the umask."""
+    out = tmp_path / "r.jsonl"
+    old = os.umask(0o002)
+    try:
+        run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+        out.chmod(0o640)
+        with out.open("a") as f:
+            f.write('{"key": "square/2", "inp')
+        with pytest.warns(UserWarning, match="not a whole sweep record"):
+            run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+        atomic_write(tmp_path / "new.txt", lambda f: f.write("x"))
+    finally:
+        os.umask(old)
+    assert out.stat().st_mode & 0o777 == 0o640
+    assert (tmp_path / "new.txt").stat().st_mode & 0o777 == 0o664
+
+
 def test_atomic_write_keeps_links_and_writes_devices_in_place(tmp_path):
     """A link named as the output stays a link (its file is replaced), and a device such
     as /dev/null (or /dev/stdout) is written in place: never a regular file renamed over
