@@ -124,7 +124,8 @@ class SweepReport:
     """Outcome of `run_sweep`: `records` maps every job key (in job order) to its line in
     the output file (finished now or before); ran / skipped / failed count this call's
     jobs (failed: among those run now); failed_before counts the jobs recorded as failed
-    before and not run again (without `retry_failed`); wall_time_s is this call's."""
+    before and not run again (without `retry_failed`), failed_before_keys their keys;
+    wall_time_s is this call's."""
 
     out: Path
     records: dict
@@ -133,6 +134,7 @@ class SweepReport:
     failed: int
     wall_time_s: float
     failed_before: int = 0
+    failed_before_keys: tuple = ()
 
 
 #: Dask runs a job again this many times when its task fails outside `run_job` (which
@@ -814,7 +816,9 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
     ]
     rerun = {j.key for j in todo}
-    failed_before = sum(j.key not in rerun and done[j.key]["status"] == "failed" for j in jobs)
+    failed_keys = tuple(
+        j.key for j in jobs if j.key not in rerun and done[j.key]["status"] == "failed"
+    )
     wall = time.perf_counter()
     failed = written = 0
     if todo:
@@ -842,7 +846,8 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         skipped=len(jobs) - len(todo),
         failed=failed,
         wall_time_s=time.perf_counter() - wall,
-        failed_before=failed_before,
+        failed_before=len(failed_keys),
+        failed_before_keys=failed_keys,
     )
 
 

@@ -1519,3 +1519,26 @@ def test_a_write_past_the_file_size_limit_names_the_file(tmp_path):
     with pytest.raises(FileNotFoundError) as caught:
         atomic_write(tmp_path / "x.csv", other)
     assert caught.value.filename == str(tmp_path / "missing" / "y")
+
+
+def test_screen_says_a_failure_is_an_earlier_run_s_and_retry_failed_reruns_it(tmp_path):
+    """`screen` showed a search recorded as failed by an earlier run as this run's result,
+    with no hint and no --retry-failed: the row is marked recorded before, the last line
+    says --retry-failed reruns it, and --retry-failed does (sweep-cct's code path)."""
+    out = tmp_path / "sc.jsonl"
+    args = ["screen", "kundur", "--buses", "3", "--workers", "1", "--tol-ms", "20"]
+    assert CliRunner().invoke(main, [*args, "--out", str(out)]).exit_code == 0
+    rec = json.loads(out.read_text())
+    rec.update(status="failed", error="SimulationError: diverged")
+    rec.pop("result", None)
+    rec.pop("verdict", None)
+    out.write_text(json.dumps(rec) + "\n")
+    res = CliRunner().invoke(main, [*args, "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "SimulationError: diverged (recorded before)" in res.stdout
+    assert res.stdout.endswith(
+        "1 search(es) recorded as failed before were not run again; --retry-failed reruns them\n"
+    )
+    res = CliRunner().invoke(main, [*args, "--out", str(out), "--retry-failed"])
+    assert res.exit_code == 0 and "1 CCT(s) found" in res.stdout, res.output
+    assert "recorded before" not in res.stdout
