@@ -407,13 +407,16 @@ def record(address, out, frames, idcode):
     or a frame is refused) is written as far as it
     came, up to the frame refused, and named an error (exit status 2: the recording is
     partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
-    left as it was).
+    left as it was).  Reporting instants the stream skipped (gaps) are counted and named
+    with the frames recorded.
 
     \b
     Example:
       stabctl pmu record 127.0.0.1:4712 --frames 3600 -o wecc.c37
     """
+    from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import End, receive
+    from stabctl.estimation.sources import stream_gaps
     from stabctl.parallel import atomic_write
 
     host, port = _host_port(address)
@@ -426,7 +429,10 @@ def record(address, out, frames, idcode):
     atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
     if got.short:
         fail_short(out, why, kept)
-    click.echo(f"recorded {len(got.data)} frames from {address} to {out}")
+    gaps = stream_gaps(got.data, c37.read_config(got.cfg2, "the CFG-2"))
+    click.echo(
+        f"recorded {len(got.data)} frames from {address} to {out}" + (f"; {gaps}" if gaps else "")
+    )
 
 
 def _host_port(address: str) -> tuple[str, int]:

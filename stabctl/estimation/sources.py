@@ -212,6 +212,43 @@ def gap_line(received: Received) -> str:
     )
 
 
+def stream_gaps(data, cfg2) -> str:
+    """The reporting instants of its CFG-2's DATA_RATE that a stream's data frames skip,
+    for a summary line (`pmu record`): ``N reporting instants missing in G gap(s): n1
+    after t = ... s, to ... s; ...`` (the first five named; t = 0 is the CFG-2's time
+    stamp); '' if none.
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames, in order (`check_data_frame` passed).
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame (DATA_RATE frames per second, or, negative,
+        seconds per frame; 0: no rate, nothing said).
+
+    Returns
+    -------
+    str
+        The gaps, or ''.
+    """
+    rate = cfg2.get_data_rate()
+    if not rate or len(data) < 2:
+        return ""
+    per_s = rate if rate > 0 else 1.0 / -rate
+    soc = cfg2.get_soc()
+    t = [c37.frame_time(d, cfg2) - soc for d in data]
+    k = [round(x * per_s) for x in t]
+    gaps = [(t[j - 1], t[j], lost) for j in range(1, len(t)) if (lost := k[j] - k[j - 1] - 1) > 0]
+    if not gaps:
+        return ""
+    named = "; ".join(f"{n} after t = {a:.4f} s, to {b:.4f} s" for a, b, n in gaps[:5])
+    more = f"; {len(gaps) - 5} more" if len(gaps) > 5 else ""
+    return (
+        f"{sum(n for _, _, n in gaps)} reporting instants missing in {len(gaps)} gap(s): "
+        f"{named}{more}"
+    )
+
+
 def read_frames(
     source: Source,
     case,
