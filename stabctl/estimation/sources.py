@@ -490,9 +490,19 @@ def check_order(data, cfg2, what: str) -> None:
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
         how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
+        # FRACSEC's time quality byte: bit 4 leap second pending, bit 5 leap second
+        # occurred (C37.118.2-2011 Table 3)
+        leap = any(d[10] & 0x30 for d in data[max(k - 1, 0) : k + 1])
+        why = (
+            ": a leap second, as its FRACSEC leap-second bits flag (C37.118.2-2011 Table 3: "
+            "a second's SOC repeated), which is not read across; split the stream there"
+            if leap
+            else ""
+        )
         raise InputError(
             f"{what}: data frame {k + 1} {how} the time stamp of frame {k} "
             f"({c37.frame_time(data[k - 1], cfg2):.6f} s, UNIX); {bad.size} such frame(s)"
+            f"{why}"
         )
 
 

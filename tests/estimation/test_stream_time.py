@@ -205,3 +205,16 @@ def test_replay_refuses_a_negative_data_rate_its_frames_do_not_keep(wire, tmp_pa
     from stabctl.estimation.sources import check_order
 
     check_order(body[::60], c37.read_config(_config(head, rate=-1), "CFG-2"), "ok")
+
+
+def test_a_leap_second_is_named_where_the_stream_goes_back(wire, tmp_path):
+    """A stream across a positive leap second (frames flagged leap pending, one second's
+    SOC repeated, then flagged leap occurred) was refused as "goes back" with no word of
+    the leap second its frames flag: the refusal names it."""
+    _, head, body = wire
+    pending = [_quality(f, 0x10) for f in body[:60]]
+    again = [_later(_quality(f, 0x20), -1_000_000) for f in body[60:]]
+    res = _track(tmp_path, head, pending + again)
+    assert res.exit_code == 2, res.output
+    assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
+    assert "a leap second, as its FRACSEC leap-second bits flag" in res.stderr, res.stderr
