@@ -49,6 +49,7 @@ import re
 import shutil
 import signal
 import socket
+import stat
 import sys
 import tempfile
 import time
@@ -123,7 +124,8 @@ class SweepReport:
     """Outcome of `run_sweep`: `records` maps every job key (in job order) to its line in
     the output file (finished now or before); ran / skipped / failed count this call's
     jobs (failed: among those run now); failed_before counts the jobs recorded as failed
-    before and not run again (without `retry_failed`); wall_time_s is this call's."""
+    before and not run again (without `retry_failed`), failed_before_keys their keys;
+    wall_time_s is this call's."""
 
     out: Path
     records: dict
@@ -132,6 +134,7 @@ class SweepReport:
     failed: int
     wall_time_s: float
     failed_before: int = 0
+    failed_before_keys: tuple = ()
 
 
 #: Dask runs a job again this many times when its task fails outside `run_job` (which
@@ -426,8 +429,10 @@ def set_aside_damaged(
 def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -> Path:
     """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
     that writers choosing the format by extension still do), renamed over `path` only when
-    complete; the temporary file is removed if writing fails.  The file gets the mode
-    ``open`` gives a new one (0o666 less the umask).  The one atomic write of stabctl.
+    complete; the temporary file is removed if writing fails.  A file replaced keeps its
+    permission bits (a records file of mode 0640 repaired stays 0640); a new one gets the
+    mode ``open`` gives a new file (0o666 less the umask).  The one atomic write of
+    stabctl.
     A symbolic link stays: the file it points to is the one replaced; a link that leads
     nowhere (broken, or a loop) is an error, and no directory it points to is created.
     A path that is neither a file nor a directory (a device or pipe: ``/dev/stdout``, a
@@ -476,7 +481,11 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
                 else:
                     with os.fdopen(fd, mode) as f:
                         write(f)
-                os.chmod(tmp, 0o666 & ~_umask())  # as open() makes a new file (mkstemp: 0o600)
+                try:  # the file replaced keeps its mode; a new one as open() makes it
+                    keep = stat.S_IMODE(os.stat(path).st_mode) if path.is_file() else None
+                except OSError:
+                    keep = None
+                os.chmod(tmp, 0o666 & ~_umask() if keep is None else keep)  # mkstemp: 0o600
                 os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
@@ -807,7 +816,9 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
     ]
     rerun = {j.key for j in todo}
-    failed_before = sum(j.key not in rerun and done[j.key]["status"] == "failed" for j in jobs)
+    failed_keys = tuple(
+        j.key for j in jobs if j.key not in rerun and done[j.key]["status"] == "failed"
+    )
     wall = time.perf_counter()
     failed = written = 0
     if todo:
@@ -835,7 +846,8 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         skipped=len(jobs) - len(todo),
         failed=failed,
         wall_time_s=time.perf_counter() - wall,
-        failed_before=failed_before,
+        failed_before=len(failed_keys),
+        failed_before_keys=failed_keys,
     )
 
 

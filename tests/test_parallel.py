@@ -1158,6 +1158,26 @@ def test_a_job_recorded_twice_is_refused_unless_the_first_failed(tmp_path):
         read_records(out)
 
 
+def test_a_repaired_records_file_keeps_its_mode(tmp_path):
+    """A records file of mode 0640 repaired (a cut last line set aside) under umask 0002
+    became 0664: `atomic_write` gave the file it replaced a new file's mode.  A file
+    replaced keeps its permission bits; a new one still follows the umask."""
+    out = tmp_path / "r.jsonl"
+    old = os.umask(0o002)
+    try:
+        run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+        out.chmod(0o640)
+        with out.open("a") as f:
+            f.write('{"key": "square/2", "inp')
+        with pytest.warns(UserWarning, match="not a whole sweep record"):
+            run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+        atomic_write(tmp_path / "new.txt", lambda f: f.write("x"))
+    finally:
+        os.umask(old)
+    assert out.stat().st_mode & 0o777 == 0o640
+    assert (tmp_path / "new.txt").stat().st_mode & 0o777 == 0o664
+
+
 def test_atomic_write_keeps_links_and_writes_devices_in_place(tmp_path):
     """A link named as the output stays a link (its file is replaced), and a device such
     as /dev/null (or /dev/stdout) is written in place: never a regular file renamed over
@@ -1499,3 +1519,26 @@ def test_a_write_past_the_file_size_limit_names_the_file(tmp_path):
     with pytest.raises(FileNotFoundError) as caught:
         atomic_write(tmp_path / "x.csv", other)
     assert caught.value.filename == str(tmp_path / "missing" / "y")
+
+
+def test_screen_says_a_failure_is_an_earlier_run_s_and_retry_failed_reruns_it(tmp_path):
+    """`screen` showed a search recorded as failed by an earlier run as this run's result,
+    with no hint and no --retry-failed: the row is marked recorded before, the last line
+    says --retry-failed reruns it, and --retry-failed does (sweep-cct's code path)."""
+    out = tmp_path / "sc.jsonl"
+    args = ["screen", "kundur", "--buses", "3", "--workers", "1", "--tol-ms", "20"]
+    assert CliRunner().invoke(main, [*args, "--out", str(out)]).exit_code == 0
+    rec = json.loads(out.read_text())
+    rec.update(status="failed", error="SimulationError: diverged")
+    rec.pop("result", None)
+    rec.pop("verdict", None)
+    out.write_text(json.dumps(rec) + "\n")
+    res = CliRunner().invoke(main, [*args, "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "SimulationError: diverged (recorded before)" in res.stdout
+    assert res.stdout.endswith(
+        "1 search(es) recorded as failed before were not run again; --retry-failed reruns them\n"
+    )
+    res = CliRunner().invoke(main, [*args, "--out", str(out), "--retry-failed"])
+    assert res.exit_code == 0 and "1 CCT(s) found" in res.stdout, res.output
+    assert "recorded before" not in res.stdout

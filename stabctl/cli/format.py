@@ -384,7 +384,8 @@ def print_screening(case, rows) -> None:
                 "when cleared at once"
             )
         else:
-            click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {r['error'][:70]}")
+            said = f"{r['error'][:70]}" + (" (recorded before)" if r.get("failed_before") else "")
+            click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {said}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
     click.echo(
@@ -394,6 +395,11 @@ def print_screening(case, rows) -> None:
         "load buses (their load shed, counted in the verdicts above)"
         + (f", {n_lost} island machines (lost; the verdicts judge the rest)" if n_lost else "")
     )
+    if before := sum(bool(r.get("failed_before")) for r in rows):
+        click.echo(
+            f"{before} search(es) recorded as failed before were not run again; "
+            "--retry-failed reruns them"
+        )
 
 
 def print_modes(st, no_pss: bool) -> None:

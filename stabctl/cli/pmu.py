@@ -233,11 +233,13 @@ def serve(
 
     The frames are those `stabctl estimate rmse` evaluates for the same seed (C37.118.1
     noise, lost frames as absent data).  Each PDC that says 'start' has a session of its
-    own, named on stderr as it ends: whole (every frame sent, and the last taken: the PDC
-    says 'stop' or closes after it), or cut by what the PDC did (said 'stop', closed the
-    connection, reset it with frames unread, took no frame for --timeout s) and the frames
-    sent; each peer refused or dropped is named as it is.  Exits once a PDC has been sent
-    the stream whole and none is streaming (exit status 0, "sent N of N frames"); if
+    own, named on stderr as it ends: whole (every frame sent, and the PDC closed the
+    connection in order after the last, within --timeout s: the evidence it read them),
+    or cut by what the PDC did (said 'stop' and left: 'stop' pauses, 'start' resumes;
+    closed the connection, reset it with frames unread, took no frame for --timeout s,
+    stayed connected after the last frame) and the frames sent; each peer refused or
+    dropped is named as it is.  Exits once a PDC has been sent the stream whole and none
+    is streaming (exit status 0, "sent N of N frames"); if
     every session was cut and no peer comes for --wait s after the last, exits with an
     error naming each cut session (exit status 2: the stream was not sent whole).
 
@@ -405,13 +407,16 @@ def record(address, out, frames, idcode):
     or a frame is refused) is written as far as it
     came, up to the frame refused, and named an error (exit status 2: the recording is
     partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
-    left as it was).
+    left as it was).  Reporting instants the stream skipped (gaps) are counted and named
+    with the frames recorded.
 
     \b
     Example:
       stabctl pmu record 127.0.0.1:4712 --frames 3600 -o wecc.c37
     """
+    from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import End, receive
+    from stabctl.estimation.sources import stream_gaps
     from stabctl.parallel import atomic_write
 
     host, port = _host_port(address)
@@ -424,7 +429,10 @@ def record(address, out, frames, idcode):
     atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
     if got.short:
         fail_short(out, why, kept)
-    click.echo(f"recorded {len(got.data)} frames from {address} to {out}")
+    gaps = stream_gaps(got.data, c37.read_config(got.cfg2, "the CFG-2"))
+    click.echo(
+        f"recorded {len(got.data)} frames from {address} to {out}" + (f"; {gaps}" if gaps else "")
+    )
 
 
 def _host_port(address: str) -> tuple[str, int]:

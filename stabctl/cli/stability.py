@@ -431,6 +431,7 @@ def sweep_cct(
 )
 @plot_option("network map with buses coloured by CCT")
 @parallel_options
+@click.option("--retry-failed", is_flag=True, help="Rerun the searches recorded as failed.")
 @search_option
 @model_options
 @q_limits_option
@@ -446,6 +447,7 @@ def screen(
     plot_path,
     workers,
     scheduler,
+    retry_failed,
     method,
     conventions,
     step,
@@ -462,7 +464,9 @@ def screen(
     voltage collapse during the fault) is listed with its reason, and the last line
     counts each kind.  A branch fault that islands load buses or machines names them
     above its row (a machine islanded apart from the main grid is lost: the row's CCT
-    or verdict is the rest's), and the last line counts those too.
+    or verdict is the rest's), and the last line counts those too.  A search an earlier
+    run recorded as failed is shown as recorded, marked so, and not run again unless
+    --retry-failed.
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
@@ -480,6 +484,7 @@ def screen(
         search=replace(search_settings(tol_ms, t_max, None), method=method),
         model=model_settings(conventions, step, q_limits),
         runner=RunnerOptions(workers, scheduler),
+        retry_failed=retry_failed,
     )
     rows.sort(key=lambda r: r.get("cct_s", float("inf")))
     if plot_p is not None:

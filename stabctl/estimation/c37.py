@@ -242,7 +242,7 @@ def _int16(value, what: str, k: int) -> int:
 #: source, so its time stamp, and the phase angles referred to it, cannot be trusted; bit
 #: 12 (data sorting by arrival): the PDC put the values in the frame as they came, not by
 #: their own time stamps, so they may belong to another instant.
-STAT_UNUSABLE = (
+STAT_UNUSABLE: tuple[tuple[int, int, str], ...] = (
     (0xC000, 0x4000, "PMU error (STAT bits 15-14 = 01)"),
     (0xC000, 0x8000, "absent (STAT bits 15-14 = 10)"),
     (0xC000, 0xC000, "test mode (STAT bits 15-14 = 11)"),
@@ -251,17 +251,42 @@ STAT_UNUSABLE = (
 )
 
 
-#: FRACSEC's message time quality (C37.118.2-2011 clause 6.2.2: the byte before the
-#: fraction-of-second count, bits 3-0 its time quality code): code 0xF is "fault, clock
-#: failure, time not reliable": every PMU value of the frame is then treated as one whose
-#: STAT says PMU sync lost (not used, counted by this reason).  The leap-second bits
-#: (6-4) and the other codes (the clock's accuracy) leave the values used.
+#: The time-quality rule: a PMU value is used only if its time stamp is known to within
+#: 10 us.  At 60 Hz, 26.5 us of time error is 1 % TVE (C37.118.1-2011 5.3: 0.573 deg), so
+#: a clock whose stated error bound is 100 us or more (or unknown) makes the phase angles,
+#: and the relative speeds drawn from them, untrustworthy.  The indicators (C37.118.2-2011):
+#: STAT bits 8-6 (PMU time quality, Table 7: 100 up to 100 us, 101 1 ms, 110 10 ms, 111 more
+#: or unknown) and bits 5-4 (unlocked time: 11, unlocked for more than 1000 s), in
+#: `STAT_UNUSABLE`; FRACSEC's message time quality (clause 6.2.2, Table 3: the byte before
+#: the fraction-of-second count, bits 3-0) in `TIME_QUALITY_UNUSABLE`.  Each such value is
+#: not used (as a frame lost) and counted by its reason.
+STAT_UNUSABLE += (
+    (0x01C0, 0x0100, "PMU time error up to 100 us (STAT bits 8-6 = 100)"),
+    (0x01C0, 0x0140, "PMU time error up to 1 ms (STAT bits 8-6 = 101)"),
+    (0x01C0, 0x0180, "PMU time error up to 10 ms (STAT bits 8-6 = 110)"),
+    (0x01C0, 0x01C0, "PMU time error over 10 ms or unknown (STAT bits 8-6 = 111)"),
+    (0x0030, 0x0030, "clock unlocked for over 1000 s (STAT bits 5-4 = 11)"),
+)
+
+#: FRACSEC's message time quality code 0xF: "fault, clock failure, time not reliable"
 TIME_QUALITY_FAULT = (0x0F, 0x0F, "clock failure (FRACSEC time quality 0xF)")
+#: FRACSEC message time quality codes (bits 3-0) that make a frame's every PMU value
+#: unusable (the rule above: a clock error bound of 100 us or more; 0xC-0xE are reserved,
+#: their meaning unknown), each (mask, value, reason); codes 0x0-0x5 (locked, or within
+#: 10 us) and the leap-second bits (6-4) leave the values used.
+TIME_QUALITY_UNUSABLE = (
+    *(
+        (0x0F, code, f"clock error up to {bound} (FRACSEC time quality 0x{code:X})")
+        for code, bound in zip(range(6, 12), ("100 us", "1 ms", "10 ms", "100 ms", "1 s", "10 s"))
+    ),
+    *((0x0F, code, f"reserved FRACSEC time quality 0x{code:X}") for code in range(12, 15)),
+    TIME_QUALITY_FAULT,
+)
 
 
 def time_unusable(data: bytes) -> str:
     """Why a data frame's time stamp makes its every PMU value unusable, by its FRACSEC
-    message time quality (`TIME_QUALITY_FAULT`), or ''.
+    message time quality (`TIME_QUALITY_UNUSABLE`), or ''.
 
     Parameters
     ----------
@@ -273,8 +298,8 @@ def time_unusable(data: bytes) -> str:
     str
         The reason, or ''.
     """
-    mask, value, why = TIME_QUALITY_FAULT
-    return why if data[10] & mask == value else ""
+    q = data[10]
+    return next((why for mask, value, why in TIME_QUALITY_UNUSABLE if q & mask == value), "")
 
 
 def unusable(stat: int) -> str:
@@ -837,18 +862,36 @@ def frame_time(data: bytes, cfg2) -> float:
 
 
 def recorded_frames(path) -> tuple:
-    """(CFG-2 as pyc37 reads it, the data frames' bytes) of a recording.
+    """(CFG-2 as pyc37 reads it, the data frames' bytes) of a recording.  The frames
+    after the first that are not data frames are checked as a receiver checks them on a
+    stream (`check_stream_frame`: their CRC; a CFG-2 must be the first one resent, its
+    time stamp aside) and left out: a header, CFG-1, CFG-3 or command frame carries no
+    measurement, and the data frames after a changed CFG-2 would be read by a layout
+    that is not theirs.
 
     Raises
     ------
     InputError
         An empty file, a first frame that is not a configuration frame, or a broken one
-        (`split_frames`).
+        (`split_frames`); a later frame other than a data frame whose CRC fails, or a
+        CFG-2 that changes the configuration, named by its place (the data frames before
+        it) and the field that changed (`config_change`).
     """
     frames = split_frames(Path(path).read_bytes(), f"C37.118.2 recording {path}")
     if not frames:
         raise InputError(f"{path}: empty C37.118.2 recording")
-    return read_config(frames[0], f"{path}: first frame"), frames[1:]
+    cfg2, data = read_config(frames[0], f"{path}: first frame"), []
+    for k, frame in enumerate(frames[1:]):
+        if frame_kind(frame) == "data frame":
+            data.append(frame)
+            continue
+        try:
+            check_stream_frame(cfg2, frame)
+        except InputError as exc:
+            raise InputError(
+                f"{path}: frame {k + 2}, after data frame {len(data)}: {exc}"
+            ) from None
+    return cfg2, data
 
 
 def read_config(data: bytes, what: str):

@@ -15,6 +15,7 @@ beyond the frame it reads).
 from __future__ import annotations
 
 import contextlib
+import errno
 import ipaddress
 import math
 import os
@@ -38,6 +39,13 @@ NAMED_PEERS = 64
 #: refusals of one address named in `RENAME_S` s, the others counted (a scan from one
 #: address)
 NAMED_PER_WINDOW, RENAME_S = 5, 10.0
+#: accept() errors of a process or system short of resources (open files, buffers,
+#: memory): the server says so once and tries again every `ACCEPT_RETRY_S` s, serving on
+#: once the resource is free
+SHORT_OF = {errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM}
+ACCEPT_RETRY_S = 0.1
+#: how often the accept thread looks whether the server was closed (s)
+ACCEPT_POLL_S = 0.2
 
 
 @dataclass(frozen=True)
@@ -55,7 +63,10 @@ class Guard:
         answer: silence and a frame sent byte by byte alike), and for a peer to take a
         frame (s); a peer past it is dropped.
     max_peers : int
-        Peers served at once; one more is closed at once.
+        Peers served at once.  With every place taken, a new peer takes the place of the
+        peer that has waited longest without sending a valid command (silent since it
+        connected; a peer streaming keeps its place), which is dropped and named; with
+        none such, the new peer is closed at once.
     wait : float
         Once every streaming session so far was cut (`StreamServer.done`), the longest
         wait for another peer (s) before the server is done.
@@ -212,12 +223,22 @@ class StreamServer:
     dripping bytes), speaks another protocol or connects and closes is dropped without
     ending the server's session.
 
-    Each PDC that says 'start' has a session of its own, and its own verdict (`Session`):
-    whole once every data frame was sent and the PDC took the last (it said 'stop' or
-    closed the connection after it, or its TCP acknowledged every byte within the
-    time-out), else cut by what the PDC did.  One PDC's session never decides another's:
-    the server is done (`done`) once one session was whole and none streams, or, with
-    every session cut, once no peer has been connected for `Guard.wait` s.
+    Each PDC that says 'start' has a session of its own, and its own verdict (`Session`).
+    'stop' pauses the session's data frames (C37.118.2-2011 Table 15, 'turn off
+    transmission'): the connection stays open and 'start' resumes them where they
+    stopped; requests for the CFG-2 or the header are answered at any time, mid-stream
+    too.  After the last data frame the server closes its side of the connection, and
+    the session is whole only once the PDC closes its side in turn, in order (FIN),
+    within `Guard.timeout` s: a TCP whose application closes with bytes unread resets the
+    connection instead (RFC 1122 4.2.2.13, as Linux, the BSDs and Windows do), so an
+    orderly close after the last frame is the evidence that the PDC read the stream to its
+    end.  A 'stop' after the last frame, or TCP acknowledgements, are not: a peer that
+    reads nothing has the whole stream acknowledged by its kernel once it fits the
+    receive buffer.  A PDC still connected `Guard.timeout` s after the last frame is cut
+    (delivery not confirmed), as is one that resets the connection, says 'stop' and
+    leaves, or takes no frame for the time-out.  One PDC's session never decides
+    another's: the server is done (`done`) once one session was whole and none streams,
+    or, with every session cut, once no peer has been connected for `Guard.wait` s.
 
     Parameters
     ----------
@@ -279,7 +300,9 @@ class StreamServer:
         self._sock = listen(host, port)
         self._address = self._sock.getsockname()[:2]
         self._stop, self.finished = threading.Event(), threading.Event()
-        self._peers = threading.BoundedSemaphore(guard.max_peers)
+        self._live: dict[int, _Peer] = {}  # the peers connected, by id
+        self._closed = False
+        self._sock.settimeout(ACCEPT_POLL_S)  # accept() looks at `_stop` this often
         self._thread = threading.Thread(target=self._accept, daemon=True)
         self._thread.start()
 
@@ -351,10 +374,17 @@ class StreamServer:
         return host, port
 
     def close(self) -> None:
-        """Stop serving and close the listening socket."""
+        """Stop serving and close the listening socket (at once: the accept thread wakes
+        within `ACCEPT_POLL_S` s); a second call does nothing."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
         self._stop.set()
+        with contextlib.suppress(OSError):  # wakes an accept() where the system does
+            self._sock.shutdown(socket.SHUT_RDWR)
         self._sock.close()
-        self._thread.join(timeout=5)
+        self._thread.join(timeout=2 * ACCEPT_POLL_S)
         with self._lock:
             for addr, (_, _, since) in self._named.items():
                 if since:
@@ -399,31 +429,65 @@ class StreamServer:
                 seen[2] += 1
 
     def _accept(self) -> None:
+        """Accept peers until `close`; an accept() that fails (the process out of file
+        descriptors, the system out of buffers) is said once per reason in `news` and
+        tried again every `ACCEPT_RETRY_S` s."""
+        failed: set = set()
         while not self._stop.is_set():
             try:
-                conn, peer = self._sock.accept()
-            except OSError:  # closed
-                return
+                conn, peer = _accept_conn(self._sock)
+            except TimeoutError:  # no peer within ACCEPT_POLL_S: look at _stop
+                continue
+            except OSError as exc:
+                if self._stop.is_set():  # closed
+                    return
+                if exc.errno not in failed:
+                    failed.add(exc.errno)
+                    with self._lock:
+                        self.news.append(_accept_failed(exc))
+                self._stop.wait(ACCEPT_RETRY_S)
+                continue
             if not self.guard.admits(peer):
                 self._refuse(peer, "not in the allowed peers")
                 conn.close()
-            elif not self._peers.acquire(blocking=False):
-                self._refuse(peer, f"{self.guard.max_peers} peers served")
+                continue
+            me, victim = self._admit(conn)
+            if victim is not None:
+                with contextlib.suppress(OSError):  # wakes its thread: it ends, named
+                    victim.conn.shutdown(socket.SHUT_RDWR)
+            if me is None:
+                self._refuse(peer, f"{self.guard.max_peers} peers served, each has sent a command")
                 conn.close()
             else:
-                with self._lock:
-                    self._open += 1
-                threading.Thread(target=self._session, args=(conn, peer), daemon=True).start()
+                threading.Thread(target=self._session, args=(me, peer), daemon=True).start()
 
-    def _session(self, conn: socket.socket, peer) -> None:
+    def _admit(self, conn: socket.socket):
+        """(the new peer's `_Peer`, or None if refused; the peer dropped for it, or None):
+        with `Guard.max_peers` connected, the one that has waited longest without a valid
+        command gives its place (`Guard.max_peers`)."""
+        me, victim = _Peer(conn, time.monotonic()), None
+        with self._lock:
+            live = [p for p in self._live.values() if not p.evicted]
+            if len(live) >= self.guard.max_peers:
+                idle = [p for p in live if not p.commanded]
+                if not idle:
+                    return None, None
+                victim = min(idle, key=lambda p: p.since)
+                victim.evicted = True
+            self._live[id(me)] = me
+            self._open += 1
+        return me, victim
+
+    def _session(self, me: _Peer, peer) -> None:
         """One peer's session: its `Session` added to `sessions` (and `finished` set if it
         was whole) if it streamed, else the peer named in `refused` if it was dropped."""
         asked: list[str] = []  # configurations asked for that this server does not send
         ended, dropped = None, True
+        conn = me.conn
         try:
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                ended = self._serve(conn, asked)
+                ended = self._serve(conn, asked, me)
                 dropped = False
         except InputError as exc:  # another protocol, a cut frame: dropped, serve on
             self._refuse(peer, str(exc))
@@ -439,16 +503,28 @@ class StreamServer:
         except OSError:  # the peer vanished mid-session
             dropped = False
         finally:
-            self._peers.release()
             with self._lock:
+                del self._live[id(me)]
                 self._open -= 1
                 if self._open == 0:
                     self._idle_since = time.monotonic()
-        if ended is None and asked and not dropped:
+        if ended is None and me.evicted:
+            self._refuse(
+                peer,
+                f"sent no command in {time.monotonic() - me.since:.1f} s, with "
+                f"{self.guard.max_peers} peers connected: its place given to a new peer",
+            )
+        elif ended is None and asked and not dropped:
             self._refuse(peer, f"{_asked(asked)}, then closed the connection")
         if ended is not None:
             why, shown = ended
-            session = Session(hostport(*peer[:2]), shown.sent, len(self._data), why)
+            session = Session(
+                hostport(*peer[:2]),
+                shown.sent,
+                len(self._data),
+                why,
+                _asked(asked) if asked else "",
+            )
             with self._lock:
                 self.sessions.append(session)
                 self._streaming -= 1
@@ -457,45 +533,67 @@ class StreamServer:
                     self.finished.set()
                 self.news.append(str(session))
 
-    def _serve(self, conn: socket.socket, asked: list):
-        """Commands until the peer closes; a 'start' streams every frame (commands
-        received meanwhile are read between frames).  None if it did not stream, else
-        (`_stream`'s verdict, the session's `_Shown`).  A request for a configuration this
-        server does not send (`NOT_SENT`) is not answered and is added to `asked`."""
+    def _serve(self, conn: socket.socket, asked: list, me: _Peer):
+        """Commands until the peer closes: 'start' streams the data frames from where they
+        stopped (commands received meanwhile are read between frames), 'stop' pauses them
+        (the connection stays open).  None if it did not stream, else (the session's
+        verdict, its `_Shown`).  A request for a configuration this server does not send
+        (`NOT_SENT`) is not answered and is added to `asked`."""
+        shown = None
         while not self._stop.is_set():
-            command = self._command(conn, block=True)
+            try:
+                command = self._command(conn, block=True)
+            except (TimeoutError, InputError, OSError) as exc:
+                if shown is None:
+                    raise
+                return _paused_end(exc, self.guard.timeout), shown
             if command is None:
-                return None
-            if command == "cfg2":
-                conn.sendall(self._cfg2.convert2bytes())
-            elif command == "header":
-                conn.sendall(self._header())
-            elif command in NOT_SENT.values():
-                asked.append(command)
-            elif command == "start":
-                shown = _Shown([math.nan] * len(self._data), [math.nan] * len(self._data))
-                with self._lock:
-                    self._streaming += 1
-                    if not self.finished.is_set():
-                        self._shown = shown
-                return self._stream(conn, shown), shown
-        return None
+                return None if shown is None else (_PAUSED, shown)
+            me.commanded = me.commanded or bool(command)
+            if command == "start":
+                if shown is None:
+                    shown = _Shown([math.nan] * len(self._data), [math.nan] * len(self._data))
+                    with self._lock:
+                        self._streaming += 1
+                        if not self.finished.is_set():
+                            self._shown = shown
+                if (why := self._stream(conn, shown, asked)) != _PAUSED:
+                    return why, shown
+            else:
+                self._answer(conn, command, asked)
+        return None if shown is None else ("was stopped by the server's close", shown)
 
-    def _stream(self, conn: socket.socket, shown: _Shown) -> str:
-        """Send the data frames paced by their time stamps (each recorded in `shown`), then
-        wait for the PDC to take the last (`_taken`): '' once it did, else what the peer
-        did before (said 'stop', closed the connection, ...)."""
-        start = time.perf_counter()
+    def _answer(self, conn: socket.socket, command: str, asked: list) -> None:
+        """Answer a command other than 'start' and 'stop': CFG-2 and header sent (at any
+        time, mid-stream too: C37.118.2-2011 6.4), a configuration this server does not
+        send added to `asked`."""
+        if command == "cfg2":
+            conn.sendall(self._cfg2.convert2bytes())
+        elif command == "header":
+            conn.sendall(self._header())
+        elif command in NOT_SENT.values():
+            asked.append(command)
+
+    def _stream(self, conn: socket.socket, shown: _Shown, asked: list) -> str:
+        """Send the data frames from `shown.sent` on, paced by their time stamps (each
+        recorded in `shown`), then wait for the PDC to take the last (`_taken`): '' once
+        it did, `_PAUSED` if it said 'stop' before, else what the peer did (closed the
+        connection, ...)."""
+        k0 = shown.sent
+        start = time.perf_counter() - (self._t[k0] - self._t[0]) / self.speed
         try:
-            for k, data in enumerate(self._data):
+            for k in range(k0, len(self._data)):
                 due = start + (self._t[k] - self._t[0]) / self.speed
                 shown.due_at[k] = due
                 while (wait := due - time.perf_counter()) > 0:
                     command = self._command(conn, block=False, timeout=min(wait, 0.05))
-                    if command in ("stop", None):
-                        return "said 'stop'" if command else "closed the connection"
+                    if command is None:
+                        return "closed the connection"
+                    if command == "stop":
+                        return _PAUSED
+                    self._answer(conn, command, asked)
                 conn.settimeout(self.guard.timeout)
-                conn.sendall(data)
+                conn.sendall(self._data[k])
                 shown.sent_at[k] = time.perf_counter()
                 shown.sent = k + 1
             return self._taken(conn)
@@ -516,10 +614,12 @@ class StreamServer:
 
     def _taken(self, conn: socket.socket) -> str:
         """After the last frame: the server's side of the connection closed (the end of
-        the stream, for a PDC that reads to it), then '' once the PDC says 'stop' or
-        closes in turn, or when its TCP has acknowledged every byte `Guard.timeout` s
-        later; else what it did: reset the connection (it closed with frames unread: a
-        peer that said 'start' and read nothing), or left bytes unacknowledged."""
+        the stream, for a PDC that reads to it), then '' once the PDC closes in turn, in
+        order, within `Guard.timeout` s (the evidence it read every frame: a TCP closed
+        with bytes unread resets the connection); else what it did: reset the connection
+        (it closed with frames unread), or stayed connected (delivery not confirmed,
+        whatever its TCP acknowledged: a peer's kernel acknowledges what its application
+        never reads)."""
         with contextlib.suppress(OSError):
             conn.shutdown(socket.SHUT_WR)
         deadline = time.monotonic() + self.guard.timeout
@@ -528,14 +628,17 @@ class StreamServer:
                 command = self._command(conn, block=False, timeout=min(left, 0.2))
             except ConnectionError:
                 return "reset the connection with frames unread (it closed without reading them)"
-            if command in ("stop", None):
+            if command is None:
                 return ""
         if (unacked := _unacknowledged(conn)) > 0:
             return (
                 f"left {unacked} bytes unacknowledged {self.guard.timeout:g} s after the last "
                 "frame was sent"
             )
-        return ""
+        return (
+            f"did not close the connection within {self.guard.timeout:g} s of the last frame "
+            "(delivery not confirmed: a PDC that read the stream to its end closes in turn)"
+        )
 
     def _command(self, conn: socket.socket, block: bool, timeout: float = 0.0):
         """The next command frame's word as a name (None: the peer closed; '' none, one
@@ -573,6 +676,58 @@ class StreamServer:
         return HeaderFrame(c.get_id_code(), text, c.get_soc(), (0, "+")).convert2bytes()
 
 
+#: a session's verdict while 'stop' has paused it, and if its PDC then leaves
+_PAUSED = "said 'stop'"
+
+
+def _paused_end(exc: BaseException, timeout: float) -> str:
+    """The verdict of a session paused by 'stop' that ends in `exc` (read by `_command`)."""
+    if isinstance(exc, FrameTimeout | ForeignCommand):
+        return f"{_PAUSED}, then sent {exc}"
+    if isinstance(exc, TimeoutError):
+        return f"{_PAUSED}, then no command for {timeout:g} s"
+    if isinstance(exc, CutFrame):
+        return f"{_PAUSED}, then closed the connection in the middle of a frame"
+    if isinstance(exc, InputError):
+        return f"{_PAUSED}, then sent what is not C37.118.2 ({exc})"
+    if isinstance(exc, ConnectionError):
+        return _PAUSED
+    return f"{_PAUSED}, then failed ({getattr(exc, 'strerror', None) or exc})"
+
+
+def _accept_conn(sock: socket.socket):
+    """``sock.accept()`` (a function of its own, for the tests to make it fail)."""
+    return sock.accept()
+
+
+def _accept_failed(exc: OSError) -> str:
+    """What a server says once as accept() fails for a reason: the system's message and,
+    for a process out of file descriptors, its open-file limit."""
+    why = os.strerror(exc.errno) if exc.errno else str(exc)
+    limit = ""
+    if exc.errno == errno.EMFILE:
+        with contextlib.suppress(ImportError, OSError, ValueError):
+            import resource
+
+            soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+            limit = f" (this process's open-file limit, ulimit -n, is {soft})"
+    return (
+        f"cannot accept a peer: {why}{limit}; trying again every {ACCEPT_RETRY_S:g} s, "
+        "peers wait meanwhile"
+    )
+
+
+@dataclass(eq=False)
+class _Peer:
+    """A connected peer: its connection, when it connected (`time.monotonic()`), whether
+    it has sent a valid command, and whether its place was given to a new peer."""
+
+    conn: socket.socket
+    since: float
+    commanded: bool = False
+    evicted: bool = False
+
+
 @dataclass
 class _Shown:
     """One streaming session's times (`StreamServer.sent_at`, `StreamServer.due_at`) and
@@ -596,15 +751,20 @@ class Session:
     frames : int
         Data frames of the stream.
     ended : str
-        Empty if the session was whole (every frame sent and the last taken); else what
-        the PDC did that cut it (said 'stop', closed the connection, took no frame for
-        the time-out, reset the connection with frames unread, ...).
+        Empty if the session was whole (every frame sent and the PDC closed in order
+        after the last); else what the PDC did that cut it (said 'stop' and left,
+        closed the connection, took no frame for the time-out, reset the connection with
+        frames unread, stayed connected after the last frame, ...).
+    asked : str
+        Empty, or the configurations it asked for that the server does not send (CFG-1,
+        CFG-3), said with the verdict.
     """
 
     peer: str
     sent: int
     frames: int
     ended: str
+    asked: str = ""
 
     @property
     def whole(self) -> bool:
@@ -613,8 +773,10 @@ class Session:
 
     def __str__(self) -> str:
         if self.whole:
-            return f"the PDC {self.peer} was sent {self.sent} of {self.frames} frames, whole"
-        return f"the PDC {self.peer} {self.ended} after {self.sent} of {self.frames} frames"
+            said = f"the PDC {self.peer} was sent {self.sent} of {self.frames} frames, whole"
+        else:
+            said = f"the PDC {self.peer} {self.ended} after {self.sent} of {self.frames} frames"
+        return f"{said}; it {self.asked}" if self.asked else said
 
 
 def _asked(asked: list) -> str:
@@ -832,13 +994,17 @@ def receive(
     with conn:
         data: list[bytes] = []
         try:
-            conn.sendall(CommandFrame(idcode, "cfg2").convert2bytes())
-            cfg2 = _read_frame(conn)
+            try:
+                conn.sendall(CommandFrame(idcode, "cfg2").convert2bytes())
+                cfg2 = _read_frame(conn)
+            except ConnectionError:  # closed with the command unread: a reset
+                cfg2 = None
             if cfg2 is None:
                 raise InputError(
-                    f"the C37.118.2 server closed the connection before its CFG-2 (a server "
-                    f"drops a PDC whose commands address another stream: these addressed "
-                    f"IDCODE {idcode})"
+                    f"the C37.118.2 server closed the connection before sending its CFG-2: "
+                    f"it serves no more peers at once, does not allow this address, or "
+                    f"serves another stream than IDCODE {idcode}, which these commands "
+                    f"addressed (its messages say which)"
                 )
             if cfg2[1] & 0x70 != 0x30:  # frame type 011: CFG-2
                 raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")

@@ -212,6 +212,43 @@ def gap_line(received: Received) -> str:
     )
 
 
+def stream_gaps(data, cfg2) -> str:
+    """The reporting instants of its CFG-2's DATA_RATE that a stream's data frames skip,
+    for a summary line (`pmu record`): ``N reporting instants missing in G gap(s): n1
+    after t = ... s, to ... s; ...`` (the first five named; t = 0 is the CFG-2's time
+    stamp); '' if none.
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames, in order (`check_data_frame` passed).
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame (DATA_RATE frames per second, or, negative,
+        seconds per frame; 0: no rate, nothing said).
+
+    Returns
+    -------
+    str
+        The gaps, or ''.
+    """
+    rate = cfg2.get_data_rate()
+    if not rate or len(data) < 2:
+        return ""
+    per_s = rate if rate > 0 else 1.0 / -rate
+    soc = cfg2.get_soc()
+    t = [c37.frame_time(d, cfg2) - soc for d in data]
+    k = [round(x * per_s) for x in t]
+    gaps = [(t[j - 1], t[j], lost) for j in range(1, len(t)) if (lost := k[j] - k[j - 1] - 1) > 0]
+    if not gaps:
+        return ""
+    named = "; ".join(f"{n} after t = {a:.4f} s, to {b:.4f} s" for a, b, n in gaps[:5])
+    more = f"; {len(gaps) - 5} more" if len(gaps) > 5 else ""
+    return (
+        f"{sum(n for _, _, n in gaps)} reporting instants missing in {len(gaps)} gap(s): "
+        f"{named}{more}"
+    )
+
+
 def read_frames(
     source: Source,
     case,
@@ -322,7 +359,8 @@ def unused_values(flagged: dict) -> str:
     if not flagged:
         return ""
     why = ", ".join(f"{n} {reason}" for reason, n in flagged.items())
-    by = "STAT or time quality" if c37.TIME_QUALITY_FAULT[2] in flagged else "STAT"
+    fracsec = {why for _, _, why in c37.TIME_QUALITY_UNUSABLE}
+    by = "STAT or time quality" if fracsec.intersection(flagged) else "STAT"
     return f"{sum(flagged.values())} PMU values not used by their {by} ({why})"
 
 
@@ -408,8 +446,8 @@ def check_order(data, cfg2, what: str) -> None:
     data : sequence of bytes
         The data frames, in order.
     cfg2 : pyc37 ConfigFrame2
-        Their stream's configuration frame (its TIME_BASE and DATA_RATE; a DATA_RATE of
-        0 or less, a period, is refused elsewhere and its grid not checked here).
+        Their stream's configuration frame (its TIME_BASE and DATA_RATE: frames per
+        second, or, negative, seconds per frame; 0 is refused).
     what : str
         Their source, for messages (``stream 2``, a recording's path).
 
@@ -422,6 +460,21 @@ def check_order(data, cfg2, what: str) -> None:
     base, rate = cfg2.get_time_base(), cfg2.get_data_rate()
     counts = np.array([int.from_bytes(d[11:14], "big") for d in data], np.int64)
     stamps = np.array([int.from_bytes(d[6:10], "big") for d in data], np.int64) * base + counts
+    if rate == 0:
+        raise InputError(f"{what}: its CFG-2's DATA_RATE is 0, no rate (C37.118.2-2011 Table 8)")
+    if rate < 0 and len(data):
+        # a period: one frame every -rate s, each at a second's rollover (within a count)
+        soc = stamps // base - stamps[0] // base
+        off = np.minimum(counts, base - counts) > 1
+        if (bad := np.flatnonzero(off | (soc % -rate != 0))).size:
+            k = int(bad[0])
+            raise InputError(
+                f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
+                f"second, {int(soc[k])} s after the first, not a reporting instant of its "
+                f"CFG-2's DATA_RATE {rate} (negative: one frame every {-rate} s, at a "
+                f"second's rollover, C37.118.2-2011 Table 8); {bad.size} such frame(s): a "
+                "stream at another rate than its CFG-2 says"
+            )
     if rate > 0 and len(data):
         # counts * rate / base is the instant's number in its second: an integer, within
         # one count (rate / base of a frame) of one
@@ -437,9 +490,19 @@ def check_order(data, cfg2, what: str) -> None:
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
         how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
+        # FRACSEC's time quality byte: bit 4 leap second pending, bit 5 leap second
+        # occurred (C37.118.2-2011 Table 3)
+        leap = any(d[10] & 0x30 for d in data[max(k - 1, 0) : k + 1])
+        why = (
+            ": a leap second, as its FRACSEC leap-second bits flag (C37.118.2-2011 Table 3: "
+            "a second's SOC repeated), which is not read across; split the stream there"
+            if leap
+            else ""
+        )
         raise InputError(
             f"{what}: data frame {k + 1} {how} the time stamp of frame {k} "
             f"({c37.frame_time(data[k - 1], cfg2):.6f} s, UNIX); {bad.size} such frame(s)"
+            f"{why}"
         )
 
 

@@ -109,6 +109,7 @@ def screen(
     search: SearchOptions = SearchOptions(),
     model: ModelOptions = ModelOptions(),
     runner: RunnerOptions = RunnerOptions(),
+    retry_failed: bool = False,
 ) -> list[dict]:
     """Run the screening.
 
@@ -125,6 +126,9 @@ def screen(
     search, model, runner : SearchOptions, ModelOptions, RunnerOptions, optional
         The CCT search (tol, t_max; recorded), the model conventions, step and Q limits of
         every run, and where the runs go.
+    retry_failed : bool, optional
+        Run again the searches `out` records as failed (`stabctl.parallel.run_sweep`);
+        else they are shown as recorded, each row marked ``failed_before``.
 
     Returns
     -------
@@ -135,7 +139,7 @@ def screen(
         machines it cuts off the main grid with their islands' buses
         (``islanded_machines``, ``islanded_machine_buses``: `islanded_machines`), CCT (s
         and cycles) with its numerical error (s), separated machines, simulations, or the
-        error.
+        error and whether an earlier run recorded it (``failed_before``, not run again).
 
     Raises
     ------
@@ -150,7 +154,9 @@ def screen(
         workers=runner.workers,
         scheduler=runner.scheduler,
         progress=runner.progress,
+        retry_failed=retry_failed,
     )
+    before = set(report.failed_before_keys)
     rows = []
     for fault, rec in zip(faults, report.records.values()):
         row = {
@@ -179,5 +185,6 @@ def screen(
             row["reason"] = rec.get("reason", "")
         else:
             row["error"] = rec.get("error", "")
+            row["failed_before"] = rec["key"] in before  # recorded by an earlier run
         rows.append(row)
     return rows

@@ -580,3 +580,22 @@ def test_a_server_drops_a_peer_addressing_another_idcode_and_names_it(
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0 and out == f"sent {n} of {n} frames\n", (out, err)
     assert f"dropped {me}: a command for IDCODE 999, not this stream's 1" in err.splitlines()
+
+
+def test_record_names_the_gaps_of_the_stream_it_records(kundur_recording, tmp_path):
+    """`pmu record` of a stream with reporting instants missing said only "recorded N
+    frames", exit 0: the gaps are counted and named on its line (the recording is what
+    was sent: exit status 0)."""
+    from stabctl.estimation.c37_tcp import StreamServer
+
+    cfg2, data = c37.recorded_frames(kundur_recording)
+    gappy = data[:20] + data[30:]
+    out = tmp_path / "g.c37"
+    with StreamServer(cfg2, gappy, speed=float("inf")) as server:
+        address = f"127.0.0.1:{server.address[1]}"
+        res = CliRunner().invoke(main, ["pmu", "record", address, "--frames", "63", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert res.stdout == (
+        f"recorded 63 frames from {address} to {out}; 10 reporting instants missing in 1 "
+        "gap(s): 10 after t = 0.3167 s, to 0.5000 s\n"
+    )

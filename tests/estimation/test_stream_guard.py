@@ -344,3 +344,158 @@ def test_more_servers_than_pmus_are_refused(kundur_stream):
     src = sources.parse_source("tcp://127.0.0.1:1-65535")
     with pytest.raises(InputError, match="65535 servers for 4 PMUs"):
         sources.read_frames(src, case, pmus, RATE)
+
+
+def _until(check, seconds=5.0):
+    """Wait (polling) until check() is true, at most `seconds`; its last value."""
+    deadline = time.monotonic() + seconds
+    while not (ok := check()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return ok
+
+
+def _frames_until_close(conn, n=None):
+    """The frames a raw peer reads from conn until the server closes (or n data
+    frames)."""
+    from stabctl.estimation.c37_tcp import _read_frame
+
+    got = []
+    while n is None or sum(f[1] & 0x70 == 0 for f in got) < n:
+        frame = _read_frame(conn)
+        if frame is None:
+            break
+        got.append(frame)
+    return got
+
+
+def test_a_server_ends_at_once_when_closed(kundur_stream):
+    """`close` waited 5 s for the accept thread stuck in accept() (closing the listening
+    socket does not wake it), and the command line closes each server twice: a server
+    ended about 10 s after its stream was sent whole.  Now close returns at once, and a
+    second close does nothing."""
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    server = StreamServer(cfg2, _encoded(cfg, cfg2, frames[:5]), speed=float("inf"))
+    time.sleep(0.05)  # the accept thread is in accept()
+    t0 = time.monotonic()
+    server.close()
+    server.close()
+    assert time.monotonic() - t0 < 1.0
+
+
+def test_a_peer_that_reads_nothing_and_stays_is_not_whole(kundur_stream):
+    """A peer that said 'start', read nothing and stayed connected was counted whole
+    (every byte fitted its receive buffer and its kernel acknowledged it): the server
+    ended on it and the real PDC coming next was reset.  Whole now needs the PDC's
+    orderly close after the last frame: this peer's session is cut, named, and the real
+    PDC is served whole."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    server = StreamServer(cfg2, data, speed=float("inf"), guard=Guard(timeout=0.5))
+    with server, socket.create_connection(server.address, timeout=5) as stranger:
+        stranger.sendall(CommandFrame(1, "cfg2").convert2bytes())
+        stranger.sendall(CommandFrame(1, "start").convert2bytes())
+        assert _until(lambda: server.sessions)
+        assert not server.finished.is_set()
+        [cut] = server.sessions
+        assert cut.sent == 61 and "did not close the connection within 0.5 s" in cut.ended
+        got = receive(*server.address, timeout=10)
+        assert len(got.data) == 61 and server.finished.wait(5)
+    assert [s.whole for s in server.sessions] == [False, True]
+
+
+def test_silent_peers_give_their_places_to_a_pdc(kundur_stream):
+    """Eight silent connections held every place (`Guard.max_peers`): the PDC coming next
+    was closed and told its commands addressed another stream.  The peer silent longest
+    now gives its place, named; with every place held by a peer that sent a command, the
+    new one is refused and the client's message names the possible causes."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames[:10])
+    guard = Guard(timeout=5, max_peers=2)
+    with StreamServer(cfg2, data, speed=float("inf"), guard=guard) as server:
+        silent = [socket.create_connection(server.address) for _ in range(2)]
+        time.sleep(0.1)
+        me = f"127.0.0.1:{silent[0].getsockname()[1]}"
+        assert len(receive(*server.address, End(frames=10), timeout=5).data) == 10
+        assert _until(lambda: any("its place given to a new peer" in r for r in server.refused))
+        assert any(r.startswith(f"{me}: sent no command in ") for r in server.refused)
+        for peer in silent:
+            peer.close()
+        busy = [socket.create_connection(server.address, timeout=5) for _ in range(2)]
+        for peer in busy:
+            peer.sendall(CommandFrame(1, "cfg2").convert2bytes())
+            assert _frames_until_close(peer, 0) == [] and peer.recv(1000)  # the CFG-2
+        with pytest.raises(InputError, match="serves no more peers at once, does not allow"):
+            receive(*server.address, End(frames=10), timeout=5)
+        full = "2 peers served, each has sent a command"
+        assert _until(lambda: any(full in r for r in server.refused))
+        for peer in busy:
+            peer.close()
+
+
+def test_a_server_short_of_file_descriptors_says_so_and_serves_on(kundur_stream, monkeypatch):
+    """An accept() failing with EMFILE (the open-file limit reached) ended the accept
+    thread without a word: the server never served again.  It is said once, naming the
+    limit, and the server serves once accept() works again."""
+    import errno
+
+    from stabctl.estimation import c37_tcp
+
+    real, fails = c37_tcp._accept_conn, [0]
+
+    def failing(sock):
+        if fails[0] < 3:
+            fails[0] += 1
+            raise OSError(errno.EMFILE, "Too many open files")
+        return real(sock)
+
+    monkeypatch.setattr(c37_tcp, "_accept_conn", failing)
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    with StreamServer(cfg2, _encoded(cfg, cfg2, frames[:5]), speed=float("inf")) as server:
+        assert len(receive(*server.address, timeout=5).data) == 5
+    said = [x for x in server.news if "cannot accept a peer" in x]
+    assert len(said) == 1 and "open-file limit, ulimit -n, is" in said[0], server.news
+
+
+def test_stop_pauses_start_resumes_and_config_requests_are_answered(kundur_stream):
+    """'stop' closed the connection, so 'start' could not resume (C37.118.2-2011 Table 15:
+    'turn off transmission' stops the data frames only), and a CFG-2 asked for mid-stream
+    was ignored without a word.  Now 'stop' pauses, 'start' resumes where it stopped
+    (every frame once), a CFG-2 request mid-stream is answered, a CFG-1 request is named
+    with the session's verdict, and the session is whole."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    cfg1 = CommandFrame(1, "cfg1").convert2bytes()
+    with StreamServer(cfg2, data, speed=2.0, guard=Guard(timeout=2)) as server:
+        with socket.create_connection(server.address, timeout=5) as pdc:
+            pdc.sendall(CommandFrame(1, "start").convert2bytes())
+            got = _frames_until_close(pdc, 10)
+            pdc.sendall(CommandFrame(1, "stop").convert2bytes())
+            time.sleep(0.3)  # paused: what was in flight arrives
+            pdc.settimeout(0.3)
+            try:
+                while True:
+                    got += _frames_until_close(pdc, 1)
+            except TimeoutError:
+                pass
+            pdc.settimeout(5)
+            paused = len(got)
+            assert paused < 30 and not server.sessions
+            pdc.sendall(CommandFrame(1, "start").convert2bytes())
+            pdc.sendall(CommandFrame(1, "cfg2").convert2bytes() + cfg1)
+            got += _frames_until_close(pdc)
+        assert _until(lambda: server.sessions)
+    kinds = [c37.frame_kind(f) for f in got]
+    assert [f for f in got if f[1] & 0x70 == 0] == data  # every frame, once, in order
+    assert "CFG-2" in " ".join(kinds[paused:]), kinds
+    [session] = server.sessions
+    assert session.whole and session.sent == 61
+    assert str(session).endswith(
+        "whole; it asked for CFG-1 (command 4), which this server "
+        "does not send (it sends its stream's CFG-2 only, command 5)"
+    )

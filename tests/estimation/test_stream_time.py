@@ -76,6 +76,43 @@ def test_a_clock_failure_makes_the_frame_s_values_unusable(wire, tmp_path):
     assert leap.exit_code == 0 and "not used" not in leap.stdout, leap.output
 
 
+def _stat(cfg2, frame: bytes, bits: int) -> bytes:
+    """frame with `bits` set in every PMU's STAT word, its CRC valid."""
+    out, at = bytearray(frame), 14
+    for b in c37.blocks(cfg2):
+        stat = int.from_bytes(out[at : at + 2], "big") | bits
+        out[at : at + 2] = stat.to_bytes(2, "big")
+        at += b.size
+    return _crc(bytes(out))
+
+
+@pytest.mark.parametrize(
+    "edit, reason",
+    [
+        ("q0B", "clock error up to 10 s (FRACSEC time quality 0xB)"),
+        ("q06", "clock error up to 100 us (FRACSEC time quality 0x6)"),
+        ("s0030", "clock unlocked for over 1000 s (STAT bits 5-4 = 11)"),
+        ("s01C0", "PMU time error over 10 ms or unknown (STAT bits 8-6 = 111)"),
+        ("s0100", "PMU time error up to 100 us (STAT bits 8-6 = 100)"),
+    ],
+)
+def test_time_quality_beyond_10_us_is_named_and_not_used(wire, tmp_path, edit, reason):
+    """FRACSEC time quality 0xB (clock unlocked, error up to 10 s), STAT bits 5-4 = 11
+    (unlocked over 1000 s) or bits 8-6 = 111 (time error over 10 ms) were tracked as
+    good data without a word.  A value is used only if its time is known to within 10 us
+    (1 % TVE is 26.5 us at 60 Hz): the others are not used, counted and named; FRACSEC
+    code 0x5 (10 us), STAT bits 8-6 = 011 and bits 5-4 = 10 leave the values used."""
+    cfg2, head, body = wire
+    value = int(edit[1:], 16)
+    mark = (lambda f: _quality(f, value)) if edit[0] == "q" else (lambda f: _stat(cfg2, f, value))
+    assert c37.flags(cfg2, mark(body[50])) == [reason] * 4
+    res = _track(tmp_path, head, body[:45] + [mark(f) for f in body[45:]])
+    assert res.exit_code == 0, res.output
+    assert "184 PMU values not used by their " in res.stdout and f"(184 {reason})" in res.stdout
+    for fine in (_quality(body[50], 0x05), _stat(cfg2, body[50], 0x00E0)):
+        assert c37.flags(cfg2, fine) == [""] * 4
+
+
 def test_frames_off_the_data_rate_s_instants_are_refused(wire, tmp_path):
     """Frames 1/50 s apart in a stream whose CFG-2 says 60 frames/s were tracked, exit 0:
     the second frame is refused by name, with the count of such frames."""
@@ -121,3 +158,63 @@ def test_a_long_gap_restarts_the_estimator(wire, tmp_path, seconds):
     )
     assert "(the estimator restarts after it)" in res.stdout
     assert _largest_mhz(res) == pytest.approx(_largest_mhz(whole), rel=0.05)
+
+
+def _config(head: bytes, time_base=None, rate=None) -> bytes:
+    """The CFG-2 frame with TIME_BASE (bytes 14-17) or DATA_RATE (the int16 before its
+    CHK) changed, its CRC valid."""
+    out = bytearray(head)
+    if time_base is not None:
+        out[14:18] = time_base.to_bytes(4, "big")
+    if rate is not None:
+        out[-4:-2] = rate.to_bytes(2, "big", signed=True)
+    return _crc(bytes(out))
+
+
+def test_a_cfg2_inside_a_recording_is_named_not_read_as_a_data_frame(wire, tmp_path):
+    """A second CFG-2 after data frame 60 was called "data frame 61 goes back from the
+    time stamp of frame 60".  One that changes the configuration is refused naming the
+    frame, the data frames before it and the field; the same CFG-2 resent is left out,
+    as a receiver leaves it out of a stream."""
+    _, head, body = wire
+    res = _track(tmp_path, head, body[:60] + [_config(head, time_base=1000)] + body[60:])
+    assert res.exit_code == 2, res.output
+    assert (
+        "frame 62, after data frame 60: a CFG-2 that changes the stream's configuration "
+        "(TIME_BASE 1000 where the CFG-2 in use has 1000000)"
+    ) in res.stderr, res.stderr
+    res = _track(tmp_path, head, body[:60] + [head] + body[60:])
+    assert res.exit_code == 0 and "tracked 91 frames" in res.stdout, res.output
+
+
+def test_replay_refuses_a_negative_data_rate_its_frames_do_not_keep(wire, tmp_path):
+    """`pmu replay` of a recording whose CFG-2 says DATA_RATE -1 (one frame a second)
+    with frames 1/60 s apart listened and served it: the rate grid was not checked for a
+    DATA_RATE <= 0.  Refused before listening, naming DATA_RATE; a stream of one frame a
+    second is served."""
+    _, head, body = wire
+    path = tmp_path / "r.c37"
+    path.write_bytes(_config(head, rate=-1) + b"".join(body))
+    args = ["pmu", "replay", str(path), "--port", "0", "--wait", "1", "--timeout", "1"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and "serving" not in res.stderr, res.output
+    assert (
+        "data frame 2 is stamped 0.016667 s into its second, 0 s after the first, not a "
+        "reporting instant of its CFG-2's DATA_RATE -1 (negative: one frame every 1 s"
+    ) in res.stderr, res.stderr
+    from stabctl.estimation.sources import check_order
+
+    check_order(body[::60], c37.read_config(_config(head, rate=-1), "CFG-2"), "ok")
+
+
+def test_a_leap_second_is_named_where_the_stream_goes_back(wire, tmp_path):
+    """A stream across a positive leap second (frames flagged leap pending, one second's
+    SOC repeated, then flagged leap occurred) was refused as "goes back" with no word of
+    the leap second its frames flag: the refusal names it."""
+    _, head, body = wire
+    pending = [_quality(f, 0x10) for f in body[:60]]
+    again = [_later(_quality(f, 0x20), -1_000_000) for f in body[60:]]
+    res = _track(tmp_path, head, pending + again)
+    assert res.exit_code == 2, res.output
+    assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
+    assert "a leap second, as its FRACSEC leap-second bits flag" in res.stderr, res.stderr
