@@ -363,3 +363,58 @@ def test_an_andes_value_is_refused_naming_file_model_row_idx_and_parameter(
     line = error_line(res)
     assert re.fullmatch(rf"error: {path.name}: {model} row 1 \(idx [^)]+\): {expected}.*", line)
     assert not out.exists()
+
+
+FIVE_BUS = RAW.parent / "five_bus_v33.raw"
+FIVE_BUS_DYR = RAW.parent / "five_bus.dyr"
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        # a number the RAW reader reads: named by the POM's name, not its position
+        (
+            "1,   1,   1,0.99000,  31.0000",
+            "1,   1,   1,O.99000,  31.0000",
+            "edited.raw:7 bus record: VM = 'O.99000': not a number",
+        ),
+        (
+            "    2,'1 ',1,   1,   1,   100.000,",
+            "    2,'1 ',1,   1,   1,   1OO.000,",
+            "edited.raw:10 load record: PL = '1OO.000': not a number",
+        ),
+        # a number it does not read (a winding's RMA1): refused all the same, at its line
+        (
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.10000,",
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.1OOOO,",
+            "edited.raw:28 transformer record: RMA1 = '1.1OOOO': not a number",
+        ),
+        # a generator's own values, on its own record, as written
+        (
+            "    3,'1 ',   150.000,    20.000,   100.000,   -50.000,1.01000,",
+            "    3,'1 ',   150.000,    20.000,   -50.000,   100.000,1.01000,",
+            "edited.raw:18 generator record: generator at bus 3 '1': QT = -50.000, "
+            "QB = 100.000: QT must be >= QB",
+        ),
+        (
+            "    3,'1 ',   150.000,    20.000,   100.000,   -50.000,1.01000,",
+            "    3,'1 ',   150.000,    20.000,   100.000,   -50.000,-1.01000,",
+            "edited.raw:18 generator record: generator at bus 3 '1': VS = -1.01000: VS must be > 0",
+        ),
+    ],
+)
+def test_a_raw_value_is_refused_naming_line_field_and_value_as_written(
+    tmp_path, old, new, expected
+):
+    """The RAW record's line, the field as the POM names it and its text as written; a
+    malformed number in a field stabctl does not read is refused too (never accepted
+    silently), and a generator's Q limits and VS on its own record, not the bus table."""
+    text = FIVE_BUS.read_text()
+    assert text.count(old) == 1, old
+    raw = tmp_path / "edited.raw"
+    raw.write_text(text.replace(old, new))
+    out = tmp_path / "p.json"
+    res = CliRunner().invoke(main, ["import-psse", str(raw), str(FIVE_BUS_DYR), "-o", str(out)])
+    line = error_line(res)
+    assert line.startswith(f"error: {expected}"), line
+    assert not out.exists()

@@ -105,7 +105,7 @@ def test_non_finite_raw_field_is_refused(tmp_path, token):
     text = V33.read_text().replace(
         "1.00000E-2, 1.00000E-1,   0.20000", f"1.00000E-2, {token},   0.20000", 1
     )
-    with pytest.raises(CaseError, match=r"cut\.raw:22 branch record: field 5 .* not a finite"):
+    with pytest.raises(CaseError, match=r"cut\.raw:22 branch record: X = .* not a finite"):
         read_raw(_write(tmp_path, text))
 
 
