@@ -114,7 +114,7 @@ import numpy as np
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.case.params import FAMILIES
 from stabctl.case.system import SWITCHED_GROUPS
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import CaseError, InputError, advice
 from stabctl.io.andes import _andes, _andes_log, _andes_said
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_origin, dyr_tables
 from stabctl.io.inputs import number_ranges, parse_json
@@ -431,8 +431,10 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
             raise InputError(
                 f"{path.name}: "
                 + "; ".join(t for t in (listing, kept.replace("kept with", "to keep with")) if t)
-                + " (use on_unsupported='skip' / --skip-unsupported to leave them out"
-                + (" or keep them changed)" if changed else ")")
+                + " ("
+                + advice("on_unsupported='skip' leaves", "--skip-unsupported leaves")
+                + " them out"
+                + (" or keeps them changed)" if changed else ")")
             )
         bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if bare:

@@ -268,6 +268,7 @@ class RawData:
             rows: generator bus, regulated bus, VS, share), shape (n, 4).
         changed: records read otherwise than they say, each named with the reason
             (a plant whose IREG bus is a generator bus regulates its own bus, as PSS/E).
+        netted_ids: (bus, ID) of the generators in ``netted``.
     """
 
     name: str
@@ -286,6 +287,7 @@ class RawData:
     solution: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     vreg_con: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     changed: tuple[RawSource, ...] = ()
+    netted_ids: frozenset[tuple[int, str]] = frozenset()
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
@@ -693,6 +695,7 @@ class _Builder:
     unsupported: list = field(default_factory=list)
     net: Callable[[int, str], str | None] | None = None  # (bus, id) -> why netted, or None
     netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
+    netted_ids: list = field(default_factory=list)  # (bus, ID) of netted generators
     out_of_service: list = field(default_factory=list)  # (bus, ID) of generators
     switched_off: list = field(default_factory=list)  # RawSource of records out of the network
     seen: dict = field(default_factory=dict)  # (section, ids) -> first line
@@ -860,6 +863,7 @@ def _generator(b: _Builder, rec: _Rec):
         rec.fail(f"{what}: {rec.given(0, 4, 5)}: QT must be >= QB")
     why = None if b.net is None else b.net(num, gid)
     if why:
+        b.netted_ids.append((num, gid))
         return _net_generator(b, rec, num, f"{what}: {why}")
     if rec.num(0, 11 + o, 0.0) != 0 or rec.num(0, 12 + o, 0.0) != 0:
         return b.skip(rec, f"{what}: step-up transformer in the generator record (RT, XT)")
@@ -1302,4 +1306,5 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         solution=np.array([[n, *vm_va] for n, vm_va in b.solution.items()], float).reshape(-1, 3),
         vreg_con=vreg_con,
         changed=tuple(b.changed),
+        netted_ids=frozenset(b.netted_ids),
     )

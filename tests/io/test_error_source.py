@@ -418,3 +418,77 @@ def test_a_raw_value_is_refused_naming_line_field_and_value_as_written(
     line = error_line(res)
     assert line.startswith(f"error: {expected}"), line
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "machine, expected",
+    [
+        # a value that is no number: the parameter by its PSS/E name, not its position
+        (record("GENROU", {"H": "nan"}), "bad.dyr:1 GENROU (bus 1, id 1): H = nan: not a finite"),
+        (record("GENROU", {"Xd": "inf"}), "bad.dyr:1 GENROU (bus 1, id 1): Xd = inf: not a"),
+        (record("GENROU", {"Xd": "1e999"}), "bad.dyr:1 GENROU (bus 1, id 1): Xd = 1e999: not a"),
+        (record("GENROU", {"H": "abc"}), "bad.dyr:1 GENROU (bus 1, id 1): H = 'abc': not a number"),
+        # a value refused by the tables: as written, E-notation kept
+        (
+            record("GENROU", {"X''d": "-1.508E-01"}),
+            "bad.dyr:1 GENROU (bus 1, id 1): X''d = -1.508E-01: must be >= 0",
+        ),
+        (
+            record("GENROU", bus=-1),
+            "bad.dyr:1 GENROU (bus -1, id 1): IBUS = -1: a bus number must be a positive integer",
+        ),
+    ],
+)
+def test_a_dyr_value_is_named_by_its_psse_name_and_as_written(tmp_path, machine, expected):
+    res, _, out = imported(tmp_path, [machine, INFINITE])
+    line = error_line(res)
+    assert line.startswith(f"error: {expected}"), line
+    assert not out.exists()
+
+
+def test_a_sexs_non_number_is_named_k(tmp_path):
+    res, _, _ = imported(tmp_path, [record("GENROU"), INFINITE, record("SEXS", {"K": "1OO"})])
+    assert error_line(res).startswith("error: bad.dyr:3 SEXS (bus 1, id 1): K = '1OO': not a")
+
+
+def test_a_machine_record_of_no_generator_is_named_before_the_generator_it_leaves_bare(
+    tmp_path,
+):
+    """GENROU id 'Z1' where the RAW's generator at bus 1 is '1': that record, its line and
+    the ids there are, then the generator left without a machine; from the command line
+    the advice is its option, from the library the argument."""
+    stray = record("GENROU").replace(" 1 4.6385", " 'Z1' 4.6385")
+    res, dyr, _ = imported(tmp_path, [INFINITE, stray])
+    assert error_line(res) == (
+        "error: bad.dyr:2 GENROU (bus 1, id Z1): matches no generator in service of the RAW "
+        "data (bus 1's: id '1'); so generator(s) without a machine model record in the DYR "
+        "data: machine 1 (bus 1, id 1) (--net-unmodelled nets them as negative loads)"
+    )
+    from stabctl.io.psse import import_psse
+
+    with pytest.raises(CaseError, match=r"\(unmodelled='net' nets them") as err:
+        import_psse(RAW, dyr)
+    assert "--" not in str(err.value)
+
+
+def test_the_controls_of_a_netted_generator_are_named_as_left_out_with_it(tmp_path):
+    """--net-unmodelled nets the generator without a machine model record; its SEXS is
+    left out with it, said so (not "no such generator in the RAW data")."""
+    res, _, out = imported(tmp_path, [INFINITE, record("SEXS")], "--net-unmodelled")
+    assert res.exit_code == 0 and out.exists(), res.output
+    assert (
+        "left out with its netted generator: bad.dyr:2 SEXS (bus 1, id 1): left out with its "
+        "generator, netted (no machine model)" in res.output
+    )
+    assert "no such generator" not in res.output
+
+
+def test_an_unsupported_record_advises_the_option_on_the_command_line(tmp_path):
+    res, dyr, _ = imported(tmp_path, [record("GENROU"), INFINITE, "    1 'FOOBAR' 1 1 2 3 /"])
+    line = error_line(res)
+    assert "(--skip-unsupported leaves them out)" in line and "on_unsupported" not in line
+    from stabctl.io.psse import import_psse
+
+    with pytest.raises(CaseError, match=r"\(on_unsupported='skip' leaves them out\)") as err:
+        import_psse(RAW, dyr)
+    assert "--" not in str(err.value)

@@ -190,7 +190,7 @@ def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
     dyr = _dyr(
         tmp_path, f"1 'GENROU' 1 {_GENROU.format(H=5.0)}", f"3 'GENROU' 1 {_GENROU.format(H=4.0)}"
     )
-    with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*--net-unmodelled"):
+    with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*unmodelled='net'"):
         load_psse(V33, dyr)
     with pytest.warns(UserWarning, match="netted 1 generator"):
         case, left_out, netted, *_ = import_psse(V33, dyr, unmodelled="net")
@@ -709,7 +709,7 @@ def test_an_unsupported_machine_record_is_named_not_called_missing(tmp_path):
         assert f"machine model record stabctl cannot read: machine 3 (bus 3, id 2): {named}" in (
             str(err.value)
         )
-        assert "--net-unmodelled" in str(err.value) and "--skip-unsupported" in str(err.value)
+        assert "unmodelled='net'" in str(err.value) and "on_unsupported='skip'" in str(err.value)
     with pytest.raises(CaseError, match=r"1 unsupported record\(s\).*edited\.dyr:3 GENTPJ1"):
         import_psse(V33, dyr, unmodelled="net")
     with pytest.warns(UserWarning):
