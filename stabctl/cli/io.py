@@ -498,6 +498,7 @@ def import_andes(
     summary, text = _imported(case, out)
     summary.update(
         left_out=list(imported.left_out),
+        out_of_service=list(imported.out_of_service),
         changed=list(imported.changed),
         unlike_andes=list(imported.unlike_andes),
         defaulted=list(imported.defaulted),
@@ -511,7 +512,8 @@ def import_andes(
         print_json(summary)
         return
     click.echo(
-        f"{text}; {len(imported.left_out)} left out"
+        f"{text}; {len(imported.left_out)} left out, "
+        f"{len(imported.out_of_service)} out of service (u = 0)"
         + (f"; {len(islands)} island(s) without a swing bus left out" if islands else "")
         + (f"; {len(imported.changed)} kept with a change" if imported.changed else "")
         + (
@@ -522,6 +524,7 @@ def import_andes(
     )
     for what, items in (
         ("left out", imported.left_out),
+        ("out of service", imported.out_of_service),
         ("changed", imported.changed),
         ("kept as the file gives, unlike ANDES", imported.unlike_andes),
         ("not given in the file, run at ANDES's", imported.defaulted),

@@ -113,7 +113,9 @@ def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
     tmp_path, case, model, values, needle
 ):
     path = edited(tmp_path, case, model, **values)
-    with pytest.raises(CaseError, match=rf"{path.name}: {model} row 1 \(idx .*\): ") as err:
+    with pytest.raises(
+        CaseError, match=rf"{path.name}: {model} row 1 \(idx .*; spreadsheet row 2\): "
+    ) as err:
         read_andes_case(path, on_unsupported="skip")
     assert needle in str(err.value)
 
@@ -157,7 +159,9 @@ def test_a_busf_naming_no_busfreq_of_the_case_is_refused(tmp_path, case, model):
     """A busf naming a BusFreq the case does not hold: ANDES adds one with its defaults at
     the bus instead (its DeviceFinder), and the import ran without a word."""
     path = edited(tmp_path, case, model, busf="BusFreq_99")
-    with pytest.raises(CaseError, match=rf"{model} row 1 \(idx .*\): busf = 'BusFreq_99': no "):
+    with pytest.raises(
+        CaseError, match=rf"{model} row 1 \(idx .*; spreadsheet row 2\): busf = 'BusFreq_99': no "
+    ):
         read_andes_case(path, on_unsupported="skip")
 
 

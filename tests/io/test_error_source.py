@@ -492,3 +492,68 @@ def test_an_unsupported_record_advises_the_option_on_the_command_line(tmp_path):
     with pytest.raises(CaseError, match=r"\(on_unsupported='skip' leaves them out\)") as err:
         import_psse(RAW, dyr)
     assert "--" not in str(err.value)
+
+
+def andes_xlsx_edited(tmp_path, case: str, sheet: str, row: int, column: str, value):
+    """ANDES's xlsx case with `column` of spreadsheet row `row` of `sheet` set to `value`."""
+    andes = pytest.importorskip("andes")
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.load_workbook(andes.get_case(case))
+    ws = book[sheet]
+    header = [c.value for c in ws[1]]
+    ws.cell(row=row, column=header.index(column) + 1).value = value
+    out = tmp_path / "edited.xlsx"
+    book.save(out)
+    return out
+
+
+def test_andes_text_where_a_number_belongs_is_named_with_its_cell(tmp_path):
+    """TGOV1 R 'abc' in an xlsx file, PVD1 Sn '100 MVA' in a json one: ANDES's own words
+    were "could not convert string to float: 'abc'"; now the file, model, row (and the
+    spreadsheet's row of an xlsx file), idx, parameter and text."""
+    path = andes_xlsx_edited(tmp_path, "ieee14/ieee14_wt3.xlsx", "TGOV1", 2, "R", "abc")
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(tmp_path / "a.json")])
+    assert error_line(res) == (
+        "error: edited.xlsx: TGOV1 row 1 (idx TGOV1_1; spreadsheet row 2): R = 'abc': not a "
+        "number (ANDES cannot read it)"
+    )
+    path = andes_edited(tmp_path, "ieee14/ieee14_pvd1.xlsx", "PVD1", "Sn", "100 MVA")
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(tmp_path / "a.json")])
+    assert re.fullmatch(
+        rf"error: {path.name}: PVD1 row 1 \(idx [^)]+\): Sn = '100 MVA': not a number .*",
+        error_line(res),
+    )
+
+
+def test_an_andes_device_out_of_service_is_named_as_left_out(tmp_path):
+    """TGOV1 row 1 with u = 0 was dropped without a word ("0 left out"); now named, as
+    import-psse names the equipment out of service."""
+    path = andes_xlsx_edited(tmp_path, "ieee14/ieee14_wt3.xlsx", "TGOV1", 2, "u", 0)
+    out = tmp_path / "a.json"
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert summary["out_of_service"] == [
+        "edited.xlsx: TGOV1 row 1 (idx TGOV1_1): out of service (u = 0)"
+    ]
+
+
+def test_a_case_json_with_a_byte_order_mark_is_read(tmp_path):
+    """A case file saved with a UTF-8 BOM (Windows editors) was refused in Python's words
+    ("decode using utf-8-sig"): it is read."""
+    res, _, out = imported(tmp_path, [record("GENROU"), INFINITE])
+    assert res.exit_code == 0, res.output
+    bom = tmp_path / "bom.json"
+    bom.write_bytes(b"\xef\xbb\xbf" + out.read_bytes())
+    assert load_case(bom).equals(load_case(out))
+
+
+def test_advice_is_in_the_callers_words():
+    """A library caller is advised Python arguments, a command's user its options, and
+    nothing where the command line has no such option."""
+    from stabctl.errors import advice, on_command_line
+
+    assert advice("(on_unsupported='skip')", "(--skip-unsupported)") == "(on_unsupported='skip')"
+    with on_command_line():
+        assert advice("(on_unsupported='skip')", "(--skip-unsupported)") == "(--skip-unsupported)"
+        assert advice(" (Simulator(off_equilibrium='warn') runs it anyway)") == ""
