@@ -122,8 +122,7 @@ def test_non_finite_dyr_parameter_is_refused(tmp_path, token):
     path = _write(tmp_path, text, "bad.dyr")
     with pytest.raises(
         CaseError,
-        match=rf"bad\.dyr:1: GENROU parameter 2 '{token}' is not a "
-        "finite number",
+        match=rf"bad\.dyr:1 GENROU \(bus 1, id 1\): T''do = {token}: not a finite number",
     ):
         read_dyr(path)
 
