@@ -8,6 +8,50 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
+#: "cli" while a command of stabctl's command line runs (`on_command_line`), else
+#: "library": which of its words a message's advice takes (`advice`)
+_FRONT: ContextVar[str] = ContextVar("stabctl_front", default="library")
+
+
+def advice(library: str, cli: str = "") -> str:
+    """A message's advice on what to do, in the words of the caller: ``library`` (a
+    function's argument, ``on_unsupported='skip'``) when stabctl is called as a library,
+    ``cli`` (a command-line option, ``--skip-unsupported``) inside a command of its
+    command line (`on_command_line`), where an option the command lacks is never
+    advised ('' where none exists).
+
+    Parameters
+    ----------
+    library : str
+        The advice to a library's caller.
+    cli : str, optional
+        The advice to a command line's user; default none.
+
+    Returns
+    -------
+    str
+        The one for the caller.
+    """
+    return cli if _FRONT.get() == "cli" else library
+
+
+@contextmanager
+def on_command_line() -> Iterator[None]:
+    """Within this block errors advise command-line options, not Python arguments
+    (`advice`): a command of stabctl's command line runs in it
+    (`stabctl.cli.options.reports_errors`).
+
+    Yields
+    ------
+    None
+        Nothing: the block runs as a command.
+    """
+    token = _FRONT.set("cli")
+    try:
+        yield
+    finally:
+        _FRONT.reset(token)
+
 
 class StabctlError(Exception):
     """Base class of all stabctl errors (the CLI turns these into exit status 2)."""

@@ -369,6 +369,7 @@ def import_psse(
         left_out=list(imported.left_out),
         out_of_service=list(imported.out_of_service),
         netted=list(imported.netted),
+        netted_controls=list(imported.netted_controls),
         changed=list(imported.changed),
         infeasible=list(infeasible),
         islands=list(islands),
@@ -400,7 +401,13 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
     click.echo(
         f"{text}; {len(imported.left_out)} record(s) left out, "
         f"{len(imported.out_of_service)} out of the network (as PSS/E), "
-        f"{len(imported.netted)} generator(s) netted, "
+        f"{len(imported.netted)} generator(s) netted"
+        + (
+            f" ({len(imported.netted_controls)} control record(s) left out with them)"
+            if imported.netted_controls
+            else ""
+        )
+        + ", "
         f"{len(infeasible)} control(s) outside their limits left out"
         + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
     )
@@ -408,6 +415,7 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
         ("left out", imported.left_out),
         ("out of the network", imported.out_of_service),
         ("netted", imported.netted),
+        ("left out with its netted generator", imported.netted_controls),
         ("changed", imported.changed),
     ):
         for item in items:
@@ -490,6 +498,7 @@ def import_andes(
     summary, text = _imported(case, out)
     summary.update(
         left_out=list(imported.left_out),
+        out_of_service=list(imported.out_of_service),
         changed=list(imported.changed),
         unlike_andes=list(imported.unlike_andes),
         defaulted=list(imported.defaulted),
@@ -503,7 +512,8 @@ def import_andes(
         print_json(summary)
         return
     click.echo(
-        f"{text}; {len(imported.left_out)} left out"
+        f"{text}; {len(imported.left_out)} left out, "
+        f"{len(imported.out_of_service)} out of service (u = 0)"
         + (f"; {len(islands)} island(s) without a swing bus left out" if islands else "")
         + (f"; {len(imported.changed)} kept with a change" if imported.changed else "")
         + (
@@ -514,6 +524,7 @@ def import_andes(
     )
     for what, items in (
         ("left out", imported.left_out),
+        ("out of service", imported.out_of_service),
         ("changed", imported.changed),
         ("kept as the file gives, unlike ANDES", imported.unlike_andes),
         ("not given in the file, run at ANDES's", imported.defaulted),

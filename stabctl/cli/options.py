@@ -33,7 +33,7 @@ import click
 
 from stabctl.cli.format import one_line
 from stabctl.cli.stdout import StdoutError, cannot_write
-from stabctl.errors import InputError, StabctlError
+from stabctl.errors import InputError, StabctlError, on_command_line
 from stabctl.io.inputs import plain_number
 
 #: seconds a run continues after the fault start when --tf is not given
@@ -174,7 +174,11 @@ def reports_errors(func):
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        with warnings.catch_warnings(record=True) as caught, _sigterm_as_interrupt():
+        with (
+            warnings.catch_warnings(record=True) as caught,
+            _sigterm_as_interrupt(),
+            on_command_line(),
+        ):
             warnings.simplefilter("default")
             try:
                 try:

@@ -72,6 +72,7 @@ from stabctl.errors import (
     NumericalInstabilityError,
     SimulationError,
     StabctlError,
+    advice,
     run_on_suspect_starts,
 )
 from stabctl.models import converters as conv
@@ -885,8 +886,8 @@ def _held_at_q_limits(case: Case, held: np.ndarray, settings: dict) -> str:
     return (
         f"; the power flow held bus{'' if one else 'es'} {listed} at "
         f"{'its Q limit' if one else 'their Q limits'}, and without Q limits the case starts "
-        "at rest: --no-q-limits (q_limits=False) solves the power flow as ANDES does (pv2pq "
-        "= 0, the power flow import-andes compares with)"
+        f"at rest: {advice('q_limits=False', '--no-q-limits')} solves the power flow as "
+        "ANDES does (pv2pq = 0, the power flow import-andes compares with)"
     )
 
 

@@ -25,7 +25,7 @@ from stabctl.case import BranchTable, BusTable, Case
 from stabctl.case.events import FAULT_B
 from stabctl.dynamics.bounded import BoundedCache
 from stabctl.dynamics.coi import coi_inertia
-from stabctl.errors import CaseError, InputError, SimulationError
+from stabctl.errors import CaseError, InputError, SimulationError, advice
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -560,11 +560,13 @@ class DynamicModel:
             return
         hint = (
             "; PSS/E data read with conventions 'pst': PST's exc_st3 (ESST3A) starts off "
-            "equilibrium with K_C != 0, read them with conventions 'andes'"
+            "equilibrium with K_C != 0, read them with "
+            + advice("conventions 'andes'", "--conventions andes")
             if state.startswith("exc.")
             else ""
         )
-        raise CaseError(f"{text}{hint} (Simulator(off_equilibrium='warn') runs it anyway)")
+        anyway = advice(" (Simulator(off_equilibrium='warn') runs it anyway)")
+        raise CaseError(f"{text}{hint}{anyway}")
 
     def state_name(self, k: int) -> str:
         """Name of flat state index k, e.g. 'mac.omega.G3' or 'exc.VTR.G1'."""

@@ -114,7 +114,7 @@ import numpy as np
 from stabctl.case import PQ, PV, SWING, Case
 from stabctl.case.params import FAMILIES
 from stabctl.case.system import SWITCHED_GROUPS
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import CaseError, InputError, advice
 from stabctl.io.andes import _andes, _andes_log, _andes_said
 from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_origin, dyr_tables
 from stabctl.io.inputs import number_ranges, parse_json
@@ -259,6 +259,10 @@ class AndesImport:
     data_solution : numpy.ndarray or None
         The RAW file's own power-flow solution, shape (n, 3): bus number, VM (pu), VA
         (degrees) (ANDES's ``Bus.v0``, ``a0``); None unless the case is a PSS/E RAW.
+    out_of_service : tuple of str
+        Each device the file puts out of service (``u = 0``), left out of the case as
+        ANDES leaves it out of its run: ``"file: MODEL row R (idx I): out of service (u =
+        0)"`` (`_switched_off`).
     """
 
     case: Case
@@ -271,6 +275,7 @@ class AndesImport:
     unlike_andes: tuple[str, ...] = ()
     data_solution: np.ndarray | None = None
     defaulted: tuple[str, ...] = ()
+    out_of_service: tuple[str, ...] = ()
 
 
 def import_andes(
@@ -431,8 +436,10 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
             raise InputError(
                 f"{path.name}: "
                 + "; ".join(t for t in (listing, kept.replace("kept with", "to keep with")) if t)
-                + " (use on_unsupported='skip' / --skip-unsupported to leave them out"
-                + (" or keep them changed)" if changed else ")")
+                + " ("
+                + advice("on_unsupported='skip' leaves", "--skip-unsupported leaves")
+                + " them out"
+                + (" or keeps them changed)" if changed else ")")
             )
         bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if bare:
@@ -473,6 +480,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
         tuple(unlike),
         solution,
         tuple(given.defaulted),
+        _switched_off(ss, path.name),
     )
 
 
@@ -547,10 +555,18 @@ def _check_json_layout(path: Path) -> None:
     """InputError for a json file that is not in ANDES's layout (`_ANDES_JSON`), naming
     what it is (a stabctl case, a PSTess matrix file) or the key that breaks the layout:
     ANDES read a stabctl case's ``"version": 1`` as model rows and failed with
-    "'int' object is not iterable".  A key given twice is refused (`_json_data`); a file
-    that is not JSON is left to ANDES, whose message names it."""
+    "'int' object is not iterable".  A key given twice is refused (`_json_data`), and a
+    byte-order mark (ANDES's reader fails on it); a file that is not JSON is left to
+    ANDES, whose message names it."""
     from stabctl.io.pst import FORMAT
 
+    with open(path, "rb") as f:
+        if f.read(3) == b"\xef\xbb\xbf":
+            raise InputError(
+                f"{path.name}: the file starts with a byte-order mark (a UTF-8 BOM, written "
+                "by some Windows editors), which ANDES's json reader cannot read: save it "
+                "as UTF-8 without one"
+            )
     data = _json_data(path)
     if data is None:
         return
@@ -598,15 +614,15 @@ def _json_kind(value) -> str:
     return f"the value {json.dumps(value)}"
 
 
-def _input_rows(path: Path) -> dict:
+def _input_rows(path: Path) -> tuple[dict, dict[str, list[int]]]:
     """ANDES model -> the rows (dicts) of an xlsx or json case file as written, before
     ANDES fills its defaults ({} for other formats, whose own readers give defaults); an
-    xlsx formula cell without a stored value is a `_Formula`."""
+    xlsx formula cell without a stored value is a `_Formula`.  And for an xlsx file,
+    sheet -> each row's number in the spreadsheet (its header is row 1)."""
     if path.suffix.lower() == ".json":
         data = _json_data(path)
-        return (
-            {k: v for k, v in data.items() if isinstance(v, list)} if isinstance(data, dict) else {}
-        )
+        rows = {k: v for k, v in data.items() if isinstance(v, list)}
+        return (rows if isinstance(data, dict) else {}), {}
     if path.suffix.lower() == ".xlsx":
         import pandas as pd  # type: ignore[import-untyped]  # ANDES reads xlsx with it
 
@@ -614,16 +630,18 @@ def _input_rows(path: Path) -> dict:
             sheets = pd.read_excel(path, sheet_name=None)
             formulas = _formulas(path)
         except Exception:  # noqa: BLE001 - ANDES's own reading names what is wrong
-            return {}
+            return {}, {}
         for name, df in sheets.items():
             for (i, col), text in formulas.get(name, {}).items():
                 if col in df.columns and i in df.index and pd.isna(df.at[i, col]):
                     df[col] = df[col].astype(object)
                     df.at[i, col] = _Formula(text)
-        return {
-            name: df.dropna(axis=0, how="all").to_dict("records") for name, df in sheets.items()
-        }
-    return {}
+        kept = {name: df.dropna(axis=0, how="all") for name, df in sheets.items()}
+        return (
+            {name: df.to_dict("records") for name, df in kept.items()},
+            {name: [int(i) + 2 for i in df.index] for name, df in kept.items()},
+        )
+    return {}, {}
 
 
 def _formulas(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
@@ -676,7 +694,8 @@ def _file_inputs(path: Path, ss) -> _Given:
 
     missing: dict[tuple[str, str, str, str], list[int]] = {}
     given = _Given([], [], [])
-    for sheet, rows in _input_rows(path).items():
+    all_rows, sheet_rows = _input_rows(path)
+    for sheet, rows in all_rows.items():
         if sheet == "_config":  # ANDES's settings, in the files it writes
             continue
         m = ss.models.get(sheet)
@@ -694,8 +713,10 @@ def _file_inputs(path: Path, ss) -> _Given:
             if c not in m.params and c not in _ROW_COLUMNS
         )
         dynamic = m.group in _DYNAMIC_GROUPS
+        lines = sheet_rows.get(sheet, [])
         for k, row in enumerate(rows, start=1):
-            where = f"{path.name}: {sheet} row {k} (idx {row.get('idx')})"
+            line = f"; spreadsheet row {lines[k - 1]}" if k <= len(lines) else ""
+            where = f"{path.name}: {sheet} row {k} (idx {row.get('idx')}{line})"
             _check_row(where, model, row)
             if dynamic or model in _CONVERTER_FAMILY:
                 _check_finders(where, m, row, ss)
@@ -709,7 +730,7 @@ def _file_inputs(path: Path, ss) -> _Given:
                 if name in _REQUIRED_INPUTS.get(model, ()) and not (number and np.isfinite(v)):
                     raise CaseError(
                         f"{where}: {name} "
-                        + (f"{v!r} is not a finite number" if not empty else "missing")
+                        + (f"= {v!r}: not a finite number" if not empty else "missing")
                         + f" (ANDES would run with its default {p.default!r})"
                     )
                 if empty:
@@ -722,7 +743,11 @@ def _file_inputs(path: Path, ss) -> _Given:
                         missing.setdefault(key, []).append(k)
                     continue
                 if not number:
-                    continue  # text: ANDES's own reading names it
+                    if isinstance(v, str) and p.vtype is float and not _reads_as_number(v):
+                        raise CaseError(
+                            f"{where}: {name} = {v!r}: not a number (ANDES cannot read it)"
+                        )
+                    continue  # a number in text ANDES reads, or another kind it names
                 values[name] = v
                 rule = _violated(p, v) if model not in IGNORED_MODELS else ""
                 if rule:
@@ -740,6 +765,17 @@ def _file_inputs(path: Path, ss) -> _Given:
         for (model, name, default, how), rows in missing.items()
     )
     return given
+
+
+def _reads_as_number(text: str) -> bool:
+    """Whether ANDES reads ``text``, the cell of a parameter of ``vtype`` float, as a
+    number (its float()); a parameter of another type (Alter's ``method``, ShuntSw's
+    lists) holds text."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _how_left_out(path: Path, row: dict, name: str) -> str:
@@ -1145,6 +1181,19 @@ def _in_service(model) -> list[int]:
     device at a bus out of service), ``u`` for a model without one."""
     status = model.ue if hasattr(model, "ue") else model.u
     return [k for k in range(model.n) if status.v[k]]
+
+
+def _switched_off(ss, file: str) -> tuple[str, ...]:
+    """Each device of ``ss`` out of service (``u = 0``; the models ignored as without
+    effect aside), named as its file holds it: left out of the case as ANDES leaves it
+    out of its run, never silently."""
+    return tuple(
+        f"{_device_where(ss, file, name, k)}: out of service (u = 0)"
+        for name, m in ss.models.items()
+        if m.n and name not in IGNORED_MODELS and name not in EVENT_MODELS and hasattr(m, "u")
+        for k in range(m.n)
+        if m.u.v[k] == 0
+    )
 
 
 def _warn_out_of_service(ss, file: str, buses: list, numbers: dict) -> None:

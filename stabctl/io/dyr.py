@@ -32,9 +32,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, advice
 from stabctl.io.inputs import input_file, plain_float
-from stabctl.io.provenance import Origin
+from stabctl.io.provenance import Origin, Written
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
 from stabctl.models.exciters import EXCITER
@@ -114,6 +114,26 @@ class DyrTables:
 
 class _Unsupported(Exception):
     """A record of a model (or model option) stabctl does not represent."""
+
+
+#: why a record of no generator is left out (`_no_generator`)
+NO_GENERATOR = "matches no generator in service of the RAW data"
+
+
+def _no_generator(rec: DyrRecord, gens: Mapping) -> str:
+    """Why ``rec`` is left out: its (bus, id) is none of ``gens``' (``(bus, id) ->
+    generator``), with the ids of the generators at its bus."""
+    ids = [f"'{gid}'" for bus, gid in gens if bus == rec.bus]
+    at = f"bus {rec.bus}'s: id {', '.join(ids)}" if ids else f"none at bus {rec.bus}"
+    return f"{NO_GENERATOR} ({at})"
+
+
+class UnmodelledError(CaseError):
+    """Generators without a (readable) machine model record: `dyr_tables` refuses them;
+    ``unreadable``: some have a record of a model stabctl cannot read (the caller may
+    advise how to net them or leave those records out)."""
+
+    unreadable: bool = False
 
 
 #: the records read with a value other than the file's, while `dyr_tables` maps them
@@ -198,11 +218,16 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
         )
     model = tokens[1].strip("'").strip().upper()
     bus = _integer(tokens[0])
-    if bus is None:
+    label = f"{file}:{line} {model} (bus {tokens[0]}, id {machine_id(tokens[2])})"
+    if bus is None or bus <= 0:
         if model in N_PARAMS:
             raise CaseError(
-                f"{file}:{line}: {model} bus field {tokens[0]!r} is not an integer (ASCII "
-                "digits, no '_')"
+                f"{label}: "
+                + (
+                    f"IBUS = {tokens[0]!r}: not an integer (ASCII digits, no '_')"
+                    if bus is None
+                    else f"IBUS = {tokens[0]}: a bus number must be a positive integer"
+                )
             )
         bus = 0
     params, text = [], []
@@ -210,7 +235,7 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
     for k, tok in enumerate(tokens[3:], 1):
         if k in strings:
             if not tok.startswith("'"):
-                raise CaseError(f"{file}:{line}: {model} parameter {k} {tok!r} is not a quoted id")
+                raise CaseError(f"{label}: {_param_name(model, k)} = {tok}: not a quoted id")
             params.append(float("nan"))
             text.append(machine_id(tok))
             continue
@@ -219,17 +244,23 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
         except ValueError:
             if model in N_PARAMS:
                 raise CaseError(
-                    f"{file}:{line}: {model} parameter {k} {tok!r} is not a number (ASCII "
+                    f"{label}: {_param_name(model, k)} = {tok!r}: not a number (ASCII "
                     "digits, no '_')"
                 ) from None
             value = float("nan")  # e.g. USRMDL's quoted names: reported unsupported
         else:
             if model in N_PARAMS and not math.isfinite(value):
-                raise CaseError(
-                    f"{file}:{line}: {model} parameter {k} {tok!r} is not a finite number"
-                )
-        params.append(value)
+                raise CaseError(f"{label}: {_param_name(model, k)} = {tok}: not a finite number")
+        params.append(Written(value, tok) if math.isfinite(value) else value)
     return DyrRecord(file, line, bus, model, machine_id(tokens[2]), tuple(params), tuple(text))
+
+
+def _param_name(model: str, k: int) -> str:
+    """The name of parameter ``k`` (1-based, after the id) of a record of ``model`` as
+    the PSS/E Model Library writes it (``X''d``, ``TA/TB``), else ``parameter k``
+    (beyond the model's count: refused later by its count)."""
+    fields = (DYR_MODELS | CONVERTER_DYR | SVC_DYR)[model].fields
+    return _SHOWN.get(fields[k - 1], fields[k - 1]) if k <= len(fields) else f"parameter {k}"
 
 
 def _field_number(model: str, name: str) -> int:
@@ -292,6 +323,12 @@ def has_machine_model(rec: DyrRecord) -> bool:
     """Whether ``rec`` gives its generator a dynamic source model (a machine or a
     converter, mapped by stabctl or not): a generator without one is what PSS/E nets."""
     return rec.model in _SOURCE_MODELS or maps_machine(rec)
+
+
+def is_control(rec: DyrRecord) -> bool:
+    """Whether ``rec`` is a machine's control stabctl maps (an exciter, stabiliser,
+    governor or load compensator): one that leaves with its generator."""
+    return _KIND.get(rec.model) in ("exciter", "pss", "governor") or rec.model in COMPENSATORS
 
 
 def maps_machine(rec: DyrRecord) -> bool:
@@ -367,8 +404,10 @@ def dyr_tables(
         _CHANGED.reset(token)
     if skipped and on_unsupported == "error":
         raise CaseError(
-            "unsupported DYR records (use on_unsupported='skip' to leave them "
-            "out):\n" + "\n".join(f"  {r.label()}: {why}" for r, why in skipped)
+            "unsupported DYR records ("
+            + advice("on_unsupported='skip' leaves", "--skip-unsupported leaves")
+            + " them out):\n"
+            + "\n".join(f"  {r.label()}: {why}" for r, why in skipped)
         )
     _check_machines(generators, rows["machine"], skipped)
     _set_fractions(generators, rows["machine"])
@@ -487,7 +526,7 @@ def _map_records(records, generators, conventions):
             _check_count(rec)
             gen = gens.get((rec.bus, rec.id))
             if gen is None:
-                raise _Unsupported("no such generator in the RAW data (or out of service)")
+                raise _Unsupported(_no_generator(rec, gens))
             mapper = _CONVENTION_MAPPERS.get(conventions, {}).get(rec.model)
             if rec.model == "IEEEG1":  # its LP shaft may be another generator's
                 row = (_ieeeg1_andes if andes else _ieeeg1)(rec, gen, _lp_generator(rec, gens))
@@ -620,9 +659,10 @@ def _check_count(rec: DyrRecord) -> None:
 
 
 def _check_machines(generators, machines, skipped) -> None:
-    """CaseError naming every generator without a machine row: without a source record
-    in the DYR data, or whose source record is of a model stabctl does not support (that
-    record named ``file:line MODEL``, with why)."""
+    """`UnmodelledError` naming every generator without a machine row: without a source
+    record in the DYR data, or whose source record is of a model stabctl does not support
+    (that record named ``file:line MODEL``, with why); a machine record that matches no
+    generator (a wrong id or bus, :data:`NO_GENERATOR`) named first."""
     missing = [g for g in generators if int(g["number"]) not in machines]
     if not missing:
         return
@@ -632,6 +672,12 @@ def _check_machines(generators, machines, skipped) -> None:
             refused.setdefault((rec.bus, rec.id), []).append(f"{rec.where()} {rec.model}: {why}")
     bare = [g for g in missing if (int(g["bus"]), machine_id(g["id"])) not in refused]
     named = [g for g in missing if (int(g["bus"]), machine_id(g["id"])) in refused]
+    # a machine record of no generator (a wrong id or bus) first: the likely cause
+    strays = [
+        f"{r.label()}: {why}"
+        for r, why in skipped
+        if why.startswith(NO_GENERATOR) and has_machine_model(r)
+    ]
     parts = []
     if bare:
         parts.append(
@@ -647,16 +693,10 @@ def _check_machines(generators, machines, skipped) -> None:
                 for g in named
             )
         )
-    raise CaseError(
-        "; ".join(parts) + " (stabctl.io.psse.import_psse with unmodelled='net', import-psse "
-        "--net-unmodelled, nets them as negative loads"
-        + (
-            ", with on_unsupported='skip' / --skip-unsupported leaving out the records "
-            "it cannot read)"
-            if named
-            else ")"
-        )
-    )
+    first = f"{'; '.join(strays)}; so " if strays else ""
+    exc = UnmodelledError(first + "; ".join(parts))
+    exc.unreadable = bool(named)
+    raise exc
 
 
 def _set_fractions(generators, machines) -> None:

@@ -17,7 +17,40 @@ from dataclasses import dataclass, field
 
 from stabctl.errors import CaseError
 
-__all__ = ["Origin", "locate", "shown"]
+__all__ = ["Origin", "Written", "locate", "shown"]
+
+
+class Written(float):  # arguments of __new__: numpydoc ignore=PR02
+    """A number read from a data file that keeps its text as the file writes it
+    (``-1.508E-01``, ``1.5D0``), for messages: ``str()``, ``repr()`` and an f-string
+    without a format give that text, arithmetic a plain float.
+
+    Parameters
+    ----------
+    value : float
+        The number.
+    text : str
+        Its text in the file.
+    """
+
+    __slots__ = ("text",)
+    text: str
+
+    def __new__(cls, value: float, text: str) -> Written:
+        self = super().__new__(cls, value)
+        self.text = text
+        return self
+
+    def __str__(self) -> str:
+        return self.text
+
+    __repr__ = __str__
+
+    def __format__(self, spec: str) -> str:
+        return self.text if not spec else format(float(self), spec)
+
+    def __reduce__(self):
+        return (Written, (float(self), self.text))
 
 
 @dataclass(frozen=True)
@@ -47,8 +80,9 @@ class Origin:  # fields of a dataclass: numpydoc ignore=PR02
 
 
 def shown(value: float) -> str:
-    """A value as a data file writes it: an integer without a decimal point, else the
-    shortest text that reads back as the number (``0.2426``, ``-0.1``).
+    """A value as a data file writes it: its own text where it was read with it
+    (`Written`), else an integer without a decimal point, else the shortest text that
+    reads back as the number (``0.2426``, ``-0.1``).
 
     Parameters
     ----------
@@ -60,6 +94,8 @@ def shown(value: float) -> str:
     str
         Its text.
     """
+    if isinstance(value, Written):
+        return value.text
     v = float(value)
     return str(int(v)) if v.is_integer() and abs(v) < 1e15 else repr(v)
 

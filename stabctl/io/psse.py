@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl.case import Case
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, advice
 from stabctl.io.psse_raw import RawData, read_raw
 from stabctl.io.pst import case_from_matrices
 
@@ -54,7 +54,8 @@ class PsseImport(NamedTuple):
     read with a value other than the file's (:attr:`stabctl.io.dyr.DyrTables.changed`),
     and the records left out of the network as PSS/E leaves them (isolated buses and what
     is at them, equipment out of service, the DYR records of generators out of service:
-    :attr:`stabctl.io.psse_raw.RawData.switched_off`)."""
+    :attr:`stabctl.io.psse_raw.RawData.switched_off`), and the DYR records of the netted
+    generators' controls, left out with them."""
 
     case: Case
     left_out: tuple[str, ...]
@@ -62,6 +63,7 @@ class PsseImport(NamedTuple):
     solution: np.ndarray
     changed: tuple[str, ...] = ()
     out_of_service: tuple[str, ...] = ()
+    netted_controls: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -122,7 +124,7 @@ def import_psse(
     ``on_unsupported="skip"``), the generators netted (empty unless
     ``unmodelled="net"``) and the records out of the network (`PsseImport`). Same
     arguments and errors."""
-    from stabctl.io.dyr import read_dyr
+    from stabctl.io.dyr import UnmodelledError, read_dyr
 
     if on_unsupported not in _MODES:
         raise CaseError(f"on_unsupported must be 'error' or 'skip', got {on_unsupported!r}")
@@ -137,10 +139,17 @@ def import_psse(
     origins: dict = {}
     lost: list[str] = []
     off_network = [str(s) for s in raw.switched_off]
+    with_netted: list[str] = []
     if records is not None:
         records, ignored = _in_service(records, raw.out_of_service)
         off_network += ignored
-        dyn, dyr_unsupported, lost, changed, origins = _dynamic_tables(raw, records, conventions)
+        records, with_netted = _of_netted(records, raw.netted_ids)
+        try:
+            dyn, dyr_unsupported, lost, changed, origins = _dynamic_tables(
+                raw, records, conventions
+            )
+        except UnmodelledError as exc:
+            raise exc.relocated(f"{exc}{_net_advice(exc.unreadable)}") from None
         mats.update(dyn)
         unsupported += dyr_unsupported
     where = _files(raw_path, dyr_path)
@@ -153,9 +162,15 @@ def import_psse(
     _say_off_network(off_network, where)
     netted = tuple(str(s) for s in raw.netted)
     if netted:
+        also = (
+            f"; left out with them their {len(with_netted)} control record(s): "
+            + "; ".join(with_netted)
+            if with_netted
+            else ""
+        )
         warnings.warn(
             f"{where}: netted {len(netted)} generator(s) without a (supported) machine "
-            f"model as negative loads: {'; '.join(netted)}",
+            f"model as negative loads: {'; '.join(netted)}{also}",
             UserWarning,
             stacklevel=3,
         )
@@ -173,7 +188,15 @@ def import_psse(
             UserWarning,
             stacklevel=3,
         )
-    return PsseImport(case, tuple(unsupported), netted, raw.solution, changed, tuple(off_network))
+    return PsseImport(
+        case,
+        tuple(unsupported),
+        netted,
+        raw.solution,
+        changed,
+        tuple(off_network),
+        tuple(with_netted),
+    )
 
 
 def _located(exc: CaseError, origins: dict, where: str) -> CaseError:
@@ -185,6 +208,31 @@ def _located(exc: CaseError, origins: dict, where: str) -> CaseError:
 
     located = locate(exc, origins, {f.table: f for f in FAMILIES.values()})
     return located if located is not exc else exc.relocated(f"{where}: {exc}")
+
+
+def _net_advice(unreadable: bool) -> str:
+    """How to import generators without a machine model all the same: netted."""
+    skip = ("on_unsupported='skip'", "--skip-unsupported")
+    net = ("unmodelled='net'", "--net-unmodelled")
+    (lib, cli) = (
+        f" ({n} nets them as negative loads"
+        + (f", with {s} leaving out the records it cannot read)" if unreadable else ")")
+        for n, s in zip(net, skip)
+    )
+    return advice(lib, cli)
+
+
+def _of_netted(records, netted_ids) -> tuple[list, list[str]]:
+    """The DYR records but the controls of the generators netted for want of a (supported)
+    machine model, and those controls named: they leave with their generator (its
+    machine and converter records stay, reported as they are)."""
+    from stabctl.io.dyr import is_control, machine_id
+
+    netted = {(bus, machine_id(gid)) for bus, gid in netted_ids}
+    gone = [r for r in records if (r.bus, r.id) in netted and is_control(r)]
+    left = [f"{r.label()}: left out with its generator, netted (no machine model)" for r in gone]
+    ids = {id(r) for r in gone}
+    return [r for r in records if id(r) not in ids], left
 
 
 def _in_service(records, out_of_service) -> tuple[list, list[str]]:
@@ -294,10 +342,9 @@ def _report(unsupported: list[str], mode: str, where: str) -> None:
         return
     listing = "; ".join(unsupported)
     if mode == "error":
+        how = advice("on_unsupported='skip' leaves", "--skip-unsupported leaves")
         raise CaseError(
-            f"{where}: {len(unsupported)} unsupported record(s) (use "
-            f"on_unsupported='skip' / --skip-unsupported to leave them out): "
-            f"{listing}"
+            f"{where}: {len(unsupported)} unsupported record(s) ({how} them out): {listing}"
         )
     warnings.warn(
         f"{where}: left out {len(unsupported)} unsupported record(s): {listing}",

@@ -268,6 +268,7 @@ class RawData:
             rows: generator bus, regulated bus, VS, share), shape (n, 4).
         changed: records read otherwise than they say, each named with the reason
             (a plant whose IREG bus is a generator bus regulates its own bus, as PSS/E).
+        netted_ids: (bus, ID) of the generators in ``netted``.
     """
 
     name: str
@@ -286,6 +287,7 @@ class RawData:
     solution: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     vreg_con: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     changed: tuple[RawSource, ...] = ()
+    netted_ids: frozenset[tuple[int, str]] = frozenset()
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
@@ -332,29 +334,49 @@ _INTEGER = re.compile(r"[+-]?\d+")
 
 @dataclass
 class _Rec:
-    """One RAW record: its lines' fields, the file and its first line number."""
+    """One RAW record: its lines' fields, the file and its first line number; ``at``: the
+    file line of each record line, ``names``: the POM names of each line's fields
+    (:data:`_NAMES`, set once the record is complete) to name a field in messages."""
 
     file: str
     line: int
     lines: list[list[str]]
     section: str = ""
+    at: list[int] = field(default_factory=list)
+    names: Sequence[Sequence[str | None]] = ()
+
+    def name(self, row: int, k: int) -> str:
+        """The POM name of field ``k`` (0-based) of line ``row``, else ``field {k + 1}``."""
+        names = self.names[row] if row < len(self.names) else ()
+        return (names[k] if k < len(names) else None) or f"field {k + 1}"
+
+    def written(self, row: int, k: int) -> str:
+        """Field ``k`` of line ``row`` as the file writes it (stripped; '' if absent)."""
+        vals = self.lines[row]
+        return vals[k].strip() if k < len(vals) else ""
 
     def num(self, row: int, k: int, default: float | None = None) -> float:
         """Field ``k`` (0-based) of the record's line ``row`` as a float; a missing or
-        empty field takes ``default`` (an error when None)."""
+        empty field takes ``default`` (an error when None).  Errors name the field as the
+        POM does (``VM``, ``RMA1``) with its text as written, at the line it is on."""
         vals = self.lines[row]
         if k >= len(vals) or vals[k] == "":
             if default is None:
-                self.fail(f"field {k + 1} missing")
+                self.fail(f"{self.name(row, k)} missing", row)
             return float(default)
+        what = (
+            f"{self.name(row, k)} = '{vals[k].strip()}'"
+            if vals[k].strip()
+            else (f"{self.name(row, k)} blank")
+        )
         try:
             v = plain_float(vals[k], fortran=True)
         except ValueError:
-            self.fail(f"field {k + 1} '{vals[k]}' is not a number (ASCII digits, no '_')")
+            self.fail(f"{what}: not a number (ASCII digits, no '_')", row)
         if not math.isfinite(v):
-            self.fail(f"field {k + 1} '{vals[k]}' is not a finite number")
+            self.fail(f"{what}: not a finite number", row)
         if abs(v) > _LARGEST:
-            self.fail(f"field {k + 1} '{vals[k]}' is out of range (|value| <= {_LARGEST:g})")
+            self.fail(f"{what}: out of range (|value| <= {_LARGEST:g})", row)
         return v
 
     def int(
@@ -363,10 +385,9 @@ class _Rec:
         """Field ``k`` of line ``row`` as an integer (see :meth:`num`): written as one,
         digits with an optional sign (PSS/E reads "3.0" in an integer field as an error)."""
         v = self.num(row, k, default)
-        vals = self.lines[row]
-        written = vals[k].strip() if k < len(vals) else ""
+        written = self.written(row, k)
         if written and not _INTEGER.fullmatch(written):
-            self.fail(f"field {k + 1} '{written}' is not an integer")
+            self.fail(f"{self.name(row, k)} = '{written}': not an integer", row)
         return int(v)
 
     def text(self, row: builtins.int, k: builtins.int, default: str = "1") -> str:
@@ -374,11 +395,16 @@ class _Rec:
         vals = self.lines[row]
         return vals[k].strip() if k < len(vals) and vals[k].strip() else default
 
+    def given(self, row: builtins.int, *ks: builtins.int) -> str:
+        """``NAME = text, ...`` of fields ``ks`` of line ``row`` as the file writes them."""
+        return ", ".join(f"{self.name(row, k)} = {self.written(row, k) or '(empty)'}" for k in ks)
+
     def source(self, what: str) -> RawSource:
         return RawSource(self.file, self.line, what)
 
-    def fail(self, what: str) -> NoReturn:
-        raise CaseError(f"{self.file}:{self.line} {self.section} record: {what}")
+    def fail(self, what: str, row: builtins.int = 0) -> NoReturn:
+        line = self.at[row] if row < len(self.at) else self.line + row
+        raise CaseError(f"{self.file}:{line} {self.section} record: {what}")
 
 
 def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
@@ -392,6 +418,7 @@ def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
             "(after its '@!' column headings)"
         )
     rec = _Rec(path.name, first + 1, [split_fields(lines[first])], "case identification")
+    rec.names = (("IC", "SBASE", "REV", "XFRRAT", "NXFRAT", "BASFRQ"),)
     sbase, rev, freq = rec.num(0, 1), rec.int(0, 2, 33), rec.num(0, 5, 60.0)
     if rev not in _SECTIONS:
         rec.fail(f"RAW version {rev} is not supported (32, 33, 34, 35 or 36)")
@@ -450,6 +477,115 @@ _XFMR_FIELDS = {
 _XFMR3_FIELDS = {v: (two[0], (11, 11), two[2], two[2], two[2]) for v, two in _XFMR_FIELDS.items()}
 
 
+_OWNERS = ("O1", "F1", "O2", "F2", "O3", "F3", "O4", "F4")
+_LOAD = ("I", "ID", "STATUS", "AREA", "ZONE", "PL", "QL", "IP", "IQ", "YP", "YQ", "OWNER")
+_GEN = ("I", "ID", "PG", "QG", "QT", "QB", "VS", "IREG")
+_GEN_TAIL = ("MBASE", "ZR", "ZX", "RT", "XT", "GTAP", "STAT", "RMPCT", "PT", "PB")
+_BRANCH_34 = (
+    ("I", "J", "CKT", "R", "X", "B", "NAME")
+    + tuple(f"RATE{n}" for n in range(1, 13))
+    + ("GI", "BI", "GJ", "BJ", "STAT")
+)
+_SWSH = ("MODSW", "ADJM")
+_SWSH_REG = ("VSWHI", "VSWLO", "SWREG")
+_BANKS = tuple(f"{x}{n}" for n in range(1, 9) for x in ("N", "B"))
+_BANKS_35 = tuple(f"{x}{n}" for n in range(1, 9) for x in ("S", "N", "B"))
+_XFMR1 = ("I", "J", "K", "CKT", "CW", "CZ", "CM", "MAG1", "MAG2", "NMETR", "NAME", "STAT")
+_XFMR2 = ("R1-2", "X1-2", "SBASE1-2", "R2-3", "X2-3", "SBASE2-3", "R3-1", "X3-1", "SBASE3-1")
+
+
+def _winding(w: int, version: int) -> tuple[str, ...]:
+    """The POM names of a transformer's winding-``w`` line (WINDVw, NOMVw, ANGw, ...)."""
+    if version >= 34:
+        rates = tuple(f"RATE{w}-{n}" for n in range(1, 13))
+    else:
+        rates = tuple(f"{r}{w}" for r in ("RATA", "RATB", "RATC"))
+    cont = ("COD", "CONT", "NOD") if version >= 35 else ("COD", "CONT")
+    tail = ("RMA", "RMI", "VMA", "VMI", "NTP", "TAB", "CR", "CX", "CNXA")
+    return (f"WINDV{w}", f"NOMV{w}", f"ANG{w}", *rates, *(f"{n}{w}" for n in cont + tail))
+
+
+#: POM names of each record line's fields, keyed by the first version of each layout (as
+#: :data:`_FIELDS`): to name a field in messages, and to check that every field that is a
+#: number is written as one (:func:`_check_numbers`), read or not (a field past the names,
+#: whose layout the POM leaves open, is not checked).  Character data: :data:`_TEXT`.
+_NAMES: dict[str, dict[int, tuple[tuple[str, ...], ...]]] = {
+    "bus": {
+        32: (("I", "NAME", "BASKV", "IDE", "AREA", "ZONE", "OWNER", "VM", "VA")
+             + ("NVHI", "NVLO", "EVHI", "EVLO"),),
+    },
+    "load": {
+        32: (_LOAD + ("SCALE", "INTRPT"),),
+        34: (_LOAD + ("SCALE", "INTRPT", "DGENP", "DGENQ", "DGENM"),),
+        35: (_LOAD + ("SCALE", "INTRPT", "DGENP", "DGENQ", "DGENM", "LOADTYPE"),),
+        36: (_LOAD + ("SCALE", "INTRPT", "DGENP", "DGENQ", "DGENM", "LOADTYPE", "NAME"),),
+    },
+    "fixed shunt": {
+        32: (("I", "ID", "STATUS", "GL", "BL"),),
+        36: (("I", "ID", "STATUS", "GL", "BL", "NAME"),),
+    },
+    "generator": {
+        32: (_GEN + _GEN_TAIL + _OWNERS + ("WMOD", "WPF"),),
+        34: (_GEN + _GEN_TAIL + _OWNERS + ("WMOD", "WPF", "NREG"),),
+        35: (_GEN + ("NREG",) + _GEN_TAIL + ("BASLOD",) + _OWNERS + ("WMOD", "WPF"),),
+        36: (
+            _GEN + ("NREG",) + _GEN_TAIL + ("BASLOD",) + _OWNERS
+            + ("WMOD", "WPF", "DROOPNAME", "NAME"),
+        ),
+    },
+    "branch": {
+        32: (
+            ("I", "J", "CKT", "R", "X", "B", "RATEA", "RATEB", "RATEC", "GI", "BI", "GJ", "BJ")
+            + ("ST", "MET", "LEN") + _OWNERS,
+        ),
+        34: (_BRANCH_34 + ("MET", "LEN") + _OWNERS,),
+        #: v36: a field more after STAT than PSS/E's heading shows: the rest not named
+        36: (_BRANCH_34,),
+    },
+    "switched shunt": {
+        32: (("I",) + _SWSH + ("STAT",) + _SWSH_REG + ("RMPCT", "RMIDNT", "BINIT") + _BANKS,),
+        34: (
+            ("I",) + _SWSH + ("STAT",) + _SWSH_REG + ("RMPCT", "RMIDNT", "BINIT") + _BANKS
+            + ("NREG",),
+        ),
+        35: (
+            ("I", "ID") + _SWSH + ("ST",) + _SWSH_REG + ("NREG", "RMPCT", "RMIDNT", "BINIT")
+            + _BANKS_35,
+        ),
+        36: (
+            ("I", "ID") + _SWSH + ("ST",) + _SWSH_REG
+            + ("NREG", "RMPCT", "RMIDNT", "BINIT", "NAME") + _BANKS_35,
+        ),
+    },
+}  # fmt: skip
+#: the fields of :data:`_NAMES` that are character data, not numbers
+_TEXT = frozenset({"NAME", "ID", "CKT", "RMIDNT", "LOADTYPE", "DROOPNAME", "VECGRP"})
+
+
+def _names(rec: _Rec, version: int) -> tuple[tuple[str, ...], ...]:
+    """The POM names of each line of the complete record ``rec`` (() for a section
+    stabctl does not read)."""
+    if rec.section == "transformer":
+        first = _XFMR1 + _OWNERS + ("VECGRP",) + (("ZCOD",) if version >= 34 else ())
+        if len(rec.lines) == 4:
+            return (first, _XFMR2[:3], _winding(1, version), ("WINDV2", "NOMV2"))
+        lines = (first, _XFMR2 + ("VMSTAR", "ANSTAR"))
+        return lines + tuple(_winding(w, version) for w in (1, 2, 3))
+    if rec.section in _NAMES:
+        return _layout(_NAMES[rec.section], version)
+    return ()
+
+
+def _check_numbers(rec: _Rec) -> None:
+    """CaseError naming the line, the field (:data:`_NAMES`) and its text for a field of
+    ``rec`` that should be a number and is written otherwise (``1.1OOOO`` in RMA1), read
+    or not (after the record's own reading, whose errors say more)."""
+    for row, names in enumerate(rec.names[: len(rec.lines)]):
+        for k, name in enumerate(names[: len(rec.lines[row])]):
+            if name not in _TEXT:
+                rec.num(row, k, 0.0)
+
+
 def _layout(table: dict, version: int):
     """The entry of ``table`` (keyed by the first version of a layout) for ``version``."""
     return table[max(v for v in table if v <= version)]
@@ -496,8 +632,10 @@ def _records(lines: list[str], path: Path, version: int, start: int):
         fields = split_fields(text, double_quotes=version >= 34)
         if pending is not None:
             pending.lines.append(fields)
+            pending.at.append(lineno)
             if _complete(pending, need):
                 _check_fields(pending, version)
+                pending.names = _names(pending, version)
                 yield pending
                 pending = None
             continue
@@ -512,10 +650,11 @@ def _records(lines: list[str], path: Path, version: int, start: int):
         if head == "0":
             k += 1
             continue
-        pending = _Rec(path.name, lineno, [fields], sections[k])
+        pending = _Rec(path.name, lineno, [fields], sections[k], [lineno])
         need = _record_lines(sections[k], fields, path.name, lineno)
         if _complete(pending, need):
             _check_fields(pending, version)
+            pending.names = _names(pending, version)
             yield pending
             pending = None
     if pending is not None:
@@ -556,6 +695,7 @@ class _Builder:
     unsupported: list = field(default_factory=list)
     net: Callable[[int, str], str | None] | None = None  # (bus, id) -> why netted, or None
     netted: list = field(default_factory=list)  # (bus, RawSource) of netted generators
+    netted_ids: list = field(default_factory=list)  # (bus, ID) of netted generators
     out_of_service: list = field(default_factory=list)  # (bus, ID) of generators
     switched_off: list = field(default_factory=list)  # RawSource of records out of the network
     seen: dict = field(default_factory=dict)  # (section, ids) -> first line
@@ -717,8 +857,13 @@ def _generator(b: _Builder, rec: _Rec):
     if b.out(rec, what, (num,), ("STAT", 14 + o)) or row is None:
         b.out_of_service.append((num, gid))
         return
+    if not rec.num(0, 6, 1.0) > 0:  # a scheduled voltage, pu
+        rec.fail(f"{what}: {rec.given(0, 6)}: VS must be > 0")
+    if rec.num(0, 4, 9999.0) < rec.num(0, 5, -9999.0):
+        rec.fail(f"{what}: {rec.given(0, 4, 5)}: QT must be >= QB")
     why = None if b.net is None else b.net(num, gid)
     if why:
+        b.netted_ids.append((num, gid))
         return _net_generator(b, rec, num, f"{what}: {why}")
     if rec.num(0, 11 + o, 0.0) != 0 or rec.num(0, 12 + o, 0.0) != 0:
         return b.skip(rec, f"{what}: step-up transformer in the generator record (RT, XT)")
@@ -1123,6 +1268,7 @@ def _dispatch(b: _Builder, rec: _Rec):
             handler(b, rec)
         except (OverflowError, ZeroDivisionError) as exc:  # values no case can hold
             rec.fail(f"the values give no finite per-unit data ({exc})")
+        _check_numbers(rec)
     elif rec.section not in _SKIPPED:
         b.skip(rec, f"{rec.section} record")
 
@@ -1160,4 +1306,5 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         solution=np.array([[n, *vm_va] for n, vm_va in b.solution.items()], float).reshape(-1, 3),
         vreg_con=vreg_con,
         changed=tuple(b.changed),
+        netted_ids=frozenset(b.netted_ids),
     )

@@ -296,7 +296,8 @@ _IMPORTERS = {
 def _load_json(path: Path):
     path = input_file(path, "case file")
     try:
-        return parse_json(path.read_text(encoding="utf-8"), str(path), CaseError)
+        # a byte-order mark (Windows editors write one) read as the start of UTF-8 text
+        return parse_json(path.read_text(encoding="utf-8-sig"), str(path), CaseError)
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     except RecursionError:

@@ -45,7 +45,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from stabctl.case import PQ, PV, SWING, Case
-from stabctl.errors import PowerFlowError
+from stabctl.errors import PowerFlowError, advice
 from stabctl.network import switched_shunts as sws
 from stabctl.network.topology import OPEN_X, bus_islands, dead_buses
 from stabctl.network.ybus import add_shunts, branch_flows, build_ybus
@@ -669,8 +669,9 @@ def _without_limits_hint(case: Case, q_limits: bool, drop) -> str:
     except PowerFlowError:
         return ""
     return (
-        "; with the PV buses' Q limits off it converges (q_limits=False, the commands' "
-        "--no-q-limits: ANDES's default, pv2pq = 0)"
+        "; with the PV buses' Q limits off it converges ("
+        + advice("q_limits=False", "--no-q-limits")
+        + ": ANDES's default, pv2pq = 0)"
     )
 
 

@@ -598,8 +598,21 @@ def test_import_andes_without_andes_says_how_to_install_and_writes_nothing(monke
 @pytest.mark.parametrize(
     "sheet, column, value, needles",
     [
-        ("GENROU", "M", 0, ("GENROU row 1 (idx 1): M = 0", "ANDES would run with its default 6")),
-        ("GENROU", "u", 0.5, ("GENROU row 1 (idx 1): u = 0.5", "must be 0 or 1")),
+        (
+            "GENROU",
+            "M",
+            0,
+            (
+                "GENROU row 1 (idx 1; spreadsheet row 2): M = 0",
+                "ANDES would run with its default 6",
+            ),
+        ),
+        (
+            "GENROU",
+            "u",
+            0.5,
+            ("GENROU row 1 (idx 1; spreadsheet row 2): u = 0.5", "must be 0 or 1"),
+        ),
         ("Toggler", "t", -1, ("Toggle 1: t = -1 s", "finite and >= 0")),
         ("GENROU", "Hfoo", 3, ("GENROU column 'Hfoo': no parameter of ANDES's GENROU",)),
         ("FOOBAR", "idx", 1, ("sheet 'FOOBAR' is no ANDES model",)),

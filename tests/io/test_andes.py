@@ -1428,7 +1428,7 @@ def test_import_andes_maps_psse_models_as_the_dyr_reader():
         (lambda d: d["Line"][2].pop("x"), r"Line row 3 \(idx Line_3\): x missing"),
         # a machine's M left out ran as H = 3 s
         (lambda d: d["GENROU"][0].pop("M"), r"GENROU row 1 \(idx GENROU_1\): M missing"),
-        (lambda d: d["GENROU"][0].update(M="8"), r"GENROU row 1 \(idx GENROU_1\): M '8'"),
+        (lambda d: d["GENROU"][0].update(M="8"), r"GENROU row 1 \(idx GENROU_1\): M = '8': not a"),
         # a duplicated machine record ran as 5 machines, the generator's power twice
         (
             lambda d: d["GENROU"].append(dict(d["GENROU"][0], idx="GENROU_9", name="GENROU_9")),

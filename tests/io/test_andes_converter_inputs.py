@@ -113,7 +113,9 @@ def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
     tmp_path, case, model, values, needle
 ):
     path = edited(tmp_path, case, model, **values)
-    with pytest.raises(CaseError, match=rf"{path.name}: {model} row 1 \(idx .*\): ") as err:
+    with pytest.raises(
+        CaseError, match=rf"{path.name}: {model} row 1 \(idx .*; spreadsheet row 2\): "
+    ) as err:
         read_andes_case(path, on_unsupported="skip")
     assert needle in str(err.value)
 
@@ -157,7 +159,9 @@ def test_a_busf_naming_no_busfreq_of_the_case_is_refused(tmp_path, case, model):
     """A busf naming a BusFreq the case does not hold: ANDES adds one with its defaults at
     the bus instead (its DeviceFinder), and the import ran without a word."""
     path = edited(tmp_path, case, model, busf="BusFreq_99")
-    with pytest.raises(CaseError, match=rf"{model} row 1 \(idx .*\): busf = 'BusFreq_99': no "):
+    with pytest.raises(
+        CaseError, match=rf"{model} row 1 \(idx .*; spreadsheet row 2\): busf = 'BusFreq_99': no "
+    ):
         read_andes_case(path, on_unsupported="skip")
 
 
@@ -278,15 +282,15 @@ def test_a_start_refused_at_the_q_limits_names_the_held_buses_and_no_q_limits(na
     """ANDES's ieee14_pvd1 and ieee14_esd1 as import-andes reads them (its power flow
     compared with ANDES's, Q limits off in both): stabctl's default power flow holds PV
     buses at their Q limits, the PVD1's Q droop then acts at the start and the start is
-    refused; the refusal names the buses held and --no-q-limits (it said neither), with
-    which the case starts.  A start refused for a cause of its own (a current limit ialim
-    of 0.001 pu) is refused without that hint."""
+    refused; the refusal names the buses held and q_limits=False (--no-q-limits from the
+    command line; it said neither), with which the case starts.  A start refused for a
+    cause of its own (a current limit ialim of 0.001 pu) is refused without that hint."""
     case = read_andes_case(andes.get_case(name)).case
     with pytest.raises(
         CaseError,
         match=r"ibr_con row 1: the converter cannot start at its power-flow point .*; the "
         r"power flow held buses 2, 3, 4, 6 at their Q limits, and without Q limits the case "
-        r"starts at rest: --no-q-limits \(q_limits=False\) solves the power flow as ANDES does",
+        r"starts at rest: q_limits=False solves the power flow as ANDES does",
     ):
         Simulator(case, background_compile=False)
     Simulator(case, q_limits=False, background_compile=False)
@@ -294,4 +298,4 @@ def test_a_start_refused_at_the_q_limits_names_the_held_buses_and_no_q_limits(na
     limited = case.replace(converters=t.replace(ialim=np.full(len(t), 0.001)))
     with pytest.raises(CaseError, match=r"cannot start") as err:
         Simulator(limited, background_compile=False)
-    assert "Q limit" not in str(err.value) and "no-q-limits" not in str(err.value)
+    assert "Q limit" not in str(err.value) and "q_limits" not in str(err.value)

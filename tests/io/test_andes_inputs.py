@@ -43,19 +43,33 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
     "edits, needle",
     [
         # values ANDES replaces by its default (its NumParam flags), any model
-        ([("GENROU", 2, "M", 0)], "GENROU row 1 (idx 1): M = 0 (must not be 0: ANDES would "),
-        ([("GENROU", 2, "M", -13)], "GENROU row 1 (idx 1): M = -13 (must not be negative"),
-        ([("EXDC2", 2, "TF1", 0)], "EXDC2 row 1 (idx 1): TF1 = 0 (must not be 0"),
-        ([("Bus", 2, "Vn", 0)], "Bus row 1 (idx 1): Vn = 0 (must not be 0"),
+        (
+            [("GENROU", 2, "M", 0)],
+            "GENROU row 1 (idx 1; spreadsheet row 2): M = 0 (must not be 0: ANDES would ",
+        ),
+        (
+            [("GENROU", 2, "M", -13)],
+            "GENROU row 1 (idx 1; spreadsheet row 2): M = -13 (must not be negative",
+        ),
+        (
+            [("EXDC2", 2, "TF1", 0)],
+            "EXDC2 row 1 (idx 1; spreadsheet row 2): TF1 = 0 (must not be 0",
+        ),
+        ([("Bus", 2, "Vn", 0)], "Bus row 1 (idx 1; spreadsheet row 2): Vn = 0 (must not be 0"),
         # a formula without a stored value, which pandas and ANDES read as empty
         (
             [("EXDC2", 2, "TA", "=1/0")],
-            "EXDC2 row 1 (idx 1): TA is a formula (=1/0) whose value the file does not hold",
+            "EXDC2 row 1 (idx 1; spreadsheet row 2)"
+            ": TA is a formula (=1/0) whose value the file does not hold",
         ),
-        ([("GENROU", 2, "u", 0.5)], "GENROU row 1 (idx 1): u = 0.5: the connection status"),
+        (
+            [("GENROU", 2, "u", 0.5)],
+            "GENROU row 1 (idx 1; spreadsheet row 2): u = 0.5: the connection status",
+        ),
         (
             [("Line", 2, "r", 0), ("Line", 2, "x", 0)],
-            "Line row 1 (idx Line_0): r = x = 0 between buses 5 and 6: a zero impedance",
+            "Line row 1 (idx Line_0; spreadsheet row 2)"
+            ": r = x = 0 between buses 5 and 6: a zero impedance",
         ),
         ([("Toggler", 2, "t", -1)], "Toggle 1: t = -1 s: an event time must be finite and >= 0"),
         (
@@ -77,32 +91,60 @@ def test_values_andes_would_change_or_cannot_run_are_refused(tmp_path, edits, ne
     [
         # GENROU: negative damping, T'do of 0; T''qo of 0 is kept (no q-axis subtransient
         # winding, PST's convention), a negative one refused
-        ([("GENROU", 2, "D", -1)], "GENROU row 1 (idx 1): D = -1: it must be >= 0", None),
-        ([("GENROU", 2, "Td10", 0)], "GENROU row 1 (idx 1): Td10 = 0: it must be > 0", None),
+        (
+            [("GENROU", 2, "D", -1)],
+            "GENROU row 1 (idx 1; spreadsheet row 2): D = -1: it must be >= 0",
+            None,
+        ),
+        (
+            [("GENROU", 2, "Td10", 0)],
+            "GENROU row 1 (idx 1; spreadsheet row 2): Td10 = 0: it must be > 0",
+            None,
+        ),
         (
             [("GENROU", 2, "Tq20", -0.05)],
-            "GENROU row 1 (idx 1): Tq20 = -0.05: it must be >= 0",
+            "GENROU row 1 (idx 1; spreadsheet row 2): Tq20 = -0.05: it must be >= 0",
             [("GENROU", 2, "Tq20", 0)],
         ),
         # TGOV1: the lead T2 of 0 bypassed, a negative one refused; the valve lag T1 and
         # the lag T3 are no bypass (PSS/E Model Library: T1 > 0, T3 > 0); the droop R
         (
             [("TGOV1", 2, "T2", -2.1)],
-            "TGOV1 row 1 (idx 1): T2 = -2.1: it must be >= 0",
+            "TGOV1 row 1 (idx 1; spreadsheet row 2): T2 = -2.1: it must be >= 0",
             [("TGOV1", 2, "T2", 0)],
         ),
-        ([("TGOV1", 2, "T1", 0)], "TGOV1 row 1 (idx 1): T1 = 0: it must be > 0", None),
-        ([("TGOV1", 2, "T3", -7)], "TGOV1 row 1 (idx 1): T3 = -7: it must be > 0", None),
-        ([("TGOV1", 2, "R", 0)], "TGOV1 row 1 (idx 1): R = 0: it must be > 0 (the droop)", None),
+        (
+            [("TGOV1", 2, "T1", 0)],
+            "TGOV1 row 1 (idx 1; spreadsheet row 2): T1 = 0: it must be > 0",
+            None,
+        ),
+        (
+            [("TGOV1", 2, "T3", -7)],
+            "TGOV1 row 1 (idx 1; spreadsheet row 2): T3 = -7: it must be > 0",
+            None,
+        ),
+        (
+            [("TGOV1", 2, "R", 0)],
+            "TGOV1 row 1 (idx 1; spreadsheet row 2): R = 0: it must be > 0 (the droop)",
+            None,
+        ),
         # EXDC2: TA of 0 bypassed (PSS/E: no regulator lag); the exciter TE and the rate
         # feedback TF1 are no bypass
         (
             [("EXDC2", 2, "TA", -0.02)],
-            "EXDC2 row 1 (idx 1): TA = -0.02: it must be >= 0",
+            "EXDC2 row 1 (idx 1; spreadsheet row 2): TA = -0.02: it must be >= 0",
             [("EXDC2", 2, "TA", 0)],
         ),
-        ([("EXDC2", 2, "TE", 0)], "EXDC2 row 1 (idx 1): TE = 0: it must be > 0", None),
-        ([("EXDC2", 2, "TF1", -1.246)], "EXDC2 row 1 (idx 1): TF1 = -1.246: it must be > 0", None),
+        (
+            [("EXDC2", 2, "TE", 0)],
+            "EXDC2 row 1 (idx 1; spreadsheet row 2): TE = 0: it must be > 0",
+            None,
+        ),
+        (
+            [("EXDC2", 2, "TF1", -1.246)],
+            "EXDC2 row 1 (idx 1; spreadsheet row 2): TF1 = -1.246: it must be > 0",
+            None,
+        ),
     ],
 )
 def test_machine_exciter_and_governor_values_that_cannot_be_are_refused(
@@ -130,7 +172,8 @@ def test_a_rate_feedback_without_its_time_constant_is_refused(tmp_path):
     with pytest.raises(CaseError) as err:
         read_andes_case(path, on_unsupported="skip")
     assert str(err.value).startswith(
-        "edited.xlsx: ESST1A row 1 (idx ESST1A_1): TF = 0 with KF = 0.1: it must be > 0"
+        "edited.xlsx: ESST1A row 1 (idx ESST1A_1; spreadsheet row 2)"
+        ": TF = 0 with KF = 0.1: it must be > 0"
     ), str(err.value)
     path = cells_edited(tmp_path, [("ESST1A", 2, "KF", 0), ("ESST1A", 2, "TF", 0)], case)
     read_andes_case(path, on_unsupported="skip")

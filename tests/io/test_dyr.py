@@ -448,14 +448,23 @@ def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
     "text, message",
     [
         ("1 'GENCLS' 1 3.0 0.0\n", r"t.dyr:1: record not terminated by '/'"),
-        ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2: GENCLS parameter 2 'x0' is not a number"),
+        ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2 GENCLS \(bus 1, id 1\): D = 'x0': not a number"),
         ("1 GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: malformed record"),
-        ("B1 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field 'B1' is not an integer"),
+        (
+            "B1 'GENCLS' 1 3.0 0.0 /\n",
+            r"t.dyr:1 GENCLS \(bus B1, id 1\): IBUS = 'B1': not an integer",
+        ),
         # float() and int() read 3_0 as 30, 0_2 as 2 and fullwidth digits as ASCII ones
-        ("1 'GENCLS' 1 3_0 0.0 /\n", r"t.dyr:1: GENCLS parameter 1 '3_0' is not a number"),
-        ("1 'GENCLS' 1 \uff13.0 0.0 /\n", r"t.dyr:1: GENCLS parameter 1 '\uff13.0' is not a"),
-        ("0_2 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field '0_2' is not an integer"),
-        ("\uff12 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1: GENCLS bus field '\uff12' is not an"),
+        ("1 'GENCLS' 1 3_0 0.0 /\n", r"t.dyr:1 GENCLS \(bus 1, id 1\): H = '3_0': not a number"),
+        ("1 'GENCLS' 1 \uff13.0 0.0 /\n", r"t.dyr:1 GENCLS \(bus 1, id 1\): H = '\uff13.0': not a"),
+        (
+            "0_2 'GENCLS' 1 3.0 0.0 /\n",
+            r"t.dyr:1 GENCLS \(bus 0_2, id 1\): IBUS = '0_2': not an integer",
+        ),
+        (
+            "\uff12 'GENCLS' 1 3.0 0.0 /\n",
+            r"t.dyr:1 GENCLS \(bus \uff12, id 1\): IBUS = '\uff12': not an",
+        ),
     ],
 )
 def test_malformed_records_name_file_and_line(tmp_path, text, message):
@@ -472,14 +481,17 @@ def test_malformed_records_name_file_and_line(tmp_path, text, message):
         ),
         (
             "1 'GENCLS' 1 3.0 0 /\n7 'GENCLS' 1 3.0 0 /\n",
-            r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): no such generator in the RAW",
+            r"unsupported DYR .*\n  t.dyr:2 GENCLS \(bus 7, id 1\): matches no generator in",
         ),
         (
             "1 'GENCLS' 1 3.0 0 /\n1 'GENCLS' 1 3.0 0 /\n",
             r"t.dyr:2 GENCLS .*second machine model .*t.dyr:1",
         ),
         ("1 'GENCLS' 1 -1.0 0 /\n", r"H = -1.0 s must be >= 0 \(0: an infinite bus\)"),
-        ("1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n", r"t.dyr:2 TGOV1 .*droop R = 0.0"),
+        (
+            "1 'GENCLS' 1 3.0 0 /\n1 'TGOV1' 1 0 0.5 1 0 1 2 0 /\n",
+            r"t.dyr:2 TGOV1 .*droop R = 0 must",
+        ),
         ("1 'TGOV1' 1 0.05 0.5 1 0 1 2 0 /\n", r"machine 1 \(bus 1, id 1\)"),
     ],
 )

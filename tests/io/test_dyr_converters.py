@@ -245,7 +245,7 @@ def test_a_flag_out_of_its_choices_is_refused_naming_the_record(tmp_path, change
 
 def test_repca1_circuit_id_must_be_quoted(tmp_path):
     text = DYR.read_text().replace("'0 '", "0")
-    with pytest.raises(CaseError, match=r"REPCA1 parameter 4 '0' is not a quoted id"):
+    with pytest.raises(CaseError, match=r"REPCA1 \(bus 103, id 1\): CKTID = 0: not a quoted id"):
         read_dyr(_dyr(tmp_path, [text]))
 
 

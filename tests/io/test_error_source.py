@@ -364,3 +364,197 @@ def test_an_andes_value_is_refused_naming_file_model_row_idx_and_parameter(
     line = error_line(res)
     assert re.fullmatch(rf"error: {path.name}: {model} row 1 \(idx [^)]+\): {expected}.*", line)
     assert not out.exists()
+
+
+FIVE_BUS = RAW.parent / "five_bus_v33.raw"
+FIVE_BUS_DYR = RAW.parent / "five_bus.dyr"
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        # a number the RAW reader reads: named by the POM's name, not its position
+        (
+            "1,   1,   1,0.99000,  31.0000",
+            "1,   1,   1,O.99000,  31.0000",
+            "edited.raw:7 bus record: VM = 'O.99000': not a number",
+        ),
+        (
+            "    2,'1 ',1,   1,   1,   100.000,",
+            "    2,'1 ',1,   1,   1,   1OO.000,",
+            "edited.raw:10 load record: PL = '1OO.000': not a number",
+        ),
+        # a number it does not read (a winding's RMA1): refused all the same, at its line
+        (
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.10000,",
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.1OOOO,",
+            "edited.raw:28 transformer record: RMA1 = '1.1OOOO': not a number",
+        ),
+        # a generator's own values, on its own record, as written
+        (
+            "    3,'1 ',   150.000,    20.000,   100.000,   -50.000,1.01000,",
+            "    3,'1 ',   150.000,    20.000,   -50.000,   100.000,1.01000,",
+            "edited.raw:18 generator record: generator at bus 3 '1': QT = -50.000, "
+            "QB = 100.000: QT must be >= QB",
+        ),
+        (
+            "    3,'1 ',   150.000,    20.000,   100.000,   -50.000,1.01000,",
+            "    3,'1 ',   150.000,    20.000,   100.000,   -50.000,-1.01000,",
+            "edited.raw:18 generator record: generator at bus 3 '1': VS = -1.01000: VS must be > 0",
+        ),
+    ],
+)
+def test_a_raw_value_is_refused_naming_line_field_and_value_as_written(
+    tmp_path, old, new, expected
+):
+    """The RAW record's line, the field as the POM names it and its text as written; a
+    malformed number in a field stabctl does not read is refused too (never accepted
+    silently), and a generator's Q limits and VS on its own record, not the bus table."""
+    text = FIVE_BUS.read_text()
+    assert text.count(old) == 1, old
+    raw = tmp_path / "edited.raw"
+    raw.write_text(text.replace(old, new))
+    out = tmp_path / "p.json"
+    res = CliRunner().invoke(main, ["import-psse", str(raw), str(FIVE_BUS_DYR), "-o", str(out)])
+    line = error_line(res)
+    assert line.startswith(f"error: {expected}"), line
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "machine, expected",
+    [
+        # a value that is no number: the parameter by its PSS/E name, not its position
+        (record("GENROU", {"H": "nan"}), "bad.dyr:1 GENROU (bus 1, id 1): H = nan: not a finite"),
+        (record("GENROU", {"Xd": "inf"}), "bad.dyr:1 GENROU (bus 1, id 1): Xd = inf: not a"),
+        (record("GENROU", {"Xd": "1e999"}), "bad.dyr:1 GENROU (bus 1, id 1): Xd = 1e999: not a"),
+        (record("GENROU", {"H": "abc"}), "bad.dyr:1 GENROU (bus 1, id 1): H = 'abc': not a number"),
+        # a value refused by the tables: as written, E-notation kept
+        (
+            record("GENROU", {"X''d": "-1.508E-01"}),
+            "bad.dyr:1 GENROU (bus 1, id 1): X''d = -1.508E-01: must be >= 0",
+        ),
+        (
+            record("GENROU", bus=-1),
+            "bad.dyr:1 GENROU (bus -1, id 1): IBUS = -1: a bus number must be a positive integer",
+        ),
+    ],
+)
+def test_a_dyr_value_is_named_by_its_psse_name_and_as_written(tmp_path, machine, expected):
+    res, _, out = imported(tmp_path, [machine, INFINITE])
+    line = error_line(res)
+    assert line.startswith(f"error: {expected}"), line
+    assert not out.exists()
+
+
+def test_a_sexs_non_number_is_named_k(tmp_path):
+    res, _, _ = imported(tmp_path, [record("GENROU"), INFINITE, record("SEXS", {"K": "1OO"})])
+    assert error_line(res).startswith("error: bad.dyr:3 SEXS (bus 1, id 1): K = '1OO': not a")
+
+
+def test_a_machine_record_of_no_generator_is_named_before_the_generator_it_leaves_bare(
+    tmp_path,
+):
+    """GENROU id 'Z1' where the RAW's generator at bus 1 is '1': that record, its line and
+    the ids there are, then the generator left without a machine; from the command line
+    the advice is its option, from the library the argument."""
+    stray = record("GENROU").replace(" 1 4.6385", " 'Z1' 4.6385")
+    res, dyr, _ = imported(tmp_path, [INFINITE, stray])
+    assert error_line(res) == (
+        "error: bad.dyr:2 GENROU (bus 1, id Z1): matches no generator in service of the RAW "
+        "data (bus 1's: id '1'); so generator(s) without a machine model record in the DYR "
+        "data: machine 1 (bus 1, id 1) (--net-unmodelled nets them as negative loads)"
+    )
+    from stabctl.io.psse import import_psse
+
+    with pytest.raises(CaseError, match=r"\(unmodelled='net' nets them") as err:
+        import_psse(RAW, dyr)
+    assert "--" not in str(err.value)
+
+
+def test_the_controls_of_a_netted_generator_are_named_as_left_out_with_it(tmp_path):
+    """--net-unmodelled nets the generator without a machine model record; its SEXS is
+    left out with it, said so (not "no such generator in the RAW data")."""
+    res, _, out = imported(tmp_path, [INFINITE, record("SEXS")], "--net-unmodelled")
+    assert res.exit_code == 0 and out.exists(), res.output
+    assert (
+        "left out with its netted generator: bad.dyr:2 SEXS (bus 1, id 1): left out with its "
+        "generator, netted (no machine model)" in res.output
+    )
+    assert "no such generator" not in res.output
+
+
+def test_an_unsupported_record_advises_the_option_on_the_command_line(tmp_path):
+    res, dyr, _ = imported(tmp_path, [record("GENROU"), INFINITE, "    1 'FOOBAR' 1 1 2 3 /"])
+    line = error_line(res)
+    assert "(--skip-unsupported leaves them out)" in line and "on_unsupported" not in line
+    from stabctl.io.psse import import_psse
+
+    with pytest.raises(CaseError, match=r"\(on_unsupported='skip' leaves them out\)") as err:
+        import_psse(RAW, dyr)
+    assert "--" not in str(err.value)
+
+
+def andes_xlsx_edited(tmp_path, case: str, sheet: str, row: int, column: str, value):
+    """ANDES's xlsx case with `column` of spreadsheet row `row` of `sheet` set to `value`."""
+    andes = pytest.importorskip("andes")
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.load_workbook(andes.get_case(case))
+    ws = book[sheet]
+    header = [c.value for c in ws[1]]
+    ws.cell(row=row, column=header.index(column) + 1).value = value
+    out = tmp_path / "edited.xlsx"
+    book.save(out)
+    return out
+
+
+def test_andes_text_where_a_number_belongs_is_named_with_its_cell(tmp_path):
+    """TGOV1 R 'abc' in an xlsx file, PVD1 Sn '100 MVA' in a json one: ANDES's own words
+    were "could not convert string to float: 'abc'"; now the file, model, row (and the
+    spreadsheet's row of an xlsx file), idx, parameter and text."""
+    path = andes_xlsx_edited(tmp_path, "ieee14/ieee14_wt3.xlsx", "TGOV1", 2, "R", "abc")
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(tmp_path / "a.json")])
+    assert error_line(res) == (
+        "error: edited.xlsx: TGOV1 row 1 (idx TGOV1_1; spreadsheet row 2): R = 'abc': not a "
+        "number (ANDES cannot read it)"
+    )
+    path = andes_edited(tmp_path, "ieee14/ieee14_pvd1.xlsx", "PVD1", "Sn", "100 MVA")
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(tmp_path / "a.json")])
+    assert re.fullmatch(
+        rf"error: {path.name}: PVD1 row 1 \(idx [^)]+\): Sn = '100 MVA': not a number .*",
+        error_line(res),
+    )
+
+
+def test_an_andes_device_out_of_service_is_named_as_left_out(tmp_path):
+    """TGOV1 row 1 with u = 0 was dropped without a word ("0 left out"); now named, as
+    import-psse names the equipment out of service."""
+    path = andes_xlsx_edited(tmp_path, "ieee14/ieee14_wt3.xlsx", "TGOV1", 2, "u", 0)
+    out = tmp_path / "a.json"
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads(res.stdout)
+    assert summary["out_of_service"] == [
+        "edited.xlsx: TGOV1 row 1 (idx TGOV1_1): out of service (u = 0)"
+    ]
+
+
+def test_a_case_json_with_a_byte_order_mark_is_read(tmp_path):
+    """A case file saved with a UTF-8 BOM (Windows editors) was refused in Python's words
+    ("decode using utf-8-sig"): it is read."""
+    res, _, out = imported(tmp_path, [record("GENROU"), INFINITE])
+    assert res.exit_code == 0, res.output
+    bom = tmp_path / "bom.json"
+    bom.write_bytes(b"\xef\xbb\xbf" + out.read_bytes())
+    assert load_case(bom).equals(load_case(out))
+
+
+def test_advice_is_in_the_callers_words():
+    """A library caller is advised Python arguments, a command's user its options, and
+    nothing where the command line has no such option."""
+    from stabctl.errors import advice, on_command_line
+
+    assert advice("(on_unsupported='skip')", "(--skip-unsupported)") == "(on_unsupported='skip')"
+    with on_command_line():
+        assert advice("(on_unsupported='skip')", "(--skip-unsupported)") == "(--skip-unsupported)"
+        assert advice(" (Simulator(off_equilibrium='warn') runs it anyway)") == ""

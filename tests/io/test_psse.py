@@ -190,7 +190,7 @@ def test_generators_without_a_machine_model_are_refused_or_netted(tmp_path):
     dyr = _dyr(
         tmp_path, f"1 'GENROU' 1 {_GENROU.format(H=5.0)}", f"3 'GENROU' 1 {_GENROU.format(H=4.0)}"
     )
-    with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*--net-unmodelled"):
+    with pytest.raises(CaseError, match=r"machine 3 \(bus 3, id 2\).*unmodelled='net'"):
         load_psse(V33, dyr)
     with pytest.warns(UserWarning, match="netted 1 generator"):
         case, left_out, netted, *_ = import_psse(V33, dyr, unmodelled="net")
@@ -407,7 +407,9 @@ def test_malformed_number_names_file_line_and_record(tmp_path):
         "1.00000E-2, 1.0O000E-1,   0.20000,  100.00,  100.00,  100.00,"
         "  0.00000,  0.00000,  0.00000,  0.00000,1,1",
     )
-    with pytest.raises(CaseError, match=r"edited\.raw:22 branch record: field 5 '1\.0O000E-1'"):
+    with pytest.raises(
+        CaseError, match=r"edited\.raw:22 branch record: X = '1\.0O000E-1': not a number"
+    ):
         read_raw(path)
 
 
@@ -416,7 +418,7 @@ def test_a_raw_number_is_written_in_ascii_digits(tmp_path, value):
     """float() read a load's PL 4_0.000 as 40 MW, and fullwidth digits as ASCII ones."""
     load = "    4,'1 ',1,   1,   1,    "
     path = _edit(tmp_path, f"{load}40.000", f"{load}{value}")
-    with pytest.raises(CaseError, match=rf"edited\.raw:12 load record: field 6 '{value}' is not"):
+    with pytest.raises(CaseError, match=rf"edited\.raw:12 load record: PL = '{value}': not"):
         read_raw(path)
 
 
@@ -707,7 +709,7 @@ def test_an_unsupported_machine_record_is_named_not_called_missing(tmp_path):
         assert f"machine model record stabctl cannot read: machine 3 (bus 3, id 2): {named}" in (
             str(err.value)
         )
-        assert "--net-unmodelled" in str(err.value) and "--skip-unsupported" in str(err.value)
+        assert "unmodelled='net'" in str(err.value) and "on_unsupported='skip'" in str(err.value)
     with pytest.raises(CaseError, match=r"1 unsupported record\(s\).*edited\.dyr:3 GENTPJ1"):
         import_psse(V33, dyr, unmodelled="net")
     with pytest.warns(UserWarning):
@@ -823,7 +825,7 @@ def test_a_blank_winding_voltage_under_cw_2_is_the_nominal_one_as_pss_e_reads_it
         (
             "    2,     3,     0,'1 ',2,2,1,",
             "    2.0,     3,     0,'1 ',2,2,1,",
-            r"edited\.raw:26 transformer record: field 1 '2\.0' is not an integer",
+            r"edited\.raw:26 transformer record: I = '2\.0': not an integer",
         ),
     ],
 )

@@ -149,7 +149,7 @@ def test_switched_shunt_without_its_v35_id_is_refused(tmp_path):
         "    4,   1,  0,  1,1.05000,0.95000,     0,   0, 100.0,",
     )
     with pytest.raises(
-        CaseError, match=r"v35\.raw:89 switched shunt record: field 5 '1.05000' is not an integer"
+        CaseError, match=r"v35\.raw:89 switched shunt record: ST = '1.05000': not an integer"
     ):
         read_raw(_write(tmp_path, text))
 
