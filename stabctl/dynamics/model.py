@@ -512,11 +512,29 @@ class DynamicModel:
         SimulationError
             The non-conforming load iteration did not converge at the initial point.
         """
-        dx, _ = self.evaluate(self.x0.copy(), self.network(StageConfig()), self.V_nc0)
+        return self._initial_check[:2]
+
+    @functools.cached_property
+    def initial_clamps(self) -> tuple[str, ...]:
+        """The limited states the first evaluation clamped (PST clamps a state outside its
+        limits in place): each as "state = value at the start, clamped to limit", e.g. a
+        simple exciter's E_fd above its EMAX; empty when every state starts within its
+        limits.  A start outside a limit is not an equilibrium (`check_equilibrium` names
+        these)."""
+        return self._initial_check[2]
+
+    @functools.cached_property
+    def _initial_check(self) -> tuple[float, str, tuple[str, ...]]:
+        x = self.x0.copy()
+        dx, _ = self.evaluate(x, self.network(StageConfig()), self.V_nc0)
         dx = np.abs(dx)
         self.layout.view(dx, "ibr")[conv.ENERGY_SLOTS, :] = 0.0  # move at any operating point
         k = int(np.argmax(dx))
-        return float(dx[k]), self.state_name(k)
+        clamps = tuple(
+            f"{self.state_name(q)} = {self.x0[q]:.6g}, clamped to {x[q]:.6g}"
+            for q in np.flatnonzero(x != self.x0)
+        )
+        return float(dx[k]), self.state_name(k), clamps
 
     def check_equilibrium(self, off_equilibrium: str = "refuse") -> None:
         """Refuse (or warn about) an initial point that is not an equilibrium: a largest
@@ -550,10 +568,17 @@ class DynamicModel:
         residual, state = self.initial_residual
         if residual <= EQUILIBRIUM_TOL:
             return
+        clamps = self.initial_clamps
+        why = (
+            f"limited state(s) start outside their limits: {'; '.join(clamps[:3])}"
+            + (f" and {len(clamps) - 3} more" if len(clamps) > 3 else "")
+            + " (the data's limit cannot hold the power flow's operating point)"
+            if clamps
+            else "a model's initialisation disagrees with its dynamics"
+        )
         text = (
             f"case '{self.case.name}': the initial point is not an equilibrium: "
-            f"|d{state}/dt| = {residual:.3g} at t = 0 (tolerance {EQUILIBRIUM_TOL:g}); "
-            "a model's initialisation disagrees with its dynamics"
+            f"|d{state}/dt| = {residual:.3g} at t = 0 (tolerance {EQUILIBRIUM_TOL:g}); {why}"
         )
         if off_equilibrium == "warn":
             warnings.warn(text, UserWarning, stacklevel=3)

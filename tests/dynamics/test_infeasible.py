@@ -9,7 +9,7 @@ import pytest
 from stabctl.case import ExciterTable
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.infeasible import leave_out_infeasible
-from stabctl.errors import InitialLimitError
+from stabctl.errors import CaseError, InitialLimitError
 from stabctl.io import load_case
 
 from model_rows import EXST1
@@ -68,8 +68,8 @@ def test_a_simple_exciter_whose_output_limit_is_below_its_field_voltage_is_named
     """A SEXS (smpexc, exc_con type 0) whose EMAX (Vrmax) = 0.5 pu is below the field
     voltage its machine starts at passed the start checks: every run then stopped at
     "the initial point is not an equilibrium ... a model's initialisation disagrees with
-    its dynamics", and --leave-out-infeasible left nothing out (finding F).  Refused
-    naming the limit and the value, and left out by name."""
+    its dynamics", and --leave-out-infeasible left nothing out.  Refused naming the
+    limit and the value, and left out by name."""
     case = load_case("kundur")
     exc = case.exciters
     assert set(exc.type) == {0} and (exc.TA >= 1e-3).all()
@@ -87,3 +87,23 @@ def test_a_simple_exciter_whose_output_limit_is_below_its_field_voltage_is_named
     )
     assert list(kept.exciters.machine) == [1, 3, 4]
     assert Simulator(kept, background_compile=False).model.initial_residual[0] < 1e-8
+
+
+def test_a_start_outside_a_limit_is_named_by_the_state_the_limiter_clamped():
+    """Run on from such a start (PSS/E's 'initial conditions suspect'), the first
+    evaluation clamps the exciter's E_fd to its EMAX: the equilibrium check names that
+    state, its start and the limit, not "a model's initialisation disagrees with its
+    dynamics" (which would point at stabctl's model)."""
+    case = load_case("kundur")
+    exc = case.exciters
+    case = case.replace(exciters=exc.replace(Vrmax=np.where(exc.machine == 2, 0.5, exc.Vrmax)))
+    with pytest.warns(UserWarning, match="not an equilibrium"):
+        sim = Simulator(case, background_compile=False, suspect_starts="run")
+    (clamp,) = sim.model.initial_clamps
+    assert clamp.startswith("exc.Efd.G2 = 1.96") and clamp.endswith(", clamped to 0.5")
+    with pytest.raises(CaseError) as err:
+        sim.model.check_equilibrium()
+    assert f"limited state(s) start outside their limits: {clamp}" in str(err.value)
+    assert "initialisation disagrees" not in str(err.value)
+    flat = Simulator(load_case("kundur"), background_compile=False).model
+    assert flat.initial_clamps == ()
