@@ -393,6 +393,10 @@ class Table:
         for f in fields:
             self._require(getattr(self, f) >= 0, f, "must be >= 0")
 
+    def _positive(self, *fields: str):
+        for f in fields:
+            self._require(getattr(self, f) > 0, f, "must be > 0")
+
     def _unique(self, fld: str, what: str):
         vals = getattr(self, fld)
         _, _first, counts = np.unique(vals, return_index=True, return_counts=True)

@@ -180,8 +180,7 @@ def check_table(t) -> None:
     CaseError
         The first row and field refused.
     """
-    for name in POSITIVE:
-        t._require(getattr(t, name) > 0, name, "must be > 0")
+    t._positive(*POSITIVE)
 
 
 def motor_params(case: Case) -> MotorParams:

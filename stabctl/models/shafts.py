@@ -179,8 +179,7 @@ def check_table(s) -> None:
     CaseError
         The first row and field refused.
     """
-    for name in POSITIVE:
-        s._require(getattr(s, name) > 0, name, "must be > 0")
+    s._positive(*POSITIVE)
 
 
 def shaft_params(case: Case) -> ShaftParams:
