@@ -284,7 +284,7 @@ class Simulator:
         #: the quiet starts of runs without commands (`stabctl.dynamics.prefix`)
         self._prefixes: BoundedCache[Prefix] = BoundedCache(PREFIXES_KEPT)
         #: the last run's stages stacked for the kernels (`stacked`)
-        self._stacked: tuple | None = None
+        self._last_stack: tuple | None = None
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
@@ -344,13 +344,13 @@ class Simulator:
         )
         return [typeof(a) for a in probe.arguments(1)]
 
-    def stacked(self, nets, bus_rows=None):
+    def _stacked_stages(self, nets, bus_rows=None):
         """`stacked_networks(nets, bus_rows)`, the last one kept: the probes of a CCT search
         run the same stages (ACTIVSg2000: 2.5 ms a run to stack them, about 2 %)."""
         key = (tuple(map(id, nets)), None if bus_rows is None else bus_rows.tobytes())
-        if self._stacked is None or self._stacked[0] != key:  # nets held: their ids stay
-            self._stacked = (key, tuple(nets), stacked_networks(nets, bus_rows))
-        return self._stacked[2]
+        if self._last_stack is None or self._last_stack[0] != key:  # nets held: ids stay
+            self._last_stack = (key, tuple(nets), stacked_networks(nets, bus_rows))
+        return self._last_stack[2]
 
     def model_for(self, buses=()) -> DynamicModel:
         """The dynamic model keeping given buses in the reduced network (built once per set
@@ -989,7 +989,7 @@ class _Run:
             devices=device_state(sa, n_commands),
             health=ig.Health(np.zeros(grid.t.size), *(np.zeros(1, np.int64) for _ in range(3))),
         )
-        self.nets, self.steps = sim.stacked(nets, bus_rows), ig.step_grid(grid)
+        self.nets, self.steps = sim._stacked_stages(nets, bus_rows), ig.step_grid(grid)
         #: the stages' networks (`stabctl.dynamics.prefix` tells a run's pre-event one by it)
         self.nets_list = nets
         #: the machines' islands stage by stage when a stage trips a machine or splits an

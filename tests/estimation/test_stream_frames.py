@@ -492,7 +492,8 @@ def test_a_receiver_addresses_the_stream_it_names(wire, tmp_path):
     c37.record(rec, cfg5, frames)
     with StreamServer.of_recording(rec, speed=float("inf")) as server:
         assert server.idcode == 5
-        with pytest.raises(InputError, match=r"before its CFG-2 .* these addressed IDCODE 1"):
+        why = r"before sending its CFG-2: .* serves another stream than IDCODE 1, which these"
+        with pytest.raises(InputError, match=why):
             receive(*server.address, timeout=5)
         assert len(receive(*server.address, idcode=5, timeout=5).data) == len(frames)
 
