@@ -344,7 +344,7 @@ def test_simulate_method_trapezoid_runs_and_matches_heun_within_the_step(tmp_pat
 
 def test_simulate_method_trapezoid_with_pstess_conventions_names_both_options(tmp_path):
     """--method trapezoid --conventions pstess was refused as "method 'trapezoid' takes
-    the 'exact' event semantics only", naming neither option (finding M): both named,
+    the 'exact' event semantics only", naming neither option: both named,
     why, and what to give instead, before any work."""
     res = run(
         "simulate", "kundur", "--fault", 3, "--far-bus", 101, "--tf", 1.5,

@@ -332,7 +332,7 @@ def _set_value(d, table, column, value):
 )
 def test_a_case_file_s_errors_name_its_tables_as_it_names_them(tmp_path, edit, needle):
     """A stabctl case file names its tables machines, exciters, ...: its errors named
-    PST's mac_con, exc_con, ... instead (finding H).  A PSTess matrix file keeps PST's."""
+    PST's mac_con, exc_con, ... instead.  A PSTess matrix file keeps PST's."""
     d = pstio.case_to_dict(load_case("kundur"))
     edit(d)
     p = tmp_path / "c.json"
@@ -355,7 +355,7 @@ def test_a_pstess_matrix_file_s_errors_keep_pst_table_names(tmp_path):
 @pytest.mark.parametrize("field", ["Hm", "rs", "rr1", "rr2", "xm", "mva"])
 def test_a_motor_the_model_cannot_run_is_refused_as_the_file_is_read(tmp_path, field):
     """A motor's Hm = 0 was refused only when the model was built, its error without the
-    file (finding I): refused as the case is read, the file first."""
+    file: refused as the case is read, the file first."""
     d = _with_motor(pstio.case_to_dict(load_case("kundur")), **{field: 0})
     p = tmp_path / "m.json"
     p.write_text(json.dumps(d))
@@ -368,7 +368,7 @@ def test_a_motor_the_model_cannot_run_is_refused_as_the_file_is_read(tmp_path, f
 
 def test_another_tool_s_case_is_pointed_to_its_importer(tmp_path):
     """An ANDES JSON case given where a case is read was "neither a stabctl case nor a
-    PSTess matrix JSON" (finding O): named as ANDES's, with the command converting it;
+    PSTess matrix JSON": named as ANDES's, with the command converting it;
     an xlsx or RAW file the same."""
     p = tmp_path / "a.json"
     p.write_text(json.dumps({"Bus": [{"idx": 1, "u": 1.0, "Vn": 69.0}], "Line": []}))

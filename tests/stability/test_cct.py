@@ -123,7 +123,7 @@ def test_upper_bound_doubles_until_unstable(kundur):
 def test_to_dict_is_json(case1):
     d = json.loads(json.dumps(case1.to_dict()))
     # every time with its unit in its name, and every search setting the result depends
-    # on: the fault's start was "t_fault", t_max not reported (finding N)
+    # on: the fault's start was "t_fault", t_max not reported
     assert d["fault"] == {"bus": 3, "far_bus": 101, "t_fault_s": 1.0, "circuit": 1, "trips": []}
     assert d["t_max_s"] == SearchOptions().t_max and d["tol_s"] == case1.tol_s
     assert d["cct_s"] == case1.cct_s and d["n_simulations"] == case1.n_simulations
