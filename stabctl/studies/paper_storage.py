@@ -223,8 +223,10 @@ def section_table4(fig_dir: Path, out_dir: Path, progress=None) -> str:
         "cycles, Case 2: 6 cycles) at that rating (what the paper does not give); in "
         "brackets, how much each moves when that run is repeated at half the step. "
         "Those runs switch their devices many times about the deadband, so rounding "
-        "moves them too: built with other numpy and scipy releases, the miniWECC "
-        "energies moved by up to 3 MJ (2 %), the CCTs not at all.",
+        "moves them too: built with other numpy and scipy releases, or with the "
+        "simulator's arithmetic changed in its last bits (magnitudes as square roots of "
+        "sums of squares instead of hypot), the miniWECC energies moved by up to 3 MJ "
+        "(4 % of the smallest), the CCTs not at all.",
         "",
     ]
     results = {}
