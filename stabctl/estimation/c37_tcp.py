@@ -358,12 +358,15 @@ class StreamServer:
         return [s for s in self.sessions if not s.whole]
 
     def done(self) -> bool:
-        """True when the server has nothing more to do: a session was whole and none is
-        streaming, or every session that streamed was cut and no peer has been connected
-        for `Guard.wait` s (no PDC came for the stream again)."""
+        """True when the server has nothing more to do: a session was whole and no PDC is
+        at work (streaming, or connected and past its first command: a PDC that has its
+        CFG-2 and has not said 'start' yet is served, not left with a closed server), or
+        every session that streamed was cut and no peer has been connected for
+        `Guard.wait` s (no PDC came for the stream again)."""
         with self._lock:
             if self.finished.is_set():
-                return self._streaming == 0
+                at_work = any(p.commanded and not p.evicted for p in self._live.values())
+                return self._streaming == 0 and not at_work
             idle = self._open == 0 and time.monotonic() - self._idle_since >= self.guard.wait
             return bool(self.sessions) and idle
 

@@ -499,3 +499,33 @@ def test_stop_pauses_start_resumes_and_config_requests_are_answered(kundur_strea
         "whole; it asked for CFG-1 (command 4), which this server "
         "does not send (it sends its stream's CFG-2 only, command 5)"
     )
+
+
+def test_a_pdc_that_has_its_cfg2_is_served_after_another_ended_whole(kundur_stream):
+    """PDC B had asked for the CFG-2 and not yet said 'start' when PDC A got the stream
+    whole: the server ended under B (0 frames, its connection closed).  A PDC past its
+    first command now keeps the server until its own session ends; a silent peer does
+    not."""
+    from pyc37.frame import CommandFrame
+
+    from stabctl.estimation.c37_tcp import _read_frame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    with StreamServer(cfg2, data, speed=float("inf"), guard=Guard(timeout=5)) as server:
+        with (
+            socket.create_connection(server.address, timeout=5) as b,
+            socket.create_connection(server.address, timeout=5),  # silent: holds nothing
+        ):
+            b.sendall(CommandFrame(1, "cfg2").convert2bytes())
+            assert "CFG-2" in c37.frame_kind(_read_frame(b))
+            with socket.create_connection(server.address, timeout=5) as a:
+                a.sendall(CommandFrame(1, "start").convert2bytes())
+                assert len(_frames_until_close(a, len(data))) == len(data)
+            assert _until(lambda: any(x.whole for x in server.sessions))
+            time.sleep(0.3)
+            assert not server.done()  # B is at work
+            b.sendall(CommandFrame(1, "start").convert2bytes())
+            assert len(_frames_until_close(b, len(data))) == len(data)
+        assert _until(server.done)
+    assert [x.whole for x in server.sessions] == [True, True]
