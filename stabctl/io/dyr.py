@@ -409,7 +409,7 @@ def dyr_tables(
             + " them out):\n"
             + "\n".join(f"  {r.label()}: {why}" for r, why in skipped)
         )
-    _check_machines(generators, rows["machine"], skipped)
+    _check_machines(generators, rows["machine"], skipped, records)
     _set_fractions(generators, rows["machine"])
     tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
     return DyrTables(
@@ -658,11 +658,12 @@ def _check_count(rec: DyrRecord) -> None:
         )
 
 
-def _check_machines(generators, machines, skipped) -> None:
+def _check_machines(generators, machines, skipped, records=()) -> None:
     """`UnmodelledError` naming every generator without a machine row: without a source
-    record in the DYR data, or whose source record is of a model stabctl does not support
-    (that record named ``file:line MODEL``, with why); a machine record that matches no
-    generator (a wrong id or bus, :data:`NO_GENERATOR`) named first."""
+    record in the DYR data (its other records named, ``file:line MODEL``, e.g. an
+    exciter for a machine that has none), or whose source record is of a model stabctl
+    does not support (that record named ``file:line MODEL``, with why); a machine record
+    that matches no generator (a wrong id or bus, :data:`NO_GENERATOR`) named first."""
     missing = [g for g in generators if int(g["number"]) not in machines]
     if not missing:
         return
@@ -682,7 +683,10 @@ def _check_machines(generators, machines, skipped) -> None:
     if bare:
         parts.append(
             "generator(s) without a machine model record in the DYR data: "
-            + ", ".join(f"machine {g['number']} (bus {g['bus']}, id {g['id']})" for g in bare)
+            + ", ".join(
+                f"machine {g['number']} (bus {g['bus']}, id {g['id']})" + _its_records(g, records)
+                for g in bare
+            )
         )
     if named:
         parts.append(
@@ -697,6 +701,13 @@ def _check_machines(generators, machines, skipped) -> None:
     exc = UnmodelledError(first + "; ".join(parts))
     exc.unreadable = bool(named)
     raise exc
+
+
+def _its_records(gen, records) -> str:
+    """' (its DYR record(s): file:line MODEL, ...)' of generator gen, '' without any."""
+    key = (int(gen["bus"]), machine_id(gen["id"]))
+    mine = [f"{r.where()} {r.model}" for r in records if (r.bus, r.id) == key]
+    return f" (its DYR record(s): {', '.join(mine)})" if mine else ""
 
 
 def _set_fractions(generators, machines) -> None:

@@ -472,6 +472,17 @@ def test_a_machine_record_of_no_generator_is_named_before_the_generator_it_leave
     assert "--" not in str(err.value)
 
 
+def test_a_generator_without_a_machine_record_is_named_with_the_records_it_has(tmp_path):
+    """A SEXS for a generator the DYR gives no machine model: the generator is refused
+    with the SEXS's file:line, the record the user wrote for it."""
+    res, _, _ = imported(tmp_path, [INFINITE, record("SEXS")])
+    assert error_line(res) == (
+        "error: generator(s) without a machine model record in the DYR data: machine 1 "
+        "(bus 1, id 1) (its DYR record(s): bad.dyr:2 SEXS) (--net-unmodelled nets them as "
+        "negative loads)"
+    )
+
+
 def test_the_controls_of_a_netted_generator_are_named_as_left_out_with_it(tmp_path):
     """--net-unmodelled nets the generator without a machine model record; its SEXS is
     left out with it, said so (not "no such generator in the RAW data")."""
