@@ -11,7 +11,7 @@ import click
 from stabctl.cli.checks import check_suffix
 from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
-from stabctl.errors import InputError
+from stabctl.errors import InputError, StabctlError
 
 
 def _case_info(name: str) -> dict:
@@ -384,15 +384,27 @@ def import_psse(
 
 def _leave_out_infeasible(case, asked: bool) -> tuple:
     """(case, lines): with --leave-out-infeasible the case without its controls that
-    cannot start inside their limits (each line echoed as a warning), else as it is."""
-    if not asked:
-        return case, ()
+    cannot start inside their limits (each line echoed as a warning), else as it is,
+    each such control named in a warning (every run refuses the case as written)."""
     from stabctl.dynamics.infeasible import leave_out_infeasible
 
-    case, infeasible = leave_out_infeasible(case)
-    for line in infeasible:
-        click.echo(f"warning: left out the {line}", err=True)
-    return case, infeasible
+    if asked:
+        case, infeasible = leave_out_infeasible(case)
+        for line in infeasible:
+            click.echo(f"warning: left out the {line}", err=True)
+        return case, infeasible
+    if len(case.machines):
+        try:
+            _, found = leave_out_infeasible(case)
+        except StabctlError:  # another refusal: a run names it, as for any case
+            found = ()
+        for line in found:
+            click.echo(
+                f"warning: the {line}: every run refuses the case as written "
+                "(--leave-out-infeasible leaves such a control out, named)",
+                err=True,
+            )
+    return case, ()
 
 
 def _echo_psse_import(text: str, imported, infeasible, islands) -> None:

@@ -569,3 +569,22 @@ def test_advice_is_in_the_callers_words():
     with on_command_line():
         assert advice("(on_unsupported='skip')", "(--skip-unsupported)") == "(--skip-unsupported)"
         assert advice(" (Simulator(off_equilibrium='warn') runs it anyway)") == ""
+
+
+def test_an_exciter_that_cannot_start_is_named_by_the_import_that_keeps_it(tmp_path):
+    """SEXS EMAX = 0.5 below the field voltage its machine starts at: the import without
+    --leave-out-infeasible wrote the case without a word, and every run then refused it.
+    It is named there, with the option; with the option it is left out by name."""
+    lines = [record("GENROU"), INFINITE, record("SEXS", {"EMAX": 0.5})]
+    res, _, out = imported(tmp_path, lines)
+    assert res.exit_code == 0 and out.exists(), res.output
+    warned = [x for x in res.output.splitlines() if x.startswith("warning: the exciter")]
+    assert len(warned) == 1 and warned[0].startswith(
+        "warning: the exciter of machine 1 (bus 1): Vrmax = 0.5 below the initial field voltage"
+    )
+    assert warned[0].endswith(
+        "every run refuses the case as written (--leave-out-infeasible leaves such a control"
+        " out, named)"
+    )
+    res, _, out = imported(tmp_path, lines, "--leave-out-infeasible")
+    assert res.exit_code == 0 and "1 control(s) outside their limits left out" in res.output
