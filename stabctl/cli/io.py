@@ -297,7 +297,7 @@ def _imported(case, out) -> tuple[dict, str]:
     help="Leave out the exciters (with their PSS) and governors whose initial point, at "
     "the power flow simulate solves (Q limits on), lies outside their own limits "
     "(PSS/E: 'initial conditions suspect'), each named, instead of writing a case that "
-    "simulate refuses.",
+    "simulate refuses (without it, each such control is named in a warning).",
 )
 @_islands_option
 @_static_option
