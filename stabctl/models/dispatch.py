@@ -124,7 +124,7 @@ FAMILIES = (
                 "and electrical power pe (pu on the machine base), flag 2: its type "
                 "module's ``derivatives`` (which clamp the limited states in x).",
                 returns=False,
-                first="dx[:, k] = 0.0",
+                first="zero_column(dx, k)",
             ),
         ),
     ),
@@ -267,11 +267,17 @@ def render(family: Dispatch) -> str:
     branches = {k.name: _branches(modules, k) for k in family.kernels}
     used = sorted({s for kernel in branches.values() for s, _, _ in kernel})
     decorators = "kernel, njit" if any(k.kind for k in family.kernels) else "kernel"
+    arrays = (
+        ["from stabctl._jit.arrays import zero_column"]
+        if any("zero_column(" in k.first for k in family.kernels)
+        else []
+    )
     out = [
         *_wrapped(header, ""),
         "",
         "from __future__ import annotations",
         "",
+        *arrays,
         f"from stabctl._jit.decorators import {decorators}",
         f"from {family.package} import (",
         *(f"    {s}," for s in used),

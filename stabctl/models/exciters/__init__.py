@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl._jit.arrays import magnitude
+from stabctl._jit.arrays import magnitude, zero_column
 from stabctl._jit.borrow import borrowed
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
@@ -668,7 +668,7 @@ def derivatives(P, x, i, vc, eterm, pss_out, efd, ifd, VB, dx, ieee, reach):
     `source_voltage` gave; reach (s): DC2's V_t-scaled V_R limits (on eterm) hold a state
     within that reach (`blocks.nonwindup`; the run's step, 0 in the linearisation).
     """
-    dx[:, i] = 0.0
+    zero_column(dx, i)
     vtr, dx[VTR, i] = lag(vc, x[VTR, i], P[i, E.TR])
     err = P[i, E.VREF] - vtr + pss_out
     type_derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)

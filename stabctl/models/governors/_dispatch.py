@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+from stabctl._jit.arrays import zero_column
 from stabctl._jit.decorators import kernel
 from stabctl.models.governors import (
     degov,
@@ -64,7 +65,7 @@ def derivatives(P, x, k, omega, pe, dx):
     electrical power pe (pu on the machine base), flag 2: its type module's ``derivatives``
     (which clamp the limited states in x)."""
     kind = P[k, G.KIND]
-    dx[:, k] = 0.0
+    zero_column(dx, k)
     if kind == 1:  # PST tg
         tg.derivatives(P, x, k, omega, pe, dx)
     elif kind == 2:  # TGOV1

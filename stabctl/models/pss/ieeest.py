@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stabctl._jit.arrays import zero_column
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, leadlag, washout
@@ -218,7 +219,7 @@ def initialise(p: PssParams, r, u1, u2, pe0, x):
 def output(P, x, k, omega, pe, dx):
     """PSS/E stabiliser: input lags K_i/(1 + s Tr_i) summed, filter N/D, washout
     K_w s/(1 + s T_w), three lead-lags, output limits (docs 3.1)."""
-    dx[:, k] = 0.0
+    zero_column(dx, k)
     v = 0.0
     for r, code, K, T in ((S.lag1, C.IN1, C.K1, C.TR1), (S.lag2, C.IN2, C.K2, C.TR2)):
         u, dx[r, k] = lag(P[k, K] * signal(P[k, code], omega, pe), x[r, k], P[k, T])

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stabctl._jit.arrays import zero_column
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import GAIN_OVER_T, LBND, clip, lag, leadlag, washout
 from stabctl.models.declaration import DyrModel, states
@@ -193,7 +194,7 @@ def output(P, x, k, omega, pe, dx):
     """The PSS2 chain before PSS2C's switch: both inputs' branches, the ramp-tracking
     filter, KS1, the lead-lags (T10/T11 in columns T5/T6, T12/T13; 0 passes), limits
     [VSTMIN, VSTMAX]; derivatives into dx[:, k] (0 where no block)."""
-    dx[:, k] = 0.0
+    zero_column(dx, k)
     u1 = signal(P[k, C.IN1], omega, pe)
     y1 = branch(
         x, k, u1, P[k, C.IN1_LO], P[k, C.IN1_HI], _W1, _W2, _L1,

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from stabctl._jit.arrays import zero_column
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import GAIN_AFTER, LBND, clip, lag, washout
 from stabctl.models.declaration import DyrModel, states
@@ -83,7 +84,7 @@ def output(P, x, k, omega, pe, dx):
     """STAB2A: -(K_Tw s/(1 + s T_w))^3 on pe (K_Tw = K_2 T_2, T_w = T_2), then
     K_3/(1 + s T_3) + K_4 (columns K1, Tr1, K2), then (K_5/(1 + s T_5))^2 (columns K5 = T5,
     T6), limited to [ymin, ymax]."""
-    dx[:, k] = 0.0
+    zero_column(dx, k)
     y = pe
     for r in range(3):
         y, dx[S.washout1 + r, k] = washout(
