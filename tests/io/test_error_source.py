@@ -689,6 +689,34 @@ def test_a_three_winding_field_is_named_at_its_own_line(tmp_path, old, new, expe
     assert line.startswith(f"error: {expected}"), line
 
 
+def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
+    """A RAW whose power flow does not converge (90 times bus 2's load): every analysis
+    command refuses the case, so the import does too, naming the power flow's worst
+    mismatch and its bus and the option that writes it all the same (it had been written
+    with a warning only); --keep-unsolved writes it with that warning."""
+    old = "    2,'1 ',1,   1,   1,   100.000,"
+    new = "    2,'1 ',1,   1,   1,  9000.000,"
+    line, out = refused_raw(tmp_path, FIVE_BUS, old, new)
+    assert re.fullmatch(
+        r"error: edited\.raw: stabctl's power flow of the case \(Q limits on, as simulate "
+        r"solves it\) does not converge, so every analysis command would refuse it: power "
+        r"flow of case 'edited' did not converge after \d+ iteration\(s\): worst mismatch "
+        r"[\d.]+ pu at bus 2 .*; nothing written \(--keep-unsolved writes it all the same\)",
+        line,
+    ), line
+    raw = tmp_path / "edited.raw"
+    res = CliRunner().invoke(
+        main, ["import-psse", str(raw), str(FIVE_BUS_DYR), "-o", str(out), "--keep-unsolved"]
+    )
+    assert res.exit_code == 0 and out.exists(), res.output
+    assert "warning: stabctl's power flow of the case did not converge" in res.output
+    static = tmp_path / "s.json"
+    res = CliRunner().invoke(main, ["import-psse", str(raw), "-o", str(static), "--static"])
+    assert "worst mismatch" in error_line(res) and not static.exists()
+    help_text = CliRunner().invoke(main, ["import-psse", "--help"]).output
+    assert "--keep-unsolved" in help_text
+
+
 @pytest.mark.parametrize(
     "machine, expected",
     [
