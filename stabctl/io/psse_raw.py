@@ -429,7 +429,11 @@ class _Rec:
 
 
 #: the sections whose records take several lines: their errors name the record's line
-_MULTI_LINE = frozenset({"transformer", "two-terminal dc line", "vsc dc line", "substation"})
+_MULTI_LINE = frozenset(
+    {"transformer", "two-terminal dc line", "vsc dc line", "multi-terminal dc line", "substation"}
+)
+#: the POM names of the first line of a multi-terminal dc line record
+_MTDC = ("NAME", "NCONV", "NDCBS", "NDCLN", "MDC", "VCONV", "VCMOD", "VCONVN")
 
 
 def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
@@ -455,10 +459,20 @@ def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
 def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
     """Lines of a record that starts with ``first`` in section ``sec``; 0 for a substation
     (v34 and later), whose record is followed by its node, switching device and terminal
-    data, each ending with a ``0`` record (the record holds them all)."""
+    data, each ending with a ``0`` record (the record holds them all).  A multi-terminal
+    dc line ('NAME', NCONV, NDCBS, NDCLN, ...) is followed by its NCONV converter, NDCBS
+    dc bus and NDCLN dc link lines (POM Multi-Terminal DC Transmission Line Data): one
+    record, not one per line."""
     if sec == "transformer":
         k = _Rec(rec_file, lineno, [first], sec).int(0, 2, 0)
         return 5 if k != 0 else 4
+    if sec == "multi-terminal dc line":
+        rec = _Rec(rec_file, lineno, [first], sec, [lineno], (_MTDC,))
+        counts = [rec.int(0, k) for k in (1, 2, 3)]
+        for k, n in zip((1, 2, 3), counts):
+            if n < 0:
+                rec.fail(f"{_MTDC[k]} {rec.written(0, k)} must be >= 0")
+        return 1 + sum(counts)
     return {"two-terminal dc line": 3, "vsc dc line": 3, "substation": 0}.get(sec, 1)
 
 

@@ -689,6 +689,45 @@ def test_a_three_winding_field_is_named_at_its_own_line(tmp_path, old, new, expe
     assert line.startswith(f"error: {expected}"), line
 
 
+#: a multi-terminal dc line (v33): NCONV 2, NDCBS 2, NDCLN 1, then those lines
+MULTI_TERMINAL = (
+    "'MTDC1', 2, 2, 1, 1, 500.0, 0.0, 0.0\n"
+    "    2, 2, 20.0, 5.0, 0.0, 1.0, 230.0, 0.5, 1.0, 1.1, 0.9, 0.00625, 100.0, 1.0, 0.0, 1\n"
+    "    4, 2, 20.0, 5.0, 0.0, 1.0, 115.0, 0.5, 1.0, 1.1, 0.9, 0.00625, -100.0, 1.0, 0.0, 1\n"
+    "    1, 2, 1, 1, 'DC1', 0, 0.0, 1\n"
+    "    2, 4, 1, 1, 'DC2', 0, 0.0, 1\n"
+    "    1, 2, '1', 1, 5.0, 0.0\n"
+)
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        # one record of six lines, named at its first (each line had been a record)
+        (
+            "'MTDC1', 2, 2, 1,",
+            "'MTDC1', 2, 2, 1,",
+            "edited.raw + five_bus.dyr: 1 unsupported record(s) (--skip-unsupported leaves "
+            "them out): edited.raw:40 multi-terminal dc line record",
+        ),
+        (
+            "'MTDC1', 2, 2, 1,",
+            "'MTDC1', 2, -2, 1,",
+            "edited.raw:40 multi-terminal dc line record (line 1 of the record): NDCBS -2 must "
+            "be >= 0",
+        ),
+    ],
+)
+def test_a_multi_terminal_dc_line_is_one_record_of_its_lines(tmp_path, old, new, expected):
+    """POM Multi-Terminal DC Transmission Line Data: the record's first line is followed
+    by NCONV converter, NDCBS dc bus and NDCLN dc link lines, all one record."""
+    marker = "0 / END OF MULTI-TERMINAL DC DATA"
+    source = tmp_path / "mtdc.raw"
+    source.write_text(FIVE_BUS.read_text().replace(marker, MULTI_TERMINAL + marker))
+    line, _ = refused_raw(tmp_path, source, old, new)
+    assert line == f"error: {expected}", line
+
+
 def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
     """A RAW whose power flow does not converge (90 times bus 2's load): every analysis
     command refuses the case, so the import does too, naming the power flow's worst
