@@ -299,6 +299,14 @@ def _imported(case, out) -> tuple[dict, str]:
     "(PSS/E: 'initial conditions suspect'), each named, instead of writing a case that "
     "simulate refuses (without it, each such control is named in a warning).",
 )
+@click.option(
+    "--keep-unsolved",
+    is_flag=True,
+    help="Write the case even when stabctl's power flow of it (Q limits on, as simulate "
+    "solves it) does not converge, with a warning; every analysis command refuses such "
+    "a case.  Without it such an import is refused naming the worst mismatch and its bus "
+    "(exit status 2, nothing written).",
+)
 @_islands_option
 @_static_option
 @json_option("the summary")
@@ -312,6 +320,7 @@ def import_psse(
     conventions,
     net_unmodelled,
     leave_out_infeasible,
+    keep_unsolved,
     leave_out_islands,
     static,
     as_json,
@@ -324,12 +333,14 @@ def import_psse(
     without DYR (no machines) is refused unless --static asks for a power-flow-only case.
     Generators without a machine model in the DYR file are refused by name, or netted as
     negative loads with --net-unmodelled (synthetic grids such as ACTIVSg2000 give their
-    wind and solar plants no dynamic data). Exciters and governors that cannot start
-    within their own limits make simulate refuse the case; --leave-out-infeasible leaves
-    them out, each named. The summary names each record left out, out of the network
-    (isolated buses and what is at them, equipment out of service: left out as PSS/E
-    leaves them) and generator netted with why, and compares the power flow (Q limits on)
-    with the RAW's own solution (the largest voltage and angle differences and their
+    wind and solar plants no dynamic data). Exciters and governors that cannot start within
+    their own limits make simulate refuse the case; --leave-out-infeasible leaves them out,
+    each named. A case whose power flow (Q limits on) does not converge is refused naming
+    the worst mismatch and its bus (every analysis command would refuse it); --keep-unsolved
+    writes it all the same, with a warning. The summary names each record left out, out of
+    the network (isolated buses and what is at them, equipment out of service: left out as
+    PSS/E leaves them) and generator netted with why, and compares the power flow (Q limits
+    on) with the RAW's own solution (the largest voltage and angle differences and their
     buses; a warning above 1e-3).
 
     \b
@@ -360,8 +371,13 @@ def import_psse(
             "for a power-flow-only case (no machines: no dynamic run, no control)",
         )
     case, islands = _leave_out_islands(imported.case, leave_out_islands)
+    unsolved = None if keep_unsolved else Path(raw_path).name
+    if len(case.machines):
+        against_raw = _raw_gap(case, imported.solution, q_limits=True, unsolved=unsolved)
+    else:  # a power-flow-only case: its power flow must converge all the same
+        against_raw = None
+        _solution_gap(case, imported.solution, True, unsolved=unsolved)
     case, infeasible = _leave_out_infeasible(case, leave_out_infeasible)
-    against_raw = _raw_gap(case, imported.solution, q_limits=True) if len(case.machines) else None
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
@@ -557,17 +573,18 @@ def import_andes(
 RAW_AGREEMENT = 1e-3
 
 
-def _raw_gap(case, solution, q_limits: bool) -> dict | None:
+def _raw_gap(case, solution, q_limits: bool, unsolved: str | None = None) -> dict | None:
     """The largest |V| (pu) and angle (rad) differences, with their buses, between
     stabctl's power flow of ``case`` (``q_limits`` as said) and the RAW file's own
     solution ``solution`` (bus number, VM pu, VA degrees; :attr:`RawData.solution`) at
     the buses the case keeps; a warning when either exceeds :data:`RAW_AGREEMENT` or the
     power flow does not converge (then None).  Generator buses whose RAW generation QG
     lies outside their own limits QB, QT (a RAW solved with those limits ignored) are
-    named, with the gap of a power flow without Q limits beside it."""
+    named, with the gap of a power flow without Q limits beside it.  ``unsolved``: see
+    `_solution_gap`."""
     import warnings
 
-    gap = _solution_gap(case, solution, q_limits)
+    gap = _solution_gap(case, solution, q_limits, unsolved=unsolved)
     if gap is None or max(gap["vmag_diff_pu"], gap["angle_diff_rad"]) <= RAW_AGREEMENT:
         return gap
     outside = _raw_q_outside(case) if q_limits else []
@@ -604,11 +621,15 @@ def _raw_gap(case, solution, q_limits: bool) -> dict | None:
     return gap
 
 
-def _solution_gap(case, solution, q_limits: bool, against: str = "the RAW's") -> dict | None:
+def _solution_gap(
+    case, solution, q_limits: bool, against: str = "the RAW's", unsolved: str | None = None
+) -> dict | None:
     """The largest |V| (pu) and angle (rad) differences, with their buses, between
     stabctl's power flow of ``case`` and a solution (bus number, VM pu, VA degrees, shape
     (n, 3)) at the buses the case keeps, without a warning on their size; None (and a
-    warning naming ``against``) when the power flow does not converge."""
+    warning naming ``against``) when the power flow does not converge, or, with
+    ``unsolved`` (the source file's name), a PowerFlowError naming that file, the power
+    flow's worst mismatch and its bus and import-psse's --keep-unsolved."""
     import warnings
 
     import numpy as np
@@ -619,6 +640,13 @@ def _solution_gap(case, solution, q_limits: bool, against: str = "the RAW's") ->
     try:
         pf = solve_powerflow(case, q_limits=q_limits, tol=1e-10)
     except PowerFlowError as exc:
+        if unsolved is not None:
+            raise PowerFlowError(
+                f"{unsolved}: stabctl's power flow of the case (Q limits "
+                f"{'on' if q_limits else 'off'}, as simulate solves it) does not converge, "
+                f"so every analysis command would refuse it: {exc}; nothing written "
+                "(--keep-unsolved writes it all the same)"
+            ) from None
         warnings.warn(
             f"stabctl's power flow of the case did not converge: not compared with "
             f"{against} solution: {exc}",

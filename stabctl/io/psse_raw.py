@@ -93,6 +93,14 @@ in service (v34 and later: DGENM 1 with DGENP or DGENQ not 0), generators with a
 transformer in the record (RT, XT) or an IREG other than the first generator's of their
 bus, and the transformer features above.
 
+Refused as ``file:line record: what``, the field by its POM name with its value as the
+file writes it: a status other than 0 (out of service) or 1 (in service) of a load, fixed
+shunt, generator, branch, two-winding transformer or switched shunt (a three-winding
+transformer's STAT: 0 to 4), a bus number I outside PSS/E's 1 to :data:`MAX_BUS` (the
+other records' buses must be in the bus data). A record of several lines names the file
+line of the field at fault and which line of the record it is (``(line 3 of the
+record)``).
+
 Bus numbers stay as in the RAW file. Branch rows: lines in file order, then transformers
 (a three-winding one as its windings' branches, winding 1 first); ``--circuit K`` of
 stabctl's commands is the K-th record of a bus pair in that order.
@@ -185,6 +193,8 @@ _SKIPPED = {
 #: first words of the system-wide data records (v34: GENERAL to RATING; v36 adds SWDRATNAM)
 _SYSTEM_WIDE = ("GENERAL", "GAUSS", "NEWTON", "ADJUST", "TYSL", "SOLVER", "RATING", "SWDRATNAM")
 _IDE_ISOLATED = 4
+#: the largest bus number PSS/E takes (POM Bus Data: I, 1 to 999997)
+MAX_BUS = 999997
 #: largest magnitude of a RAW number (bus numbers, MW, kV, pu alike are far below)
 _LARGEST = 1e12
 _TOKEN = re.compile(r"'[^']*'?|/|,|[^,\s'/]+")
@@ -395,6 +405,11 @@ class _Rec:
         vals = self.lines[row]
         return vals[k].strip() if k < len(vals) and vals[k].strip() else default
 
+    def shown(self, row: builtins.int, k: builtins.int, value: float) -> str:
+        """Field ``k`` of line ``row`` as the file writes it, for a message about the
+        value read from it; a field not given: ``blank (taken as {value})``."""
+        return self.written(row, k) or f"blank (taken as {value:g})"
+
     def given(self, row: builtins.int, *ks: builtins.int) -> str:
         """``NAME = text, ...`` of fields ``ks`` of line ``row`` as the file writes them."""
         return ", ".join(f"{self.name(row, k)} = {self.written(row, k) or '(empty)'}" for k in ks)
@@ -402,9 +417,23 @@ class _Rec:
     def source(self, what: str) -> RawSource:
         return RawSource(self.file, self.line, what)
 
-    def fail(self, what: str, row: builtins.int = 0) -> NoReturn:
+    def fail(self, what: str, row: builtins.int = 0, whole: bool = False) -> NoReturn:
+        """CaseError ``file:line section record: what`` at the file line of the record's
+        line ``row``; a record of several lines (:data:`_MULTI_LINE`) also names which
+        (``(line 3 of the record)``), whatever the line, unless the error is about the
+        ``whole`` record (one cut short)."""
         line = self.at[row] if row < len(self.at) else self.line + row
-        raise CaseError(f"{self.file}:{line} {self.section} record: {what}")
+        multi = self.section in _MULTI_LINE and not whole
+        which = f" (line {row + 1} of the record)" if multi else ""
+        raise CaseError(f"{self.file}:{line} {self.section} record{which}: {what}")
+
+
+#: the sections whose records take several lines: their errors name the record's line
+_MULTI_LINE = frozenset(
+    {"transformer", "two-terminal dc line", "vsc dc line", "multi-terminal dc line", "substation"}
+)
+#: the POM names of the first line of a multi-terminal dc line record
+_MTDC = ("NAME", "NCONV", "NDCBS", "NDCLN", "MDC", "VCONV", "VCMOD", "VCONVN")
 
 
 def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
@@ -423,17 +452,27 @@ def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
     if rev not in _SECTIONS:
         rec.fail(f"RAW version {rev} is not supported (32, 33, 34, 35 or 36)")
     if sbase <= 0 or freq <= 0:
-        rec.fail(f"SBASE {sbase:g} MVA and BASFRQ {freq:g} Hz must be > 0")
+        rec.fail(f"SBASE {rec.written(0, 1)} MVA and BASFRQ {rec.shown(0, 5, freq)} Hz must be > 0")
     return sbase, rev, freq, first
 
 
 def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
     """Lines of a record that starts with ``first`` in section ``sec``; 0 for a substation
     (v34 and later), whose record is followed by its node, switching device and terminal
-    data, each ending with a ``0`` record (the record holds them all)."""
+    data, each ending with a ``0`` record (the record holds them all).  A multi-terminal
+    dc line ('NAME', NCONV, NDCBS, NDCLN, ...) is followed by its NCONV converter, NDCBS
+    dc bus and NDCLN dc link lines (POM Multi-Terminal DC Transmission Line Data): one
+    record, not one per line."""
     if sec == "transformer":
         k = _Rec(rec_file, lineno, [first], sec).int(0, 2, 0)
         return 5 if k != 0 else 4
+    if sec == "multi-terminal dc line":
+        rec = _Rec(rec_file, lineno, [first], sec, [lineno], (_MTDC,))
+        counts = [rec.int(0, k) for k in (1, 2, 3)]
+        for k, n in zip((1, 2, 3), counts):
+            if n < 0:
+                rec.fail(f"{_MTDC[k]} {rec.written(0, k)} must be >= 0")
+        return 1 + sum(counts)
     return {"two-terminal dc line": 3, "vsc dc line": 3, "substation": 0}.get(sec, 1)
 
 
@@ -603,11 +642,10 @@ def _check_fields(rec: _Rec, version: int) -> None:
     for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
         if not lo <= len(vals) <= hi:
             want = f"{lo}" if lo == hi else f"{lo} to {hi}"
-            where = f" (line {row + 1} of the record)" if len(limits) > 1 else ""
-            raise CaseError(
-                f"{rec.file}:{rec.line + row} {rec.section} record{where}: "
+            rec.fail(
                 f"{len(vals)} field(s), the v{version} layout has {want}: a "
-                "cut or merged line, or a missing '0 /' section terminator"
+                "cut or merged line, or a missing '0 /' section terminator",
+                row,
             )
 
 
@@ -662,7 +700,8 @@ def _records(lines: list[str], path: Path, version: int, start: int):
             f"file ends inside the record ({len(pending.lines)} of {need} lines)"
             if need
             else "file ends inside the record (its node, switching device and terminal "
-            "data must each end with a '0 /' record)"
+            "data must each end with a '0 /' record)",
+            whole=True,
         )
     if k < len(sections):
         raise CaseError(
@@ -717,15 +756,21 @@ class _Builder:
     def skip(self, rec: _Rec, what: str):
         self.unsupported.append(rec.source(what))
 
-    def out(self, rec: _Rec, what: str, buses: tuple, status: tuple[str, int]) -> bool:
+    def out(self, rec: _Rec, what: str, buses: tuple, status: int) -> bool:
         """Whether the record ``what`` is out of the network, as PSS/E leaves it: at an
-        isolated bus among ``buses``, or its status field (name, 0-based field of line 1)
-        0; such a record is named in ``switched_off``."""
+        isolated bus among ``buses``, or its status field (0-based field ``status`` of
+        line 1; blank: 1) 0; such a record is named in ``switched_off``.  A status other
+        than 0 or 1 is refused naming the field and its text: the POM gives loads, fixed
+        shunts, generators, branches, two-winding transformers and switched shunts 1 for
+        in service and 0 for out of service, nothing else (v32 to v36)."""
+        code = rec.int(0, status, 1)
+        if code not in (0, 1):
+            rec.fail(f"{what}: {rec.name(0, status)} {rec.written(0, status)} must be 0 or 1")
         isolated = [n for n in buses if n in self.isolated]
         if isolated:
             why = f"at isolated bus {isolated[0]} (IDE 4)"
-        elif rec.int(0, status[1], 1) == 0:
-            why = f"out of service ({status[0]} 0)"
+        elif code == 0:
+            why = f"out of service ({rec.name(0, status)} 0)"
         else:
             return False
         self.switched_off.append(rec.source(f"{what}: {why}"))
@@ -746,20 +791,21 @@ class _Builder:
 def _bus(b: _Builder, rec: _Rec):
     """Bus: I, 'NAME', BASKV, IDE, AREA, ZONE, OWNER, VM, VA (POM Bus Data)."""
     num, ide = rec.int(0, 0), rec.int(0, 3, 1)
-    if num <= 0 or num in b.buses or num in b.isolated:
-        rec.fail(f"bus number {num} must be a positive integer used once")
+    if not 1 <= num <= MAX_BUS:
+        rec.fail(f"I {rec.written(0, 0)}: a bus number must be within 1 to {MAX_BUS}")
+    b.once(rec, (num,), f"bus {num}")
     b.base_kv[num] = rec.num(0, 2, 0.0)
     if b.base_kv[num] < 0:
-        rec.fail(f"bus {num}: BASKV {b.base_kv[num]:g} kV must be >= 0 (0: not given)")
+        rec.fail(f"bus {num}: BASKV {rec.written(0, 2)} kV must be >= 0 (0: not given)")
     if ide == _IDE_ISOLATED:
         b.isolated.add(num)
         b.switched_off.append(rec.source(f"bus {num}: isolated (IDE 4)"))
         return
     if ide not in (1, 2, 3):
-        rec.fail(f"bus {num}: IDE {ide} must be 1, 2, 3 or 4")
+        rec.fail(f"bus {num}: IDE {rec.written(0, 3)} must be 1, 2, 3 or 4")
     vm = rec.num(0, 7, 1.0)
     if vm <= 0:
-        rec.fail(f"bus {num}: VM {vm:g} must be > 0")
+        rec.fail(f"bus {num}: VM {rec.written(0, 7)} must be > 0")
     kind = {1: PQ, 2: PV, 3: SWING}[ide]
     b.solution[num] = (vm, rec.num(0, 8, 0.0))
     b.buses[num] = [
@@ -814,7 +860,7 @@ def _load(b: _Builder, rec: _Rec):
     what = f"load at bus {num} '{rec.text(0, 1)}'"
     b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "load")
-    if b.out(rec, what, (num,), ("STATUS", 2)) or row is None:
+    if b.out(rec, what, (num,), 2) or row is None:
         return
     if b.version >= 34 and rec.int(0, 16, 0) == 1 and (rec.num(0, 14, 0.0) or rec.num(0, 15, 0.0)):
         return b.skip(rec, f"{what}: distributed generation in service (DGENM 1, DGENP, DGENQ)")
@@ -834,7 +880,7 @@ def _fixed_shunt(b: _Builder, rec: _Rec):
     what = f"fixed shunt at bus {num} '{rec.text(0, 1)}'"
     b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "fixed shunt")
-    if not b.out(rec, what, (num,), ("STATUS", 2)) and row is not None:
+    if not b.out(rec, what, (num,), 2) and row is not None:
         row[7] += rec.num(0, 3, 0.0) / b.base
         row[8] += rec.num(0, 4, 0.0) / b.base
 
@@ -854,7 +900,7 @@ def _generator(b: _Builder, rec: _Rec):
     b.once(rec, (num, gid), what)
     row = b.bus_row(rec, num, "generator")
     o = _nreg_offset(b.version)
-    if b.out(rec, what, (num,), ("STAT", 14 + o)) or row is None:
+    if b.out(rec, what, (num,), 14 + o) or row is None:
         b.out_of_service.append((num, gid))
         return
     if not rec.num(0, 6, 1.0) > 0:  # a scheduled voltage, pu
@@ -871,7 +917,9 @@ def _generator(b: _Builder, rec: _Rec):
         return b.skip(rec, f"{what}: generator at a load bus (IDE 1)")
     vs = rec.num(0, 6, 1.0)
     if b.gen_vs.setdefault(num, vs) != vs:
-        return b.skip(rec, f"{what}: VS {vs:g} differs from bus {num}'s first generator")
+        return b.skip(
+            rec, f"{what}: VS {rec.written(0, 6)} differs from bus {num}'s first generator"
+        )
     ireg = rec.int(0, 7, 0) or num
     first = b.gen_ireg.setdefault(num, ireg)
     if first != ireg:
@@ -879,7 +927,7 @@ def _generator(b: _Builder, rec: _Rec):
     if ireg != num:
         rmpct = rec.num(0, 15 + o, 100.0)
         if rmpct < 0:
-            rec.fail(f"{what}: RMPCT {rmpct:g} must be >= 0")
+            rec.fail(f"{what}: RMPCT {rec.written(0, 15 + o)} must be >= 0")
         b.remote.setdefault(num, [ireg, vs, 0.0, rec])[2] += rmpct
     _add_generator(b, rec, row, vs if ireg == num else row[1], o, gid)
 
@@ -902,7 +950,7 @@ def _add_generator(b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: st
     row[11] += rec.num(0, 5, -9999.0) / b.base
     mbase = rec.num(0, 8 + o, b.base)
     if mbase <= 0:
-        rec.fail(f"generator at bus {row[0]} '{gid}': MBASE {mbase:g} must be > 0")
+        rec.fail(f"generator at bus {row[0]} '{gid}': MBASE {rec.written(0, 8 + o)} must be > 0")
     b.gens.append(
         Generator(
             number=len(b.gens) + 1,
@@ -934,7 +982,7 @@ def _branch(b: _Builder, rec: _Rec):
     b.once(rec, (min(i, j), max(i, j), ckt), what)
     _ends(b, rec, i, j, "branch")
     k = 19 if b.version >= 34 else 9  # GI
-    if b.out(rec, what, (i, j), ("ST", k + 4)):
+    if b.out(rec, what, (i, j), k + 4):
         return
     r, x, bc = rec.num(0, 3), rec.num(0, 4), rec.num(0, 5, 0.0)
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
@@ -958,7 +1006,7 @@ def _transformer(b: _Builder, rec: _Rec):
     if k3 != 0:
         return _three_winding(b, rec, (i, j, k3), f"three-winding {what}")
     ends = _ends(b, rec, i, j, "transformer")
-    if b.out(rec, what, (i, j), ("STAT", 11)) or ends is None:
+    if b.out(rec, what, (i, j), 11) or ends is None:
         return
     if not _modelled(b, rec, (2,), what):
         return
@@ -967,7 +1015,7 @@ def _transformer(b: _Builder, rec: _Rec):
     z = _impedance(b, rec, (0, 2), ends[0][12], ends[0][0], what)
     r2, x2 = z.real * t2**2, z.imag * t2**2
     if r2 == 0 and x2 == 0:
-        rec.fail(f"{what}: R1-2 + jX1-2 must not be 0")
+        rec.fail(f"{what}: {rec.given(1, 0, 1)}: R1-2 + jX1-2 must not be 0", 1)
     ang = _angle(rec, 2, what)
     row = [i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0]
     b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if g_mag or b_mag else []))
@@ -999,7 +1047,7 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
         rec.fail(f"{what}: its three windings must be at three different buses")
     stat = rec.int(0, 11, 1)
     if stat not in (0, *_WINDINGS_IN):
-        rec.fail(f"{what}: STAT {stat} must be 0, 1, 2, 3 or 4")
+        rec.fail(f"{what}: STAT {rec.written(0, 11)} must be 0, 1, 2, 3 or 4")
     windings = [w for w in _WINDINGS_IN.get(stat, ()) if rows[w] is not None]
     if len(windings) < 2:
         why = (
@@ -1014,13 +1062,13 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
     kvs = [b.base_kv[n] for n in buses]
     z12, z23, z31 = (_impedance(b, rec, (3 * p, 2 + p), kvs[p], buses[p], what) for p in range(3))
     if 0 in (z12, z23, z31):
-        rec.fail(f"{what}: the pair impedances must not be 0")
+        rec.fail(f"{what}: the pair impedances must not be 0 ({rec.given(1, *range(9))})", 1)
     star_z = ((z12 + z31 - z23) / 2, (z12 + z23 - z31) / 2, (z23 + z31 - z12) / 2)
     b.stars += 1
     star = max(b.base_kv) + b.stars  # above every bus of the file
     vm = rec.num(1, 9, 1.0)
     if vm <= 0:
-        rec.fail(f"{what}: VMSTAR {vm:g} must be > 0")
+        rec.fail(f"{what}: VMSTAR {rec.written(1, 9)} must be > 0", 1)
     b.buses[star] = [star, vm, rec.num(1, 10, 0.0), *[0] * 6, PQ, 0, 0, 0.0, 0, 0]
     g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
     for w in windings:
@@ -1039,16 +1087,16 @@ def _ratio(rec: _Rec, row: int, kv: float, bus: int, what: str) -> float:
     voltage, is refused naming the field."""
     cw = rec.int(0, 4, 1)
     if cw not in (1, 2, 3):
-        rec.fail(f"{what}: CW {cw} must be 1, 2 or 3")
+        rec.fail(f"{what}: CW {rec.written(0, 4)} must be 1, 2 or 3")
     w = row - 1
     nomv = _nominal(rec, row, kv, bus, w, what)
     windv = rec.num(row, 0, nomv if cw == 2 else 1.0)
     if not windv > 0:
-        rec.fail(f"{what}: WINDV{w} {windv:g} must be > 0")
+        rec.fail(f"{what}: WINDV{w} {rec.shown(row, 0, windv)} must be > 0", row)
     if cw == 1 or (cw == 3 and nomv == kv):
         return windv
     if not kv > 0:
-        rec.fail(f"{what}: CW {cw} gives WINDV{w} in kV, but bus {bus} has no BASKV")
+        rec.fail(f"{what}: CW {cw} gives WINDV{w} in kV, but bus {bus} has no BASKV", row)
     return windv / kv if cw == 2 else windv * nomv / kv
 
 
@@ -1057,7 +1105,9 @@ def _angle(rec: _Rec, row: int, what: str) -> float:
     (POM Transformer Data)."""
     ang = rec.num(row, 2, 0.0)
     if not -180 <= ang <= 180:
-        rec.fail(f"{what}: ANG{row - 1} {ang:g} degrees must be within -180 to 180")
+        rec.fail(
+            f"{what}: ANG{row - 1} {rec.written(row, 2)} degrees must be within -180 to 180", row
+        )
     return ang
 
 
@@ -1065,7 +1115,9 @@ def _nominal(rec: _Rec, row: int, kv: float, bus: int, w: int, what: str) -> flo
     """NOMVw (kV) on line ``row``: blank or 0 is the base voltage ``kv`` of bus ``bus``."""
     nomv = rec.num(row, 1, 0.0)
     if nomv < 0:
-        rec.fail(f"{what}: NOMV{w} {nomv:g} kV must be >= 0 (0: bus {bus}'s BASKV)")
+        rec.fail(
+            f"{what}: NOMV{w} {rec.written(row, 1)} kV must be >= 0 (0: bus {bus}'s BASKV)", row
+        )
     return nomv or kv
 
 
@@ -1078,18 +1130,26 @@ def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, bus: int, what: str
     if cz == 1:
         return complex(r, x)
     if cz not in (2, 3):
-        rec.fail(f"{what}: CZ {cz} must be 1, 2 or 3")
+        rec.fail(f"{what}: CZ {rec.written(0, 5)} must be 1, 2 or 3")
     sbase = rec.num(1, at[0] + 2, b.base)
     if sbase <= 0:
-        rec.fail(f"{what}: SBASE {sbase:g} MVA of a winding pair must be > 0")
+        name = rec.name(1, at[0] + 2)
+        rec.fail(f"{what}: {name} {rec.written(1, at[0] + 2)} MVA must be > 0", 1)
     if cz == 3:  # R is the load loss in W, X the impedance magnitude
         r = r / 1e6 / sbase
         if x < r:
-            rec.fail(f"{what}: |Z| {x:g} pu below the loss resistance {r:g} pu (CZ 3)")
+            rec.fail(
+                f"{what}: {rec.given(1, at[0], at[0] + 1)}: |Z| {rec.written(1, at[0] + 1)} pu "
+                f"below the loss resistance {r:g} pu (CZ 3)",
+                1,
+            )
         x = math.sqrt(x * x - r * r)
     nomv = _nominal(rec, at[1], kv, bus, at[1] - 1, what)
     if nomv != kv and not kv > 0:
-        rec.fail(f"{what}: NOMV{at[1] - 1} {nomv:g} kV given, but bus {bus} has no BASKV")
+        rec.fail(
+            f"{what}: NOMV{at[1] - 1} {rec.written(at[1], 1)} kV given, but bus {bus} has no BASKV",
+            at[1],
+        )
     return complex(r, x) * (b.base / sbase) * (nomv / kv if nomv != kv else 1.0) ** 2
 
 
@@ -1106,7 +1166,7 @@ def _switched_shunt(b: _Builder, rec: _Rec):
         b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "switched shunt")
     o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
-    if not b.out(rec, what, (num,), ("STAT", 3 + o)) and row is not None:
+    if not b.out(rec, what, (num,), 3 + o) and row is not None:
         row[8] += rec.num(0, 9 + o + _nreg_offset(b.version)) / b.base
 
 

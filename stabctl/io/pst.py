@@ -660,8 +660,13 @@ def _table_from_json(field: str, raw: Mapping, where: str):
     rows = raw.get("rows", [])
     if not isinstance(cols, list) or not all(isinstance(c, str) for c in cols):
         raise CaseError(f"{where}: table '{field}' has no 'columns' list of names")
-    if len(set(cols)) != len(cols):
-        raise CaseError(f"{where}: table '{field}' names a column twice")
+    twice = sorted({c for c in cols if cols.count(c) > 1}, key=cols.index)
+    if twice:
+        places = "; ".join(
+            f"'{c}' at positions {', '.join(str(k + 1) for k, n in enumerate(cols) if n == c)}"
+            for c in twice
+        )
+        raise CaseError(f"{where}: table '{field}' names a column twice in its 'columns': {places}")
     if not isinstance(rows, list) or not all(isinstance(r, list) for r in rows):
         raise CaseError(f"{where}: table '{field}': 'rows' must be a list of rows")
     known = cls.columns()

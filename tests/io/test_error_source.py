@@ -388,7 +388,8 @@ FIVE_BUS_DYR = RAW.parent / "five_bus.dyr"
         (
             "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.10000,",
             "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.1OOOO,",
-            "edited.raw:28 transformer record: RMA1 = '1.1OOOO': not a number",
+            "edited.raw:28 transformer record (line 3 of the record): RMA1 = '1.1OOOO': not a "
+            "number",
         ),
         # a generator's own values, on its own record, as written
         (
@@ -419,6 +420,340 @@ def test_a_raw_value_is_refused_naming_line_field_and_value_as_written(
     line = error_line(res)
     assert line.startswith(f"error: {expected}"), line
     assert not out.exists()
+
+
+V35 = RAW.parent / "five_bus_v35.raw"
+
+
+def refused_raw(tmp_path, source: Path, old: str, new: str, *options: str) -> tuple[str, Path]:
+    """import-psse of `source` with `old` (once in it) replaced by `new`: the one error line
+    (exit status 2 asserted) and the case file, which must not exist."""
+    text = source.read_text()
+    assert text.count(old) == 1, old
+    raw = tmp_path / "edited.raw"
+    raw.write_text(text.replace(old, new))
+    out = tmp_path / "p.json"
+    res = CliRunner().invoke(
+        main, ["import-psse", str(raw), str(FIVE_BUS_DYR), "-o", str(out), *options]
+    )
+    assert not out.exists()
+    return error_line(res), out
+
+
+@pytest.mark.parametrize(
+    "source, old, new, expected",
+    [
+        (
+            FIVE_BUS,
+            "    2,'1 ',1,   1,",
+            "    2,'1 ',2,   1,",
+            "edited.raw:10 load record: load at bus 2 '1': STATUS 2 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "    4,'1 ',1,   1,",
+            "    4,'1 ',-1,   1,",
+            "edited.raw:12 load record: load at bus 4 '1': STATUS -1 must be 0 or 1",
+        ),
+        # at an isolated bus too: the record is wrong wherever it is
+        (
+            FIVE_BUS,
+            "    5,'1 ',1,   1,",
+            "    5,'1 ',2,   1,",
+            "edited.raw:13 load record: load at bus 5 '1': STATUS 2 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "    2,'1 ',1,     5.000",
+            "    2,'1 ',3,     5.000",
+            "edited.raw:15 fixed shunt record: fixed shunt at bus 2 '1': STATUS 3 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "1.00000,1,  100.0,   999.000",
+            "1.00000,2,  100.0,   999.000",
+            "edited.raw:17 generator record: generator at bus 1 '1': STAT 2 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "1.00000,0,  100.0",
+            "1.00000,-1,  100.0",
+            "edited.raw:20 generator record: generator at bus 3 '3': STAT -1 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "'1 ', 1.00000E-2, 1.00000E-1,   0.20000,  100.00,  100.00,  100.00,  0.00000,  "
+            "0.00000,  0.00000,  0.00000,1,",
+            "'1 ', 1.00000E-2, 1.00000E-1,   0.20000,  100.00,  100.00,  100.00,  0.00000,  "
+            "0.00000,  0.00000,  0.00000,5,",
+            "edited.raw:22 branch record: branch 1-2 '1': ST 5 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "0.05000,1,1,",
+            "0.05000,-1,1,",
+            "edited.raw:24 branch record: branch 1-2 '3': ST -1 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "'T1          ',1,",
+            "'T1          ',7,",
+            "edited.raw:26 transformer record (line 1 of the record): transformer 2-3 '1': "
+            "STAT 7 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            "    4,1,0,1,1.05000",
+            "    4,1,0,4,1.05000",
+            "edited.raw:{n} switched shunt record: switched shunt at bus 4: STAT 4 must be 0 or 1",
+        ),
+        # v35: the switched shunt's status is ST, after its ID
+        (
+            V35,
+            "    4,'1 ',   1,  0,  1,1.05000",
+            "    4,'1 ',   1,  0,  4,1.05000",
+            "edited.raw:{n} switched shunt record: switched shunt at bus 4 '1': ST 4 must be 0 "
+            "or 1",
+        ),
+        (
+            V35,
+            "    4,'1 ',   1,  0,  1,1.05000",
+            "    4,'1 ',   1,  0,  -1,1.05000",
+            "edited.raw:{n} switched shunt record: switched shunt at bus 4 '1': ST -1 must be 0 "
+            "or 1",
+        ),
+    ],
+)
+def test_a_status_other_than_0_or_1_is_refused_naming_its_field(
+    tmp_path, source, old, new, expected
+):
+    """PSS/E's POM gives loads, fixed shunts, generators, branches, two-winding
+    transformers and switched shunts a status of 1 (in service) or 0 (out of service),
+    nothing else: any other value is refused naming its line, the field by its POM name
+    and the value as written (it had been read as in service without a word)."""
+    n = next(k for k, t in enumerate(source.read_text().splitlines(), 1) if old in t)
+    line, _ = refused_raw(tmp_path, source, old, new)
+    assert line == f"error: {expected.format(n=n)}", line
+
+
+@pytest.mark.parametrize("number", ["1000000", "999998", "-3"])
+def test_a_bus_number_outside_pss_e_s_range_is_refused_as_written(tmp_path, number):
+    """POM Bus Data: I is 1 to 999997; a bus number above (or not positive) is refused
+    naming the line, field I and the number as written.  The other records' bus numbers
+    name a bus of the bus data, so this one check bounds them all."""
+    old = "    3,'GEN         ',"
+    line, _ = refused_raw(tmp_path, FIVE_BUS, old, f"    {number},'GEN         ',")
+    assert line == (
+        f"error: edited.raw:6 bus record: I {number}: a bus number must be within 1 to 999997"
+    ), line
+
+
+def test_a_record_naming_a_bus_outside_the_range_is_refused_as_not_in_the_bus_data(tmp_path):
+    """A load at bus 1000000: no such bus in the bus data (which holds none above
+    999997)."""
+    line, _ = refused_raw(tmp_path, FIVE_BUS, "    4,'1 ',1,   1,", "    1000000,'1 ',1,   1,")
+    assert line == "error: edited.raw:12 load record: load bus 1000000 is not in the bus data"
+
+
+def test_a_bus_given_twice_is_refused_naming_its_first_line(tmp_path):
+    """A second record of bus 2 (its number written twice) names both lines."""
+    line, _ = refused_raw(tmp_path, FIVE_BUS, "    3,'GEN         ',", "    2,'GEN         ',")
+    assert line == "error: edited.raw:6 bus record: bus 2 appears twice (first at line 5)"
+
+
+#: the first winding line (line 3 of the record) of the five-bus case's transformer T1
+T1_WINDING_1 = "240.00,   0.000,   0.000,"
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        # the value as written, not as a float prints it
+        (
+            "  500.000, 0.00000E+0, 2.50000E-1",
+            "  -200.0, 0.00000E+0, 2.50000E-1",
+            "edited.raw:17 generator record: generator at bus 1 '1': MBASE -200.0 must be > 0",
+        ),
+        (
+            "    4,'SUB         ', 115.0000,1,   1,   1,   1,0.99000,",
+            "    4,'SUB         ', 115.0000,1,   1,   1,   1,-0.990,",
+            "edited.raw:7 bus record: bus 4: VM -0.990 must be > 0",
+        ),
+        # a field of a transformer's winding line: at that line, and which line of the
+        # record it is, as the field-count error says
+        (
+            T1_WINDING_1,
+            "-240.00,   0.000,   0.000,",
+            "edited.raw:28 transformer record (line 3 of the record): transformer 2-3 '1': "
+            "WINDV1 -240.00 must be > 0",
+        ),
+        (
+            T1_WINDING_1,
+            "240.00,   0.000,   -190.0,",
+            "edited.raw:28 transformer record (line 3 of the record): transformer 2-3 '1': "
+            "ANG1 -190.0 degrees must be within -180 to 180",
+        ),
+        (
+            T1_WINDING_1,
+            "240.00,   -5.00,   0.000,",
+            "edited.raw:28 transformer record (line 3 of the record): transformer 2-3 '1': "
+            "NOMV1 -5.00 kV must be >= 0 (0: bus 2's BASKV)",
+        ),
+        (
+            "21.000,   0.000",
+            "-21.00,   0.000",
+            "edited.raw:29 transformer record (line 4 of the record): transformer 2-3 '1': "
+            "WINDV2 -21.00 must be > 0",
+        ),
+        (
+            " 5.00000E-3, 8.00000E-2,   500.00",
+            " 5.00000E-3, 8.00000E-2,   -50.0",
+            "edited.raw:27 transformer record (line 2 of the record): transformer 2-3 '1': "
+            "SBASE1-2 -50.0 MVA must be > 0",
+        ),
+        (
+            " 0.00000E+0, 5.00000E-2,   100.00",
+            " 0.00000E+0, 0.0,   100.00",
+            "edited.raw:31 transformer record (line 2 of the record): transformer 4-2 '1': "
+            "R1-2 = 0.00000E+0, X1-2 = 0.0: R1-2 + jX1-2 must not be 0",
+        ),
+        # the field count: the same form
+        (
+            " 5.00000E-3, 8.00000E-2,   500.00",
+            " 5.00000E-3",
+            "edited.raw:27 transformer record (line 2 of the record): 1 field(s), the v33 "
+            "layout has 2 to 3",
+        ),
+        # a field of the first line: line 1 of the record
+        (
+            "    2,     3,     0,'1 ',2,2,1,",
+            "    2,     3,     0,'1 ',5,2,1,",
+            "edited.raw:26 transformer record (line 1 of the record): transformer 2-3 '1': "
+            "CW 5 must be 1, 2 or 3",
+        ),
+    ],
+)
+def test_a_raw_field_is_named_at_its_own_line_with_its_text(tmp_path, old, new, expected):
+    """Each field error names the file line that holds the field (for a record of several
+    lines, which line of the record it is, as the field-count error does) and the value
+    as the file writes it (MBASE -200.0 had been named -200, a winding's WINDV1 and ANG1
+    the record's first line)."""
+    line, _ = refused_raw(tmp_path, FIVE_BUS, old, new)
+    assert line.startswith(f"error: {expected}"), line
+
+
+#: the winding lines of a three-winding transformer (v33, CW 1)
+WINDING = "1.0, 0.0, 0.0, 100.0, 100.0, 100.0, 0, 0, 1.1, 0.9, 1.1, 0.9, 33, 0, 0.0, 0.0, 0.0\n"
+#: a three-winding transformer 1-2-4 for the five-bus case (v33, CW 1, CZ 1, CM 1), a
+#: blank line before its winding-3 line
+THREE_WINDING = (
+    "    1,     2,     4,'9 ',1,1,1, 0.0, 0.0,2,'T3          ',1,   1,1.0000\n"
+    " 1.0E-3, 5.0E-2, 100.0, 1.0E-3, 5.0E-2, 100.0, 1.0E-3, 5.0E-2, 100.0, 1.0, 0.0\n"
+    + WINDING
+    + WINDING
+    + "\n"
+    + WINDING.replace("1.0, 0.0, 0.0,", "1.0, 0.0, 0.00,")
+)
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        (
+            "'T3          ',1,",
+            "'T3          ',5,",
+            "edited.raw:34 transformer record (line 1 of the record): three-winding "
+            "transformer 1-2-4 '9': STAT 5 must be 0, 1, 2, 3 or 4",
+        ),
+        (
+            "100.0, 1.0, 0.0\n",
+            "100.0, -1.00, 0.0\n",
+            "edited.raw:35 transformer record (line 2 of the record): three-winding "
+            "transformer 1-2-4 '9': VMSTAR -1.00 must be > 0",
+        ),
+        (
+            "1.0, 0.0, 0.00,",
+            "1.0, 0.0, 200.0,",
+            "edited.raw:39 transformer record (line 5 of the record): three-winding "
+            "transformer 1-2-4 '9': ANG3 200.0 degrees must be within -180 to 180",
+        ),
+    ],
+)
+def test_a_three_winding_field_is_named_at_its_own_line(tmp_path, old, new, expected):
+    """A three-winding transformer's fields alike: STAT on line 1, VMSTAR on line 2, a
+    winding's on its own line (the file's line, a blank line inside the record counted)."""
+    marker = "0 / END OF TRANSFORMER DATA"
+    source = tmp_path / "three.raw"
+    source.write_text(FIVE_BUS.read_text().replace(marker, THREE_WINDING + marker))
+    line, _ = refused_raw(tmp_path, source, old, new)
+    assert line.startswith(f"error: {expected}"), line
+
+
+#: a multi-terminal dc line (v33): NCONV 2, NDCBS 2, NDCLN 1, then those lines
+MULTI_TERMINAL = (
+    "'MTDC1', 2, 2, 1, 1, 500.0, 0.0, 0.0\n"
+    "    2, 2, 20.0, 5.0, 0.0, 1.0, 230.0, 0.5, 1.0, 1.1, 0.9, 0.00625, 100.0, 1.0, 0.0, 1\n"
+    "    4, 2, 20.0, 5.0, 0.0, 1.0, 115.0, 0.5, 1.0, 1.1, 0.9, 0.00625, -100.0, 1.0, 0.0, 1\n"
+    "    1, 2, 1, 1, 'DC1', 0, 0.0, 1\n"
+    "    2, 4, 1, 1, 'DC2', 0, 0.0, 1\n"
+    "    1, 2, '1', 1, 5.0, 0.0\n"
+)
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        # one record of six lines, named at its first (each line had been a record)
+        (
+            "'MTDC1', 2, 2, 1,",
+            "'MTDC1', 2, 2, 1,",
+            "edited.raw + five_bus.dyr: 1 unsupported record(s) (--skip-unsupported leaves "
+            "them out): edited.raw:40 multi-terminal dc line record",
+        ),
+        (
+            "'MTDC1', 2, 2, 1,",
+            "'MTDC1', 2, -2, 1,",
+            "edited.raw:40 multi-terminal dc line record (line 1 of the record): NDCBS -2 must "
+            "be >= 0",
+        ),
+    ],
+)
+def test_a_multi_terminal_dc_line_is_one_record_of_its_lines(tmp_path, old, new, expected):
+    """POM Multi-Terminal DC Transmission Line Data: the record's first line is followed
+    by NCONV converter, NDCBS dc bus and NDCLN dc link lines, all one record."""
+    marker = "0 / END OF MULTI-TERMINAL DC DATA"
+    source = tmp_path / "mtdc.raw"
+    source.write_text(FIVE_BUS.read_text().replace(marker, MULTI_TERMINAL + marker))
+    line, _ = refused_raw(tmp_path, source, old, new)
+    assert line == f"error: {expected}", line
+
+
+def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
+    """A RAW whose power flow does not converge (90 times bus 2's load): every analysis
+    command refuses the case, so the import does too, naming the power flow's worst
+    mismatch and its bus and the option that writes it all the same (it had been written
+    with a warning only); --keep-unsolved writes it with that warning."""
+    old = "    2,'1 ',1,   1,   1,   100.000,"
+    new = "    2,'1 ',1,   1,   1,  9000.000,"
+    line, out = refused_raw(tmp_path, FIVE_BUS, old, new)
+    assert re.fullmatch(
+        r"error: edited\.raw: stabctl's power flow of the case \(Q limits on, as simulate "
+        r"solves it\) does not converge, so every analysis command would refuse it: power "
+        r"flow of case 'edited' did not converge after \d+ iteration\(s\): worst mismatch "
+        r"[\d.]+ pu at bus 2 .*; nothing written \(--keep-unsolved writes it all the same\)",
+        line,
+    ), line
+    raw = tmp_path / "edited.raw"
+    res = CliRunner().invoke(
+        main, ["import-psse", str(raw), str(FIVE_BUS_DYR), "-o", str(out), "--keep-unsolved"]
+    )
+    assert res.exit_code == 0 and out.exists(), res.output
+    assert "warning: stabctl's power flow of the case did not converge" in res.output
+    static = tmp_path / "s.json"
+    res = CliRunner().invoke(main, ["import-psse", str(raw), "-o", str(static), "--static"])
+    assert "worst mismatch" in error_line(res) and not static.exists()
+    help_text = CliRunner().invoke(main, ["import-psse", "--help"]).output
+    assert "--keep-unsolved" in help_text
 
 
 @pytest.mark.parametrize(

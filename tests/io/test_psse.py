@@ -806,12 +806,12 @@ def test_a_blank_winding_voltage_under_cw_2_is_the_nominal_one_as_pss_e_reads_it
         (
             _T1_WINDING_1,
             "0.0,   0.000,   0.000,",
-            r"edited\.raw:26 transformer record: "
-            r"transformer 2-3 '1': WINDV1 0 must be > 0",
+            r"edited\.raw:28 transformer record \(line 3 of the record\): "
+            r"transformer 2-3 '1': WINDV1 0\.0 must be > 0",
         ),
-        (_T1_WINDING_1, "-240.0,   0.000,   0.000,", r"WINDV1 -240 must be > 0"),
-        (_T1_WINDING_1, "240.00,   -5.000,   0.000,", r"NOMV1 -5 kV must be >= 0"),
-        (_T1_WINDING_1, "240.00,   0.000,   400.000,", r"ANG1 400 degrees must be within"),
+        (_T1_WINDING_1, "-240.0,   0.000,   0.000,", r"WINDV1 -240\.0 must be > 0"),
+        (_T1_WINDING_1, "240.00,   -5.000,   0.000,", r"NOMV1 -5\.000 kV must be >= 0"),
+        (_T1_WINDING_1, "240.00,   0.000,   400.000,", r"ANG1 400\.000 degrees must be within"),
         (
             "    2,'LOAD        ', 230.0000",
             "    2,'LOAD        ',   0.0000",
@@ -820,12 +820,13 @@ def test_a_blank_winding_voltage_under_cw_2_is_the_nominal_one_as_pss_e_reads_it
         (
             "    2,'LOAD        ', 230.0000",
             "    2,'LOAD        ', -230.000",
-            r"edited\.raw:\d+ bus record: bus 2: BASKV -230 kV must be >= 0",
+            r"edited\.raw:\d+ bus record: bus 2: BASKV -230\.000 kV must be >= 0",
         ),
         (
             "    2,     3,     0,'1 ',2,2,1,",
             "    2.0,     3,     0,'1 ',2,2,1,",
-            r"edited\.raw:26 transformer record: I = '2\.0': not an integer",
+            r"edited\.raw:26 transformer record \(line 1 of the record\): I = '2\.0': not an "
+            r"integer",
         ),
     ],
 )

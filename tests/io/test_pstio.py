@@ -5,6 +5,7 @@ NOTICE there); the .json is GNU Octave's evaluation of the .m.
 """
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -148,6 +149,30 @@ def test_own_format_rejects_wrong_version_and_unknown_column(tmp_path):
     data["tables"]["buses"]["columns"][1] = "voltage"
     with pytest.raises(CaseError, match=r"table 'buses' has unknown column\(s\) \['voltage'\]"):
         pstio.case_from_dict(data)
+
+
+def test_a_column_named_twice_is_named(tmp_path):
+    """A table naming a column twice in its 'columns' is refused naming that column and its
+    positions (the error had said "names a column twice" without saying which), by the
+    case file and a command alike."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    data = pstio.case_to_dict(load_case("kundur"))
+    cols = data["tables"]["buses"]["columns"]
+    k = cols.index("vmag")
+    cols[k + 1] = "vmag"
+    message = (
+        f"table 'buses' names a column twice in its 'columns': 'vmag' at positions {k + 1}, {k + 2}"
+    )
+    with pytest.raises(CaseError, match=re.escape(message)):
+        pstio.case_from_dict(data)
+    path = tmp_path / "twice.json"
+    path.write_text(json.dumps(data))
+    res = CliRunner().invoke(main, ["cases", str(path)])
+    assert res.exit_code == 2, res.output
+    assert f"error: {path}: {message}" in res.output, res.output
 
 
 def test_own_format_columns_by_name_in_any_order():
