@@ -369,10 +369,14 @@ def _healthy(x, est, nm, health, judged):
     for the machines the stage judges (judged, bool (n_mac,)): one tripped or cut off from
     the main grid may run up with no load on it (miniWECC's G4, alone on line 9-10 and
     without a governor, passes 1.5 pu 15 s after that line opens)."""
-    for q in range(x.size):
-        if not np.isfinite(x[q]):
-            health.bad[0] = q
-            return False
+    n_bad = 0
+    for q in range(x.size):  # a count, which vectorises; the first sought only if any
+        n_bad += not np.isfinite(x[q])
+    if n_bad:
+        for q in range(x.size):
+            if not np.isfinite(x[q]):
+                health.bad[0] = q
+                return False
     for i in range(nm):
         if judged[i] and abs(x[nm + i] - 1.0) > SPEED_BAND:
             health.bad[0] = nm + i

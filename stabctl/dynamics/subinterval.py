@@ -70,10 +70,11 @@ def _advance(p, x_a, u, hh, out):
     N_FROZEN) held, into out's exciter block (other slots untouched)."""
     p, x_a, u, out = borrowed((p, x_a, u, out))
     xe, oe = _exciter_states(p, x_a), _exciter_states(p, out)
+    work = exc.frozen_work(p.EP.shape[1], xe.shape[0])
     for i in range(p.n_exc):
         if p.exc_hmax[i] < np.inf:
             n = max(1, math.ceil(hh / p.exc_hmax[i] - 1e-9))
-            exc.advance_frozen(p.EP, xe, i, u[i], hh, n, p.ieee, p.reach, oe[:, i])
+            exc.advance_frozen(p.EP, xe, i, u[i], hh, n, p.ieee, p.reach, oe[:, i], work)
 
 
 @kernel
