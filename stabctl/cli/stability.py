@@ -499,7 +499,7 @@ def screen(
     if as_json:
         print_json(rows)
         return
-    print_screening(case, rows)
+    print_screening(case, rows, tol_ms / 1000)
 
 
 def _bus_list(text: str) -> list[int]:
