@@ -1,6 +1,7 @@
-"""`python -m stabctl`: the `stabctl` command (as `python -m stabctl.cli`)."""
+"""`python -m stabctl`: the `stabctl` command (signals handled from the start:
+`stabctl._entry`)."""
 
-from stabctl.cli import main
+from stabctl._entry import main
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -1,6 +1,6 @@
-"""`python -m stabctl.cli`: the `stabctl` command."""
+"""`python -m stabctl.cli`: the `stabctl` command (`stabctl._entry`)."""
 
-from stabctl.cli import main
+from stabctl._entry import main
 
 if __name__ == "__main__":  # pragma: no cover
     main()
