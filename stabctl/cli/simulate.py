@@ -586,7 +586,12 @@ def simulate(
         click.echo(f"  {line}")
     if esd is not None:
         print_storage(esd, result)
-    if result.stable:
+    if result.de_energised_s is not None:
+        click.echo(
+            f"de-energised at t = {result.de_energised_s:g} s: no machine left in service "
+            "in the main grid (its load lost); no stability verdict"
+        )
+    elif result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:
         click.echo(

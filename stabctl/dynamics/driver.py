@@ -64,7 +64,7 @@ from stabctl.dynamics.partition import (
     tripped_log,
 )
 from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache, reach
-from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.results import SimulationResult, de_energised_at
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
     CaseError,
@@ -765,7 +765,7 @@ class Simulator:
             converters=c.converters.number.astype(int),
             ibr_p=rec.S_ibr[:n].real.copy() if len(c.converters) else None,
             ibr_q=rec.S_ibr[:n].imag.copy() if len(c.converters) else None,
-            stable=t_sep is None,
+            stable=t_sep is None and de_energised_at(partitions, float(t[n - 1])) is None,
             t_separation=t_sep,
             separated=separated,
             partitions=partitions,
@@ -1182,6 +1182,8 @@ def separated_group(
         far = np.argmax(np.abs(delta - coi_of_islands(delta, inertia, island)))
         within = np.flatnonzero(island == island[far])
     order = within[np.argsort(delta[within])]
+    if order.size < 2:  # a machine alone: no gap to split at
+        return np.sort(order)
     cut = int(np.argmax(np.diff(delta[order]))) + 1
     lagging, leading = order[:cut], order[cut:]
     m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()
