@@ -514,15 +514,18 @@ def simulate(
     )
     h = sim.default_h if step is None else step
     sub = sim.sub_stepped(h, method)
-    result = sim.run(
-        events,
-        t_end=tf,
-        h=h,
-        separation_limit=separation_limit,
-        stop_at_separation=stop_at_separation,
-        storage=fleet,
-        method=method,
-    )
+    from stabctl.progress import runs_shown
+
+    with runs_shown():  # a run longer than a few seconds shows a bar of simulated time
+        result = sim.run(
+            events,
+            t_end=tf,
+            h=h,
+            separation_limit=separation_limit,
+            stop_at_separation=stop_at_separation,
+            storage=fleet,
+            method=method,
+        )
     esd = (
         None
         if esd_pct is None
