@@ -38,8 +38,15 @@ class EarlyInterrupt(BaseException):
         self.signum = int(signum)
 
 
+#: the signals `_early` received (an import may turn the exception it raises into
+#: another error, e.g. numba's ``RuntimeError: Error calling __set_name__``, or swallow
+#: it: the record still ends the process as the signal does)
+_received: list[int] = []
+
+
 def _early(signum, frame):
-    """Raise `EarlyInterrupt` (the handler of `main`)."""
+    """Remember the signal and raise `EarlyInterrupt` (the handler of `main`)."""
+    _received.append(int(signum))
     raise EarlyInterrupt(signum)
 
 
@@ -64,11 +71,25 @@ def install() -> None:
 
 
 def _ignore_all() -> None:
-    """Ignore further signals while the process says why it ends."""
+    """Ignore the signals from now on: the process is ending (the interpreter's own
+    shutdown puts back their default action, which killed it without its status)."""
     for name in _SIGNALS:
         sig = getattr(signal, name, None)
-        if sig is not None:
+        if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:
             signal.signal(sig, signal.SIG_IGN)
+
+
+def _end(signum: int) -> None:
+    """Say that the command was interrupted before it started and exit 128 + signum."""
+    _ignore_all()
+    argv = shlex.join(["stabctl", *sys.argv[1:]])
+    line = f"interrupted: nothing is kept; the work starts again; resume with: {argv}\n"
+    try:
+        sys.stderr.flush()
+        os.write(2, line.encode())
+    except OSError:  # stderr closed: the status alone says it
+        pass
+    sys.exit(128 + signum)
 
 
 def main() -> None:
@@ -78,14 +99,10 @@ def main() -> None:
     try:
         from stabctl.cli import main as cli_main
 
+        if _received:  # raised inside an import that turned it into something else
+            _end(_received[0])
         cli_main()
     except EarlyInterrupt as exc:
-        _ignore_all()
-        argv = shlex.join(["stabctl", *sys.argv[1:]])
-        line = f"interrupted: nothing is kept; the work starts again; resume with: {argv}\n"
-        try:
-            sys.stderr.flush()
-            os.write(2, line.encode())
-        except OSError:  # stderr closed: the status alone says it
-            pass
-        sys.exit(128 + exc.signum)
+        _end(exc.signum)
+    finally:
+        _ignore_all()  # done: a signal now leaves the command's status as it is
