@@ -491,7 +491,7 @@ def critical_clearing_time(
             early_stops.append(t_clear)
         # no machine left in service (de-energised): no stable clearing, whatever an early
         # verdict on the machines left judged (none) or a custom criterion says
-        dead = res.de_energised_s is not None
+        dead = getattr(res, "de_energised_s", None) is not None  # a stand-in result: none
         ok = not diverged and not dead and (verdict == "stable" if verdict else bool(crit(res)))
         probes[step].append((t_clear, ok))
         if not islanded:
