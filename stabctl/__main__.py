@@ -1,6 +1,114 @@
-"""`python -m stabctl`: the `stabctl` command (as `python -m stabctl.cli`)."""
+"""`python -m stabctl`, the `stabctl` command's entry point: signals handled from the
+first instant.
 
-from stabctl.cli import main
+Starting a command imports click, numpy, numba and the command's modules (about a second
+and more); the command's own handling of Ctrl-C, SIGTERM and SIGHUP (one ``interrupted:``
+line, exit status 128 + the signal's number: `stabctl.cli.options.reports_errors`) comes
+after.  A signal before it printed a Python traceback ending in KeyboardInterrupt
+(Ctrl-C), or killed the process without a word (SIGTERM).  `main` installs a minimal
+handler first, with nothing but the standard library imported, so that a signal at any
+time before the command's handlers (or after them, while the process ends) ends it the
+same way: one ``interrupted:`` line, nothing done, exit status 130 (SIGINT), 143
+(SIGTERM) or 129 (SIGHUP).  A signal the process was started with ignored
+(``nohup``, a background job's SIGINT) stays ignored.
+
+`main` is the console script (``stabctl = stabctl.__main__:main``), what ``python -m
+stabctl`` and ``python -m stabctl.cli`` run; `stabctl.cli.main` (the click group) is
+imported inside.
+"""
+
+from __future__ import annotations
+
+import os
+import shlex
+import signal
+import sys
+
+
+class EarlyInterrupt(BaseException):
+    """A signal that came before the command's own handlers (a BaseException but not a
+    KeyboardInterrupt: click turns the latter into ``Aborted!`` and exit status 1).
+
+    Parameters
+    ----------
+    signum : int
+        The signal's number.
+    """
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = int(signum)
+
+
+#: the signals `_early` received (an import may turn the exception it raises into
+#: another error, e.g. numba's ``RuntimeError: Error calling __set_name__``, or swallow
+#: it: the record still ends the process as the signal does)
+_received: list[int] = []
+
+
+def _early(signum, frame):
+    """Remember the signal and raise `EarlyInterrupt` (the handler of `main`)."""
+    _received.append(int(signum))
+    raise EarlyInterrupt(signum)
+
+
+#: read by `stabctl.cli.options` (which installs its own SIGINT handler only in place of
+#: Python's default or this one)
+_early.stabctl_early = True  # type: ignore[attr-defined]
+
+#: the signals handled from the start: those a command ends on
+_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+
+
+def install() -> None:
+    """Install `_early` for SIGINT (in place of Python's default handler), SIGTERM and
+    SIGHUP (in place of the default action); an ignored signal stays ignored."""
+    for name in _SIGNALS:
+        sig = getattr(signal, name, None)
+        if sig is None:  # pragma: no cover - SIGHUP on Windows
+            continue
+        now = signal.getsignal(sig)
+        if now is signal.default_int_handler or now is signal.SIG_DFL:
+            signal.signal(sig, _early)
+
+
+def _ignore_all() -> None:
+    """Ignore the signals from now on: the process is ending (the interpreter's own
+    shutdown puts back their default action, which killed it without its status)."""
+    for name in _SIGNALS:
+        sig = getattr(signal, name, None)
+        if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:
+            signal.signal(sig, signal.SIG_IGN)
+
+
+def _end(signum: int) -> None:
+    """Say that the command was interrupted before it started and exit 128 + signum."""
+    _ignore_all()
+    argv = shlex.join(["stabctl", *sys.argv[1:]])
+    line = f"interrupted: nothing is kept; the work starts again; resume with: {argv}\n"
+    try:
+        sys.stderr.flush()
+        os.write(2, line.encode())
+    except OSError:  # stderr closed: the status alone says it
+        pass
+    sys.exit(128 + signum)
+
+
+def main() -> None:
+    """Run the `stabctl` command line with signals handled from the start (module
+    docstring)."""
+    install()
+    try:
+        from stabctl.cli import main as cli_main
+
+        if _received:  # raised inside an import that turned it into something else
+            _end(_received[0])
+        cli_main()
+    except EarlyInterrupt as exc:
+        _end(exc.signum)
+    finally:
+        _ignore_all()  # done: a signal now leaves the command's status as it is
+
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -10,6 +10,10 @@ through two context managers:
   said for HEARTBEAT_S, so that a long batch of runs is never silent;
 - `bar`: a tqdm bar on stderr, one step per job, or nothing when asked to be silent;
   a line said while one is shown goes above it (`bars_cleared`), not onto its line.
+
+A long simulation run shows its own bar, of simulated time, when a caller asked for it
+(`runs_shown`, the ``simulate`` command) and the run lasts longer than RUN_SHOWN_AFTER_S:
+the run asks `run_progress` for it and tells it the simulated time at each of its pauses.
 """
 
 from __future__ import annotations
@@ -17,8 +21,8 @@ from __future__ import annotations
 import sys
 import threading
 import time
-from collections.abc import Callable
-from contextlib import AbstractContextManager
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
 
 from tqdm import tqdm
 
@@ -96,3 +100,89 @@ def bars_cleared() -> AbstractContextManager:
         tqdm's ``external_write_mode`` for stderr.
     """
     return tqdm.external_write_mode(file=sys.stderr)
+
+
+#: wall time a shown run goes before its bar appears (`runs_shown`), s
+RUN_SHOWN_AFTER_S = 3.0
+
+#: the delay of the bar of runs shown now (`runs_shown`), None: runs are not shown
+_RUNS_SHOWN: list[float] = []
+
+
+@contextmanager
+def runs_shown(after_s: float = RUN_SHOWN_AFTER_S) -> Iterator[None]:
+    """Within the block, a simulation run (`stabctl.dynamics.driver.Simulator.run`) that
+    lasts longer than `after_s` of wall time shows a bar of its simulated time on stderr
+    (the fraction done, the rate, the time left), cleared when it ends.
+
+    Parameters
+    ----------
+    after_s : float, optional
+        Wall time before a run's bar appears, s; default RUN_SHOWN_AFTER_S.
+
+    Yields
+    ------
+    None
+    """
+    _RUNS_SHOWN.append(after_s)
+    try:
+        yield
+    finally:
+        _RUNS_SHOWN.pop()
+
+
+class RunProgress:
+    """The bar of one run (`run_progress`): called with the simulated time reached,
+    `close` at the end.
+
+    Parameters
+    ----------
+    t_start : float
+        Where the run stands, s (its rate and time left count from there).
+    t_end : float
+        The run's end, s.
+    after_s : float
+        Wall time before the bar appears, s.
+    """
+
+    def __init__(self, t_start: float, t_end: float, after_s: float):
+        self._bar = tqdm(
+            total=round(t_end, 6),
+            initial=round(t_start, 6),
+            desc="simulated",
+            unit="s",
+            file=sys.stderr,
+            delay=after_s,
+            mininterval=0.0,  # drawn at each of the run's pauses (a quarter second apart)
+            leave=False,
+            bar_format="{desc} {n:.2f} of {total:g} s |{bar}| {percentage:3.0f}% "
+            "[{elapsed} elapsed, {remaining} left]",
+        )
+
+    def __call__(self, t: float) -> None:
+        """The run has reached t (s)."""
+        self._bar.update(round(t, 6) - self._bar.n)
+
+    def close(self) -> None:
+        """The run ended (or was interrupted): the bar cleared."""
+        self._bar.close()
+
+
+def run_progress(t_start: float, t_end: float) -> RunProgress | None:
+    """The bar of a run from `t_start` to `t_end` (s) inside `runs_shown`, None outside
+    (or outside the main thread).
+
+    Parameters
+    ----------
+    t_start : float
+        Where the run stands, s.
+    t_end : float
+        The run's end, s.
+
+    Returns
+    -------
+    RunProgress or None
+    """
+    if not _RUNS_SHOWN or threading.current_thread() is not threading.main_thread():
+        return None
+    return RunProgress(t_start, t_end, _RUNS_SHOWN[-1])

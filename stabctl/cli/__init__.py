@@ -1,6 +1,6 @@
 """The `stabctl` command line: one subcommand per study, `--json` where figures come out.
 
-The click group :func:`main` (the console script ``stabctl = stabctl.cli:main``) and its
+The click group :func:`main` (run by the console script ``stabctl = stabctl.__main__:main``) and its
 commands, one module per family: :mod:`~stabctl.cli.omib` (omib), :mod:`~stabctl.cli.paper`
 (paper), :mod:`~stabctl.cli.io` (cases, import-psse, import-andes), :mod:`~stabctl.cli.simulate`,
 :mod:`~stabctl.cli.stability` (cct, sweep-cct, screen), :mod:`~stabctl.cli.eig`,

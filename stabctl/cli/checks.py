@@ -249,6 +249,30 @@ def model_settings(conventions: str, step, q_limits: bool = True):
     )
 
 
+def check_power_flow(case, model) -> None:
+    """Solve the base case's power flow before a batch dispatches any job: a case whose
+    power flow does not converge is refused once (every job ran and failed with the same
+    error, the batch exited 0 with a file of failures).
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+        The case the batch studies.
+    model : stabctl.dynamics.options.ModelOptions
+        Its settings (`model_settings`): the power flow with or without Q limits, as
+        the jobs solve it.
+
+    Raises
+    ------
+    PowerFlowError
+        The power flow does not converge (names the case, the iterations and the worst
+        mismatch bus).
+    """
+    from stabctl.network.powerflow import solve_powerflow
+
+    solve_powerflow(case, q_limits=model.q_limits)
+
+
 def check_method(method: str, conventions: str, storage: bool) -> None:
     """Refuse, before any work, an integration method with options it does not implement.
 

@@ -215,6 +215,36 @@ def islanding_lines(case, islanded, tripped=(), timed: bool = True) -> list[str]
     return lines
 
 
+def time_decimals(tol_s: float | None) -> int:
+    """Decimals that print every multiple of a CCT search's tolerance apart (its clearing
+    times are multiples of it): 3 for 1 ms and above, 4 for 0.1 ms, 5 for 0.25 ms (a fixed
+    3 printed ``stable at 0.154 s, unstable at 0.154 s`` at 0.1 ms).
+
+    Parameters
+    ----------
+    tol_s : float or None
+        The tolerance, s; None: 3 decimals.
+
+    Returns
+    -------
+    int
+        At least 3, at most 9.
+    """
+    if tol_s is None or not tol_s > 0:
+        return 3
+    for d in range(3, 10):
+        scaled = tol_s * 10**d
+        if abs(scaled - round(scaled)) <= 1e-6 * scaled:
+            return d
+    return 9
+
+
+def cycle_decimals(tol_s: float | None) -> int:
+    """Decimals of a time in cycles at a tolerance `tol_s` (`time_decimals`): 2 for 1 ms
+    and above, one fewer than the seconds' beyond (a cycle is 16.7-20 ms)."""
+    return max(2, time_decimals(tol_s) - 1)
+
+
 def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 
@@ -245,10 +275,11 @@ def print_cct(case, rating, d) -> None:
             + (", WECC batteries" if d.get("esd_model") == "wecc" else "")
         )
     )
+    n, c = time_decimals(d["tol_s"]), cycle_decimals(d["tol_s"])
     click.echo(
-        f"CCT {d['cct_s']:.3f} s = {d['cct_cycles']:.2f} cycles (stable at "
-        f"{d['t_stable_s']:.3f} s, unstable at {d['t_unstable_s']:.3f} s = "
-        f"{d['t_unstable_cycles']:.2f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
+        f"CCT {d['cct_s']:.{n}f} s = {d['cct_cycles']:.{c}f} cycles (stable at "
+        f"{d['t_stable_s']:.{n}f} s, unstable at {d['t_unstable_s']:.{n}f} s = "
+        f"{d['t_unstable_cycles']:.{c}f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
         f"step {step_text(d['step_s'])}"
         + (
             f" with {d['sub_stepped_exciters']} exciter(s) in sub-intervals"
@@ -259,15 +290,15 @@ def print_cct(case, rating, d) -> None:
     )
     if d["numerical_error_s"] is not None:
         click.echo(
-            f"numerical error {1000 * d['numerical_error_s']:g} ms (CCT at half the "
-            f"step {d['cct_half_step_s']:.3f} s)"
+            f"numerical error {1000 * d['numerical_error_s']:.{max(n - 3, 0)}f} ms (CCT at "
+            f"half the step {d['cct_half_step_s']:.{n}f} s)"
         )
     if "critical_group" in d:
         g = d["critical_group"]
         click.echo(
             f"storage on the critical group's COI: machines {machine_list(case, g['machines'])} "
             "separate without "
-            f"storage (CCT {g['cct_without_storage_s']:.3f} s); their devices brake them "
+            f"storage (CCT {g['cct_without_storage_s']:.{n}f} s); their devices brake them "
             "against the other machines' COI, the other devices drive theirs after them"
         )
     for line in islanding_lines(case, d.get("islanded", []), timed=False):
@@ -275,7 +306,7 @@ def print_cct(case, rating, d) -> None:
     if d["separated_machines"]:
         click.echo(
             f"machine(s) {machine_list(case, d['separated_machines'])} lose "
-            f"synchronism when cleared at {d['t_unstable_s']:.3f} s"
+            f"synchronism when cleared at {d['t_unstable_s']:.{n}f} s"
         )
     click.echo(
         f"{d['n_simulations']} simulations ({d['n_simulations_half_step']} at half the step, "
@@ -308,10 +339,11 @@ def sweep_line(key, rec) -> str:
             return f"{key:<34} {0.0:7.3f} {0.0:8.2f}  {insecure}"
         return f"{key:<34} failed: {rec['error']}"
     r, wall = rec["result"], rec.get("wall_time_s")  # none in a reproducible copy
+    n, c = time_decimals(r.get("tol_s")), cycle_decimals(r.get("tol_s"))
     err = r.get("numerical_error_s")
-    err = "-" if err is None else f"{1000 * err:g}"
+    err = "-" if err is None else f"{1000 * err:.{max(n - 3, 0)}f}"
     return (
-        f"{key:<34} {r['cct_s']:7.3f} {r['cct_cycles']:8.2f} {err:>6} "
+        f"{key:<34} {r['cct_s']:7.{n}f} {r['cct_cycles']:8.{c}f} {err:>6} "
         f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}")
     )
 
@@ -345,7 +377,7 @@ def print_sweep(rep, n_jobs: int) -> None:
         )
 
 
-def print_screening(case, rows) -> None:
+def print_screening(case, rows, tol_s: float | None = None) -> None:
     """Print the `screen` table, one row per fault in the given order.
 
     Parameters
@@ -354,7 +386,11 @@ def print_screening(case, rows) -> None:
         The case screened (its machines named by number and bus).
     rows : list of dict
         Screening rows (`stabctl.stability.screening.screen`).
+    tol_s : float or None, optional
+        The searches' tolerance, s: the CCTs with the decimals it needs
+        (`time_decimals`); None (default): 3.
     """
+    n, c = time_decimals(tol_s), cycle_decimals(tol_s)
     from stabctl.stability.screening import ABOVE, INSECURE, VERDICTS
 
     click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
@@ -368,19 +404,20 @@ def print_screening(case, rows) -> None:
                 f" with bus(es) {r['islanded_machine_buses']} (lost; the rest judged):"
             )
         if r["status"] == "ok":
-            err = "-" if r["numerical_error_s"] is None else f"{1000 * r['numerical_error_s']:g}"
+            err = r["numerical_error_s"]
+            err = "-" if err is None else f"{1000 * err:.{max(n - 3, 0)}f}"
             click.echo(
-                f"{where:<22} {r['cct_s']:7.3f} {r['cct_cycles']:7.2f} {err:>6}  "
+                f"{where:<22} {r['cct_s']:7.{n}f} {r['cct_cycles']:7.{c}f} {err:>6}  "
                 + (machine_list(case, r["separated"]) or "-")
             )
         elif r["verdict"] == ABOVE:
-            above = f">{r['t_max_s']:.3f}"
+            above = f">{r['t_max_s']:.{n}f}"
             click.echo(
                 f"{where:<22} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there"
             )
         elif r["verdict"] == INSECURE:
             click.echo(
-                f"{where:<22} {0.0:7.3f} {0.0:7.2f} {'-':>6}  N-1 insecure: unstable even "
+                f"{where:<22} {0.0:7.{n}f} {0.0:7.{c}f} {'-':>6}  N-1 insecure: unstable even "
                 "when cleared at once"
             )
         else:

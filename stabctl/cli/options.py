@@ -86,8 +86,9 @@ _ENDING_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 def _sigterm_as_interrupt():
     """SIGTERM and SIGHUP raise :class:`Terminated` while the block runs (main thread
     only, where Python delivers signals), the previous handlers restored after; SIGINT
-    raises KeyboardInterrupt as Python's handler does (when the process has that handler:
-    an ignored SIGINT, of a background job, stays ignored).  A signal the process was
+    raises KeyboardInterrupt as Python's handler does (when the process has that handler or
+    the entry point's, `stabctl.__main__`: an ignored SIGINT, of a background job, stays
+    ignored).  A signal the process was
     started with ignored stays ignored: ``nohup stabctl screen ...`` goes on when its
     terminal closes.  Each signal is remembered
     (`_received`), so that an error the interrupt caused in code that does not let it
@@ -101,7 +102,9 @@ def _sigterm_as_interrupt():
         for sig in _ENDING_SIGNALS
         if signal.getsignal(sig) is not signal.SIG_IGN  # nohup's SIGHUP stays ignored
     }
-    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+    now = signal.getsignal(signal.SIGINT)
+    if now is signal.default_int_handler or getattr(now, "stabctl_early", False):
+        # Python's handler, or the entry point's until the command's (`stabctl.__main__`)
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_interrupt)
     try:
         yield

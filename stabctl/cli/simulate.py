@@ -514,15 +514,18 @@ def simulate(
     )
     h = sim.default_h if step is None else step
     sub = sim.sub_stepped(h, method)
-    result = sim.run(
-        events,
-        t_end=tf,
-        h=h,
-        separation_limit=separation_limit,
-        stop_at_separation=stop_at_separation,
-        storage=fleet,
-        method=method,
-    )
+    from stabctl.progress import runs_shown
+
+    with runs_shown():  # a run longer than a few seconds shows a bar of simulated time
+        result = sim.run(
+            events,
+            t_end=tf,
+            h=h,
+            separation_limit=separation_limit,
+            stop_at_separation=stop_at_separation,
+            storage=fleet,
+            method=method,
+        )
     esd = (
         None
         if esd_pct is None
@@ -586,7 +589,12 @@ def simulate(
         click.echo(f"  {line}")
     if esd is not None:
         print_storage(esd, result)
-    if result.stable:
+    if result.de_energised_s is not None:
+        click.echo(
+            f"de-energised at t = {result.de_energised_s:g} s: no machine left in service "
+            "in the main grid (its load lost); no stability verdict"
+        )
+    elif result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
     else:
         click.echo(

@@ -8,6 +8,7 @@ import click
 
 from stabctl.cli.checks import (
     PLOT_SUFFIXES,
+    check_power_flow,
     check_run_end,
     check_suffix,
     check_writable,
@@ -393,6 +394,7 @@ def sweep_cct(
         storage_fleet(case, p)
     faults = read_fault_list(case, case_name, faults_src)
     check_run_end(faults, search)
+    check_power_flow(case, model)  # before any job: not one failure per job
     jobs = controlled_cct_jobs(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )
@@ -476,13 +478,15 @@ def screen(
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
     check_writable(out_path, "--out")
+    model = model_settings(conventions, step, q_limits)
+    check_power_flow(case, model)  # before any search: not one failure per fault
     rows = run_screen(
         case_name,
         out_path,
         buses=bus_list,
         lines=lines,
         search=replace(search_settings(tol_ms, t_max, None), method=method),
-        model=model_settings(conventions, step, q_limits),
+        model=model,
         runner=RunnerOptions(workers, scheduler),
         retry_failed=retry_failed,
     )
@@ -495,7 +499,7 @@ def screen(
     if as_json:
         print_json(rows)
         return
-    print_screening(case, rows)
+    print_screening(case, rows, tol_ms / 1000)
 
 
 def _bus_list(text: str) -> list[int]:

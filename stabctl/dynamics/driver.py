@@ -64,7 +64,7 @@ from stabctl.dynamics.partition import (
     tripped_log,
 )
 from stabctl.dynamics.prefix import PREFIXES_KEPT, Prefix, integrate_from_cache, reach
-from stabctl.dynamics.results import SimulationResult
+from stabctl.dynamics.results import SimulationResult, de_energised_at
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
     CaseError,
@@ -77,6 +77,7 @@ from stabctl.errors import (
 )
 from stabctl.models import converters as conv
 from stabctl.network import switched_shunts as sws
+from stabctl.progress import run_progress
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
 
@@ -285,6 +286,8 @@ class Simulator:
         self._prefixes: BoundedCache[Prefix] = BoundedCache(PREFIXES_KEPT)
         #: the last run's stages stacked for the kernels (`stacked`)
         self._last_stack: tuple | None = None
+        #: the pieces its runs' compiled loops advance in between pauses (`Pieces`)
+        self._pieces = Pieces()
         self.battery_rows: np.ndarray | None = None
         self.off_equilibrium = off_equilibrium
         self.model = self.model_for(injection_buses)
@@ -765,7 +768,7 @@ class Simulator:
             converters=c.converters.number.astype(int),
             ibr_p=rec.S_ibr[:n].real.copy() if len(c.converters) else None,
             ibr_q=rec.S_ibr[:n].imag.copy() if len(c.converters) else None,
-            stable=t_sep is None,
+            stable=t_sep is None and de_energised_at(partitions, float(t[n - 1])) is None,
             t_separation=t_sep,
             separated=separated,
             partitions=partitions,
@@ -781,6 +784,39 @@ class Simulator:
 
 #: simulated time between two calls of a run's monitor (`Simulator.run`), s
 MONITOR_EVERY_S = 0.1
+
+#: wall time between two pauses of a run's compiled loop (`_Run.advance`), s: signals
+#: are handled and progress shown there
+PAUSE_EVERY_S = 0.25
+#: steps of a run's first piece while its simulator has measured none
+FIRST_PIECE_STEPS = 32
+
+
+class Pieces:
+    """How many steps a run's compiled loop takes before it pauses (`_Run.advance`):
+    about PAUSE_EVERY_S of wall time at the cost per step of the last piece of this
+    simulator's runs (FIRST_PIECE_STEPS before one was measured).  A short run then takes
+    one piece: a CCT search's thousands of runs pay nothing for the pauses."""
+
+    def __init__(self) -> None:
+        self.per_step: float | None = None
+
+    def steps(self) -> int:
+        """Steps of the next piece (>= 1)."""
+        if self.per_step is None:
+            return FIRST_PIECE_STEPS
+        return max(1, int(PAUSE_EVERY_S / max(self.per_step, 1e-9)))
+
+    def took(self, wall: float, steps: int) -> None:
+        """A piece of `steps` steps took `wall` s.  A piece of fewer than 8 steps (the
+        end of a run) says little of the cost per step, its call's own cost included:
+        kept only when it is the first measure or lowers the last (a first piece slowed
+        by loading the compiled code then does not hold the pieces to single steps)."""
+        if steps < 1:
+            return
+        per_step = wall / steps
+        if steps >= 8 or self.per_step is None or per_step < self.per_step:
+            self.per_step = per_step
 
 
 def _advance_monitored(run: _Run, monitor) -> str | None:
@@ -1007,6 +1043,9 @@ class _Run:
         )
         self.k, self.status, self.wall, self.stored = 0, ig.OK, 0.0, False
         self.evaluate: int | None = None
+        #: the steps of each call of the compiled loop (`Pieces`: the simulator's, so
+        #: that a search's short runs start from the cost its earlier runs measured)
+        self.pieces = sim._pieces
 
     @property
     def x(self) -> np.ndarray:
@@ -1020,17 +1059,36 @@ class _Run:
 
     def advance(self, k1: int) -> None:
         """Integrate up to grid index k1 and store its outputs (nothing after a stop);
-        advance(0) at the start stores the initial point."""
+        advance(0) at the start stores the initial point.
+
+        The compiled loop runs in pieces of about PAUSE_EVERY_S of wall time (`pieces`),
+        so that Python's signal handlers run between them (Ctrl-C, SIGTERM: within a
+        second, not at the end of a long run) and a run shown (`stabctl.progress.
+        run_progress`) says how far it is; pausing leaves the trajectory as it is
+        (`integrate` continues from its carry)."""
         if self.status != ig.OK or k1 < self.k or (k1 == self.k and self.stored):
             return
         self.stored = True
         if self.evaluate is None:  # the model's evaluation: compiled or loaded here
             self.evaluate = evaluate_address(self.params)
         await_background(ig.integrate)
-        wall = time.perf_counter()
-        self.status, k_end = ig.integrate(*self.arguments(k1))
-        self.wall += time.perf_counter() - wall
-        self.k = k_end
+        shown = run_progress(float(self.grid.t[self.k]), float(self.grid.t[-1]))
+        try:
+            while True:
+                k = self.k
+                k_next = min(k1, k + self.pieces.steps())
+                wall = time.perf_counter()
+                self.status, self.k = ig.integrate(*self.arguments(k_next))
+                spent = time.perf_counter() - wall
+                self.wall += spent
+                self.pieces.took(spent, self.k - k)
+                if shown is not None:
+                    shown(float(self.grid.t[self.k]))
+                if self.status != ig.OK or self.k >= k1:
+                    return
+        finally:
+            if shown is not None:
+                shown.close()
 
     def arguments(self, k1: int) -> tuple:
         """The arguments of `integrate` from the last stored grid index to k1 (an address
@@ -1182,6 +1240,8 @@ def separated_group(
         far = np.argmax(np.abs(delta - coi_of_islands(delta, inertia, island)))
         within = np.flatnonzero(island == island[far])
     order = within[np.argsort(delta[within])]
+    if order.size < 2:  # a machine alone: no gap to split at
+        return np.sort(order)
     cut = int(np.argmax(np.diff(delta[order]))) + 1
     lagging, leading = order[:cut], order[cut:]
     m_lag, m_lead = inertia[lagging].sum(), inertia[leading].sum()

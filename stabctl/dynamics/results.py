@@ -57,6 +57,34 @@ SERIES_UNITS = {
 }
 
 
+#: the verdict of a run that lost synchronism (`SimulationResult.verdict`)
+LOSS_OF_SYNCHRONISM = "loss of synchronism"
+#: the verdict of a run whose events left no machine in service (`de_energised_at`)
+DE_ENERGISED = "de-energised"
+
+
+def de_energised_at(partitions, t_end: float) -> float | None:
+    """The start of the first stage, up to `t_end`, in which no machine is judged (every
+    machine tripped, or none left in the main grid of its island: the customers lost).
+
+    Parameters
+    ----------
+    partitions : sequence of Partition
+        A run's partitions (`stabctl.dynamics.partition`); empty: never.
+    t_end : float
+        The run's last recorded time, s.
+
+    Returns
+    -------
+    float or None
+        The stage's start, s; None when some machine is judged throughout.
+    """
+    for p in partitions:
+        if p.t_s <= t_end and not np.any(p.judged):
+            return float(p.t_s)
+    return None
+
+
 @dataclass
 class SimulationResult:
     """Trajectories of one run (`Simulator.run`), per machine, bus and storage device.
@@ -113,7 +141,9 @@ class SimulationResult:
         (default) when not recorded.
     stable : bool, optional
         False when some rotor angle left the COI by more than the separation limit
-        (`Simulator.run`, default pi rad); default True.
+        (`Simulator.run`, default pi rad), or when the run's events left no machine in
+        service in the main grid (`de_energised_s`: a blackout is no stable outcome);
+        default True.
     t_separation : float or None, optional
         First recorded time the limit was exceeded, s; None (default) if never.
     separated : list of int, optional
@@ -160,6 +190,24 @@ class SimulationResult:
     def __post_init__(self) -> None:
         if self.island.size == 0:
             self.island = np.zeros(self.machines.size, int)
+
+    @property
+    def de_energised_s(self) -> float | None:
+        """When the run's events left no machine that the criterion judges (every machine
+        tripped, or cut off from the load of the main grid: `de_energised_at`), s; None
+        if never."""
+        return de_energised_at(self.partitions, float(self.t[-1]) if self.t.size else 0.0)
+
+    @property
+    def verdict(self) -> str:
+        """The run's verdict, a label: ``"stable"``, ``"loss of synchronism"`` (some rotor
+        angle left the COI by more than the limit: `t_separation`) or ``DE_ENERGISED``
+        (no machine left in service: `de_energised_s`)."""
+        if self.t_separation is not None:
+            return LOSS_OF_SYNCHRONISM
+        if self.de_energised_s is not None:
+            return DE_ENERGISED
+        return "stable" if self.stable else LOSS_OF_SYNCHRONISM
 
     # -- centre of inertia (paper eq. 40) ----------------------------------------------
     @property
@@ -296,7 +344,8 @@ class SimulationResult:
         Returns
         -------
         dict
-            ``stable`` (bool), ``t_separation_s`` (s or None), ``separated_machines``
+            ``stable`` (bool), ``verdict`` (`verdict`), ``de_energised_s`` (s or None),
+            ``t_separation_s`` (s or None), ``separated_machines``
             (machine numbers), ``max_angle_spread_rad`` (largest abs(delta_i - delta_COI),
             rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
             then every entry of `meta` but its trajectories (arrays, e.g. the WECC
@@ -304,6 +353,8 @@ class SimulationResult:
         """
         return {
             "stable": self.stable,
+            "verdict": self.verdict,
+            "de_energised_s": self.de_energised_s,
             "t_separation_s": self.t_separation,
             "separated_machines": [int(m) for m in self.separated],
             "max_angle_spread_rad": self.max_angle_spread,

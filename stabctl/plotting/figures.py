@@ -257,12 +257,15 @@ def simulation_overview(
         if active:
             ax.legend(fontsize=7, ncol=2, loc="best")
     axes[-1].set_xlabel("t (s)")
-    verdict = (
-        "stable"
-        if result.stable
-        else f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
-        + ", ".join(case.machine_name(m) for m in result.separated)
-    )
+    if result.t_separation is None and result.de_energised_s is not None:
+        verdict = f"de-energised at {result.de_energised_s:g} s: no machine left in service"
+    else:
+        verdict = (
+            "stable"
+            if result.stable
+            else f"loss of synchronism at {result.t_separation:.3f} s, machine(s) "
+            + ", ".join(case.machine_name(m) for m in result.separated)
+        )
     head = title or str(result.meta.get("case", "simulation"))
     axes[0].set_title(f"{head}\n{verdict}", fontsize=9)
     save_figure(fig, Path(path))

@@ -196,7 +196,8 @@ class LineFault:
 
 def no_separation(result: SimulationResult) -> bool:
     """Default criterion: True if no rotor angle left the COI by more than the run's
-    separation limit (`SimulationResult.stable`)."""
+    separation limit and some machine is left in service (`SimulationResult.stable`: a
+    clearing that de-energises the system is no stable one)."""
     return result.stable
 
 
@@ -488,13 +489,16 @@ def critical_clearing_time(
         verdict = res.meta.get("early_verdict") if early and not diverged else None
         if verdict:
             early_stops.append(t_clear)
-        ok = not diverged and (verdict == "stable" if verdict else bool(crit(res)))
+        # no machine left in service (de-energised): no stable clearing, whatever an early
+        # verdict on the machines left judged (none) or a custom criterion says
+        dead = getattr(res, "de_energised_s", None) is not None  # a stand-in result: none
+        ok = not diverged and not dead and (verdict == "stable" if verdict else bool(crit(res)))
         probes[step].append((t_clear, ok))
         if not islanded:
             islanded.extend(res.meta.get("islanded", []))
         if not ok and step == h:
             separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
-        if o.method == "sime" and step == h and not ok:
+        if o.method == "sime" and step == h and not ok and not dead:
             margins[k] = probe_margin(res, t_cl, sim.case.base_mva, sim.case.freq_hz)
         if o.method == "sime" and step == h and ok:
             swings[k] = largest_swing(res)
@@ -820,7 +824,8 @@ def _lower_bound_unstable(k_lo: int, fault: LineFault, tol):
     if k_lo == 0:
         raise InsecureContingency(
             f"{fault.describe()}: unstable even when cleared instantly "
-            "(the line trip alone loses synchronism): N-1 insecure, CCT 0"
+            "(the line trip alone loses synchronism, or leaves no machine in service): "
+            "N-1 insecure, CCT 0"
         )
     raise InputError(
         f"{fault.describe()}: unstable already at the lower bound "

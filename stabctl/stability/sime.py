@@ -72,12 +72,15 @@ def critical_machines(result: SimulationResult) -> list[int]:
     """Machines that lost synchronism (`result.separated`); after a divergence without
     separation, the smaller coherent group at the last computed point (largest angle gap,
     as `stabctl.dynamics.driver.separated_group`), among the machines the criterion judges
-    there (`SimulationResult.judged`: not tripped nor islanded apart from the main grid)."""
+    there (`SimulationResult.judged`: not tripped nor islanded apart from the main grid);
+    none when no machine is judged there (the system de-energised)."""
     if result.separated:
         return [int(k) for k in result.separated]
     from stabctl.dynamics.driver import judged_group, separated_group
 
     last = result.last_partition()
+    if last is not None and not last.judged.any():  # no machine left in service
+        return []
     if last is not None:
         return [int(k) for k in result.machines[judged_group(result.angle[-1], last)]]
     return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]

@@ -1929,3 +1929,32 @@ def test_a_case_s_own_steps_have_the_options_bounds(tmp_path, records, needle):
     bad.write_text(json.dumps(d))
     for args in (["--case-events"], ["--tf", 1]):
         assert_error(run("simulate", bad, *args), f"bad.json: {needle}")
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("screen", "--buses", "3"),
+        ("sweep-cct", "--faults", "FAULTS"),
+    ],
+)
+def test_a_case_whose_power_flow_does_not_converge_is_refused_before_any_job(
+    tmp_path, no_simulation, command
+):
+    """screen and sweep-cct ran every job on it, each failing with the same power-flow
+    error, then exited 0 with a records file of failures: they refuse it as cct does."""
+    d = _kundur_dict()
+    t = d["tables"]["buses"]
+    col = t["columns"].index("pload")
+    for row in t["rows"]:
+        row[col] *= 100  # 270 GW of load on a 2.8 GW system
+    path = tmp_path / "heavy.json"
+    path.write_text(json.dumps(d))
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    out = tmp_path / "records.jsonl"
+    args = [faults if a == "FAULTS" else a for a in command[1:]]
+    assert_error(
+        run(*command[:1], path, *args, "--out", out), "power flow of case 'kundur' did not converge"
+    )
+    assert not out.exists()

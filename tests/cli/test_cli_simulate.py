@@ -646,3 +646,19 @@ def test_a_trapezoid_step_above_two_cycles_is_a_warning():
     assert "halve the step and compare" in coarse.stderr
     fine = run(*args, "--method", "trapezoid", "--step", str(1 / 30))
     assert fine.exit_code == 0 and "warning" not in fine.stderr
+
+
+def test_tripping_every_machine_is_reported_as_de_energised_not_stable(tmp_path):
+    """Every machine tripped (all load shed) printed 'stable: largest angle from the COI
+    0.3632 rad' (the angle before the trips) and "stable": true."""
+    trips = [a for m in (1, 2, 3, 4) for a in ("--trip-gen", m, 1)]
+    res = run("simulate", "kundur", *trips, "--tf", 2)
+    assert res.exit_code == 0, res.output
+    assert "de-energised at t = 1 s: no machine left in service" in res.stdout
+    assert "stable:" not in res.stdout
+    plot = tmp_path / "run.png"
+    res = run("simulate", "kundur", *trips, "--tf", 2, "--plot", plot)  # its title says so
+    assert res.exit_code == 0 and plot.stat().st_size > 0, res.output
+    res = run("simulate", "kundur", *trips, "--tf", 2, "--json")
+    d = json.loads(res.stdout)
+    assert d["stable"] is False and d["verdict"] == "de-energised" and d["de_energised_s"] == 1.0

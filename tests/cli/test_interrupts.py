@@ -385,3 +385,62 @@ def test_a_hangup_the_command_was_started_ignoring_is_still_ignored():
     finally:
         signal.signal(signal.SIGHUP, old)
     assert res.exit_code == 0 and "went on" in res.output, (res.output, res.exception)
+
+
+def _catches(pid: int, sig: int) -> bool:
+    """Whether process pid has a handler for sig (its SigCgt mask in /proc)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1]
+    return bool(int(mask, 16) >> (sig - 1) & 1)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+@pytest.mark.parametrize("module", ["stabctl", "stabctl.cli"])
+@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_during_start_up_ends_with_one_interrupted_line(tmp_path, module, sig, status):
+    """Ctrl-C in the first second or so (the imports, before the command's own handlers)
+    printed a traceback ending in KeyboardInterrupt; SIGTERM killed the process without a
+    word.  Both end as later: one `interrupted:` line (the entry point's, or the command's
+    when the signal came after its handlers), exit 130 or 143, never a traceback.  The
+    signal is sent as soon as the process catches SIGTERM (the entry point's handlers,
+    installed before any import of the command: the interpreter's own start-up is not
+    ours to handle), then after fixed delays."""
+    seen = []
+    for delay in (None, 0.2, 0.5, 1.0):
+        proc = subprocess.Popen(
+            [sys.executable, "-m", module, "simulate", "kundur", "--tf", "3600"],
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            preexec_fn=_default_sigint,
+        )
+        try:
+            started = _started(proc.pid)
+            assert started or delay is not None
+            time.sleep(delay or 0.0)
+            proc.send_signal(sig)
+            out, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+        assert proc.returncode == status, (delay, proc.returncode, err, out[-300:])
+        assert "Traceback" not in err and "Aborted" not in err, err
+        said = [x for x in err.splitlines() if x.startswith("interrupted:")]
+        assert len(said) == 1, err
+        assert said[0].endswith("resume with: stabctl simulate kundur --tf 3600"), said
+        seen.append(said[0])
+    assert "nothing is kept" in seen[0], seen
+
+
+def _started(pid: int, timeout: float = 30) -> bool:
+    """Wait (polling every 2 ms) until process pid catches SIGTERM; whether it did."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if _catches(pid, signal.SIGTERM):
+            return True
+        time.sleep(0.002)
+    return False

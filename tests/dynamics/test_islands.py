@@ -173,6 +173,43 @@ def test_a_tripped_machine_is_out_of_the_loss_of_synchronism_criterion(kundur):
     assert trapezoid.stable and trapezoid.meta["tripped"] == res.meta["tripped"]
 
 
+def test_a_run_that_trips_every_machine_is_de_energised_not_stable(kundur):
+    """Every machine of Kundur tripped at 1 s (all load shed) was 'stable' with the largest
+    angle from the COI of before the trips: it is its own verdict, de-energised from the
+    trips, and not stable (a blackout is no stable outcome)."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import GeneratorTrip
+    from stabctl.dynamics.results import DE_ENERGISED
+
+    for method in ("heun", "trapezoid"):
+        res = Simulator(kundur).run(
+            [GeneratorTrip(m, 1.0) for m in (1, 2, 3, 4)], 2.0, method=method
+        )
+        assert not res.stable and res.t_separation is None and res.separated == []
+        assert res.verdict == DE_ENERGISED and res.de_energised_s == 1.0
+        summary = res.summary()
+        assert summary["stable"] is False and summary["verdict"] == "de-energised"
+        assert summary["de_energised_s"] == 1.0
+    one = Simulator(kundur).run([GeneratorTrip(4, 1.0)], 2.0)
+    assert one.stable and one.verdict == "stable" and one.de_energised_s is None
+
+
+def test_a_contingency_whose_clearing_leaves_no_machine_in_service_is_n_1_insecure(kundur):
+    """A fault at bus 1 cleared by opening every step-up transformer cuts each machine off
+    the load: no clearing time is stable (the CCT search crashed on its empty critical
+    group), so both searches say N-1 insecure and name the islanding."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.errors import InsecureContingency
+    from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
+
+    sim = Simulator(kundur)
+    fault = LineFault(1, 10, 1.0, 1, ((2, 20), (11, 110), (12, 120)))
+    for method in ("bisection", "sime"):
+        with pytest.raises(InsecureContingency, match="leaves no machine in service") as err:
+            critical_clearing_time(sim, fault, SearchOptions(t_max=0.5, method=method))
+        assert err.value.islanded
+
+
 def islanded_and_tripped(kundur, t_clear, t_end=6.0, **kw):
     """The fault at bus 1 cleared at t_clear by opening G1's step-up transformer 1-10 (G1
     islanded at bus 1), and the same fault cleared without loss of the line with G1

@@ -1,0 +1,76 @@
+"""Text output of the CCT reports: times with the decimals their tolerance needs."""
+
+import pytest
+
+from stabctl.cli.format import cycle_decimals, print_cct, print_screening, sweep_line, time_decimals
+from stabctl.io import load_case
+
+
+@pytest.mark.parametrize(
+    "tol_s,decimals",
+    [(None, 3), (0.05, 3), (1e-3, 3), (2e-3, 3), (1e-4, 4), (5e-4, 4), (2.5e-4, 5), (1e-6, 6)],
+)
+def test_time_decimals_show_every_multiple_of_the_tolerance(tol_s, decimals):
+    assert time_decimals(tol_s) == decimals
+    assert cycle_decimals(tol_s) == max(2, decimals - 1)
+
+
+def _cct(tol_s):
+    return {
+        "fault": {"bus": 3, "far_bus": 101, "circuit": 1, "t_fault_s": 1.0, "trips": []},
+        "cct_s": 0.1541,
+        "cct_cycles": 0.1541 * 60,
+        "numerical_error_s": 0.0002,
+        "cct_half_step_s": 0.1539,
+        "conventions": "ieee",
+        "t_stable_s": 0.1541,
+        "t_unstable_s": 0.1542,
+        "t_unstable_cycles": 0.1542 * 60,
+        "tol_s": tol_s,
+        "step_s": 1 / 120,
+        "n_simulations": 20,
+        "n_simulations_half_step": 2,
+        "early_stops": 3,
+        "search": "bisection",
+        "wall_time_s": 1.0,
+        "separated_machines": [1, 2],
+        "islanded": [],
+    }
+
+
+def test_a_cct_at_a_tolerance_below_1_ms_prints_its_bracket_apart(capsys):
+    """At --tol-ms 0.1 the bracket printed 'stable at 0.154 s, unstable at 0.154 s' and
+    'numerical error 0.2 ms (CCT at half the step 0.154 s)'."""
+    print_cct(load_case("kundur"), None, _cct(1e-4))
+    text = capsys.readouterr().out
+    assert "CCT 0.1541 s = 9.246 cycles (stable at 0.1541 s, unstable at 0.1542 s" in text
+    assert "numerical error 0.2 ms (CCT at half the step 0.1539 s)" in text
+    assert "lose synchronism when cleared at 0.1542 s" in text
+
+
+def test_a_cct_at_the_default_tolerance_prints_as_before(capsys):
+    d = _cct(1e-3)
+    d.update(cct_s=0.154, t_stable_s=0.154, t_unstable_s=0.155, cct_half_step_s=0.153)
+    d.update(numerical_error_s=0.001, cct_cycles=9.24, t_unstable_cycles=9.3)
+    print_cct(load_case("kundur"), None, d)
+    text = capsys.readouterr().out
+    assert "CCT 0.154 s = 9.24 cycles (stable at 0.154 s, unstable at 0.155 s = 9.30" in text
+    assert "numerical error 1 ms (CCT at half the step 0.153 s)" in text
+
+
+def test_the_sweep_and_screening_tables_print_cct_at_their_tolerance(capsys):
+    d = _cct(1e-4)
+    line = sweep_line("kundur/3-101/t1/esdnone", {"status": "ok", "result": d})
+    assert " 0.1541    9.246    0.2    20       -" in line
+    row = {
+        "bus": 3,
+        "far_bus": 101,
+        "status": "ok",
+        "verdict": "cct",
+        "cct_s": 0.1541,
+        "cct_cycles": 9.246,
+        "numerical_error_s": 0.0002,
+        "separated": [],
+    }
+    print_screening(load_case("kundur"), [row], 1e-4)
+    assert "bus 3 line to 101       0.1541   9.246    0.2  -" in capsys.readouterr().out
