@@ -652,7 +652,10 @@ def control(
     the plant at HOST:PORT (`stabctl pmu plant`), feed every data frame to the estimator,
     apply the paper's Table 3 law to its relative speeds (forecast over --latency-ms) and
     answer each frame with the ESD modes, until the plant ends the run.  The noise options
-    tune the estimator (they are the PMUs' stated accuracy).
+    tune the estimator (they are the PMUs' stated accuracy).  Reporting instants the
+    plant sent no frame for (gaps) are counted and named on the summary line and taken
+    as `estimate track` takes them: the estimator predicts across a gap of at most 1 s,
+    starts again after a longer one.
 
     \b
     Example:
@@ -660,7 +663,7 @@ def control(
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_loop import serve_controller
-    from stabctl.estimation.sources import unused_values
+    from stabctl.estimation.sources import gaps_line, unused_values
     from stabctl.io import load_case
 
     if esd_pct is None:
@@ -678,8 +681,8 @@ def control(
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     got = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
-    flagged = unused_values(got.flagged)
+    flagged, gaps = unused_values(got.flagged), gaps_line(got.gaps, " (no frame sent)")
     click.echo(
         f"controller ({estimator}): answered {got.frames} frames from {address}, {d.starts} "
-        f"ESD starts" + (f"; {flagged}" if flagged else "")
+        f"ESD starts" + (f"; {flagged}" if flagged else "") + (f"; {gaps}" if gaps else "")
     )

@@ -435,10 +435,16 @@ class Answered(NamedTuple):
     flagged : dict
         PMU values not used by their STAT (`c37.unusable`), by reason (the reasons that
         occurred only).
+    gaps : tuple of Gap
+        Each run of reporting instants the plant sent no frame for, between two it did
+        (`sources.Gap`): one of at most `sources.FILL_S` s fed to the estimator as frames
+        of missing values (it predicts across), after a longer one the estimator starts
+        again (`closed_loop.LoopController.restart`), as `closed_loop.track` takes them.
     """
 
     frames: int
     flagged: dict
+    gaps: tuple = ()
 
 
 def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> Answered:
@@ -461,7 +467,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     Returns
     -------
     Answered
-        Frames answered, and PMU values not used by their STAT.
+        Frames answered, PMU values not used by their STAT, and the gaps in the plant's
+        time stamps.
 
     Raises
     ------
@@ -480,8 +487,12 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
         raise InputError(f"no plant at {host}:{port}: {exc.strerror or exc}") from None
+    from stabctl.estimation.sources import FILL_S, Gap, missing_frame
+
     n, last = 0, None
     flagged: collections.Counter = collections.Counter()
+    gaps: list[Gap] = []
+    fill = int(round(FILL_S * cfg.rate))
     try:
         with conn:
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -495,7 +506,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
             while (data := _read_frame(conn)) is not None:
                 if (t_end := _end_time(data, cfg.idcode)) is not None:
                     _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
-                    return Answered(n, dict(flagged))
+                    return Answered(n, dict(flagged), tuple(gaps))
                 try:  # a data frame, checked (`c37.check_data_frame`)
                     frame = c37.parse_frame(cfg, cfg2, data)
                 except InputError as exc:
@@ -504,6 +515,16 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                         f", after {n} frame(s) answered"
                     ) from None
                 flagged.update(why for why in c37.flags(cfg2, data) if why)
+                k = round(frame.t * cfg.rate)
+                if last is not None and (lost := k - round(last * cfg.rate) - 1) > 0:
+                    # as `sources.read_frames` and `closed_loop.track` take a gap: the
+                    # estimator predicts across a short one frame by frame (no answer is
+                    # due: no frame came), starts again after a longer one
+                    gaps.append(Gap(last, frame.t, lost, lost <= fill))
+                    if lost > fill:
+                        controller.restart()
+                    for j in range(lost if lost <= fill else 0):
+                        controller.act(missing_frame((k - lost + j) / cfg.rate, frame.valid.size))
                 soc, counts = int.from_bytes(data[6:10], "big"), int.from_bytes(data[11:14], "big")
                 conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
                 n, last = n + 1, frame.t

@@ -202,13 +202,32 @@ def gap_line(received: Received) -> str:
     """The gaps of a source (`Received.gaps`) for a summary line: ``N reporting instants
     missing in G gap(s): n1 after t = ... s, to ... s (...); ...`` (the first five
     named); '' if none."""
-    if not received.gaps:
+    return gaps_line(received.gaps, " (sent by no stream)")
+
+
+def gaps_line(gaps, by: str = "") -> str:
+    """Gaps (`Gap`) for a summary line: ``N reporting instants missing<by> in G gap(s):
+    n1 after t = ... s, to ... s (...); ...`` (the first five named); '' if none.
+
+    Parameters
+    ----------
+    gaps : sequence of Gap
+        The gaps, in order.
+    by : str, optional
+        Said after "missing" (who did not send them).
+
+    Returns
+    -------
+    str
+        The gaps, or ''.
+    """
+    if not gaps:
         return ""
-    named = "; ".join(map(str, received.gaps[:5]))
-    more = f"; {len(received.gaps) - 5} more" if len(received.gaps) > 5 else ""
+    named = "; ".join(map(str, gaps[:5]))
+    more = f"; {len(gaps) - 5} more" if len(gaps) > 5 else ""
     return (
-        f"{received.gap_frames} reporting instants missing (sent by no stream) in "
-        f"{len(received.gaps)} gap(s): {named}{more}"
+        f"{sum(g.frames for g in gaps)} reporting instants missing{by} in {len(gaps)} "
+        f"gap(s): {named}{more}"
     )
 
 
@@ -589,7 +608,7 @@ def _by_time_stamp(n: int, parsed, rate: float) -> Received:
             gaps.append(Gap(at[stamps[k - 1]], at[s], lost, lost <= fill))
             if lost <= fill:
                 first = round(at[stamps[k - 1]] * rate) + 1
-                out += [_nothing((first + j) / rate, n) for j in range(lost)]
+                out += [missing_frame((first + j) / rate, n) for j in range(lost)]
             else:
                 breaks.append(len(out))
         out.append(Frame(at[s], valid[k], v[k], i[k], freq[k], rocof[k]))
@@ -604,7 +623,21 @@ def _by_time_stamp(n: int, parsed, rate: float) -> Received:
     )
 
 
-def _nothing(t: float, n: int) -> Frame:
-    """A frame at t of n PMUs whose every value is missing."""
+def missing_frame(t: float, n: int) -> Frame:
+    """A frame at t (s) of n PMUs whose every value is missing: what a reporting instant
+    of a gap of at most `FILL_S` s is filled with.
+
+    Parameters
+    ----------
+    t : float
+        Its time stamp (s).
+    n : int
+        PMUs.
+
+    Returns
+    -------
+    Frame
+        Every value NaN and invalid.
+    """
     nan = np.full(n, np.nan)
     return Frame(t, np.zeros(n, bool), nan + 0j, nan + 0j, nan.copy(), nan.copy())

@@ -676,3 +676,70 @@ def test_record_names_frames_of_a_failed_clock(kundur_recording, tmp_path):
         "or time quality (40 clock failure (FRACSEC time quality 0xF))\n"
     )
     assert c37.recorded_frames(out)[1] == sent
+
+
+def test_control_names_the_gaps_in_the_plant_s_stream(kundur_recording):
+    """`pmu control` against a plant that sent no frame for 30 reporting instants (frames
+    40-69) said only "answered N frames", and its estimator was fed the frame after the
+    gap as the next one: the gap is counted and named on its line as `estimate track` and
+    `pmu record` name gaps (exit status 0: every frame sent was answered), and taken as
+    track takes one: at most 1 s, the estimator is fed frames of missing values for it;
+    longer, it starts again."""
+    from pmu_streams import fake_server
+
+    from stabctl.estimation.c37_loop import end_of_run_frame
+    from stabctl.estimation.c37_tcp import _read_frame
+
+    head, data = c37.recorded_frames(kundur_recording)
+    sent = data[:40] + data[70:]
+
+    def plant(conn, sent=sent):
+        _read_frame(conn)  # 'cfg2'
+        conn.sendall(head.convert2bytes())
+        _read_frame(conn)  # 'start'
+        for frame in sent:
+            conn.sendall(frame)
+            _read_frame(conn)  # the modes
+        conn.sendall(end_of_run_frame(1, 72 / 60))
+        conn.recv(1)  # until the controller closes
+
+    srv, port = fake_server(plant)
+    with srv:
+        res = CliRunner().invoke(
+            main, ["pmu", "control", "kundur", f"127.0.0.1:{port}", "--esd-pct", "5"]
+        )
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith(f"controller (ekf): answered 43 frames from 127.0.0.1:{port}, ")
+    assert res.stdout.endswith(
+        "; 30 reporting instants missing (no frame sent) in 1 gap(s): 30 after t = 0.6500 "
+        "s, to 1.1667 s (filled with missing values)\n"
+    ), res.stdout
+
+    class Fed:
+        """A controller that notes what it is fed."""
+
+        def __init__(self):
+            self.fed: list = []
+
+        def act(self, frame):
+            self.fed.append((round(frame.t * 60), bool(frame.valid.any())))
+            return np.zeros(4, np.int8)
+
+        def restart(self):
+            self.fed.append("restart")
+
+    from stabctl.estimation.c37_loop import serve_controller
+
+    case = stabctl.load_case("kundur")
+    cfg = c37.stream_config(case, pm.machine_pmus(case), 60)
+    after = [(k, True) for k in (70, 71, 72)]
+    for sent, fed in (
+        (data[:40] + data[70:], [(k, not 40 <= k < 70) for k in range(73)]),
+        (data[:2] + data[70:], [(0, True), (1, True), "restart", *after]),
+    ):
+        srv, port = fake_server(lambda conn, sent=sent: plant(conn, sent))
+        ctrl = Fed()
+        with srv:
+            got = serve_controller(ctrl, cfg, "127.0.0.1", port, 10)
+        assert got.frames == len(sent) and ctrl.fed == fed
+        assert [g.filled for g in got.gaps] == [len(sent) == 43]
