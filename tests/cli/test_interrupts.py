@@ -212,6 +212,51 @@ def test_a_signal_to_a_screening_on_a_local_dask_cluster_says_only_what_it_kept(
     assert "CancelledError" not in err and "distributed" not in err, err
 
 
+@pytest.mark.dask
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_line(tmp_path):
+    """Ctrl-C at a terminal (SIGINT to the whole process group) of a screening on
+    `--scheduler local`: each Dask worker process got it too and printed its traceback
+    (CancelledError, KeyboardInterrupt) before the interrupted line.  Exit status 130,
+    the interrupted line alone, the records valid, the cluster's scratch directory gone
+    and no process left."""
+    import glob
+    import json
+    import os
+    import tempfile
+
+    pytest.importorskip("distributed")
+    before = set(glob.glob(os.path.join(tempfile.gettempdir(), "stabctl-dask-*")))
+    args = ["screen", "kundur", "--lines", "--tol-ms", "0.05", "--workers", "2"]
+    args += ["--scheduler", "local", "--out", "s.jsonl"]
+    proc = subprocess.Popen(
+        STABCTL + args,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+    )
+    out = tmp_path / "s.jsonl"
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, err
+    said = [line for line in err.splitlines() if line.strip() and not line.startswith("s.jsonl")]
+    assert len(said) == 1, err
+    assert said[0].startswith("interrupted: finished searches are in s.jsonl ("), err
+    assert all(json.loads(line) for line in out.read_text().splitlines())
+    assert set(glob.glob(os.path.join(tempfile.gettempdir(), "stabctl-dask-*"))) <= before
+    assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
+
+
 @pytest.mark.parametrize(
     "command,target,kept",
     [
