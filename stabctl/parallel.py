@@ -52,6 +52,7 @@ import socket
 import stat
 import sys
 import tempfile
+import threading
 import time
 import traceback
 import warnings
@@ -1236,13 +1237,21 @@ def _connect(scheduler: str, workers: int, timeout: float):
         # CancelledError", two per running job; the error and traceback of a heartbeat
         # that met the scheduler closed, "Failed to communicate with scheduler"), and a
         # job's own error is in its record;
+        # its worker processes ignore SIGINT (`dask_setup`): Ctrl-C at a terminal reaches
+        # the whole process group, and a worker's event loop turned it into tracebacks
+        # (CancelledError, KeyboardInterrupt) printed over the sweep's one line, while the
+        # sweep closes the cluster itself;
         # its processes' semaphores are tracked by a tracker that outlives a SIGHUP; the
         # scratch space of its scheduler and workers (``dask-scratch-space``, left in the
         # temporary directory by Dask) is a directory of its own, removed with the cluster
         start_resource_tracker()
         scratch = tempfile.mkdtemp(prefix="stabctl-dask-")
         try:
-            settings = {"distributed.scheduler.worker-saturation": 1.0}
+            settings = {
+                "distributed.scheduler.worker-saturation": 1.0,
+                # each worker process ignores the terminal's Ctrl-C (`dask_setup`)
+                "distributed.worker.preload": [__name__],
+            }
             with dask.config.set({**settings, "temporary-directory": scratch}):
                 cluster = LocalCluster(
                     n_workers=workers,
@@ -1270,6 +1279,23 @@ def _connect(scheduler: str, workers: int, timeout: float):
             f"no Dask scheduler answers at {address} within {timeout:g} s "
             f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
         ) from None
+
+
+def dask_setup(worker) -> None:
+    """Dask's preload hook, run in each worker process of a local cluster (`_connect`) as
+    it starts, in its main thread: SIGINT ignored, as a process pool's workers ignore it
+    (`die_with_parent`).  Ctrl-C at a terminal signals the whole process group; the
+    worker's event loop (asyncio's runner) turned it into a cancelled task and a
+    KeyboardInterrupt, each printed as a traceback, while the sweep's own process closes
+    the cluster and says what it kept.
+
+    Parameters
+    ----------
+    worker : distributed.Worker
+        The worker starting (unused).
+    """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _started_client(address, **kwargs):

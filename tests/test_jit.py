@@ -43,6 +43,34 @@ def test_a_source_change_clears_the_kernels_under_numba_cache_dir(tmp_path, monk
     assert (kernels / "f-1.py311.nbi").exists()
 
 
+def test_a_stamp_that_is_no_regular_file_is_out_of_date_and_never_waited_on(tmp_path, monkeypatch):
+    """A FIFO (a plain read of it waits for a writer for ever) or an
+    oversized file where the cache key belongs: read as stale (the kernels cleared, as
+    for a changed source), and replaced by a regular file with the first kernel."""
+    import os
+    import threading
+
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    stamp = jc.cache_dirs()[0] / "numba-sources.sha256"
+    stamp.parent.mkdir(parents=True, exist_ok=True)
+    kernels = jc.cache_dirs()[3]
+    kernels.mkdir(parents=True, exist_ok=True)
+    for plant in (lambda: os.mkfifo(stamp), lambda: stamp.write_text("0" * 100_000)):
+        (kernels / "f-1.py311.nbi").write_text("stale")
+        plant()
+        done = threading.Thread(target=jc.ensure_fresh_cache, daemon=True)
+        done.start()
+        done.join(20)
+        assert not done.is_alive(), "ensure_fresh_cache waits on the stamp"
+        assert not (kernels / "f-1.py311.nbi").exists()
+        writer = threading.Thread(target=jc.stamp_cache, daemon=True)
+        writer.start()
+        writer.join(20)
+        assert not writer.is_alive(), "stamp_cache waits on the stamp"
+        assert stamp.is_file() and stamp.read_text() == jc.source_digest()
+        stamp.unlink()
+
+
 def test_the_cache_key_hashes_the_kernel_sources_only(tmp_path):
     # the modules declaring kernels and what they import; not the CLI, the driver, reports
     import shutil

@@ -460,18 +460,45 @@ def _stamp() -> Path:
     return cache_dirs()[0] / "numba-sources.sha256"
 
 
+#: the longest cache stamp read (bytes): a digest is 64 hex digits; a longer file is damaged
+STAMP_MAX_BYTES = 4096
+
+
+def _read_stamp(path: Path) -> str | None:
+    """The cache key in the stamp `path`, or None if there is none that can be trusted:
+    missing, not a regular file (a FIFO, which a plain read waits on for ever, a device,
+    a symbolic link, a directory), larger than `STAMP_MAX_BYTES` or not text.  Opened
+    without following a link and without waiting (O_NONBLOCK), and checked on the open
+    file itself, so what is read is what was checked."""
+    flags = os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError:
+        return None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > STAMP_MAX_BYTES:
+            return None
+        return os.read(fd, STAMP_MAX_BYTES + 1).decode("ascii")
+    except (OSError, UnicodeDecodeError):
+        return None
+    finally:
+        os.close(fd)
+
+
 def ensure_fresh_cache() -> None:
     """Delete stabctl's compiled kernels (`clear_cache`) if a kernel source changed since
     they were written (`source_digest`; the stamp sits in the first cache directory).
     The new stamp is written when the first kernel is saved (`stamp_cache`), not here: a
     process that compiles nothing makes nothing (``stabctl compile --check``).  A
-    read-only installation is left alone (numba then compiles in memory)."""
+    stamp that is not a regular file or is larger than `STAMP_MAX_BYTES` is read as out
+    of date (`_read_stamp`: never waited on), as a damaged kernel file is.  A read-only
+    installation is left alone (numba then compiles in memory)."""
     global _STAMP_DUE
     ensure_safe_cache()
     now = source_digest()
     try:
-        stamp = _stamp()
-        if stamp.exists() and stamp.read_text() == now:
+        if _read_stamp(_stamp()) == now:
             return
         clear_cache()
     except OSError:
@@ -483,14 +510,22 @@ def stamp_cache() -> None:
     """Write the cache's key (`source_digest`) that `ensure_fresh_cache` found missing or
     out of date, making its directory, before a kernel is saved (`GuardedCache`) or
     compiled in a child process (`stabctl._jit.background`); nothing when it is up to
-    date.  A directory that cannot be written is left alone."""
+    date.  Written to a file of its own, then renamed over the stamp: whatever is there
+    (a FIFO, which an open for writing waits on, a link) is replaced, not written
+    through.  A directory that cannot be written is left alone."""
     global _STAMP_DUE
     if _STAMP_DUE is None:
         return
     stamp = _stamp()
+    tmp = stamp.with_name(f".{stamp.name}.{os.getpid()}.tmp")
     try:
         stamp.parent.mkdir(parents=True, exist_ok=True)
-        stamp.write_text(_STAMP_DUE)
+        flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+        fd = os.open(tmp, flags, 0o644)
+        with os.fdopen(fd, "w") as f:
+            f.write(_STAMP_DUE)
+        os.replace(tmp, stamp)
     except OSError:
-        pass
+        with contextlib.suppress(OSError):
+            tmp.unlink()
     _STAMP_DUE = None

@@ -7,6 +7,7 @@ the old flags ``--closed-loop`` / ``--cct`` the subcommand of that name.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import click
 import numpy as np
@@ -594,7 +595,16 @@ def track(
     case = load_case(case_name)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
-    got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end, idcode=codes)
+    try:
+        got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end, idcode=codes)
+    except KeyboardInterrupt as exc:  # said with what had come, and that it is not tracked
+        if received := getattr(exc, "received", ""):
+            left = "left as it was" if Path(out_path).exists() else "not written"
+            exc.kept = (  # type: ignore[attr-defined]
+                f"nothing is tracked: the {received} had come, short of {end}; a stream "
+                f"is tracked once received, so they are lost ({out_path} {left})"
+            )
+        raise
     why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
     kept = f"{len(got.frames)} frames tracked"
     if got.short:

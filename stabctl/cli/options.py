@@ -208,7 +208,7 @@ def reports_errors(func):
                 click.echo(f"error: {where}{exc.strerror or one_line(exc)}", err=True)
                 sys.exit(2)
             except KeyboardInterrupt as exc:
-                click.echo(_interrupted(kwargs), err=True)
+                click.echo(_interrupted(kwargs, exc), err=True)
                 sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
             except SystemExit:  # the command's own status (`compile --check`'s 1)
                 _say(caught)
@@ -466,12 +466,16 @@ _KEPT = {
 }
 
 
-def _interrupted(kwargs) -> str:
+def _interrupted(kwargs, exc: BaseException | None = None) -> str:
     """The one line printed on Ctrl-C (SIGINT) or SIGTERM by every command: what was kept
-    and the command that resumes (paper: with --resume)."""
+    and the command that resumes (paper: with --resume); what the command itself said it
+    kept, if it did (the interrupt's ``kept`` attribute: `pmu record`'s partial
+    recording, what `estimate track` had received), and the command that runs it again."""
     ctx = click.get_current_context(silent=True)
     name = ctx.info_name if ctx is not None else ""
     argv = ["stabctl", *sys.argv[1:]]
+    if said := getattr(exc, "kept", None):
+        return f"interrupted: {said}; run again with: {shlex.join(argv)}"
     if name == "paper" and "--resume" not in argv:
         argv.append("--resume")
     out = kwargs.get("out_path") or kwargs.get("out_dir") or ""

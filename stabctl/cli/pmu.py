@@ -3,6 +3,7 @@ TCP, a recording served again, and a received stream recorded."""
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import ipaddress
 import json
@@ -407,8 +408,13 @@ def record(address, out, frames, idcode):
     or a frame is refused) is written as far as it
     came, up to the frame refused, and named an error (exit status 2: the recording is
     partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
-    left as it was).  Reporting instants the stream skipped (gaps) are counted and named
-    with the frames recorded.
+    left as it was).  Time stamps are checked as `pmu replay` and `estimate track` check
+    them: a data frame whose time stamp repeats or goes back, or is off the reporting
+    instants of the CFG-2's DATA_RATE, is refused so, named with its time stamp.
+    Interrupted (Ctrl-C, SIGTERM), the frames received are written likewise, as a partial
+    recording (exit status 130, 143), and said.  Reporting instants the stream skipped
+    (gaps), and PMU values of a failed clock or flagged by their STAT, are counted and
+    named with the frames recorded.
 
     \b
     Example:
@@ -416,23 +422,76 @@ def record(address, out, frames, idcode):
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import End, receive
-    from stabctl.estimation.sources import stream_gaps
-    from stabctl.parallel import atomic_write
+    from stabctl.estimation.sources import first_out_of_order, stream_gaps, unused_values
 
     host, port = _host_port(address)
     [code] = stream_idcodes(idcode, 1)
     check_writable(out, "--out")
-    got = receive(host, port, End(frames=frames), idcode=code)
-    why, kept = f"{address}: {got.short}", f"{len(got.data)} received"
-    if got.short:
+    try:
+        got = receive(host, port, End(frames=frames), idcode=code)
+    except KeyboardInterrupt as exc:  # what came is kept, as of a stream cut short
+        exc.kept = _keep_interrupted(  # type: ignore[attr-defined]
+            out, address, getattr(exc, "stream", None)
+        )
+        raise
+    cfg2 = c37.read_config(got.cfg2, "the CFG-2")
+    data, why, kept = got.data, f"{address}: {got.short}", f"{len(got.data)} received"
+    if bad := first_out_of_order(data, cfg2, address):
+        # refused as replay and track refuse it: the frames before it are what came
+        k, said = bad
+        if not k:
+            raise InputError(f"{said}: nothing is recorded")
+        data, short = data[:k], True
+        why = f"{said}: the stream is cut there, {k} data frames before it, before {frames} frames"
+        kept = f"{k} received before it"
+    else:
+        short = bool(got.short)
+    if short:
         refuse_short_over(out, why, kept)
-    atomic_write(out, lambda f: f.write(got.cfg2 + b"".join(got.data)), mode="wb")
-    if got.short:
+    _write_recording(out, got.cfg2, data)
+    if short:
         fail_short(out, why, kept)
-    gaps = stream_gaps(got.data, c37.read_config(got.cfg2, "the CFG-2"))
-    click.echo(
-        f"recorded {len(got.data)} frames from {address} to {out}" + (f"; {gaps}" if gaps else "")
+    gaps = stream_gaps(data, cfg2)
+    flagged = unused_values(
+        collections.Counter(why for d in data for why in c37.flags(cfg2, d) if why)
     )
+    click.echo(
+        f"recorded {len(data)} frames from {address} to {out}"
+        + (f"; {gaps}" if gaps else "")
+        + (f"; {flagged}" if flagged else "")
+    )
+
+
+def _write_recording(out, cfg2: bytes, data) -> None:
+    """OUT written atomically: the CFG-2, then the data frames."""
+    from stabctl.parallel import atomic_write
+
+    atomic_write(out, lambda f: f.write(cfg2 + b"".join(data)), mode="wb")
+
+
+def _keep_interrupted(out, address: str, stream) -> str:
+    """What an interrupted `record` keeps, for its ``interrupted:`` line: the data frames
+    received (`c37_tcp.receive`'s partial `stream`, None if the CFG-2 had not come) written
+    to OUT as a partial recording, atomically, unless OUT exists (left as it was, as for
+    any stream cut short) or no data frame came.  A second interrupt while writing leaves
+    OUT as it was."""
+    if stream is None:
+        return f"nothing is kept: {address} had not sent its CFG-2"
+    n = len(stream.data)
+    what = f"{address} {stream.short.removeprefix('interrupted ')}"
+    if not n:
+        return f"nothing is kept: {what}"
+    from pathlib import Path
+
+    if Path(out).exists():
+        return f"{what}; {out} is left as it was (the {n} received are not written over it)"
+    try:
+        _write_recording(out, stream.cfg2, stream.data)
+    except OSError as exc:
+        return f"{what}; the {n} received are lost: {out}: {exc.strerror or exc}"
+    except KeyboardInterrupt:
+        return f"{what}; the {n} received are lost: interrupted again while writing {out}"
+    return f"{what}; the {n} received are in {out}, a partial recording"
 
 
 def _host_port(address: str) -> tuple[str, int]:
@@ -593,7 +652,10 @@ def control(
     the plant at HOST:PORT (`stabctl pmu plant`), feed every data frame to the estimator,
     apply the paper's Table 3 law to its relative speeds (forecast over --latency-ms) and
     answer each frame with the ESD modes, until the plant ends the run.  The noise options
-    tune the estimator (they are the PMUs' stated accuracy).
+    tune the estimator (they are the PMUs' stated accuracy).  Reporting instants the
+    plant sent no frame for (gaps) are counted and named on the summary line and taken
+    as `estimate track` takes them: the estimator predicts across a gap of at most 1 s,
+    starts again after a longer one.
 
     \b
     Example:
@@ -601,7 +663,7 @@ def control(
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_loop import serve_controller
-    from stabctl.estimation.sources import unused_values
+    from stabctl.estimation.sources import gaps_line, unused_values
     from stabctl.io import load_case
 
     if esd_pct is None:
@@ -619,8 +681,8 @@ def control(
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
     got = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
-    flagged = unused_values(got.flagged)
+    flagged, gaps = unused_values(got.flagged), gaps_line(got.gaps, " (no frame sent)")
     click.echo(
         f"controller ({estimator}): answered {got.frames} frames from {address}, {d.starts} "
-        f"ESD starts" + (f"; {flagged}" if flagged else "")
+        f"ESD starts" + (f"; {flagged}" if flagged else "") + (f"; {gaps}" if gaps else "")
     )

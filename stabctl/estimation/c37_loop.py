@@ -34,6 +34,7 @@ the modelled latency is counted late.
 from __future__ import annotations
 
 import collections
+import contextlib
 import socket
 import threading
 import time
@@ -259,6 +260,7 @@ class PlantLink:
         self.cfg2 = c37.config_frame(cfg)
         self._sock = listen(host, port)
         self._conn: socket.socket | None = None
+        self._peer = "?"  # the controller's address, once connected
         self._trips: list[float] = []
         #: (time stamp s, modes) of every answer
         self.answers: list[tuple[float, np.ndarray]] = []
@@ -309,13 +311,19 @@ class PlantLink:
             max(0.0, self._start[0] + (t_f - self._start[1]) / self.speed - time.perf_counter())
         )
         sent = time.perf_counter()
-        conn.sendall(data)
-        answer = self._next(conn, f"the answer to the frame at {t_f:.4f} s")
+        try:
+            conn.sendall(data)
+        except OSError as exc:  # a reset or broken pipe: the controller has gone
+            raise InputError(self._lost(t_f, f"{exc.strerror or exc} as it was sent")) from None
+        answer = self._next(conn, t_f)
         self._trips.append(time.perf_counter() - sent)
-        stamp, modes = read_modes(answer, self.ctrl.mode.size, self.cfg.idcode)
+        try:
+            stamp, modes = read_modes(answer, self.ctrl.mode.size, self.cfg.idcode)
+        except InputError as exc:
+            raise InputError(self._lost(t_f, str(exc))) from None
         soc, counts = c37.time_stamp(self.cfg, t_f)
         if stamp != soc * c37.TIME_BASE + counts:
-            raise InputError(f"the controller answered another frame than that at {t_f:.4f} s")
+            raise InputError(self._lost(t_f, "answered another frame than this"))
         self.ctrl.mode = modes
         self.answers.append((t_f, modes))
         return modes
@@ -357,6 +365,8 @@ class PlantLink:
         with lock:
             if won:
                 self._conn = won[0]
+                with contextlib.suppress(OSError):  # gone already: the next send says so
+                    self._peer = hostport(*self._conn.getpeername()[:2])
                 return self._conn
             won.append(None)  # type: ignore[arg-type]  # a late handshake closes its peer
         refused = (
@@ -385,14 +395,33 @@ class PlantLink:
             if word == 5:  # 'cfg2'
                 conn.sendall(self.cfg2.convert2bytes())
 
-    def _next(self, conn: socket.socket, what: str) -> bytes:
+    def _lost(self, t_f: float, what: str) -> str:
+        """A message naming the controller's address, what it did (`what`) to the frame
+        at t_f (s) and the frames it answered before."""
+        return (
+            f"the controller at {self._peer}: {what} (the frame at t = {t_f:.4f} s, after "
+            f"{len(self.answers)} frame(s) answered)"
+        )
+
+    def _next(self, conn: socket.socket, t_f: float) -> bytes:
+        """The controller's whole answer to the frame at t_f (s) within the time-out;
+        InputError naming the controller, the frame and the frames answered if it sends
+        none in time (or drips it), closes or resets the connection, or speaks another
+        protocol."""
         conn.settimeout(self.timeout)
         try:
             frame = _read_frame(conn)
+        except FrameTimeout as exc:
+            raise InputError(self._lost(t_f, f"sent {exc}")) from None
         except TimeoutError:
-            raise InputError(f"the controller sent no {what} within {self.timeout:g} s") from None
+            what = f"sent no answer within {self.timeout:g} s"
+            raise InputError(self._lost(t_f, what)) from None
+        except InputError as exc:  # cut in the middle, another protocol
+            raise InputError(self._lost(t_f, str(exc))) from None
+        except OSError as exc:  # a reset: the controller has gone
+            raise InputError(self._lost(t_f, exc.strerror or str(exc))) from None
         if frame is None:
-            raise InputError(f"the controller closed the loop before {what}")
+            raise InputError(self._lost(t_f, "closed the loop before its answer"))
         return frame
 
 
@@ -406,10 +435,16 @@ class Answered(NamedTuple):
     flagged : dict
         PMU values not used by their STAT (`c37.unusable`), by reason (the reasons that
         occurred only).
+    gaps : tuple of Gap
+        Each run of reporting instants the plant sent no frame for, between two it did
+        (`sources.Gap`): one of at most `sources.FILL_S` s fed to the estimator as frames
+        of missing values (it predicts across), after a longer one the estimator starts
+        again (`closed_loop.LoopController.restart`), as `closed_loop.track` takes them.
     """
 
     frames: int
     flagged: dict
+    gaps: tuple = ()
 
 
 def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> Answered:
@@ -432,7 +467,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     Returns
     -------
     Answered
-        Frames answered, and PMU values not used by their STAT.
+        Frames answered, PMU values not used by their STAT, and the gaps in the plant's
+        time stamps.
 
     Raises
     ------
@@ -451,8 +487,12 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
         raise InputError(f"no plant at {host}:{port}: {exc.strerror or exc}") from None
+    from stabctl.estimation.sources import FILL_S, Gap, missing_frame
+
     n, last = 0, None
     flagged: collections.Counter = collections.Counter()
+    gaps: list[Gap] = []
+    fill = int(round(FILL_S * cfg.rate))
     try:
         with conn:
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -466,7 +506,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
             while (data := _read_frame(conn)) is not None:
                 if (t_end := _end_time(data, cfg.idcode)) is not None:
                     _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
-                    return Answered(n, dict(flagged))
+                    return Answered(n, dict(flagged), tuple(gaps))
                 try:  # a data frame, checked (`c37.check_data_frame`)
                     frame = c37.parse_frame(cfg, cfg2, data)
                 except InputError as exc:
@@ -475,6 +515,16 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                         f", after {n} frame(s) answered"
                     ) from None
                 flagged.update(why for why in c37.flags(cfg2, data) if why)
+                k = round(frame.t * cfg.rate)
+                if last is not None and (lost := k - round(last * cfg.rate) - 1) > 0:
+                    # as `sources.read_frames` and `closed_loop.track` take a gap: the
+                    # estimator predicts across a short one frame by frame (no answer is
+                    # due: no frame came), starts again after a longer one
+                    gaps.append(Gap(last, frame.t, lost, lost <= fill))
+                    if lost > fill:
+                        controller.restart()
+                    for j in range(lost if lost <= fill else 0):
+                        controller.act(missing_frame((k - lost + j) / cfg.rate, frame.valid.size))
                 soc, counts = int.from_bytes(data[6:10], "big"), int.from_bytes(data[11:14], "big")
                 conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
                 n, last = n + 1, frame.t

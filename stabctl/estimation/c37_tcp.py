@@ -960,7 +960,12 @@ RECEIVE_TIMEOUT_S = 30.0
 
 
 def receive(
-    host: str, port: int, end: End = End(), idcode: int = 1, timeout: float | None = None
+    host: str,
+    port: int,
+    end: End = End(),
+    idcode: int = 1,
+    timeout: float | None = None,
+    data: list | None = None,
 ) -> Stream:
     """The CFG-2 frame and the data frames of the C37.118.2 stream at host:port: command
     frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached, each
@@ -976,8 +981,16 @@ def receive(
     (`Stream.refused` why a frame was refused); a stream with no stated end ends when the
     server closes.
 
+    `data`, if given, is the list the data frames are appended to as they come: the
+    caller's, which holds what came whatever ends the receive (a thread's receive that
+    the caller stops waiting for).
+
     Raises
     ------
+    KeyboardInterrupt
+        Ctrl-C or a termination (`stabctl.cli.options.Terminated`) while receiving,
+        raised on with the stream received so far as its ``stream`` attribute: a `Stream`
+        whose `Stream.short` says it was interrupted, or None before the CFG-2 came.
     InputError
         No server there, no whole frame within `timeout` s before the first data frame, a
         reply to 'cfg2' that is not a valid configuration frame (its CRC), a peer of
@@ -994,8 +1007,9 @@ def receive(
         conn = socket.create_connection((host, port), timeout=timeout)
     except OSError as exc:
         raise InputError(f"no C37.118.2 server at {where}: {exc.strerror or exc}") from None
+    data = [] if data is None else data
+    cfg2 = None
     with conn:
-        data: list[bytes] = []
         try:
             try:
                 conn.sendall(CommandFrame(idcode, "cfg2").convert2bytes())
@@ -1022,12 +1036,34 @@ def receive(
             raise InputError(f"{where}: {exc}") from None
         except OSError as exc:  # a reset or broken pipe before any data frame
             raise InputError(f"{where}: {exc.strerror or exc}") from None
+        except KeyboardInterrupt as exc:  # handed on with what came
+            exc.stream = _interrupted_stream(cfg2, data, end)  # type: ignore[attr-defined]
+            raise
         if not data and short:
             raise InputError(f"{where}: {short}")
         if not short and end.given:
             with contextlib.suppress(OSError):
                 conn.sendall(CommandFrame(idcode, "stop").convert2bytes())
     return Stream(cfg2, data, short, refused)
+
+
+def _interrupted_stream(cfg2, data: list, end: End) -> Stream | None:
+    """The `Stream` an interrupted `receive` hands on: its CFG-2 (None: it had not come,
+    and None is returned) and the data frames received, `Stream.short` naming the
+    interrupt, the frames and the last time stamp."""
+    if not cfg2 or cfg2[1] & 0x70 != 0x30:
+        return None
+    try:
+        config = c37.read_config(cfg2, "its CFG-2")
+    except InputError:
+        return None
+    last = (
+        f", the last stamped {c37.frame_time(data[-1], config) - config.get_soc():.4f} s"
+        if data
+        else ""
+    )
+    said = f"interrupted after {len(data)} data frames{last}, before {end}"
+    return Stream(cfg2, list(data), said)
 
 
 def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float) -> tuple[str, str]:

@@ -202,13 +202,32 @@ def gap_line(received: Received) -> str:
     """The gaps of a source (`Received.gaps`) for a summary line: ``N reporting instants
     missing in G gap(s): n1 after t = ... s, to ... s (...); ...`` (the first five
     named); '' if none."""
-    if not received.gaps:
+    return gaps_line(received.gaps, " (sent by no stream)")
+
+
+def gaps_line(gaps, by: str = "") -> str:
+    """Gaps (`Gap`) for a summary line: ``N reporting instants missing<by> in G gap(s):
+    n1 after t = ... s, to ... s (...); ...`` (the first five named); '' if none.
+
+    Parameters
+    ----------
+    gaps : sequence of Gap
+        The gaps, in order.
+    by : str, optional
+        Said after "missing" (who did not send them).
+
+    Returns
+    -------
+    str
+        The gaps, or ''.
+    """
+    if not gaps:
         return ""
-    named = "; ".join(map(str, received.gaps[:5]))
-    more = f"; {len(received.gaps) - 5} more" if len(received.gaps) > 5 else ""
+    named = "; ".join(map(str, gaps[:5]))
+    more = f"; {len(gaps) - 5} more" if len(gaps) > 5 else ""
     return (
-        f"{received.gap_frames} reporting instants missing (sent by no stream) in "
-        f"{len(received.gaps)} gap(s): {named}{more}"
+        f"{sum(g.frames for g in gaps)} reporting instants missing{by} in {len(gaps)} "
+        f"gap(s): {named}{more}"
     )
 
 
@@ -270,6 +289,9 @@ def read_frames(
 
     Raises
     ------
+    KeyboardInterrupt
+        Ctrl-C or a termination while TCP streams are received, raised on with its
+        ``received`` attribute saying how many data frames had come from which server.
     InputError
         As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
         ``--source``); more TCP servers than PMUs; a stream at another rate, a station
@@ -296,10 +318,11 @@ def read_frames(
                 f"--source {source}: {len(codes)} IDCODEs for {len(source.servers)} servers"
             )
         got: list[Stream | Exception | None] = [None] * len(source.servers)
+        came: list[list] = [[] for _ in source.servers]  # each stream's data frames so far
 
         def fetch(k, host, port):
             try:
-                got[k] = receive(host, port, end, idcode=codes[k], timeout=timeout)
+                got[k] = receive(host, port, end, idcode=codes[k], timeout=timeout, data=came[k])
             except (InputError, OSError) as exc:  # handed to the caller
                 got[k] = exc
 
@@ -309,9 +332,13 @@ def read_frames(
         ]
         for t in threads:
             t.start()
-        for t in threads:
-            while t.is_alive():  # a join with a time-out lets Ctrl-C through
-                t.join(0.2)
+        try:
+            for t in threads:
+                while t.is_alive():  # a join with a time-out lets Ctrl-C through
+                    t.join(0.2)
+        except KeyboardInterrupt as exc:  # said with what had come
+            exc.received = _came(source, came)  # type: ignore[attr-defined]
+            raise
         if errors := [g for g in got if isinstance(g, Exception)]:
             raise InputError(f"--source {source}: {errors[0]}") from None
         for (h, p), g in zip(source.servers, got):
@@ -339,6 +366,14 @@ def read_frames(
             f"{received.missing} missing: nothing was measured"
         )
     return dataclasses.replace(received, short=tuple(s for _, _, s in streams if s))
+
+
+def _came(source: Source, came: list) -> str:
+    """What a TCP source's streams had sent when their receive was interrupted: ``N data
+    frames from tcp://... (n1 from HOST:PORT, ...)``."""
+    each = ", ".join(f"{len(d)} from {hostport(h, p)}" for (h, p), d in zip(source.servers, came))
+    total = sum(len(d) for d in came)
+    return f"{total} data frames from {source}" + (f" ({each})" if len(came) > 1 else "")
 
 
 def unused_values(flagged: dict) -> str:
@@ -457,23 +492,58 @@ def check_order(data, cfg2, what: str) -> None:
         The first frame whose time stamp repeats or goes back, or is off the DATA_RATE
         grid, and how many are.
     """
+    if faults := _order_faults(data, cfg2, what):
+        raise InputError(faults[0][1])
+
+
+def first_out_of_order(data, cfg2, what: str) -> tuple[int, str] | None:
+    """The first data frame `check_order` refuses, for a receiver that keeps the frames
+    before it (`stabctl pmu record`).
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames, in order.
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame.
+    what : str
+        Their source, for messages.
+
+    Returns
+    -------
+    (int, str) or None
+        The index in `data` of the earliest frame whose time stamp repeats, goes back or
+        is off the DATA_RATE grid (0 for a DATA_RATE of 0: no frame is on a grid), and
+        the message naming it; None if every time stamp is in order.
+    """
+    faults = _order_faults(data, cfg2, what)
+    return min(faults, key=lambda f: f[0]) if faults else None
+
+
+def _order_faults(data, cfg2, what: str) -> list[tuple[int, str]]:
+    """Each fault of `check_order` as (the index of the first frame with it, the message
+    naming it): off the DATA_RATE grid, then repeated or backward time stamps."""
     base, rate = cfg2.get_time_base(), cfg2.get_data_rate()
     counts = np.array([int.from_bytes(d[11:14], "big") for d in data], np.int64)
     stamps = np.array([int.from_bytes(d[6:10], "big") for d in data], np.int64) * base + counts
     if rate == 0:
-        raise InputError(f"{what}: its CFG-2's DATA_RATE is 0, no rate (C37.118.2-2011 Table 8)")
+        return [(0, f"{what}: its CFG-2's DATA_RATE is 0, no rate (C37.118.2-2011 Table 8)")]
+    faults = []
     if rate < 0 and len(data):
         # a period: one frame every -rate s, each at a second's rollover (within a count)
         soc = stamps // base - stamps[0] // base
         off = np.minimum(counts, base - counts) > 1
         if (bad := np.flatnonzero(off | (soc % -rate != 0))).size:
             k = int(bad[0])
-            raise InputError(
-                f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
-                f"second, {int(soc[k])} s after the first, not a reporting instant of its "
-                f"CFG-2's DATA_RATE {rate} (negative: one frame every {-rate} s, at a "
-                f"second's rollover, C37.118.2-2011 Table 8); {bad.size} such frame(s): a "
-                "stream at another rate than its CFG-2 says"
+            faults.append(
+                (
+                    k,
+                    f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
+                    f"second, {int(soc[k])} s after the first, not a reporting instant of its "
+                    f"CFG-2's DATA_RATE {rate} (negative: one frame every {-rate} s, at a "
+                    f"second's rollover, C37.118.2-2011 Table 8); {bad.size} such frame(s): a "
+                    "stream at another rate than its CFG-2 says",
+                )
             )
     if rate > 0 and len(data):
         # counts * rate / base is the instant's number in its second: an integer, within
@@ -481,11 +551,14 @@ def check_order(data, cfg2, what: str) -> None:
         off = np.abs(counts * rate - np.round(counts * rate / base).astype(np.int64) * base)
         if (bad := np.flatnonzero(off > rate)).size:
             k = int(bad[0])
-            raise InputError(
-                f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
-                f"second, not a reporting instant of its CFG-2's DATA_RATE {rate} (k / "
-                f"{rate} s into each second, within one FRACSEC count); {bad.size} such "
-                "frame(s): a stream at another rate than its CFG-2 says"
+            faults.append(
+                (
+                    k,
+                    f"{what}: data frame {k + 1} is stamped {counts[k] / base:.6f} s into its "
+                    f"second, not a reporting instant of its CFG-2's DATA_RATE {rate} (k / "
+                    f"{rate} s into each second, within one FRACSEC count); {bad.size} such "
+                    "frame(s): a stream at another rate than its CFG-2 says",
+                )
             )
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
@@ -499,11 +572,15 @@ def check_order(data, cfg2, what: str) -> None:
             if leap
             else ""
         )
-        raise InputError(
-            f"{what}: data frame {k + 1} {how} the time stamp of frame {k} "
-            f"({c37.frame_time(data[k - 1], cfg2):.6f} s, UNIX); {bad.size} such frame(s)"
-            f"{why}"
+        faults.append(
+            (
+                k,
+                f"{what}: data frame {k + 1} {how} the time stamp of frame {k} "
+                f"({c37.frame_time(data[k - 1], cfg2):.6f} s, UNIX); {bad.size} such "
+                f"frame(s){why}",
+            )
         )
+    return faults
 
 
 def _by_time_stamp(n: int, parsed, rate: float) -> Received:
@@ -531,7 +608,7 @@ def _by_time_stamp(n: int, parsed, rate: float) -> Received:
             gaps.append(Gap(at[stamps[k - 1]], at[s], lost, lost <= fill))
             if lost <= fill:
                 first = round(at[stamps[k - 1]] * rate) + 1
-                out += [_nothing((first + j) / rate, n) for j in range(lost)]
+                out += [missing_frame((first + j) / rate, n) for j in range(lost)]
             else:
                 breaks.append(len(out))
         out.append(Frame(at[s], valid[k], v[k], i[k], freq[k], rocof[k]))
@@ -546,7 +623,21 @@ def _by_time_stamp(n: int, parsed, rate: float) -> Received:
     )
 
 
-def _nothing(t: float, n: int) -> Frame:
-    """A frame at t of n PMUs whose every value is missing."""
+def missing_frame(t: float, n: int) -> Frame:
+    """A frame at t (s) of n PMUs whose every value is missing: what a reporting instant
+    of a gap of at most `FILL_S` s is filled with.
+
+    Parameters
+    ----------
+    t : float
+        Its time stamp (s).
+    n : int
+        PMUs.
+
+    Returns
+    -------
+    Frame
+        Every value NaN and invalid.
+    """
     nan = np.full(n, np.nan)
     return Frame(t, np.zeros(n, bool), nan + 0j, nan + 0j, nan.copy(), nan.copy())

@@ -599,3 +599,147 @@ def test_record_names_the_gaps_of_the_stream_it_records(kundur_recording, tmp_pa
         f"recorded 63 frames from {address} to {out}; 10 reporting instants missing in 1 "
         "gap(s): 10 after t = 0.3167 s, to 0.5000 s\n"
     )
+
+
+def _restamped(frame: bytes, *, fracsec: int | None = None, quality: int | None = None) -> bytes:
+    """A data frame with another FRACSEC count or time quality byte, its CRC made again."""
+    body = bytearray(frame[:-2])
+    if fracsec is not None:
+        body[11:14] = fracsec.to_bytes(3, "big")
+    if quality is not None:
+        body[10] = quality
+    return bytes(body) + c37_crc(bytes(body))
+
+
+@pytest.mark.parametrize(
+    "how,said",
+    [
+        ("repeated", "data frame 21 repeats the time stamp of frame 20 ("),
+        ("backward", "data frame 21 goes back from the time stamp of frame 20 ("),
+        ("off grid", "data frame 21 is stamped 0.353333 s into its second, not a reporting"),
+    ],
+)
+def test_record_refuses_time_stamps_replay_and_track_refuse(kundur_recording, tmp_path, how, said):
+    """`pmu record` of a stream with a frame sent twice, a frame stamped before the one
+    before it, or one stamped off the 60 frames/s grid wrote all of it, exit 0 (a
+    repeated frame was even named a 9-instant gap), a recording `pmu replay` and
+    `estimate track` then refuse: refused as they refuse it, naming the frame and its
+    time stamp (exit 2), the frames before it written as a partial recording, as for a
+    frame refused by its CRC; an existing OUT is left as it was."""
+    from stabctl.estimation.c37_tcp import StreamServer
+
+    cfg2, data = c37.recorded_frames(kundur_recording)
+    bad = {
+        "repeated": data[19],
+        "backward": data[18],
+        "off grid": _restamped(data[20], fracsec=int.from_bytes(data[20][11:14], "big") + 20_000),
+    }[how]
+    sent = data[:20] + [bad] + data[21:]
+    out = tmp_path / "o.c37"
+    for existing in (False, True):
+        if existing:
+            out.write_bytes(b"kept")
+        with StreamServer(cfg2, sent, speed=float("inf")) as server:
+            address = f"127.0.0.1:{server.address[1]}"
+            res = CliRunner().invoke(
+                main, ["pmu", "record", address, "--frames", "73", "-o", str(out)]
+            )
+        assert res.exit_code == 2 and res.stdout == "", res.output
+        assert res.stderr.startswith(f"error: {address}: {said}"), res.stderr
+        assert "the stream is cut there, 20 data frames before it, before 73 frames; " in res.stderr
+        if existing:
+            assert res.stderr.endswith(
+                f"; {out} is left as it was (the 20 received before it are not written over it)\n"
+            )
+            assert out.read_bytes() == b"kept"
+        else:
+            assert res.stderr.endswith(f"; the 20 received before it are in {out}\n")
+            assert c37.recorded_frames(out)[1] == data[:20]
+            out.unlink()
+
+
+def test_record_names_frames_of_a_failed_clock(kundur_recording, tmp_path):
+    """Data frames whose FRACSEC time quality is 0xF (clock failure) were recorded without
+    a word: named on the line as `estimate track` names them (the recording is what was
+    sent: exit status 0)."""
+    from stabctl.estimation.c37_tcp import StreamServer
+
+    cfg2, data = c37.recorded_frames(kundur_recording)
+    sent = [_restamped(d, quality=0x0F) if 10 <= k < 20 else d for k, d in enumerate(data)]
+    out = tmp_path / "q.c37"
+    with StreamServer(cfg2, sent, speed=float("inf")) as server:
+        address = f"127.0.0.1:{server.address[1]}"
+        res = CliRunner().invoke(main, ["pmu", "record", address, "--frames", "73", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert res.stdout == (
+        f"recorded 73 frames from {address} to {out}; 40 PMU values not used by their STAT "
+        "or time quality (40 clock failure (FRACSEC time quality 0xF))\n"
+    )
+    assert c37.recorded_frames(out)[1] == sent
+
+
+def test_control_names_the_gaps_in_the_plant_s_stream(kundur_recording):
+    """`pmu control` against a plant that sent no frame for 30 reporting instants (frames
+    40-69) said only "answered N frames", and its estimator was fed the frame after the
+    gap as the next one: the gap is counted and named on its line as `estimate track` and
+    `pmu record` name gaps (exit status 0: every frame sent was answered), and taken as
+    track takes one: at most 1 s, the estimator is fed frames of missing values for it;
+    longer, it starts again."""
+    from pmu_streams import fake_server
+
+    from stabctl.estimation.c37_loop import end_of_run_frame
+    from stabctl.estimation.c37_tcp import _read_frame
+
+    head, data = c37.recorded_frames(kundur_recording)
+    sent = data[:40] + data[70:]
+
+    def plant(conn, sent=sent):
+        _read_frame(conn)  # 'cfg2'
+        conn.sendall(head.convert2bytes())
+        _read_frame(conn)  # 'start'
+        for frame in sent:
+            conn.sendall(frame)
+            _read_frame(conn)  # the modes
+        conn.sendall(end_of_run_frame(1, 72 / 60))
+        conn.recv(1)  # until the controller closes
+
+    srv, port = fake_server(plant)
+    with srv:
+        res = CliRunner().invoke(
+            main, ["pmu", "control", "kundur", f"127.0.0.1:{port}", "--esd-pct", "5"]
+        )
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith(f"controller (ekf): answered 43 frames from 127.0.0.1:{port}, ")
+    assert res.stdout.endswith(
+        "; 30 reporting instants missing (no frame sent) in 1 gap(s): 30 after t = 0.6500 "
+        "s, to 1.1667 s (filled with missing values)\n"
+    ), res.stdout
+
+    class Fed:
+        """A controller that notes what it is fed."""
+
+        def __init__(self):
+            self.fed: list = []
+
+        def act(self, frame):
+            self.fed.append((round(frame.t * 60), bool(frame.valid.any())))
+            return np.zeros(4, np.int8)
+
+        def restart(self):
+            self.fed.append("restart")
+
+    from stabctl.estimation.c37_loop import serve_controller
+
+    case = stabctl.load_case("kundur")
+    cfg = c37.stream_config(case, pm.machine_pmus(case), 60)
+    after = [(k, True) for k in (70, 71, 72)]
+    for sent, fed in (
+        (data[:40] + data[70:], [(k, not 40 <= k < 70) for k in range(73)]),
+        (data[:2] + data[70:], [(0, True), (1, True), "restart", *after]),
+    ):
+        srv, port = fake_server(lambda conn, sent=sent: plant(conn, sent))
+        ctrl = Fed()
+        with srv:
+            got = serve_controller(ctrl, cfg, "127.0.0.1", port, 10)
+        assert got.frames == len(sent) and ctrl.fed == fed
+        assert [g.filled for g in got.gaps] == [len(sent) == 43]

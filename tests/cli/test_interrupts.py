@@ -4,6 +4,7 @@ kept and the command that resumes; SIGTERM the same with exit 143, also while a 
 waits on a PMU stream that never ends; SIGHUP to the whole process group (a closed
 terminal) the same with exit 129."""
 
+import re
 import signal
 import subprocess
 import sys
@@ -211,6 +212,51 @@ def test_a_signal_to_a_screening_on_a_local_dask_cluster_says_only_what_it_kept(
     assert "CancelledError" not in err and "distributed" not in err, err
 
 
+@pytest.mark.dask
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
+def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_line(tmp_path):
+    """Ctrl-C at a terminal (SIGINT to the whole process group) of a screening on
+    `--scheduler local`: each Dask worker process got it too and printed its traceback
+    (CancelledError, KeyboardInterrupt) before the interrupted line.  Exit status 130,
+    the interrupted line alone, the records valid, the cluster's scratch directory gone
+    and no process left."""
+    import glob
+    import json
+    import os
+    import tempfile
+
+    pytest.importorskip("distributed")
+    before = set(glob.glob(os.path.join(tempfile.gettempdir(), "stabctl-dask-*")))
+    args = ["screen", "kundur", "--lines", "--tol-ms", "0.05", "--workers", "2"]
+    args += ["--scheduler", "local", "--out", "s.jsonl"]
+    proc = subprocess.Popen(
+        STABCTL + args,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+    )
+    out = tmp_path / "s.jsonl"
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, err
+    said = [line for line in err.splitlines() if line.strip() and not line.startswith("s.jsonl")]
+    assert len(said) == 1, err
+    assert said[0].startswith("interrupted: finished searches are in s.jsonl ("), err
+    assert all(json.loads(line) for line in out.read_text().splitlines())
+    assert set(glob.glob(os.path.join(tempfile.gettempdir(), "stabctl-dask-*"))) <= before
+    assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
+
+
 @pytest.mark.parametrize(
     "command,target,kept",
     [
@@ -279,9 +325,9 @@ def test_sigint_or_sigterm_ends_estimate_track_of_an_endless_stream(
 ):
     """`estimate track --until 100` of a server that sends a frame each 0.1 s and never
     closes, so the command waits on the stream: SIGINT or SIGTERM ends it within 10 s with
-    exit status 130 or 143 and the one line of every interrupted command (nothing kept),
-    no traceback, nothing on stdout and no e.csv, not even in part (outputs are written
-    whole or not at all)."""
+    exit status 130 or 143 and one line saying how many data frames had come and that
+    they are not tracked (it said only "nothing is kept"), no traceback, nothing on stdout
+    and no e.csv, not even in part (outputs are written whole or not at all)."""
     with endless_server(*kundur_on_the_wire) as (port, streaming):
         args = ["estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}"]
         args += ["--until", "100", "--out", "e.csv"]
@@ -304,63 +350,34 @@ def test_sigint_or_sigterm_ends_estimate_track_of_an_endless_stream(
                 proc.kill()
                 proc.communicate()
     assert proc.returncode == status, err
-    assert err.strip().splitlines()[-1] == (
-        "interrupted: nothing is kept; the work starts again; resume with: stabctl "
-        + " ".join(args)
-    ), err
+    said = re.fullmatch(
+        rf"interrupted: nothing is tracked: the (\d+) data frames from tcp://127.0.0.1:{port} "
+        r"had come, short of t = 100 s; a stream is tracked once received, so they are "
+        r"lost \(e.csv not written\); run again with: stabctl " + re.escape(" ".join(args)),
+        err.strip().splitlines()[-1],
+    )
+    assert said and int(said[1]) >= 1, err
     assert "Traceback" not in err and out == ""
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.fixture
-def sigint_raises():
-    """SIGINT with Python's own handler for the test, as in a terminal (pytest started
-    with SIGINT ignored would ignore the Ctrl-C under test; an ignored SIGINT stays
-    ignored by the commands)."""
-    old = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, old)
-
-
-@pytest.mark.parametrize(
-    ("sig", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)]
-)
-def test_an_interrupt_that_surfaces_as_another_error_ends_as_an_interrupt(
-    sig, status, sigint_raises
-):
-    """Ctrl-C landing inside numba's code generation (a cold `stabctl compile`) surfaced
-    as ``RuntimeError: no compiled object yet`` with a traceback and exit status 1: an
-    error raised once an ending signal came (the interrupt swallowed, or chained to it)
-    ends the command as the interrupt does: one line, exit 128 + the signal."""
-    import click
-
-    from stabctl.cli.options import reports_errors
-
-    @click.command()
-    @click.option("--chained", is_flag=True)
-    @reports_errors
-    def codegen(chained):
+def _record_interrupted(tmp_path, cfg2: bytes, data: list, sig) -> tuple:
+    """`pmu record --frames 121 -o r.c37` of an endless stream of `data`, sent `sig` once
+    a few frames came: (exit status, stdout, stderr, the server's port, the command)."""
+    with endless_server(cfg2, data) as (port, streaming):
+        args = ["pmu", "record", f"127.0.0.1:{port}", "--frames", "121", "-o", "r.c37"]
+        proc = _start(args, tmp_path)
         try:
-            signal.raise_signal(sig)
-            time.sleep(5)  # the interrupt is raised at once, never reached
-        except KeyboardInterrupt as exc:  # code that turns the interrupt into an error
-            if chained:
-                raise RuntimeError("no compiled object yet") from exc
-        raise RuntimeError("no compiled object yet")
-
-    for chained in ([], ["--chained"]):
-        res = CliRunner().invoke(codegen, chained)
-        assert res.exit_code == status, (res.output, res.exception)
-        err = res.stderr.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith("interrupted: nothing is kept"), err
-
-    @click.command()
-    @reports_errors
-    def plain():
-        raise RuntimeError("a bug, no signal")
-
-    res = CliRunner().invoke(plain, [])  # without a signal an error stays an error
-    assert res.exit_code == 1 and isinstance(res.exception, RuntimeError)
+            assert _wait_for(lambda: streaming.is_set() or proc.poll() is not None, 60)
+            assert proc.poll() is None, proc.communicate()[1]
+            time.sleep(0.5)  # a few frames received
+            proc.send_signal(sig)
+            out, err = proc.communicate(timeout=10)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+    return proc.returncode, out, err, port, args
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX")
@@ -444,3 +461,37 @@ def _started(pid: int, timeout: float = 30) -> bool:
             return True
         time.sleep(0.002)
     return False
+
+
+@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_an_interrupted_recording_keeps_the_frames_received(
+    tmp_path, kundur_on_the_wire, sig, status
+):
+    """`pmu record --frames 121` of a server that sends a frame each 0.1 s, interrupted
+    (Ctrl-C, SIGTERM): it kept nothing of what it had received.  Exit status 130 or 143,
+    the frames received written as a partial recording (whole frames, CFG-2 first, read
+    back as they were sent), named on the one ``interrupted:`` line with their count and
+    last time stamp; a second interrupted recording to the same file leaves it as it
+    was, and says so."""
+    cfg2, data = kundur_on_the_wire
+    kept = b""
+    for again in (False, True):
+        code, out, err, port, args = _record_interrupted(tmp_path, cfg2, data, sig)
+        assert code == status and "Traceback" not in err and out == "", err
+        [line] = err.strip().splitlines()
+        said = re.fullmatch(
+            rf"interrupted: 127.0.0.1:{port} after (\d+) data frames, the last stamped "
+            r"(\S+) s, before 121 frames; (.*); run again with: stabctl "
+            + re.escape(" ".join(args)),
+            line,
+        )
+        assert said, line
+        n = int(said[1])
+        assert n >= 1 and float(said[2]) == pytest.approx((n - 1) / 60, abs=1e-4)
+        if again:
+            assert said[3] == f"r.c37 is left as it was (the {n} received are not written over it)"
+        else:
+            assert said[3] == f"the {n} received are in r.c37, a partial recording"
+            kept = cfg2 + b"".join(data[:n])
+        assert (tmp_path / "r.c37").read_bytes() == kept
+        assert [p.name for p in tmp_path.iterdir()] == ["r.c37"]

@@ -439,15 +439,51 @@ def test_a_controller_times_out_a_dripping_plant_and_a_plant_a_dripping_answer(w
     stop = threading.Event()
     with link, socket.create_connection(link.address) as ctrl:
         ctrl.sendall(CommandFrame(1, "start").convert2bytes())
+        me = f"127.0.0.1:{ctrl.getsockname()[1]}"
         conn = link._connected()
         conn.sendall(body[0])
         ctrl.recv(1000)
         _drip(ctrl, c37_loop.modes_frame(1, 0, 0, [0, 0, 0, 0]), 0.1, stop)
         t0 = time.monotonic()
-        with pytest.raises(InputError, match="the controller sent no the answer"):
-            link._next(conn, "the answer")
+        with pytest.raises(InputError) as err:
+            link._next(conn, 0.05)
         stop.set()
     assert time.monotonic() - t0 < 1.5
+    assert str(err.value) == (
+        f"the controller at {me}: sent part of a frame and not the rest within 0.5 s (the "
+        "frame at t = 0.0500 s, after 0 frame(s) answered)"
+    )
+
+
+@pytest.mark.parametrize(
+    "how,said",
+    [
+        ("reset", "Connection reset by peer"),
+        ("closed", "closed the loop before its answer"),
+    ],
+)
+def test_a_plant_whose_controller_goes_names_it_the_frame_and_the_answers(wire, how, said):
+    """A controller killed mid-run (its connection reset) ended `pmu plant` with only
+    ``error: Connection reset by peer``: the controller's address, the frame and the
+    frames answered are named, as for a controller that closes the loop or times out."""
+    import struct
+
+    cfg, _, _, body = wire
+    link = c37_loop.PlantLink(None, cfg, timeout=5)
+    with link, socket.create_connection(link.address) as ctrl:
+        ctrl.sendall(CommandFrame(1, "start").convert2bytes())
+        me = f"127.0.0.1:{ctrl.getsockname()[1]}"
+        conn = link._connected()
+        conn.sendall(body[0])
+        ctrl.recv(1000)
+        if how == "reset":
+            ctrl.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        ctrl.close()
+        with pytest.raises(InputError) as err:
+            link._next(conn, 0.05)
+    assert str(err.value) == (
+        f"the controller at {me}: {said} (the frame at t = 0.0500 s, after 0 frame(s) answered)"
+    )
 
 
 def test_a_controller_takes_no_damaged_end_of_run_header(wire):
