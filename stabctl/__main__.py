@@ -99,8 +99,12 @@ def main() -> None:
     docstring)."""
     install()
     try:
-        from stabctl.cli import main as cli_main
-
+        try:
+            from stabctl.cli import main as cli_main
+        except Exception:  # an extension module's start that the signal made fail
+            if _received:  # (scipy's "ImportError: initialization failed")
+                _end(_received[0])
+            raise
         if _received:  # raised inside an import that turned it into something else
             _end(_received[0])
         cli_main()

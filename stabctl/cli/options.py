@@ -177,46 +177,55 @@ def reports_errors(func):
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        with (
-            warnings.catch_warnings(record=True) as caught,
-            _sigterm_as_interrupt(),
-            on_command_line(),
-        ):
-            warnings.simplefilter("default")
-            try:
-                try:
-                    _check_numbers(kwargs)
-                    _check_single_rate(kwargs)
-                    _check_scheduler(kwargs)
-                    out = func(*args, **kwargs)
-                except Exception as exc:  # re-raised, or the interrupt behind it
-                    stop = _interrupt(exc)
-                    if stop is None:
-                        raise
-                    raise stop from exc
-            except StabctlError as exc:
-                click.echo(f"error: {one_line(exc)}", err=True)
-                sys.exit(2)
-            except StdoutError as exc:  # stdout closed, its disk full
-                click.echo(cannot_write(exc), err=True)
-                sys.exit(2)
-            except BrokenPipeError:  # the reader went away (`stabctl cases | head`)
-                _quiet_stdout()
-                sys.exit(141)  # as a process killed by SIGPIPE
-            except OSError as exc:  # a read or write the system refused (disk full, ...)
-                where = f"{exc.filename}: " if exc.filename else ""
-                click.echo(f"error: {where}{exc.strerror or one_line(exc)}", err=True)
-                sys.exit(2)
-            except KeyboardInterrupt as exc:
-                click.echo(_interrupted(kwargs, exc), err=True)
-                sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
-            except SystemExit:  # the command's own status (`compile --check`'s 1)
-                _say(caught)
-                raise
-        _say(caught)
-        return out
+        try:
+            return _reported(func, args, kwargs)
+        except KeyboardInterrupt as exc:  # a signal as the handling below began or ended
+            click.echo(_interrupted(kwargs, exc), err=True)  # (click said "Aborted!", 1)
+            sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
 
     return wrapper
+
+
+def _reported(func, args, kwargs):
+    """`reports_errors`'s call of the command ``func(*args, **kwargs)``."""
+    with (
+        warnings.catch_warnings(record=True) as caught,
+        _sigterm_as_interrupt(),
+        on_command_line(),
+    ):
+        warnings.simplefilter("default")
+        try:
+            try:
+                _check_numbers(kwargs)
+                _check_single_rate(kwargs)
+                _check_scheduler(kwargs)
+                out = func(*args, **kwargs)
+            except Exception as exc:  # re-raised, or the interrupt behind it
+                stop = _interrupt(exc)
+                if stop is None:
+                    raise
+                raise stop from exc
+        except StabctlError as exc:
+            click.echo(f"error: {one_line(exc)}", err=True)
+            sys.exit(2)
+        except StdoutError as exc:  # stdout closed, its disk full
+            click.echo(cannot_write(exc), err=True)
+            sys.exit(2)
+        except BrokenPipeError:  # the reader went away (`stabctl cases | head`)
+            _quiet_stdout()
+            sys.exit(141)  # as a process killed by SIGPIPE
+        except OSError as exc:  # a read or write the system refused (disk full, ...)
+            where = f"{exc.filename}: " if exc.filename else ""
+            click.echo(f"error: {where}{exc.strerror or one_line(exc)}", err=True)
+            sys.exit(2)
+        except KeyboardInterrupt as exc:
+            click.echo(_interrupted(kwargs, exc), err=True)
+            sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
+        except SystemExit:  # the command's own status (`compile --check`'s 1)
+            _say(caught)
+            raise
+    _say(caught)
+    return out
 
 
 def _say(caught) -> None:

@@ -223,10 +223,10 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
     import glob
     import json
     import os
-    import tempfile
 
     pytest.importorskip("distributed")
-    before = set(glob.glob(os.path.join(tempfile.gettempdir(), "stabctl-dask-*")))
+    scratch = tmp_path / "tmp"  # the command's temporary directory: its own, as other
+    scratch.mkdir()  # tests' clusters come and go in the machine's
     args = ["screen", "kundur", "--lines", "--tol-ms", "0.05", "--workers", "2"]
     args += ["--scheduler", "local", "--out", "s.jsonl"]
     proc = subprocess.Popen(
@@ -237,6 +237,7 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
         text=True,
         start_new_session=True,
         preexec_fn=_default_sigint,
+        env={**os.environ, "TMPDIR": str(scratch)},
     )
     out = tmp_path / "s.jsonl"
     try:
@@ -253,7 +254,7 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
     assert len(said) == 1, err
     assert said[0].startswith("interrupted: finished searches are in s.jsonl ("), err
     assert all(json.loads(line) for line in out.read_text().splitlines())
-    assert set(glob.glob(os.path.join(tempfile.gettempdir(), "stabctl-dask-*"))) <= before
+    assert not glob.glob(str(scratch / "stabctl-dask-*"))
     assert _wait_for(lambda: not any(_alive(k) for k in kids), 10)
 
 
