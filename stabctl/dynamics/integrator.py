@@ -291,8 +291,7 @@ class _Workspace(NamedTuple):
     devices at the sub-step start (P_a) and end (P_b) (`stabctl.dynamics.switching.delivered`);
     for exciters integrated in sub-intervals (`stabctl.dynamics.subinterval`): whether
     there are any, their states' slots (left out of the local error estimate), their
-    inputs at the step's start u_a and their states Phi(x_a, u_a), Phi(x_a, u_p); the
-    predictor's state xp."""
+    inputs at the step's start u_a and their states Phi(x_a, u_a), Phi(x_a, u_p)."""
 
     dx_k: np.ndarray
     dx_j: np.ndarray
@@ -306,7 +305,6 @@ class _Workspace(NamedTuple):
     u_a: np.ndarray
     phi_a: np.ndarray
     phi_p: np.ndarray
-    xp: np.ndarray
 
 
 class _SplitPoint(NamedTuple):
@@ -334,7 +332,6 @@ def _workspace(x, nd, p, u):
         np.zeros_like(u),
         x.copy(),
         x.copy(),
-        np.empty_like(x),
     )
 
 
@@ -524,9 +521,8 @@ def _heun(kn, sa, ds, w, x_a, dx_a, hh, stage, want, dx_j):
     was at x_a), the devices' powers advanced (their energy left as it is), the exciters
     of `stabctl.dynamics.subinterval` in sub-steps: (network solved, corrected state);
     dx_j is written with the derivatives at the predictor (network of `stage`)."""
-    xp = w.xp  # (loops: numba's array expressions cost 5-10 % of an ACTIVSg2000 run)
-    for q in range(x_a.size):
-        xp[q] = x_a[q] + hh * dx_a[q]
+    xp = x_a + hh * dx_a  # (a new array: a workspace buffer here made commanded WECC
+    # batteries' runs differ from process to process)
     if w.sub:
         sub.sub_heun_start(kn.p, x_a, kn.out.exc_in, w.u_a, w.phi_a, hh, xp)
     if sa.pmax.size > 0:  # (a call passing the devices' arrays costs even without devices)
@@ -534,7 +530,7 @@ def _heun(kn, sa, ds, w, x_a, dx_a, hh, stage, want, dx_j):
         sw.inject(sa, Pb, kn.kept.S_extra, xp)
     if _evaluate(kn, xp, stage, want, dx_j) < 0:
         return False, x_a
-    x_b = np.empty_like(x_a)
+    x_b = np.empty_like(x_a)  # (a loop: numba's array expression cost 5 % of a run)
     for q in range(x_a.size):
         x_b[q] = x_a[q] + 0.5 * hh * (dx_a[q] + dx_j[q])
     if w.sub:

@@ -89,3 +89,17 @@ def test_a_run_is_shown_only_when_asked(capsys):
         bar.close()
     assert "simulated 5.00 of 10 s" in capsys.readouterr().err
     assert run_progress(0.0, 10.0) is None
+
+
+def test_commanded_wecc_batteries_in_pieces_of_one_step_keep_their_cct(monkeypatch):
+    """Converters commanded frame by frame (an estimator's WECC batteries) continued at
+    every step: Kundur line 3-101 at 5 % storage, exact measurements, has its CCT at 11.5
+    cycles as in one piece (docs/storage.md)."""
+    from stabctl.estimation import closed_loop as cl
+
+    monkeypatch.setattr(Pieces, "steps", lambda self: 1)
+    job = {
+        "case": "kundur", "bus": 3, "far_bus": 101, "esd_pct": 5.0, "estimator": "ideal",
+        "seed": 0, "esd_model": "wecc",
+    }  # fmt: skip
+    assert cl.cct_job(job)["cct_cycles"] == pytest.approx(11.5)
