@@ -4,6 +4,7 @@ kept and the command that resumes; SIGTERM the same with exit 143, also while a 
 waits on a PMU stream that never ends; SIGHUP to the whole process group (a closed
 terminal) the same with exit 129."""
 
+import os
 import re
 import signal
 import subprocess
@@ -37,6 +38,21 @@ def _children(pid: int) -> set[int]:
             out.add(k)
             todo.append(k)
     return out
+
+
+def _signal_group_after_first_record(proc, out, sig):
+    """Once the records file `out` holds a line, send `sig` to proc's process group (as a
+    terminal does) and wait for the end: (stderr, the descendants it had then)."""
+    try:
+        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, sig)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return err, kids
 
 
 def _alive(pid: int) -> bool:
@@ -152,7 +168,6 @@ def test_a_hangup_of_the_whole_process_group_ends_a_sweep_with_one_line(tmp_path
     cluster: exit status 129 and the resume line alone.  The tracker, which ignores only
     SIGINT and SIGTERM, died of it; the shutdown started another, which printed a
     traceback (KeyError: '/mp-...') for each semaphore it had never registered."""
-    import os
 
     if scheduler:
         pytest.importorskip("distributed")
@@ -168,15 +183,7 @@ def test_a_hangup_of_the_whole_process_group_ends_a_sweep_with_one_line(tmp_path
         preexec_fn=_default_sigint,
     )
     out = tmp_path / "h.jsonl"
-    try:
-        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
-        kids = _children(proc.pid)
-        os.killpg(proc.pid, signal.SIGHUP)
-        _, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+    err, kids = _signal_group_after_first_record(proc, out, signal.SIGHUP)
     assert proc.returncode == 129, err
     said = [line for line in err.splitlines() if line.strip() and not line.startswith("h.jsonl")]
     assert len(said) == 1 and said[0].startswith("interrupted: finished jobs are in h.jsonl ("), err
@@ -222,7 +229,6 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
     and no process left."""
     import glob
     import json
-    import os
 
     pytest.importorskip("distributed")
     scratch = tmp_path / "tmp"  # the command's temporary directory: its own, as other
@@ -240,15 +246,7 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
         env={**os.environ, "TMPDIR": str(scratch)},
     )
     out = tmp_path / "s.jsonl"
-    try:
-        assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
-        kids = _children(proc.pid)
-        os.killpg(proc.pid, signal.SIGINT)
-        _, err = proc.communicate(timeout=60)
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+    err, kids = _signal_group_after_first_record(proc, out, signal.SIGINT)
     assert proc.returncode == 130, err
     said = [line for line in err.splitlines() if line.strip() and not line.startswith("s.jsonl")]
     assert len(said) == 1, err
