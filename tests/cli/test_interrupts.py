@@ -40,9 +40,20 @@ def _children(pid: int) -> set[int]:
     return out
 
 
-def _signal_group_after_first_record(proc, out, sig):
-    """Once the records file `out` holds a line, send `sig` to proc's process group (as a
-    terminal does) and wait for the end: (stderr, the descendants it had then)."""
+def _signal_group_after_first_record(tmp_path, args, out, sig, env=None):
+    """Start ``stabctl args`` in tmp_path in a session of its own; once its records file
+    `out` holds a line, send `sig` to its process group (as a terminal does) and wait for
+    the end: (the process, its stderr, the descendants it had then)."""
+    proc = subprocess.Popen(
+        STABCTL + args,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=_default_sigint,
+        env=env,
+    )
     try:
         assert _wait_for(lambda: out.exists() and out.read_text().count("\n") >= 1, 300)
         kids = _children(proc.pid)
@@ -52,7 +63,7 @@ def _signal_group_after_first_record(proc, out, sig):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-    return err, kids
+    return proc, err, kids
 
 
 def _alive(pid: int) -> bool:
@@ -173,17 +184,8 @@ def test_a_hangup_of_the_whole_process_group_ends_a_sweep_with_one_line(tmp_path
         pytest.importorskip("distributed")
     args = ["sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "none,5,10,20"]
     args += ["--tol-ms", "0.05", "--workers", "2", *scheduler, "--out", "h.jsonl"]
-    proc = subprocess.Popen(
-        STABCTL + args,
-        cwd=tmp_path,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=_default_sigint,
-    )
     out = tmp_path / "h.jsonl"
-    err, kids = _signal_group_after_first_record(proc, out, signal.SIGHUP)
+    proc, err, kids = _signal_group_after_first_record(tmp_path, args, out, signal.SIGHUP)
     assert proc.returncode == 129, err
     said = [line for line in err.splitlines() if line.strip() and not line.startswith("h.jsonl")]
     assert len(said) == 1 and said[0].startswith("interrupted: finished jobs are in h.jsonl ("), err
@@ -235,18 +237,9 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
     scratch.mkdir()  # tests' clusters come and go in the machine's
     args = ["screen", "kundur", "--lines", "--tol-ms", "0.05", "--workers", "2"]
     args += ["--scheduler", "local", "--out", "s.jsonl"]
-    proc = subprocess.Popen(
-        STABCTL + args,
-        cwd=tmp_path,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=_default_sigint,
-        env={**os.environ, "TMPDIR": str(scratch)},
-    )
     out = tmp_path / "s.jsonl"
-    err, kids = _signal_group_after_first_record(proc, out, signal.SIGINT)
+    env = {**os.environ, "TMPDIR": str(scratch)}
+    proc, err, kids = _signal_group_after_first_record(tmp_path, args, out, signal.SIGINT, env)
     assert proc.returncode == 130, err
     said = [line for line in err.splitlines() if line.strip() and not line.startswith("s.jsonl")]
     assert len(said) == 1, err
