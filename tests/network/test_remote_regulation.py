@@ -95,7 +95,7 @@ def test_bad_remote_data_is_refused_by_name(tmp_path):
         case_of(tmp_path, ireg3=9)
     with pytest.raises(CaseError, match="RMPCT 0 in all"):
         case_of(tmp_path, rm3=0.0, rm4=0.0)
-    with pytest.raises(CaseError, match="RMPCT -5.0 must be >= 0"):
+    with pytest.raises(CaseError, match=r"RMPCT -5\.0 must be >= 0"):
         case_of(tmp_path, rm3=-5.0)
 
 
