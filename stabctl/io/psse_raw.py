@@ -86,7 +86,10 @@ interface elements (names, ratings and monitoring definitions), and the system-w
 rating-set names RATING, SWDRATNAM, which do not change the case; each record must start
 with its keyword, so a file without the ``0 /`` record that ends them is refused rather
 than read with its buses taken for settings). Unsupported, reported as
-``file:line record``: dc lines, FACTS, GNE, induction machines, multi-section lines, system
+``file:line record``: dc lines, FACTS, GNE devices (POM v33 "GNE Device Data": one record of
+'NAME', 'MODEL', NTERM, BUS1 to BUSNTERM, NREAL, NINTG, NCHAR, then STATUS, OWNER, NMETR,
+then the NREAL REAL, NINTG INTG and NCHAR CHAR values, each kind on lines of up to ten;
+named with their model and buses), induction machines, multi-section lines, system
 switching devices and substations with node-breaker data (nodes, switching devices,
 terminals; v34 and later), v36 voltage droop controls, loads with distributed generation
 in service (v34 and later: DGENM 1 with DGENP or DGENQ not 0), generators with a step-up
@@ -430,10 +433,19 @@ class _Rec:
 
 #: the sections whose records take several lines: their errors name the record's line
 _MULTI_LINE = frozenset(
-    {"transformer", "two-terminal dc line", "vsc dc line", "multi-terminal dc line", "substation"}
+    {
+        "transformer",
+        "two-terminal dc line",
+        "vsc dc line",
+        "multi-terminal dc line",
+        "substation",
+        "gne device",
+    }
 )
 #: the POM names of the first line of a multi-terminal dc line record
 _MTDC = ("NAME", "NCONV", "NDCBS", "NDCLN", "MDC", "VCONV", "VCMOD", "VCONVN")
+#: the POM names of the first fields of a GNE device record
+_GNE_FIRST = ("NAME", "MODEL", "NTERM")
 
 
 def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
@@ -473,7 +485,58 @@ def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int
             if n < 0:
                 rec.fail(f"{_MTDC[k]} {rec.written(0, k)} must be >= 0")
         return 1 + sum(counts)
+    if sec == "gne device":
+        return _gne_lines(_Rec(rec_file, lineno, [first], sec, [lineno]))
     return {"two-terminal dc line": 3, "vsc dc line": 3, "substation": 0}.get(sec, 1)
+
+
+#: values per GNE value line (POM GNE Device Data: up to 10 REAL, INTG or CHAR values a line)
+_GNE_PER_LINE = 10
+#: the kinds of a GNE record's value lines, in order
+_GNE_VALUES = ("REAL", "INTG", "CHAR")
+
+
+def _gne_counts(rec: _Rec) -> tuple[int, tuple[int, int, int]]:
+    """NTERM and (NREAL, NINTG, NCHAR) of a GNE record's first line ('NAME', 'MODEL',
+    NTERM, BUS1 ... BUSNTERM, NREAL, NINTG, NCHAR); CaseError naming the field for a
+    count that is not an integer >= 0 (NTERM >= 1) or a line too short to hold them."""
+    head = _Rec(rec.file, rec.line, rec.lines[:1], rec.section, rec.at[:1], (_GNE_FIRST,))
+    nterm = head.int(0, 2)
+    if nterm < 1:
+        head.fail(f"NTERM {head.written(0, 2)} must be >= 1 (the buses the device connects)")
+    head.names = (_gne_first(nterm),)
+    if len(head.lines[0]) != 6 + nterm:
+        head.fail(
+            f"{len(head.lines[0])} field(s), its NTERM {nterm} needs {6 + nterm} ('NAME', "
+            f"'MODEL', NTERM, {nterm} bus(es), NREAL, NINTG, NCHAR): a cut or merged line"
+        )
+    counts = tuple(head.int(0, 3 + nterm + k) for k in range(3))
+    for k, n in enumerate(counts):
+        if n < 0:
+            head.fail(f"N{_GNE_VALUES[k]} {head.written(0, 3 + nterm + k)} must be >= 0")
+    return nterm, (counts[0], counts[1], counts[2])
+
+
+def _gne_first(nterm: int) -> tuple[str, ...]:
+    """The POM names of a GNE record's first line with ``nterm`` buses."""
+    return (*_GNE_FIRST, *(f"BUS{k}" for k in range(1, nterm + 1)), "NREAL", "NINTG", "NCHAR")
+
+
+def _gne_lines(rec: _Rec) -> int:
+    """Lines of a GNE record (POM GNE Device Data): its first line, STATUS, OWNER, NMETR,
+    then its NREAL, NINTG and NCHAR values, each kind on lines of up to 10."""
+    _, counts = _gne_counts(rec)
+    return 2 + sum(-(-n // _GNE_PER_LINE) for n in counts)
+
+
+def _gne_names(rec: _Rec) -> tuple[tuple[str, ...], ...]:
+    """The POM names of each line of the complete GNE record ``rec``."""
+    nterm, counts = _gne_counts(rec)
+    lines = [_gne_first(nterm), ("STATUS", "OWNER", "NMETR")]
+    for kind, n in zip(_GNE_VALUES, counts):
+        names = [f"{kind}{k}" for k in range(1, n + 1)]
+        lines += [tuple(names[k : k + _GNE_PER_LINE]) for k in range(0, n, _GNE_PER_LINE)]
+    return tuple(lines)
 
 
 #: data blocks after a substation record (node, switching device, terminal data), each
@@ -597,8 +660,9 @@ _NAMES: dict[str, dict[int, tuple[tuple[str, ...], ...]]] = {
         ),
     },
 }  # fmt: skip
-#: the fields of :data:`_NAMES` that are character data, not numbers
-_TEXT = frozenset({"NAME", "ID", "CKT", "RMIDNT", "LOADTYPE", "DROOPNAME", "VECGRP"})
+#: the fields of :data:`_NAMES` that are character data, not numbers (and a GNE record's
+#: CHAR values)
+_TEXT = frozenset({"NAME", "ID", "CKT", "RMIDNT", "LOADTYPE", "DROOPNAME", "VECGRP", "MODEL"})
 
 
 def _names(rec: _Rec, version: int) -> tuple[tuple[str, ...], ...]:
@@ -612,6 +676,8 @@ def _names(rec: _Rec, version: int) -> tuple[tuple[str, ...], ...]:
         return lines + tuple(_winding(w, version) for w in (1, 2, 3))
     if rec.section in _NAMES:
         return _layout(_NAMES[rec.section], version)
+    if rec.section == "gne device":
+        return _gne_names(rec)
     return ()
 
 
@@ -621,7 +687,7 @@ def _check_numbers(rec: _Rec) -> None:
     or not (after the record's own reading, whose errors say more)."""
     for row, names in enumerate(rec.names[: len(rec.lines)]):
         for k, name in enumerate(names[: len(rec.lines[row])]):
-            if name not in _TEXT:
+            if name not in _TEXT and not name.startswith("CHAR"):
                 rec.num(row, k, 0.0)
 
 
@@ -637,6 +703,9 @@ def _check_fields(rec: _Rec, version: int) -> None:
         limits: Sequence[tuple[int, int]] = [_layout(_FIELDS[rec.section], version)]
     elif rec.section == "transformer":
         limits = _layout(_XFMR_FIELDS if len(rec.lines) == 4 else _XFMR3_FIELDS, version)
+    elif rec.section == "gne device":  # STATUS (OWNER, NMETR), then each line's values
+        limits = [(len(n), len(n)) for n in _gne_names(rec)]
+        limits[1] = (1, 3)
     else:
         return
     for row, ((lo, hi), vals) in enumerate(zip(limits, rec.lines)):
@@ -851,6 +920,28 @@ def _substation(b: _Builder, rec: _Rec):
             rec,
             f"{what}: node-breaker data ({len(data)} node, switching device and terminal records)",
         )
+
+
+def _gne_device(b: _Builder, rec: _Rec):
+    """GNE device (POM GNE Device Data): 'NAME', 'MODEL', NTERM, its buses, NREAL, NINTG,
+    NCHAR; STATUS, OWNER, NMETR; its REAL, INTG and CHAR values (their lines counted by
+    :func:`_gne_lines`). PSS/E's generic network element runs a user-written model
+    stabctl does not have: the record is unsupported, named with its model and buses."""
+    nterm, counts = _gne_counts(rec)
+    status = rec.int(1, 0, 1)
+    if status not in (0, 1):
+        rec.fail(f"STATUS {rec.written(1, 0)} must be 0 or 1", 1)
+    for row, names in enumerate(rec.names[2:], start=2):
+        for k, name in enumerate(names):
+            if name.startswith("INTG"):
+                rec.int(row, k)
+    buses = ", ".join(str(rec.int(0, 3 + k)) for k in range(nterm))
+    b.skip(
+        rec,
+        f"gne device '{rec.text(0, 0, '')}' (model '{rec.text(0, 1, '')}', bus(es) {buses}; "
+        f"{counts[0]} REAL, {counts[1]} INTG, {counts[2]} CHAR values): PSS/E's generic "
+        "network element runs a user-written model, which stabctl does not have",
+    )
 
 
 def _load(b: _Builder, rec: _Rec):
@@ -1180,6 +1271,7 @@ _HANDLERS = {
     "transformer": _transformer,
     "switched shunt": _switched_shunt,
     "substation": _substation,
+    "gne device": _gne_device,
 }
 
 

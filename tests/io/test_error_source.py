@@ -728,6 +728,67 @@ def test_a_multi_terminal_dc_line_is_one_record_of_its_lines(tmp_path, old, new,
     assert line == f"error: {expected}", line
 
 
+GNE = "'WIND1', 'WTGEN', 2, 2, 4, 3, 2, 1\n1, 1, 2\n0.5, 1.25, 3.0\n0, 7\n'ABC'\n"
+
+
+def _with_gne(tmp_path) -> Path:
+    """five_bus_v33.raw with the GNE record `GNE` in its GNE device data."""
+    marker = "0 / END OF GNE DATA"
+    source = tmp_path / "gne.raw"
+    source.write_text(FIVE_BUS.read_text().replace(marker, GNE + marker))
+    return source
+
+
+def test_a_gne_device_is_one_record_of_its_lines(tmp_path):
+    """POM GNE Device Data: 'NAME', 'MODEL', NTERM, the buses, NREAL, NINTG, NCHAR, then
+    STATUS, OWNER, NMETR, then the values, ten a line.  Each line was read as a record of
+    its own: an INTG line starting with 0 ended the section, and the import stopped at
+    the CHAR line ("data after the last section").  The record is one unsupported record,
+    named with its model and buses."""
+    source = _with_gne(tmp_path)
+    out = tmp_path / "g.json"
+    res = CliRunner().invoke(
+        main, ["import-psse", str(source), str(FIVE_BUS_DYR), "-o", str(out), "--skip-unsupported"]
+    )
+    assert res.exit_code == 0, res.output
+    left_out = [line for line in res.output.splitlines() if line.startswith("  left out:")]
+    assert left_out == [
+        "  left out: gne.raw:49 gne device 'WIND1' (model 'WTGEN', bus(es) 2, 4; 3 REAL, 2 "
+        "INTG, 1 CHAR values): PSS/E's generic network element runs a user-written model, "
+        "which stabctl does not have"
+    ]
+    res = CliRunner().invoke(main, ["import-psse", str(source), str(FIVE_BUS_DYR), "-o", str(out)])
+    assert "1 unsupported record(s)" in error_line(res)
+
+
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        (
+            "2, 2, 4, 3, 2, 1",
+            "2, 2, 4, 3, 2.5, 1",
+            "line 1 of the record): NINTG = '2.5': not an integer",
+        ),
+        (
+            "2, 2, 4, 3, 2, 1",
+            "2, 2, 4, 3, 2",
+            "line 1 of the record): 7 field(s), its NTERM 2 needs 8",
+        ),
+        ("'WTGEN', 2, 2, 4,", "'WTGEN', 0, 2, 4,", "line 1 of the record): NTERM 0 must be >= 1"),
+        ("2, 2, 4, 3, 2, 1", "2, 2, 4, -3, 2, 1", "line 1 of the record): NREAL -3 must be >= 0"),
+        ("1, 1, 2\n", "3, 1, 2\n", "line 2 of the record): STATUS 3 must be 0 or 1"),
+        ("0.5, 1.25, 3.0", "0.5, 1.25", "line 3 of the record): 2 field(s), the v33 layout has 3"),
+        ("0, 7", "0, x", "line 4 of the record): INTG2 = 'x': not a number"),
+    ],
+)
+def test_a_malformed_gne_device_is_refused_at_its_line(tmp_path, old, new, expected):
+    """A GNE record whose counts, status or value lines do not fit its layout is refused
+    naming the file line and which line of the record."""
+    line, _ = refused_raw(tmp_path, _with_gne(tmp_path), old, new, "--skip-unsupported")
+    assert line.startswith("error: edited.raw:") and expected in line, line
+    assert "gne device record (" in line, line
+
+
 def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
     """A RAW whose power flow does not converge (90 times bus 2's load): every analysis
     command refuses the case, so the import does too, naming the power flow's worst
