@@ -186,6 +186,28 @@ def _islands_option(func):
     )(func)
 
 
+def _solved_as(q_limits: bool) -> str:
+    """How the import solves the case's power flow, for its messages: Q limits on, as
+    simulate solves it (import-psse), or off, as ANDES and simulate --no-q-limits do
+    (import-andes)."""
+    if q_limits:
+        return "Q limits on, as simulate solves it"
+    return "Q limits off, as ANDES and simulate --no-q-limits solve it"
+
+
+def _unsolved_option(q_limits: bool):
+    """--keep-unsolved: write a case whose power flow (solved as `_solved_as` says) does
+    not converge, instead of refusing it."""
+    return click.option(
+        "--keep-unsolved",
+        is_flag=True,
+        help=f"Write the case even when stabctl's power flow of it ({_solved_as(q_limits)}) "
+        "does not converge, with a warning; every analysis command refuses such a case.  "
+        "Without it such an import is refused naming the worst mismatch and its bus "
+        "(exit status 2, nothing written).",
+    )
+
+
 def _leave_out_islands(case, asked: bool):
     """(case, lines): the case without its dead islands when asked (each line echoed as a
     warning), else as it is."""
@@ -299,14 +321,7 @@ def _imported(case, out) -> tuple[dict, str]:
     "(PSS/E: 'initial conditions suspect'), each named, instead of writing a case that "
     "simulate refuses (without it, each such control is named in a warning).",
 )
-@click.option(
-    "--keep-unsolved",
-    is_flag=True,
-    help="Write the case even when stabctl's power flow of it (Q limits on, as simulate "
-    "solves it) does not converge, with a warning; every analysis command refuses such "
-    "a case.  Without it such an import is refused naming the worst mismatch and its bus "
-    "(exit status 2, nothing written).",
-)
+@_unsolved_option(True)
 @_islands_option
 @_static_option
 @json_option("the summary")
@@ -471,6 +486,7 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
     "Library states them or as PST's.  [default: psse for RAW + DYR files, andes "
     "otherwise]",
 )
+@_unsolved_option(False)
 @_islands_option
 @_static_option
 @json_option("the summary")
@@ -481,6 +497,7 @@ def import_andes(
     out_path,
     skip_unsupported,
     conventions,
+    keep_unsolved,
     leave_out_islands,
     static,
     as_json,
@@ -499,7 +516,10 @@ def import_andes(
     one ANDES would replace by its default (an M of 0), a formula without a stored value,
     a status u other than 0 or 1, a line of zero impedance, a sheet that is no ANDES model
     stop the import; columns ANDES ignores too, or are left out by name with
-    --skip-unsupported. The power flow of the case is compared
+    --skip-unsupported. A case whose power flow (Q limits off, as ANDES solves it) does
+    not converge is refused naming the worst mismatch and its bus (every analysis
+    command would refuse it); --keep-unsolved writes it all the same, with a warning.
+    The power flow of the case is compared
     with ANDES's (PV Q limits off in both) and, for a RAW file, with the RAW's own
     solution, and the largest differences reported.
 
@@ -518,7 +538,7 @@ def import_andes(
     )
     _check_dynamic(imported.case, Path(case_path).name, static)
     case, islands = _leave_out_islands(imported.case, leave_out_islands)
-    dv, da = _powerflow_gap(imported, case)
+    dv, da = _powerflow_gap(imported, case, None if keep_unsolved else Path(case_path).name)
     against_raw = (
         None if imported.data_solution is None else _raw_gap(case, imported.data_solution, True)
     )
@@ -628,30 +648,11 @@ def _solution_gap(
     stabctl's power flow of ``case`` and a solution (bus number, VM pu, VA degrees, shape
     (n, 3)) at the buses the case keeps, without a warning on their size; None (and a
     warning naming ``against``) when the power flow does not converge, or, with
-    ``unsolved`` (the source file's name), a PowerFlowError naming that file, the power
-    flow's worst mismatch and its bus and import-psse's --keep-unsolved."""
-    import warnings
-
+    ``unsolved``, a PowerFlowError (`_solved`)."""
     import numpy as np
 
-    from stabctl.errors import PowerFlowError
-    from stabctl.network.powerflow import solve_powerflow
-
-    try:
-        pf = solve_powerflow(case, q_limits=q_limits, tol=1e-10)
-    except PowerFlowError as exc:
-        if unsolved is not None:
-            raise PowerFlowError(
-                f"{unsolved}: stabctl's power flow of the case (Q limits "
-                f"{'on' if q_limits else 'off'}, as simulate solves it) does not converge, "
-                f"so every analysis command would refuse it: {exc}; nothing written "
-                "(--keep-unsolved writes it all the same)"
-            ) from None
-        warnings.warn(
-            f"stabctl's power flow of the case did not converge: not compared with "
-            f"{against} solution: {exc}",
-            stacklevel=3,
-        )
+    pf = _solved(case, q_limits, against, unsolved)
+    if pf is None:
         return None
     kept = np.isin(solution[:, 0], case.buses.number)
     buses, rows = solution[kept, 0], case.bus_indices(solution[kept, 0])
@@ -663,6 +664,34 @@ def _solution_gap(
         "angle_diff_rad": float(da.max()),
         "angle_bus": int(buses[da.argmax()]),
     }
+
+
+def _solved(case, q_limits: bool, against: str, unsolved: str | None):
+    """stabctl's power flow of ``case`` (``q_limits`` as said), or, when it does not
+    converge, None with a warning that it is not compared with ``against`` solution, or,
+    with ``unsolved`` (the source file's name), a PowerFlowError naming that file, how the
+    power flow was solved (`_solved_as`), its worst mismatch and its bus and the imports'
+    --keep-unsolved."""
+    import warnings
+
+    from stabctl.errors import PowerFlowError
+    from stabctl.network.powerflow import solve_powerflow
+
+    try:
+        return solve_powerflow(case, q_limits=q_limits, tol=1e-10)
+    except PowerFlowError as exc:
+        if unsolved is not None:
+            raise PowerFlowError(
+                f"{unsolved}: stabctl's power flow of the case ({_solved_as(q_limits)}) "
+                f"does not converge, so every analysis command would refuse it: {exc}; "
+                "nothing written (--keep-unsolved writes it all the same)"
+            ) from None
+        warnings.warn(
+            f"stabctl's power flow of the case did not converge: not compared with "
+            f"{against} solution: {exc}",
+            stacklevel=4,
+        )
+        return None
 
 
 def _raw_q_outside(case) -> list[dict]:
@@ -705,20 +734,21 @@ def _echo_raw_gap(gap: dict | None, how: str) -> None:
 _PF_AGREEMENT = 1e-4
 
 
-def _powerflow_gap(imported, case) -> tuple[float | None, float | None]:
+def _powerflow_gap(imported, case, unsolved: str | None) -> tuple[float | None, float | None]:
     """Largest |V| (pu) and angle (rad) differences between stabctl's power flow of the
     imported case (Q limits off, as ANDES's default; `case`, its dead islands perhaps left
     out) and ANDES's at the buses `case` keeps (`_solution_gap`); a warning when either
-    exceeds 1e-4 or one of the two does not converge."""
+    exceeds 1e-4 or one of the two does not converge; ``unsolved``: see `_solved`."""
     import warnings
 
     import numpy as np
 
     if imported.pf_bus is None:
         warnings.warn("ANDES's power flow of the case did not converge: not compared", stacklevel=2)
+        _solved(case, False, "ANDES's", unsolved)
         return None, None
     andes = np.column_stack([imported.pf_bus, imported.pf_vmag, np.rad2deg(imported.pf_vang)])
-    gap = _solution_gap(case, andes, False, "ANDES's")
+    gap = _solution_gap(case, andes, False, "ANDES's", unsolved=unsolved)
     if gap is None:
         return None, None
     dv, da = gap["vmag_diff_pu"], gap["angle_diff_rad"]

@@ -269,10 +269,34 @@ def test_andes_s_log_is_said_in_stabctl_s_words_not_shown(tmp_path):
     ]
     assert not (tmp_path / "bad.json").exists()
     heavy = cells_edited(tmp_path, [("PQ", 2, "p0", 100.0)])  # beyond what the grid carries
-    res = run_cli("import-andes", heavy, "-o", "heavy.json", cwd=tmp_path)
+    res = run_cli("import-andes", heavy, "-o", "heavy.json", "--keep-unsolved", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert [line for line in res.stderr.splitlines() if not line.startswith("warning: ")] == []
     assert "ANDES's power flow of the case did not converge" in res.stderr
+
+
+def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
+    """Kundur with a bus load beyond what the grid carries: neither ANDES's power flow nor
+    stabctl's converges.  import-andes wrote the case with a warning, exit 0 (every
+    analysis command then refused it); it refuses it as import-psse does, naming the
+    worst mismatch and its bus (exit status 2, nothing written), and --keep-unsolved
+    writes it with the warnings."""
+    heavy = cells_edited(tmp_path, [("PQ", 2, "p0", 100.0)])
+    res = run_cli("import-andes", heavy, "-o", "heavy.json", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert re.fullmatch(
+        r"error: edited\.xlsx: stabctl's power flow of the case \(Q limits off, as ANDES and "
+        r"simulate --no-q-limits solve it\) does not converge, so every analysis command "
+        r"would refuse it: power flow of case 'edited' did not converge after \d+ "
+        r"iteration\(s\): worst mismatch [\d.]+ pu at bus \d+ .*; nothing written "
+        r"\(--keep-unsolved writes it all the same\)",
+        res.stderr.splitlines()[-1],
+    ), res.stderr
+    assert not (tmp_path / "heavy.json").exists()
+    res = run_cli("import-andes", heavy, "-o", "heavy.json", "--keep-unsolved", cwd=tmp_path)
+    assert res.returncode == 0 and (tmp_path / "heavy.json").exists(), res.stderr
+    assert "warning: stabctl's power flow of the case did not converge" in res.stderr
+    assert "--keep-unsolved" in run_cli("import-andes", "--help", cwd=tmp_path).stdout
 
 
 def test_a_zero_impedance_branch_of_a_raw_file_is_refused_by_both_importers(tmp_path):
