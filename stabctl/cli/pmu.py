@@ -409,8 +409,9 @@ def record(address, out, frames, idcode):
     came, up to the frame refused, and named an error (exit status 2: the recording is
     partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
     left as it was).  Time stamps are checked as `pmu replay` and `estimate track` check
-    them: a data frame whose time stamp repeats or goes back, or is off the reporting
-    instants of the CFG-2's DATA_RATE, is refused so, named with its time stamp.
+    them, each data frame as it comes: one whose time stamp repeats or goes back, or is
+    off the reporting instants of the CFG-2's DATA_RATE, is refused so, named with its
+    time stamp, and the stream is cut there.
     Interrupted (Ctrl-C, SIGTERM), the frames received are written likewise, as a partial
     recording (exit status 130, 143), and said.  Reporting instants the stream skipped
     (gaps), and PMU values of a failed clock or flagged by their STAT, are counted and
@@ -422,7 +423,7 @@ def record(address, out, frames, idcode):
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import End, receive
-    from stabctl.estimation.sources import first_out_of_order, stream_gaps, unused_values
+    from stabctl.estimation.sources import stream_gaps, unused_values
 
     host, port = _host_port(address)
     [code] = stream_idcodes(idcode, 1)
@@ -436,16 +437,7 @@ def record(address, out, frames, idcode):
         raise
     cfg2 = c37.read_config(got.cfg2, "the CFG-2")
     data, why, kept = got.data, f"{address}: {got.short}", f"{len(got.data)} received"
-    if bad := first_out_of_order(data, cfg2, address):
-        # refused as replay and track refuse it: the frames before it are what came
-        k, said = bad
-        if not k:
-            raise InputError(f"{said}: nothing is recorded")
-        data, short = data[:k], True
-        why = f"{said}: the stream is cut there, {k} data frames before it, before {frames} frames"
-        kept = f"{k} received before it"
-    else:
-        short = bool(got.short)
+    short = bool(got.short)
     if short:
         refuse_short_over(out, why, kept)
     _write_recording(out, got.cfg2, data)

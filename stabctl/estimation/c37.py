@@ -861,6 +861,122 @@ def frame_time(data: bytes, cfg2) -> float:
     return int.from_bytes(data[6:10], "big") + count / cfg2.get_time_base()
 
 
+def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
+    """The time stamps `stabctl.estimation.sources.check_order` refuses: repeated, going
+    back, or off the reporting instants of the CFG-2's DATA_RATE.
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames, in order.
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame.
+    what : str
+        Their source, the messages' start (none if empty).
+    numbers : sequence of int, optional
+        The frames' numbers in their stream (default 1, 2, ...): `next_frame_fault`
+        checks a frame with the first and the last before it; then the messages do not
+        count the frames with each fault.
+
+    Returns
+    -------
+    list of (int, str)
+        Each fault as (the index in `data` of the first frame with it, the message naming
+        that frame and its time stamp): off the DATA_RATE grid, then repeated or backward
+        time stamps.
+    """
+    number = list(range(1, len(data) + 1)) if numbers is None else list(numbers)
+    lead = f"{what}: " if what else ""
+
+    def many(n: int) -> str:
+        return f"; {n} such frame(s)" if numbers is None else ""
+
+    base, rate = cfg2.get_time_base(), cfg2.get_data_rate()
+    counts = np.array([int.from_bytes(d[11:14], "big") for d in data], np.int64)
+    stamps = np.array([int.from_bytes(d[6:10], "big") for d in data], np.int64) * base + counts
+    if rate == 0:
+        return [(0, f"{lead}its CFG-2's DATA_RATE is 0, no rate (C37.118.2-2011 Table 8)")]
+    faults = []
+    if rate < 0 and len(data):
+        # a period: one frame every -rate s, each at a second's rollover (within a count)
+        soc = stamps // base - stamps[0] // base
+        off = np.minimum(counts, base - counts) > 1
+        if (bad := np.flatnonzero(off | (soc % -rate != 0))).size:
+            k = int(bad[0])
+            faults.append(
+                (
+                    k,
+                    f"{lead}data frame {number[k]} is stamped {counts[k] / base:.6f} s into "
+                    f"its second, {int(soc[k])} s after the first, not a reporting instant of "
+                    f"its CFG-2's DATA_RATE {rate} (negative: one frame every {-rate} s, at a "
+                    f"second's rollover, C37.118.2-2011 Table 8){many(bad.size)}: a stream at "
+                    "another rate than its CFG-2 says",
+                )
+            )
+    if rate > 0 and len(data):
+        # counts * rate / base is the instant's number in its second: an integer, within
+        # one count (rate / base of a frame) of one
+        off = np.abs(counts * rate - np.round(counts * rate / base).astype(np.int64) * base)
+        if (bad := np.flatnonzero(off > rate)).size:
+            k = int(bad[0])
+            faults.append(
+                (
+                    k,
+                    f"{lead}data frame {number[k]} is stamped {counts[k] / base:.6f} s into "
+                    f"its second, not a reporting instant of its CFG-2's DATA_RATE {rate} (k / "
+                    f"{rate} s into each second, within one FRACSEC count){many(bad.size)}: a "
+                    "stream at another rate than its CFG-2 says",
+                )
+            )
+    if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
+        k = int(bad[0]) + 1
+        how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
+        # FRACSEC's time quality byte: bit 4 leap second pending, bit 5 leap second
+        # occurred (C37.118.2-2011 Table 3)
+        leap = any(d[10] & 0x30 for d in data[max(k - 1, 0) : k + 1])
+        why = (
+            ": a leap second, as its FRACSEC leap-second bits flag (C37.118.2-2011 Table 3: "
+            "a second's SOC repeated), which is not read across; split the stream there"
+            if leap
+            else ""
+        )
+        faults.append(
+            (
+                k,
+                f"{lead}data frame {number[k]} {how} the time stamp of frame "
+                f"{number[k - 1]} ({frame_time(data[k - 1], cfg2):.6f} s, UNIX)"
+                f"{many(bad.size)}{why}",
+            )
+        )
+    return faults
+
+
+def next_frame_fault(data, frame: bytes, cfg2) -> str | None:
+    """The time-stamp fault (`order_faults`) of a data frame arriving after `data`, whose
+    stamps are in order: a receiver's check of each frame as it comes (`pmu record`
+    stops at the first frame refused).
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames received before it, in order.
+    frame : bytes
+        The data frame that came.
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame.
+
+    Returns
+    -------
+    str or None
+        The message naming the frame (by its number in the stream) and its fault, or None
+        if its time stamp follows the one before on the DATA_RATE grid.
+    """
+    window = [*data[:1], *data[1:][-1:], frame]  # the first (the grid), the last, the new
+    numbers = [1, len(data), len(data) + 1][-len(window) :]
+    faults = order_faults(window, cfg2, "", numbers)
+    return next((why for k, why in faults if k == len(window) - 1), None)
+
+
 def recorded_frames(path) -> tuple:
     """(CFG-2 as pyc37 reads it, the data frames' bytes) of a recording.  The frames
     after the first that are not data frames are checked as a receiver checks them on a

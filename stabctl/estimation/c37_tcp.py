@@ -972,7 +972,9 @@ def receive(
     addressed to the stream `idcode` (C37.118.2-2011 Table 2: a command's IDCODE is its
     destination stream's; a server of another drops the peer).  The CFG-2 and every frame
     after 'start' are checked (`c37.check_stream_frame`: CRC; a data frame's IDCODE, type
-    and size; a CFG-2 resent must be the one in use) and each must come whole within
+    and size; a CFG-2 resent must be the one in use; a data frame's time stamp, which must
+    follow the one before on the DATA_RATE grid: `c37.next_frame_fault`) as each comes,
+    and each must come whole within
     `timeout` s (None: `RECEIVE_TIMEOUT_S`), however its bytes are spread, and each data
     frame within `timeout` s of the one before, whatever other frames come between.  A
     stream that stops before its stated end (the server closes, resets or sends no whole
@@ -1069,7 +1071,8 @@ def _interrupted_stream(cfg2, data: list, end: End) -> Stream | None:
 def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float) -> tuple[str, str]:
     """Append data frames from conn to data until `end`, every frame checked against cfg2
     (the CFG-2 as pyc37 reads it; `c37.check_stream_frame`: a data frame's CRC, IDCODE,
-    type and size, any other frame's CRC, a CFG-2 resent unchanged): ('', '') if the end
+    type and size, any other frame's CRC, a CFG-2 resent unchanged; a data frame's time
+    stamp against the frames before, `c37.next_frame_fault`): ('', '') if the end
     was reached (or, with no end stated, the server closed), else (what cut the stream,
     why a frame was refused or '').  `budget` (s) is the longest wait for the next data
     frame, whatever else comes meanwhile (a server sending header frames and no data
@@ -1096,18 +1099,20 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
                 raise InputError(f"after {len(data)} data frames: {exc}{off}") from None
             else:
                 if frame is not None:
+                    kind = c37.frame_kind(frame)
                     try:
                         if not c37.check_stream_frame(cfg2, frame):
                             continue  # a header, CFG-1, CFG-3, command or the same CFG-2
+                        why = c37.next_frame_fault(data, frame, cfg2)  # its time stamp
                     except InputError as exc:
+                        at = f"data frame {len(data) + 1}" if kind == "data frame" else kind
+                        why = f"{at}: {exc}"
+                    if why:
                         last = (
                             f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s"
                             if data
                             else ""
                         )
-                        kind = c37.frame_kind(frame)
-                        at = f"data frame {len(data) + 1}" if kind == "data frame" else kind
-                        why = f"{at}: {exc}"
                         return (
                             f"the server sent a {kind} that is refused ({why}); the stream is "
                             f"cut there: {len(data)} data frames before it{last}, before {end}",

@@ -625,7 +625,9 @@ def test_record_refuses_time_stamps_replay_and_track_refuse(kundur_recording, tm
     repeated frame was even named a 9-instant gap), a recording `pmu replay` and
     `estimate track` then refuse: refused as they refuse it, naming the frame and its
     time stamp (exit 2), the frames before it written as a partial recording, as for a
-    frame refused by its CRC; an existing OUT is left as it was."""
+    frame refused by its CRC; an existing OUT is left as it was.  The frame is refused
+    as it comes: the stream, served in real time, is cut there, not received to its end
+    (all 73 frames) before the time stamps were looked at."""
     from stabctl.estimation.c37_tcp import StreamServer
 
     cfg2, data = c37.recorded_frames(kundur_recording)
@@ -639,21 +641,27 @@ def test_record_refuses_time_stamps_replay_and_track_refuse(kundur_recording, tm
     for existing in (False, True):
         if existing:
             out.write_bytes(b"kept")
-        with StreamServer(cfg2, sent, speed=float("inf")) as server:
+        with StreamServer(cfg2, sent, speed=1.0) as server:
             address = f"127.0.0.1:{server.address[1]}"
             res = CliRunner().invoke(
                 main, ["pmu", "record", address, "--frames", "73", "-o", str(out)]
             )
+        assert server.n_sent < 40, server.n_sent  # cut at frame 21, not read to frame 73
         assert res.exit_code == 2 and res.stdout == "", res.output
-        assert res.stderr.startswith(f"error: {address}: {said}"), res.stderr
-        assert "the stream is cut there, 20 data frames before it, before 73 frames; " in res.stderr
+        assert res.stderr.startswith(
+            f"error: {address}: the server sent a data frame that is refused ({said}"
+        ), res.stderr
+        assert (
+            "; the stream is cut there: 20 data frames before it, the last stamped 0.3167 s, "
+            "before 73 frames; " in res.stderr
+        )
         if existing:
             assert res.stderr.endswith(
-                f"; {out} is left as it was (the 20 received before it are not written over it)\n"
+                f"; {out} is left as it was (the 20 received are not written over it)\n"
             )
             assert out.read_bytes() == b"kept"
         else:
-            assert res.stderr.endswith(f"; the 20 received before it are in {out}\n")
+            assert res.stderr.endswith(f"; the 20 received are in {out}\n")
             assert c37.recorded_frames(out)[1] == data[:20]
             out.unlink()
 
