@@ -46,6 +46,7 @@ from stabctl.cli.pmu_options import (
     fail_short,
     fault_event,
     fault_run_options,
+    keep_interrupted,
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
@@ -557,7 +558,9 @@ def track(
     as it was, refused before any tracking), as `pmu record` does.  Frames stamped off
     the reporting instants of their CFG-2's DATA_RATE refuse the source; reporting
     instants no stream sent are counted and said: a gap of at most 1 s is filled with
-    missing values, after a longer one the estimator starts again.
+    missing values, after a longer one the estimator starts again.  Interrupted (Ctrl-C,
+    SIGTERM) while estimating, the frames estimated so far are written likewise, as a
+    partial estimate (exit status 130, 143), and said.
 
     \b
     Example:
@@ -568,7 +571,6 @@ def track(
     from stabctl.estimation import sources
     from stabctl.estimation.c37_tcp import End
     from stabctl.io import load_case
-    from stabctl.parallel import atomic_write
 
     if out_path is None:
         raise InputError("estimate track needs --out FILE.csv")
@@ -609,12 +611,25 @@ def track(
     kept = f"{len(got.frames)} frames tracked"
     if got.short:
         refuse_short_over(out_path, why, kept)
-    d = cl.track(ctrl, got.frames, got.breaks)
-    head, rows = _track_columns(ctrl, d, esd_pct is not None)
-    atomic_write(
-        out_path,
-        lambda f: np.savetxt(f, rows, delimiter=",", header=head, comments="", fmt="%.9g"),
-    )
+    try:
+        d = cl.track(ctrl, got.frames, got.breaks)
+    except KeyboardInterrupt as exc:  # what was estimated is kept, as record keeps frames
+        d = ctrl.diagnostics()
+        what = f"{len(d.t)} of the {len(got.frames)} frames from {src} estimated"
+        exc.kept = (  # type: ignore[attr-defined]
+            keep_interrupted(
+                out_path,
+                what,
+                len(d.t),
+                "frames estimated",
+                "a partial estimate",
+                lambda: _write_track(out_path, ctrl, d, esd_pct is not None),
+            )
+            if d.t.size
+            else f"nothing is kept: {what}"
+        )
+        raise
+    _write_track(out_path, ctrl, d, esd_pct is not None)
     worst = np.unravel_index(np.argmax(np.abs(d.rel)), d.rel.shape) if d.rel.size else None
     click.echo(
         f"tracked {len(got.frames)} frames from {src} with {estimator}"
@@ -631,6 +646,17 @@ def track(
     )
     if got.short:
         fail_short(out_path, why, kept)
+
+
+def _write_track(out_path, ctrl, d, with_modes: bool) -> None:
+    """`estimate track`'s CSV (`_track_columns`) written atomically to ``out_path``."""
+    from stabctl.parallel import atomic_write
+
+    head, rows = _track_columns(ctrl, d, with_modes)
+    atomic_write(
+        out_path,
+        lambda f: np.savetxt(f, rows, delimiter=",", header=head, comments="", fmt="%.9g"),
+    )
 
 
 def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:

@@ -38,6 +38,7 @@ from stabctl.cli.pmu_options import (
     fail_short,
     fault_event,
     fault_run_options,
+    keep_interrupted,
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
@@ -473,17 +474,14 @@ def _keep_interrupted(out, address: str, stream) -> str:
     what = f"{address} {stream.short.removeprefix('interrupted ')}"
     if not n:
         return f"nothing is kept: {what}"
-    from pathlib import Path
-
-    if Path(out).exists():
-        return f"{what}; {out} is left as it was (the {n} received are not written over it)"
-    try:
-        _write_recording(out, stream.cfg2, stream.data)
-    except OSError as exc:
-        return f"{what}; the {n} received are lost: {out}: {exc.strerror or exc}"
-    except KeyboardInterrupt:
-        return f"{what}; the {n} received are lost: interrupted again while writing {out}"
-    return f"{what}; the {n} received are in {out}, a partial recording"
+    return keep_interrupted(
+        out,
+        what,
+        n,
+        "received",
+        "a partial recording",
+        lambda: _write_recording(out, stream.cfg2, stream.data),
+    )
 
 
 def _host_port(address: str) -> tuple[str, int]:

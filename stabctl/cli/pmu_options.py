@@ -328,3 +328,40 @@ def fail_short(out, why: str, kept: str) -> None:
         Always: the message names the shortfall and where what came is (exit status 2).
     """
     raise InputError(f"{why}; the {kept} are in {out}")
+
+
+def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> str:
+    """What an interrupted command keeps, for its ``interrupted:`` line: `n` items (the
+    frames `pmu record` received, the frames `estimate track` estimated) written to `out`
+    by `write` (atomically), unless `out` exists (left as it was, as for any stream cut
+    short).  A second interrupt while writing leaves `out` as it was.
+
+    Parameters
+    ----------
+    out : str or Path
+        The output file.
+    what : str
+        What was done before the interrupt, as the line starts.
+    n : int
+        The items kept (at least 1).
+    noun : str
+        What they are, after their number (``"received"``, ``"frames estimated"``).
+    partial : str
+        What `out` then is (``"a partial recording"``).
+    write : callable
+        Writes them to `out`, atomically, as a partial result.
+
+    Returns
+    -------
+    str
+        Where the items are, or why they are lost.
+    """
+    if Path(out).exists():
+        return f"{what}; {out} is left as it was (the {n} {noun} are not written over it)"
+    try:
+        write()
+    except OSError as exc:
+        return f"{what}; the {n} {noun} are lost: {out}: {exc.strerror or exc}"
+    except KeyboardInterrupt:
+        return f"{what}; the {n} {noun} are lost: interrupted again while writing {out}"
+    return f"{what}; the {n} {noun} are in {out}, {partial}"

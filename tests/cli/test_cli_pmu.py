@@ -404,6 +404,48 @@ def kundur_recording(tmp_path_factory):
     return path
 
 
+@pytest.mark.parametrize("signal, status", [(None, 130), (15, 143)])
+def test_an_interrupted_track_keeps_what_it_estimated(
+    kundur_recording, tmp_path, monkeypatch, signal, status
+):
+    """`estimate track` interrupted while estimating (Ctrl-C; SIGTERM) kept nothing: the
+    frames estimated before the interrupt are written as a partial estimate (a CSV row
+    each, as a whole track writes them), atomically and never over an existing --out, and
+    the interrupted: line says how many (exit status 130, 143)."""
+    from stabctl.cli.options import Terminated
+    from stabctl.estimation.closed_loop import LoopController
+
+    act = LoopController.act
+    calls = []
+
+    def interrupted(self, frame):
+        calls.append(frame.t)
+        if len(calls) == 31:
+            raise KeyboardInterrupt if signal is None else Terminated(signal)
+        return act(self, frame)
+
+    monkeypatch.setattr(LoopController, "act", interrupted)
+    out = tmp_path / "t.csv"
+    args = ["estimate", "track", "kundur", "--source", str(kundur_recording), "--out", str(out)]
+    for existing in (False, True):
+        calls.clear()
+        if existing:
+            out.write_text("kept")
+        res = CliRunner().invoke(main, args)
+        assert res.exit_code == status, res.output
+        said = f"interrupted: 30 of the {len(c37.recorded_frames(kundur_recording)[1])} frames"
+        assert res.stderr.startswith(said), res.stderr
+        if existing:
+            assert f"; {out} is left as it was (the 30 frames estimated are not written " in (
+                res.stderr
+            )
+            assert out.read_text() == "kept"
+        else:
+            assert f"; the 30 frames estimated are in {out}, a partial estimate; " in res.stderr
+            head, *rows = out.read_text().splitlines()
+            assert head.startswith("t_s,f_") and len(rows) == 30
+
+
 def test_a_server_listens_on_ipv6(kundur_recording, tmp_path):
     """`--host ::1` could not be served (the listening socket was IPv4 only, while --allow
     took IPv6 addresses): a replay on ::1, allowed only to ::1, is recorded from
