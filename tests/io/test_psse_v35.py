@@ -265,3 +265,25 @@ def test_v36_branch_with_the_field_after_stat_and_four_owners(tmp_path):
     )
     assert text != V36.read_text()
     _same_raw(read_raw(_write(tmp_path, text)), read_raw(V33))
+
+
+def test_v36_branch_fields_are_read_from_their_v36_columns(tmp_path):
+    """A v36 branch record with every field it reads distinct (12 ratings 101 to 112
+    between NAME and GI; GI, BI, GJ, BJ 0.01 to 0.04; MET 2 after STAT): R, X, B and the
+    line-end shunts come from the columns of PSS/E 36's heading, as in v35, none from a
+    rating's or from the fields after STAT."""
+    old = (
+        "0.10000,'LINE 1-2 C                              ', 100.00, 100.00, 100.00,"
+        + "   0.00," * 9
+        + " 0.00000, 0.05000, 0.00000, 0.05000,1,1, 10.00,   1,1.0000"
+    )
+    new = (
+        "0.10000,'LINE 1-2 C                              ',"
+        + ",".join(f" {r}.00" for r in range(101, 113))
+        + ", 0.01000, 0.02000, 0.03000, 0.04000,1,2, 10.00,   1,1.0000"
+    )
+    text = V36.read_text()
+    assert text.count(old) == 1
+    line = read_raw(_write(tmp_path, text.replace(old, new))).line
+    np.testing.assert_allclose(line[1, :5], [1, 2, 0.02, 0.2, 0.1])
+    np.testing.assert_allclose(line[1, 10:14], [0.01, 0.02, 0.03, 0.04])
