@@ -407,6 +407,10 @@ def simulate(
     Fault (as PST's sw_con, y_switch): a bolted three-phase fault at BUS from --t-fault;
     after N cycles the near end of line BUS-FAR_BUS opens (the far end keeps feeding the
     fault through the line), after M cycles the far end opens too and the line stays out.
+    A verdict (separated or not) of a fault cleared within a few ms of its critical
+    clearing time may depend on the step (the run at half the step can give the other
+    one, and simulate does not say so): confirm it with `stabctl cct`, which reports the
+    CCT with its half-step error bar.
 
     \b
     PSS/E study events, each with its time, in any number and order: --bus-fault (through
