@@ -687,7 +687,7 @@ def _check_numbers(rec: _Rec) -> None:
     or not (after the record's own reading, whose errors say more)."""
     for row, names in enumerate(rec.names[: len(rec.lines)]):
         for k, name in enumerate(names[: len(rec.lines[row])]):
-            if name not in _TEXT and not name.startswith("CHAR"):
+            if name not in _TEXT and not (name or "").startswith("CHAR"):
                 rec.num(row, k, 0.0)
 
 
@@ -933,7 +933,7 @@ def _gne_device(b: _Builder, rec: _Rec):
         rec.fail(f"STATUS {rec.written(1, 0)} must be 0 or 1", 1)
     for row, names in enumerate(rec.names[2:], start=2):
         for k, name in enumerate(names):
-            if name.startswith("INTG"):
+            if (name or "").startswith("INTG"):
                 rec.int(row, k)
     buses = ", ".join(str(rec.int(0, 3 + k)) for k in range(nterm))
     b.skip(
