@@ -861,6 +861,68 @@ def frame_time(data: bytes, cfg2) -> float:
     return int.from_bytes(data[6:10], "big") + count / cfg2.get_time_base()
 
 
+#: FRACSEC's time quality bits (C37.118.2-2011 Table 3): leap second pending (bit 4),
+#: occurred (bit 5), direction (bit 6: 1 a second deleted)
+LEAP_PENDING, LEAP_OCCURRED, LEAP_DELETED = 0x10, 0x20, 0x40
+
+
+def leap_offsets(data, cfg2) -> np.ndarray:
+    """The seconds a positive leap second puts between each data frame's time stamp and
+    the time elapsed: SOC counts UTC seconds without leap seconds (C37.118.2-2011 6.2.2),
+    so across an inserted leap second one second's SOC comes twice.  A frame stamped at
+    or before the one before it, by less than a second, where the frame before flags a
+    leap second pending or the frame a leap second occurred (FRACSEC's time quality,
+    Table 3; neither flagging a deleted one) is 1 s later than stamped, as is every frame
+    after it.
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames of one stream, in order.
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame (its TIME_BASE).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Per frame, 0 before the leap second and 1 from the repeated second on.
+    """
+    base = cfg2.get_time_base()
+    if len(data) < 2:
+        return np.zeros(len(data), np.int64)
+    stamps = np.array(
+        [int.from_bytes(d[6:10], "big") * base + int.from_bytes(d[11:14], "big") for d in data],
+        np.int64,
+    )
+    quality = np.array([d[10] for d in data], np.int64)
+    back = np.diff(stamps)
+    flagged = (quality[:-1] & LEAP_PENDING != 0) | (quality[1:] & LEAP_OCCURRED != 0)
+    inserted = (quality[:-1] | quality[1:]) & LEAP_DELETED == 0
+    leap = (back <= 0) & (back > -base) & flagged & inserted
+    return np.concatenate([[0], np.cumsum(leap)])
+
+
+def stamp_times(data, cfg2) -> np.ndarray:
+    """Each data frame's time stamp (`frame_time`, s, UNIX) and the positive leap seconds
+    before it in its stream (`leap_offsets`): the time the frames were measured at, in
+    order across a leap second.
+
+    Parameters
+    ----------
+    data : sequence of bytes
+        The data frames of one stream, in order.
+    cfg2 : pyc37 ConfigFrame2
+        Their stream's configuration frame.
+
+    Returns
+    -------
+    numpy.ndarray
+        The times (s).
+    """
+    times = np.array([frame_time(d, cfg2) for d in data], float)
+    return times + leap_offsets(data, cfg2)
+
+
 def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
     """The time stamps `stabctl.estimation.sources.check_order` refuses: repeated, going
     back, or off the reporting instants of the CFG-2's DATA_RATE.
@@ -894,6 +956,7 @@ def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
     base, rate = cfg2.get_time_base(), cfg2.get_data_rate()
     counts = np.array([int.from_bytes(d[11:14], "big") for d in data], np.int64)
     stamps = np.array([int.from_bytes(d[6:10], "big") for d in data], np.int64) * base + counts
+    stamps += leap_offsets(data, cfg2) * base  # a leap second's repeated SOC is no repeat
     if rate == 0:
         return [(0, f"{lead}its CFG-2's DATA_RATE is 0, no rate (C37.118.2-2011 Table 8)")]
     faults = []
@@ -931,12 +994,12 @@ def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
     if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
         k = int(bad[0]) + 1
         how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
-        # FRACSEC's time quality byte: bit 4 leap second pending, bit 5 leap second
-        # occurred (C37.118.2-2011 Table 3)
-        leap = any(d[10] & 0x30 for d in data[max(k - 1, 0) : k + 1])
+        # flagged, yet not one inserted second (`leap_offsets` reads those across)
+        leap = any(d[10] & (LEAP_PENDING | LEAP_OCCURRED) for d in data[max(k - 1, 0) : k + 1])
         why = (
-            ": a leap second, as its FRACSEC leap-second bits flag (C37.118.2-2011 Table 3: "
-            "a second's SOC repeated), which is not read across; split the stream there"
+            ": its FRACSEC flags a leap second (C37.118.2-2011 Table 3), but the stamps are "
+            "not one second inserted (a SOC repeated, going back less than 1 s): a deleted "
+            "one, or more than the leap second, is not read across; split the stream there"
             if leap
             else ""
         )
@@ -1043,4 +1106,7 @@ def replay(path, cfg: StreamConfig) -> list[Frame]:
         check_config(cfg2, cfg)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
-    return [parse_frame(cfg, cfg2, d) for d in data]
+    return [
+        f._replace(t=f.t + int(leap))
+        for f, leap in zip((parse_frame(cfg, cfg2, d) for d in data), leap_offsets(data, cfg2))
+    ]

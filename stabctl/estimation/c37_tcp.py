@@ -287,7 +287,7 @@ class StreamServer:
         if not data:
             raise InputError("a stream server needs at least one data frame")
         self.speed, self._cfg2, self._data, self.guard = float(speed), cfg2, list(data), guard
-        self._t = [c37.frame_time(d, cfg2) for d in self._data]
+        self._t = list(c37.stamp_times(self._data, cfg2))  # across a leap second too
         self.sessions: list[Session] = []
         self.refused: list[str] = []
         self.unlisted = 0

@@ -254,8 +254,7 @@ def stream_gaps(data, cfg2) -> str:
     if not rate or len(data) < 2:
         return ""
     per_s = rate if rate > 0 else 1.0 / -rate
-    soc = cfg2.get_soc()
-    t = [c37.frame_time(d, cfg2) - soc for d in data]
+    t = list(c37.stamp_times(data, cfg2) - cfg2.get_soc())
     k = [round(x * per_s) for x in t]
     gaps = [(t[j - 1], t[j], lost) for j in range(1, len(t)) if (lost := k[j] - k[j - 1] - 1) > 0]
     if not gaps:
@@ -405,20 +404,17 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
     if end.frames is not None:
         data = data[: end.frames]
     if end.tf is not None:
-        stamps = [c37.frame_time(d, cfg2) - soc for d in data]
+        stamps = c37.stamp_times(data, cfg2) - soc
         reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
         data = data[: reached[0] + 1] if reached else data
     # whichever end comes first, as a TCP stream's (`c37_tcp._data_frames`)
+    at = c37.stamp_times(data, cfg2)[-1] - soc if data else None
     whole = (
         not end.given
         or (end.frames is not None and len(data) == end.frames)
-        or (
-            end.tf is not None
-            and bool(data)
-            and c37.frame_time(data[-1], cfg2) - soc >= end.tf - 0.5e-6
-        )
+        or (end.tf is not None and at is not None and at >= end.tf - 0.5e-6)
     )
-    last = f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s" if data else ""
+    last = f", the last stamped {at:.4f} s" if at is not None else ""
     return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"
 
 
@@ -455,11 +451,13 @@ def merge(case, pmus, rate: float, streams) -> Received:
         except InputError as exc:
             raise InputError(f"stream {s + 1}: {exc}") from None
         frames = []
-        for k, d in enumerate(data):
+        for k, (d, leap) in enumerate(zip(data, c37.leap_offsets(data, cfg2))):
             try:
-                frames.append(c37.parse_frame(cfg, cfg2, d))
+                frame = c37.parse_frame(cfg, cfg2, d)
             except InputError as exc:
                 raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
+            # a frame after a leap second is 1 s later than stamped (`c37.leap_offsets`)
+            frames.append(frame._replace(t=frame.t + int(leap)))
             flagged.update(why for why in c37.flags(cfg2, d) if why)
         parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:

@@ -207,14 +207,32 @@ def test_replay_refuses_a_negative_data_rate_its_frames_do_not_keep(wire, tmp_pa
     check_order(body[::60], c37.read_config(_config(head, rate=-1), "CFG-2"), "ok")
 
 
-def test_a_leap_second_is_named_where_the_stream_goes_back(wire, tmp_path):
+def test_a_leap_second_is_read_across_in_order(wire, tmp_path):
     """A stream across a positive leap second (frames flagged leap pending, one second's
-    SOC repeated, then flagged leap occurred) was refused as "goes back" with no word of
-    the leap second its frames flag: the refusal names it."""
+    SOC repeated, then flagged leap occurred) was refused as "goes back": the repeated
+    second is the leap second, so the frames from it on are 1 s later than stamped.  The
+    track is the one of the same frames stamped without the leap (row for row), and the
+    recording passes the order check; a stream that goes back more than the second, or
+    flags a deleted second, is still refused naming the leap-second flags."""
+    from stabctl.estimation.sources import check_order
+
     _, head, body = wire
     pending = [_quality(f, 0x10) for f in body[:60]]
     again = [_later(_quality(f, 0x20), -1_000_000) for f in body[60:]]
+    cfg2 = c37.read_config(head, "CFG-2")
+    check_order(pending + again, cfg2, "leap")
+    assert list(c37.leap_offsets(pending + again, cfg2)) == [0] * 60 + [1] * len(again)
     res = _track(tmp_path, head, pending + again)
-    assert res.exit_code == 2, res.output
-    assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
-    assert "a leap second, as its FRACSEC leap-second bits flag" in res.stderr, res.stderr
+    assert res.exit_code == 0, res.output
+    leaped = (tmp_path / "t.csv").read_text()
+    res = _track(tmp_path, head, body)
+    assert res.exit_code == 0, res.output
+    assert leaped == (tmp_path / "t.csv").read_text()
+    for bad in (
+        [_later(_quality(f, 0x20), -2_000_000) for f in body[60:]],  # back 2 s
+        [_later(_quality(f, 0x60), -1_000_000) for f in body[60:]],  # a deleted second
+    ):
+        res = _track(tmp_path, head, [_quality(f, 0x50) for f in body[:60]] + bad)
+        assert res.exit_code == 2, res.output
+        assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
+        assert "its FRACSEC flags a leap second (C37.118.2-2011 Table 3)" in res.stderr
