@@ -383,7 +383,8 @@ class SearchOptions:
         criterion, without early_stop, on a runner that starts runs it can continue.
 
     A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
-    job's inputs (`to_inputs`); the other fields must keep their defaults there.
+    job's inputs, and method, early_stop and provisional_s when not their defaults
+    (`to_inputs`); the other fields must keep their defaults there.
     """
 
     tol: float = TOL
@@ -570,7 +571,8 @@ def _search(probe: _Probes, bounds) -> tuple[int, int, tuple[int, int]]:
 
 
 #: the provisional stable runs a search keeps to continue (`_Probes.held`): the highest
-#: below its lowest unstable probe (ACTIVSg2000: about 20 MB each, machines only)
+#: below its lowest unstable probe (ACTIVSg2000: 9.8 MB each, its recording to t_end of
+#: the machines only; the stages are shared)
 KEPT_RUNS = 3
 
 

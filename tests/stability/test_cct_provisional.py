@@ -25,8 +25,9 @@ def outcome(sim, fault: LineFault, options: SearchOptions):
     return res, (res.bracket, res.cct_half_step_s, res.separated)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("method", ["sime", "bisection"])
-def test_provisional_probes_keep_every_outcome_of_kunders_screening(kundur, method):
+def test_provisional_probes_keep_every_outcome_of_kundurs_screening(kundur, method):
     """Every bus and line fault of Kundur: the same verdicts, cells, half-step CCTs and
     separated machines with whole runs, provisional ones (the default window) and a
     window so short that stable ends found provisionally separate when continued."""
@@ -74,3 +75,12 @@ def test_a_run_paused_and_continued_is_the_whole_run_bit_for_bit(kundur, stop):
     for name in ("t", "angle", "speed", "pelect", "pmech", "efd"):
         assert np.array_equal(getattr(res, name), getattr(whole, name)), name
         assert np.array_equal(getattr(early, name), getattr(whole, name)[: early.t.size])
+
+
+def test_the_window_is_checked_and_recorded_when_not_the_default(kundur):
+    with pytest.raises(InputError, match="provisional_s must be > 0 s"):
+        critical_clearing_time(kundur, LineFault(3, 101), SearchOptions(provisional_s=0.0))
+    assert "provisional_s" not in SearchOptions().to_inputs()
+    for window in (None, 1.0):
+        recorded = SearchOptions(provisional_s=window).to_inputs()
+        assert SearchOptions.from_inputs(recorded).provisional_s == window
