@@ -484,7 +484,7 @@ class Simulator:
             parts = self.partitions(m, grid, nets)
             res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation, parts)
             return self._annotated(res, grid, nets, parts)
-        handle = self.start(
+        handle = self._handle(
             events, t_end, h, semantics, separation_limit, stop_at_separation, storage, voltages
         )
         if monitor is None:
@@ -546,11 +546,20 @@ class Simulator:
         InputError, UnknownBusError, CaseError
             As `run`.
         """
+        return self._handle(
+            events, t_end, h, semantics, separation_limit, stop_at_separation, storage, voltages
+        )
+
+    def _handle(
+        self, events, t_end, h, semantics, separation_limit, stop_at_separation, storage, voltages
+    ) -> RunHandle:
+        """`start`'s run, which `run` advances too (a caller counting `start` counts the
+        runs it pauses only)."""
         semantics = self._semantics(semantics)
         _check_method("heun", semantics, storage)
         sim = self._for_storage(storage)
         if sim is not self:
-            return sim.start(
+            return sim._handle(
                 events,
                 t_end,
                 h,
