@@ -640,13 +640,13 @@ class _Probes:
         pause = self.fault.t_fault + t_clear + (self.window or 0.0)
         if step != self.h or self.window is None or k in self.whole or pause >= self.t_end:
             res, diverged = self._whole(t_clear, step)
-            self.n_steps += len(res.t) - 1
+            self.n_steps += _steps(res)
             return self._judged(k, step, res, diverged, provisional=False)
         started: list = []
         res, diverged = _outcome(
             self.fault, t_clear, functools.partial(self._started, t_clear, pause, started)
         )
-        self.n_steps += len(res.t) - 1
+        self.n_steps += _steps(res)
         ok = self._judged(k, step, res, diverged, provisional=bool(started) and not started[0].done)
         if k in self.provisional:
             self._keep(k, (started[0], len(res.t)))
@@ -670,7 +670,7 @@ class _Probes:
         else:
             self.reruns += 1
             res, diverged = self._whole(t_clear, self.h)
-            self.n_steps += len(res.t) - 1
+            self.n_steps += _steps(res)
         i = self.probes[self.h].index((t_clear, True))
         ok = self._judged(k, self.h, res, diverged, provisional=False, record=False)
         if not ok:  # late separations near here: the search's other probes run whole
@@ -768,6 +768,11 @@ class _Probes:
             del self.held[j]
         while len(self.held) > KEPT_RUNS:
             del self.held[min(self.held)]
+
+
+def _steps(res) -> int:
+    """A run's time steps from t = 0 (0 for a stand-in result without times)."""
+    return max(len(getattr(res, "t", ())) - 1, 0)
 
 
 def _continued(handle, t_end: float) -> SimulationResult:
