@@ -477,9 +477,89 @@ class Simulator:
         """
         semantics = self._semantics(semantics)
         _check_method(method, semantics, storage)
+        if monitor is not None and method != "heun":
+            raise InputError(f"a run monitor needs the heun method, got {method!r}")
+        if method == "trapezoid":  # no storage (`_check_method`): this simulator's run
+            m, _, grid, nets = self._prepare(events, t_end, h, storage, semantics, method)
+            parts = self.partitions(m, grid, nets)
+            res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation, parts)
+            return self._annotated(res, grid, nets, parts)
+        handle = self._handle(
+            events, t_end, h, semantics, separation_limit, stop_at_separation, storage, voltages
+        )
+        if monitor is None:
+            handle.advance_to(t_end)
+            return handle.result()
+        verdict = _advance_monitored(handle.run, monitor)
+        res = handle.result()
+        if verdict is not None:
+            res.meta["early_verdict"] = verdict
+        return res
+
+    def start(
+        self,
+        events=(),
+        t_end: float = 5.0,
+        h: float | None = None,
+        semantics: str | None = None,
+        separation_limit: float = np.pi,
+        stop_at_separation: bool = False,
+        storage=None,
+        voltages: bool | Sequence[int] = True,
+    ) -> RunHandle:
+        """A Heun run of `run`, not advanced yet: its caller advances it in pieces
+        (`RunHandle.advance_to`) and reads its result at any pause (`RunHandle.result`).
+
+        The trajectory is the one `run` gives, bit for bit, wherever the run pauses: the
+        grid is built to `t_end` at once and the compiled loop continues from its carry
+        (`stabctl.dynamics.integrator.integrate`).  A CCT search pauses its probes some
+        seconds after the clearing and continues the one it must confirm
+        (`stabctl.stability.cct`).
+
+        Parameters
+        ----------
+        events : iterable, optional
+            Disturbances, as `run`.
+        t_end : float, optional
+            End of the run, s (> 0); default 5.
+        h : float or None, optional
+            Integration step, s, as `run`.
+        semantics : {"pst", "exact"} or None, optional
+            Event semantics, as `run`.
+        separation_limit : float, optional
+            Loss-of-synchronism limit, rad, as `run`; default pi.
+        stop_at_separation : bool, optional
+            End the run at separation, as `run`; default False.
+        storage : StorageFleet or None, optional
+            Energy-storage devices, as `run`.
+        voltages : bool or sequence of int, optional
+            The buses whose voltages are recorded, as `run`; default every bus.
+
+        Returns
+        -------
+        RunHandle
+            The run at t = 0, nothing integrated (its memory, the recording to `t_end`,
+            taken).
+
+        Raises
+        ------
+        InputError, UnknownBusError, CaseError
+            As `run`.
+        """
+        return self._handle(
+            events, t_end, h, semantics, separation_limit, stop_at_separation, storage, voltages
+        )
+
+    def _handle(
+        self, events, t_end, h, semantics, separation_limit, stop_at_separation, storage, voltages
+    ) -> RunHandle:
+        """`start`'s run, which `run` advances too (a caller counting `start` counts the
+        runs it pauses only)."""
+        semantics = self._semantics(semantics)
+        _check_method("heun", semantics, storage)
         sim = self._for_storage(storage)
         if sim is not self:
-            return sim.run(
+            return sim._handle(
                 events,
                 t_end,
                 h,
@@ -487,31 +567,18 @@ class Simulator:
                 separation_limit,
                 stop_at_separation,
                 storage,
-                monitor=monitor,
-                voltages=voltages,
+                voltages,
             )
-        if monitor is not None and method != "heun":
-            raise InputError(f"a run monitor needs the heun method, got {method!r}")
         rows = voltage_rows(self.case, voltages)
-        recorded = rows if method == "heun" else None  # the trapezoid records every bus
-        prepared = self._prepare(events, t_end, h, storage, semantics, method, recorded)
-        m, sa, grid, nets = prepared
-        parts = self.partitions(m, grid, nets)
-        if method == "trapezoid":
-            res = trapezoid.run(self, m, grid, nets, separation_limit, stop_at_separation, parts)
-        else:
-            pst = semantics == "pst"
-            run = _Run(self, *prepared, pst, separation_limit, stop_at_separation, bus_rows=rows)
-            verdict = None
-            if monitor is None and sa.kind != law.EXTERNAL:
-                integrate_from_cache(run, self._prefixes)
-            elif monitor is None:
-                run.advance(grid.t.size - 1)
-            else:
-                verdict = _advance_monitored(run, monitor)
-            res = run.finish(storage)
-            if verdict is not None:
-                res.meta["early_verdict"] = verdict
+        prepared = self._prepare(events, t_end, h, storage, semantics, "heun", rows)
+        pst = semantics == "pst"
+        run = _Run(self, *prepared, pst, separation_limit, stop_at_separation, bus_rows=rows)
+        return RunHandle(run, storage)
+
+    def _annotated(self, res: SimulationResult, grid, nets, parts) -> SimulationResult:
+        """`res` with its islanding (`islanding_log`), tripped machines
+        (`stabctl.dynamics.partition.tripped_log`) and suspect starts in its meta, those
+        that are not empty."""
         islanded = islanding_log(grid, nets, self.case, parts)
         if islanded:
             res.meta["islanded"] = islanded
@@ -1177,6 +1244,70 @@ class _Run:
                 result=res,
             )
         return res
+
+
+class RunHandle:
+    """A Heun run its caller advances in pieces (`Simulator.start`): paused anywhere, it
+    continues bit for bit (`_Run.advance`), its quiet start copied from the simulator's
+    prefixes as `Simulator.run`'s (`stabctl.dynamics.prefix`) unless its fleet takes
+    commands.
+
+    Parameters
+    ----------
+    run : _Run
+        The run, not advanced yet.
+    storage : StorageFleet or None
+        Its fleet (for the result's device figures).
+
+    Attributes
+    ----------
+    run : _Run
+        The run (its grid ``run.grid``, last grid index ``run.k``).
+    """
+
+    def __init__(self, run: _Run, storage) -> None:
+        self.run, self._storage = run, storage
+
+    @property
+    def done(self) -> bool:
+        """Whether the run is over: at its end, stopped (separation) or failed."""
+        return self.run.status != ig.OK or self.run.k >= self.run.grid.t.size - 1
+
+    def advance_to(self, t: float) -> None:
+        """Integrate up to the first grid point at or after `t` (the run's end at most);
+        nothing after a stop.
+
+        Parameters
+        ----------
+        t : float
+            Time, s (absolute run time).
+        """
+        run = self.run
+        k1 = min(int(np.searchsorted(run.grid.t, t - 1e-12)), run.grid.t.size - 1)
+        if run.k == 0 and not run.stored and run.sa.kind != law.EXTERNAL:
+            integrate_from_cache(run, run.sim._prefixes, k1)
+        else:
+            run.advance(k1)
+
+    def result(self) -> SimulationResult:
+        """The result up to the last grid point reached (`Simulator.run`'s when at the
+        end), with its verdict on that stretch; the run can go on after it.
+
+        Returns
+        -------
+        SimulationResult
+            As `Simulator.run`'s (its arrays views of the recording, which later pieces
+            do not rewrite).
+
+        Raises
+        ------
+        NumericalInstabilityError, SimulationError
+            The run diverged (as `Simulator.run`, with the partial result).
+        """
+        run = self.run
+        return run.sim._annotated(
+            run.finish(self._storage), run.grid, run.nets_list, run.partitions
+        )
 
 
 #: Two switchings of a device closer than this (s) count as chattering.

@@ -105,10 +105,11 @@ def fleet_key(sa) -> tuple:
     )
 
 
-def integrate_from_cache(run, cache) -> None:
+def integrate_from_cache(run, cache, k1: int) -> None:
     """Advance `run` (a fresh `stabctl.dynamics.driver._Run` without commands or monitor)
-    to its end, its quiet start copied from `cache` (a
-    `stabctl.dynamics.bounded.BoundedCache`) or integrated and stored there.
+    to grid index `k1`, its quiet start copied from `cache` (a
+    `stabctl.dynamics.bounded.BoundedCache`) or integrated and stored there when `k1`
+    reaches past it.
 
     Parameters
     ----------
@@ -116,11 +117,12 @@ def integrate_from_cache(run, cache) -> None:
         The run, not advanced yet.
     cache : BoundedCache
         The simulator's prefixes (`PREFIXES_KEPT`).
+    k1 : int
+        The grid index to stop at (the run's last: to its end).
     """
-    last = run.grid.t.size - 1
     k = quiet_end(run.grid.interval)
-    if k < 1:
-        run.advance(last)
+    if not 1 <= k <= k1:
+        run.advance(k1)
         return
     net0 = run.nets_list[0]
     key = (
@@ -139,7 +141,7 @@ def integrate_from_cache(run, cache) -> None:
     prefix = cache.get(key, lambda: _integrated(run, k, net0))
     if run.k == 0 and _fits(prefix, run, net0, k):
         _restore(run, prefix)
-    run.advance(last)
+    run.advance(k1)
 
 
 def _fits(prefix: Prefix, run, net0, k: int) -> bool:

@@ -51,6 +51,29 @@ Neither comes near 5 runs per CCT: the two ends of the final cell and their reru
 h/2 make 4, and the margins of runs far from the CCT (those of the doubling) place no
 probe within a cell of it.
 
+Provisional stable probes (`SearchOptions.provisional_s`, default PROVISIONAL_S): only the
+stable end of the final cell needs its run to t_end to be trusted; a probe is first run
+to provisional_s after its clearing (`stabctl.dynamics.driver.Simulator.start`).
+Separated by then, it is unstable, as its whole run (the same trajectory, stopped at the
+same separation); swung GENTLE_SWING or more (`largest_swing`), it runs on to t_end at
+once (runs near the CCT swing wide and may separate late); else provisionally stable, its
+run kept (at most KEPT_RUNS, the highest below the lowest unstable probe).  When the
+search closes a cell on a provisionally stable end, that run is continued to t_end, bit
+for bit the whole run: still stable, the cell is the search's; separated, that end is
+unstable, the search goes on below it (its next stable end confirmed alike) and its
+further probes run whole.  Without the swing test and that switch, a window of 1.5 s took
+25.9 runs a search on the ACTIVSg2000 sample of docs/scale.md instead of 5.9, probing
+cell by cell through the late separations above the CCT.  Where the verdict is monotone
+in the clearing time every provisional probe below a confirmed stable end is stable too,
+so the search ends in the cell of the searches whose runs all go to t_end.  Where it is
+not, a probe that separates late with gentle swings can be taken as stable: ACTIVSg2000's
+bus 5367, unstable cleared at 0.082-0.15 s (separated 3.5-5 s after the clearing) and
+stable at 0.2 s, gets a CCT of 0.261 s instead of 0.081 s with a window of 1 s (with
+2 s, the default, its probe at 0.1 s has swung 1 rad and runs whole).  The runs that
+decide a verdict (the check at t_lo, N-1 insecure; the probe at t_max, above the limit or
+robust in one run), those at h/2 and those of a custom criterion or of early verdicts go
+to t_end.
+
 Grid: the simulator's grid lands on every event time (`stabctl.dynamics.grid.time_grid`), so a
 clearing time is never rounded to a multiple of the step h: the fault-on interval of length
 tc gets fix(tc/h) equal steps (each in [h, 2h)) and the post-fault interval restarts at the
@@ -99,6 +122,9 @@ from stabctl.stability.sime import EarlyVerdict, critical_machines, probe_margin
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
 T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
+#: how long a probe runs after its clearing before it is judged provisionally stable, s
+#: (`SearchOptions.provisional_s`)
+PROVISIONAL_S = 2.0
 
 
 class Runner(Protocol):
@@ -216,9 +242,12 @@ class CCTResult:
     lost and the CCT that of the rest; empty: none).  step_s: integration step h; wall_time_s:
     the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
     check was not asked for), half_step_probes: its runs; conventions: the model's.
-    n_simulations: every run of the search (probes and half_step_probes); early_stops:
-    those ended by an early verdict (`stabctl.stability.sime.EarlyVerdict`); method:
-    the search's (`SearchOptions.method`).
+    n_simulations: every run of the search (probes and half_step_probes; a provisional
+    probe continued to t_end counts once, a run started again because its provisional one
+    was not kept twice); early_stops: those ended by an early verdict
+    (`stabctl.stability.sime.EarlyVerdict`); method: the search's (`SearchOptions.method`).
+    A provisionally stable probe never continued is listed stable in probes (implied by
+    the confirmed stable end above it when the verdict is monotone).
     """
 
     fault: LineFault
@@ -243,6 +272,13 @@ class CCTResult:
     sub_stepped: int = 0
     #: the search's longest clearing time tried (`SearchOptions.t_max`, s); None: not given
     t_max_s: float | None = None
+    #: time steps of the search's runs, each counted from t = 0 (a quiet start copied from
+    #: an earlier run too, `stabctl.dynamics.prefix`), a continued run's once
+    n_steps: int = 0
+    #: provisionally stable probes continued to t_end (`SearchOptions.provisional_s`), and
+    #: those of them that separated there
+    resumed: int = 0
+    overturned: int = 0
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -286,6 +322,7 @@ class CCTResult:
             "step_s": self.step_s,
             "n_simulations": self.n_simulations,
             "n_simulations_half_step": len(self.half_step_probes),
+            "n_steps": self.n_steps,
             "early_stops": self.early_stops,
             "sub_stepped_exciters": self.sub_stepped,
             "search": self.method,
@@ -338,9 +375,16 @@ class SearchOptions:
         only); default False: with the gates that keep every verdict equal to the full
         run's, the runs end less than 10 % sooner and the monitor costs more than that
         (`benchmarks/bench_cct.py`).
+    provisional_s : float or None
+        A probe at the step runs this long after its clearing, s (> 0), and is judged
+        provisionally stable if no machine separated by then; its run is kept and
+        continued to t_end when the search closes a cell on it (module docstring);
+        default PROVISIONAL_S.  None: every probe runs to t_end.  Only with the default
+        criterion, without early_stop, on a runner that starts runs it can continue.
 
     A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
-    job's inputs (`to_inputs`); the other fields must keep their defaults there.
+    job's inputs, and method, early_stop and provisional_s when not their defaults
+    (`to_inputs`); the other fields must keep their defaults there.
     """
 
     tol: float = TOL
@@ -354,10 +398,12 @@ class SearchOptions:
     error_check: bool = True
     method: str = "bisection"
     early_stop: bool = False
+    provisional_s: float | None = PROVISIONAL_S
 
     def to_inputs(self) -> dict:
         """Fields of a sweep job's recorded inputs: tol, t_max, t_end, error_check when
-        off, method when not the default, early_stop when on.  Raises InputError when a
+        off, method when not the default, early_stop when on, provisional_s when not the
+        default.  Raises InputError when a
         field a record cannot hold is not its default."""
         default = SearchOptions()
         for name in ("t_lo", "t_hi", "separation_limit", "criterion", "stop_at_separation"):
@@ -373,6 +419,9 @@ class SearchOptions:
             **({} if self.error_check else {"error_check": False}),
             **({} if self.method == default.method else {"method": self.method}),
             **({"early_stop": True} if self.early_stop else {}),
+            **(
+                {} if self.provisional_s == PROVISIONAL_S else {"provisional_s": self.provisional_s}
+            ),
         }
 
     @classmethod
@@ -385,6 +434,7 @@ class SearchOptions:
             error_check=inputs.get("error_check", True),
             method=inputs.get("method", "bisection"),
             early_stop=inputs.get("early_stop", False),
+            provisional_s=inputs.get("provisional_s", PROVISIONAL_S),
         )
 
 
@@ -459,104 +509,303 @@ def critical_clearing_time(
     0.199
     """
     o = SearchOptions() if search is None else search
-    tol, t_max = o.tol, o.t_max
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
     t_hi = _first_upper(o)
-    _check_settings(fault, tol, o.t_lo, t_hi, t_max, t_end)
+    _check_settings(fault, o.tol, o.t_lo, t_hi, o.t_max, t_end)
+    if o.provisional_s is not None and not o.provisional_s > 0:
+        raise InputError(f"provisional_s must be > 0 s or None, got {o.provisional_s:g}")
     check_trips(sim.case, fault)
-    h = sim.default_h if h is None else h
-    crit = no_separation if o.criterion is None else o.criterion
-    stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
-    extra = {} if storage is None else {"storage": storage}
-    if o.criterion is None and getattr(sim, "takes_monitor", False):
-        extra["voltages"] = False  # the default criterion reads the machines only
     if o.method not in METHODS:
         raise InputError(f"CCT search method must be one of {METHODS}, got {o.method!r}")
-    early = o.early_stop and o.criterion is None and getattr(sim, "takes_monitor", False)
-    probes: dict[float, list] = {h: [], h / 2: []}
-    separated: dict = {}
-    margins: dict = {}
-    swings: dict = {}
-    early_stops = []
-    islanded: list = []
+    h = sim.default_h if h is None else h
+    bounds = _lattice_bounds(o.tol, o.t_lo, t_hi, o.t_max)
+    probe = _Probes(sim, fault, o, h, t_end, storage, (bounds[0], bounds[2]))
+    wall = time.perf_counter()
+    try:
+        k_lo, k_hi, start = _search(probe, bounds)
+    except Verdict as exc:  # robust or N-1 insecure: the islanding goes with the verdict
+        exc.islanded = tuple(probe.islanded)
+        raise
+    probe.held.clear()  # the bracket is confirmed: no run is continued any more
+    half = None
+    if o.error_check:
+        stable_half = functools.partial(probe.stable_at, step=h / 2)
+        half = _lattice(_half_step_cct(stable_half, k_lo, k_hi, bounds[2]), o.tol)
+    return CCTResult(
+        fault=fault,
+        t_stable=_lattice(k_lo, o.tol),
+        t_unstable=_lattice(k_hi, o.tol),
+        search_bracket=(_lattice(start[0], o.tol), _lattice(start[1], o.tol)),
+        tol_s=o.tol,
+        t_max_s=o.t_max,
+        step_s=h,
+        freq_hz=sim.case.freq_hz,
+        n_simulations=len(probe.probes[h]) + len(probe.probes[h / 2]) + probe.reruns,
+        wall_time_s=time.perf_counter() - wall,
+        criterion=getattr(probe.crit, "__name__", repr(probe.crit)),
+        probes=tuple(probe.probes[h]),
+        separated=probe.separated.get(k_hi, ()),
+        islanded=tuple(probe.islanded),
+        cct_half_step_s=half,
+        half_step_probes=tuple(probe.probes[h / 2]),
+        conventions=sim.conventions,
+        method=o.method,
+        early_stops=len(probe.early_stops),
+        sub_stepped=sim.sub_stepped(h) if hasattr(sim, "sub_stepped") else 0,
+        n_steps=probe.n_steps,
+        resumed=probe.resumed,
+        overturned=probe.overturned,
+    )
 
-    def stable_at(k: int, step: float = h) -> bool:
-        t_clear = _lattice(k, tol)
-        t_cl = fault.t_fault + t_clear
-        monitor = EarlyVerdict(t_cl, t_end, sim.case.freq_hz, o.separation_limit)
-        more = {**extra, "monitor": monitor} if early else extra
-        res, diverged = _run(sim, fault, t_clear, t_end, step, o.separation_limit, stop, more)
-        verdict = res.meta.get("early_verdict") if early and not diverged else None
+
+def _search(probe: _Probes, bounds) -> tuple[int, int, tuple[int, int]]:
+    """The search of `probe`'s options (`SearchOptions.method`) on the lattice bounds
+    (k_lo, k_hi, k_max): (k_stable, k_unstable = k_stable + 1, the first (stable,
+    unstable) pair found), the stable end confirmed by a whole run."""
+    k_lo, k_hi, k_max = bounds
+    fault, tol, freq = probe.fault, probe.o.tol, probe.sim.case.freq_hz
+    if probe.o.method == "sime":
+        return _sime_search(probe, bounds, fault, tol, freq)
+    k_lo, k_hi = _bracket(probe.stable_at, k_lo, k_hi, k_max, fault, tol, freq)
+    return (*_bisect_confirmed(probe, k_lo, k_hi), (k_lo, k_hi))
+
+
+#: the provisional stable runs a search keeps to continue (`_Probes.held`): the highest
+#: below its lowest unstable probe (ACTIVSg2000: 9.8 MB each, its recording to t_end of
+#: the machines only; the stages are shared)
+KEPT_RUNS = 3
+
+
+class _Probes:
+    """The runs of one CCT search (`critical_clearing_time`) and what it keeps of them.
+
+    A probe at the step h with the default criterion (no early verdicts) on a simulator
+    that starts runs it can continue (`stabctl.dynamics.driver.Simulator.start`) is
+    integrated to `SearchOptions.provisional_s` after the clearing only: separated by
+    then, it is unstable as the whole run; swung GENTLE_SWING or more, run on to t_end;
+    else provisionally stable, its run kept (`held`, at most KEPT_RUNS) until the search
+    closes a cell on it, then continued to t_end (`confirm`; found unstable, the
+    search's later probes run whole).  The runs at the search's bounds (k_lo: N-1
+    insecure; k_max: above the limit, robust in one run) and at h/2 are whole runs.
+
+    Parameters
+    ----------
+    sim : Runner
+        The simulator.
+    fault : LineFault
+        The fault.
+    o : SearchOptions
+        The search's settings.
+    h : float
+        The step, s.
+    t_end : float
+        The runs' end, s (absolute).
+    storage : StorageFleet or None
+        Passed to the runs.
+    whole : tuple of int
+        The lattice indices whose runs are whole at the step (k_lo, k_max).
+    """
+
+    def __init__(self, sim, fault: LineFault, o: SearchOptions, h, t_end, storage, whole):
+        self.sim, self.fault, self.o, self.h, self.t_end, self.whole = (
+            sim, fault, o, h, t_end, whole,
+        )  # fmt: skip
+        self.crit = no_separation if o.criterion is None else o.criterion
+        self.stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
+        self.extra = {} if storage is None else {"storage": storage}
+        if o.criterion is None and getattr(sim, "takes_monitor", False):
+            self.extra["voltages"] = False  # the default criterion reads the machines only
+        self.early = o.early_stop and o.criterion is None and getattr(sim, "takes_monitor", False)
+        usable = o.criterion is None and not self.early and hasattr(sim, "start")
+        #: how long a probe runs after its clearing before it is judged provisionally, s
+        self.window = o.provisional_s if usable else None
+        self.probes: dict[float, list] = {h: [], h / 2: []}
+        self.separated: dict = {}
+        self.margins: dict = {}
+        self.swings: dict = {}
+        self.early_stops: list = []
+        self.islanded: list = []
+        #: the step's verdicts by lattice index; the provisional ones; their runs kept
+        #: (handle, grid points reached)
+        self.verdicts: dict[int, bool] = {}
+        self.provisional: set[int] = set()
+        self.held: dict[int, tuple] = {}
+        self.n_steps = self.reruns = self.resumed = self.overturned = 0
+
+    def stable_at(self, k: int, step: float | None = None) -> bool:
+        """The verdict at clearing time k*tol (s) and step `step` (s; default h):
+        provisional when the probe is (class docstring)."""
+        step = self.h if step is None else step
+        t_clear = _lattice(k, self.o.tol)
+        pause = self.fault.t_fault + t_clear + (self.window or 0.0)
+        if step != self.h or self.window is None or k in self.whole or pause >= self.t_end:
+            res, diverged = self._whole(t_clear, step)
+            self.n_steps += _steps(res)
+            return self._judged(k, step, res, diverged, provisional=False)
+        started: list = []
+        res, diverged = _outcome(
+            self.fault, t_clear, functools.partial(self._started, t_clear, pause, started)
+        )
+        self.n_steps += _steps(res)
+        ok = self._judged(k, step, res, diverged, provisional=bool(started) and not started[0].done)
+        if k in self.provisional:
+            self._keep(k, (started[0], len(res.t)))
+        return ok
+
+    def confirm(self, k: int) -> bool:
+        """Whether the stable end k of a closed cell stays stable to t_end: a
+        provisionally stable probe's run continued (or, when it was not kept, run again
+        whole); the other verdicts as they are."""
+        if k not in self.provisional:
+            return self.verdicts[k]
+        self.provisional.discard(k)
+        t_clear = _lattice(k, self.o.tol)
+        if k in self.held:
+            handle, n_t = self.held.pop(k)
+            self.resumed += 1
+            res, diverged = _outcome(
+                self.fault, t_clear, functools.partial(_continued, handle, self.t_end)
+            )
+            self.n_steps += len(res.t) - n_t
+        else:
+            self.reruns += 1
+            res, diverged = self._whole(t_clear, self.h)
+            self.n_steps += _steps(res)
+        i = self.probes[self.h].index((t_clear, True))
+        ok = self._judged(k, self.h, res, diverged, provisional=False, record=False)
+        if not ok:  # late separations near here: the search's other probes run whole
+            self.overturned += 1
+            self.probes[self.h][i] = (t_clear, False)
+            self.window = None
+        return ok
+
+    def stable_below(self, k: int) -> int:
+        """The highest lattice index below k found stable at the step (provisionally or
+        not)."""
+        return max(j for j, ok in self.verdicts.items() if ok and j < k)
+
+    def _whole(self, t_clear: float, step: float) -> tuple[SimulationResult, bool]:
+        """A whole run (to t_end or its stop), with its early verdict's monitor when the
+        search ends runs early."""
+        extra = self.extra
+        if self.early:
+            t_cl, case = self.fault.t_fault + t_clear, self.sim.case
+            monitor = EarlyVerdict(t_cl, self.t_end, case.freq_hz, self.o.separation_limit)
+            extra = {**extra, "monitor": monitor}
+        run = functools.partial(
+            self.sim.run,
+            self.fault.events(t_clear),
+            self.t_end,
+            h=step,
+            separation_limit=self.o.separation_limit,
+            stop_at_separation=self.stop,
+            **extra,
+        )
+        return _outcome(self.fault, t_clear, run)
+
+    def _started(self, t_clear: float, pause: float, started: list) -> SimulationResult:
+        """A run started to t_end (appended to `started`), advanced to `pause` (s), its
+        result there."""
+        handle = self.sim.start(
+            self.fault.events(t_clear),
+            self.t_end,
+            h=self.h,
+            separation_limit=self.o.separation_limit,
+            stop_at_separation=self.stop,
+            **self.extra,
+        )
+        started.append(handle)
+        handle.advance_to(pause)
+        res = handle.result()
+        if res.stable and largest_swing(res) >= GENTLE_SWING:  # may still separate
+            handle.advance_to(self.t_end)
+            res = handle.result()
+        return res
+
+    def _judged(self, k, step, res, diverged, provisional: bool, record: bool = True) -> bool:
+        """A run's verdict, recorded with what the search reads of it: the separated
+        machines and SIME's margin of an unstable run, the swing of a stable whole one."""
+        o, case = self.o, self.sim.case
+        t_clear = _lattice(k, o.tol)
+        verdict = res.meta.get("early_verdict") if self.early and not diverged else None
         if verdict:
-            early_stops.append(t_clear)
+            self.early_stops.append(t_clear)
         # no machine left in service (de-energised): no stable clearing, whatever an early
         # verdict on the machines left judged (none) or a custom criterion says
         dead = getattr(res, "de_energised_s", None) is not None  # a stand-in result: none
-        ok = not diverged and not dead and (verdict == "stable" if verdict else bool(crit(res)))
-        probes[step].append((t_clear, ok))
-        if not islanded:
-            islanded.extend(res.meta.get("islanded", []))
-        if not ok and step == h:
-            separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
-        if o.method == "sime" and step == h and not ok and not dead:
-            margins[k] = probe_margin(res, t_cl, sim.case.base_mva, sim.case.freq_hz)
-        if o.method == "sime" and step == h and ok:
-            swings[k] = largest_swing(res)
+        ok = (
+            not diverged and not dead and (verdict == "stable" if verdict else bool(self.crit(res)))
+        )
+        if record:
+            self.probes[step].append((t_clear, ok))
+        if not self.islanded:
+            self.islanded.extend(res.meta.get("islanded", []))
+        if step != self.h:
+            return ok
+        self.verdicts[k] = ok
+        if ok and provisional:
+            self.provisional.add(k)
+        if not ok:
+            self._trim()
+            self.separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
+        if o.method == "sime" and not ok and not dead:
+            t_cl = self.fault.t_fault + t_clear
+            self.margins[k] = probe_margin(res, t_cl, case.base_mva, case.freq_hz)
+        if o.method == "sime" and ok and not provisional:
+            self.swings[k] = largest_swing(res)
         return ok
 
-    wall = time.perf_counter()
-    k_lo, k_hi, k_max = _lattice_bounds(tol, o.t_lo, t_hi, t_max)
-    try:
-        if o.method == "sime":
-            k_lo, k_hi, start_k = _sime_search(
-                stable_at, margins, swings, (k_lo, k_hi, k_max), fault, tol, sim.case.freq_hz
-            )
-            start = (_lattice(start_k[0], tol), _lattice(start_k[1], tol))
-        else:
-            k_lo, k_hi = _bracket(stable_at, k_lo, k_hi, k_max, fault, tol, sim.case.freq_hz)
-            start = (_lattice(k_lo, tol), _lattice(k_hi, tol))
-            k_lo, k_hi = _bisect(stable_at, k_lo, k_hi)
-    except Verdict as exc:  # robust or N-1 insecure: the islanding goes with the verdict
-        exc.islanded = tuple(islanded)
-        raise
-    half = None
-    if o.error_check:
-        half = _lattice(_half_step_cct(lambda k: stable_at(k, h / 2), k_lo, k_hi, k_max), tol)
-    return CCTResult(
-        fault=fault,
-        t_stable=_lattice(k_lo, tol),
-        t_unstable=_lattice(k_hi, tol),
-        search_bracket=start,
-        tol_s=tol,
-        t_max_s=t_max,
-        step_s=h,
-        freq_hz=sim.case.freq_hz,
-        n_simulations=len(probes[h]) + len(probes[h / 2]),
-        wall_time_s=time.perf_counter() - wall,
-        criterion=getattr(crit, "__name__", repr(crit)),
-        probes=tuple(probes[h]),
-        separated=separated.get(k_hi, ()),
-        islanded=tuple(islanded),
-        cct_half_step_s=half,
-        half_step_probes=tuple(probes[h / 2]),
-        conventions=sim.conventions,
-        method=o.method,
-        early_stops=len(early_stops),
-        sub_stepped=sim.sub_stepped(h) if hasattr(sim, "sub_stepped") else 0,
-    )
+    def _keep(self, k: int, held: tuple) -> None:
+        """Keep a provisional run (`_trim`)."""
+        self.held[k] = held
+        self._trim()
+
+    def _trim(self) -> None:
+        """Drop the kept runs no search closes a cell on (above an unstable probe) and,
+        past KEPT_RUNS, the lowest."""
+        u = min((j for j, ok in self.verdicts.items() if not ok), default=math.inf)
+        for j in [j for j in self.held if j > u]:
+            del self.held[j]
+        while len(self.held) > KEPT_RUNS:
+            del self.held[min(self.held)]
+
+
+def _steps(res) -> int:
+    """A run's time steps from t = 0 (0 for a stand-in result without times)."""
+    return max(len(getattr(res, "t", ())) - 1, 0)
+
+
+def _continued(handle, t_end: float) -> SimulationResult:
+    """A kept run (`stabctl.dynamics.driver.RunHandle`) continued to t_end (s), its
+    result."""
+    handle.advance_to(t_end)
+    return handle.result()
+
+
+def _bisect_confirmed(probe: _Probes, k_lo: int, k_hi: int) -> tuple[int, int]:
+    """Bisect a (stable, unstable) bracket to adjacent cells whose stable end is
+    confirmed (`_Probes.confirm`): an end that separates when continued is unstable, and
+    the search goes on from the next stable probe below it."""
+    while True:
+        k_lo, k_hi = _bisect(probe.stable_at, k_lo, k_hi)
+        if probe.confirm(k_lo):
+            return k_lo, k_hi
+        k_lo, k_hi = probe.stable_below(k_lo), k_lo
 
 
 #: the CCT search methods (`SearchOptions.method`)
 METHODS = ("sime", "bisection")
 
 
-def _sime_search(stable_at, margins: dict, swings: dict, bounds, fault: LineFault, tol, freq):
+def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq):
     """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
-    the first (stable, unstable) pair found).
+    the first (stable, unstable) pair found), the stable end confirmed
+    (`_Probes.confirm`: a provisional stable end that separates when continued is
+    unstable, and the search goes on below it).
 
     The first probe is at k_max (when above k_hi): stable there with no machine swung
     more than GENTLE_SWING rad from its angle to the centre of inertia before the fault
-    (`largest_swing`, `swings` filled by `stable_at` for each stable probe), the fault is
+    (`largest_swing`, ``probe.swings`` filled for each whole stable run), the fault is
     robust in one run (AboveSearchLimit).  The verdicts below such a gentle run are taken
     to be stable too: a shorter fault swings the machines less, and the non-monotone
     verdicts seen come with wide swings (ACTIVSg2000's bus 5370, stable cleared at 0.6 s
@@ -594,9 +843,10 @@ def _sime_search(stable_at, margins: dict, swings: dict, bounds, fault: LineFaul
     the bracket above it.  Two guided probes in a row that moved the same end by at most
     2 cells (the bracket creeping) are followed by a bisection step; after SIME_GUIDED
     guided probes, bisection.  A probe at k_max found stable raises AboveSearchLimit.
-    `margins` (lattice index -> margin or None) is filled by `stable_at` for each
-    unstable probe."""
+    ``probe.margins`` (lattice index -> margin or None) is filled for each unstable
+    probe."""
     k_lo, k_hi, k_max = bounds
+    stable_at, margins, swings = probe.stable_at, probe.margins, probe.swings
     known: dict[int, bool] = {}
     at_max: dict[int, bool] = {}
     held: dict = {}
@@ -611,32 +861,37 @@ def _sime_search(stable_at, margins: dict, swings: dict, bounds, fault: LineFaul
             held[k_max] = margins.pop(k_max)
     start = None
     n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
-    k = k_hi
+    k: int | None = k_hi
     while True:
-        if k in at_max:
-            known[k] = at_max.pop(k)
-            margins.update(held)
-        else:
-            known[k] = stable_at(k)
-        if k == k_max and known[k]:
-            _above_limit(k_max, fault, tol, freq)
-        creeping, moved = False, None
-        if k == guided:  # the cells the bracket's end moved, and whether it creeps
-            moved = (known[k], k - ends[0] if known[k] else ends[1] - k)
-            creeping = last is not None and last[0] == moved[0] and max(last[1], moved[1]) <= 2
-        last = moved
+        creeping = False
+        if k is not None:  # None: a stable end just found unstable, no new probe
+            if k in at_max:
+                known[k] = at_max.pop(k)
+                margins.update(held)
+            else:
+                known[k] = stable_at(k)
+            if k == k_max and known[k]:
+                _above_limit(k_max, fault, tol, freq)
+            moved = None
+            if k == guided:  # the cells the bracket's end moved, and whether it creeps
+                moved = (known[k], k - ends[0] if known[k] else ends[1] - k)
+                creeping = last is not None and last[0] == moved[0] and max(last[1], moved[1]) <= 2
+            last = moved
         u = min((j for j, ok in known.items() if not ok), default=None)
         if u is not None and not any(ok for j, ok in known.items() if j < u):
             if not stable_at(k_lo):  # no stable probe yet: the check at k_lo
                 _lower_bound_unstable(k_lo, fault, tol)
             known[k_lo] = True
         s = max(j for j, ok in known.items() if ok and (u is None or j < u))
-        if u is None:  # stable so far: double
-            k = min(2 * k, k_max)
+        if u is None:  # stable so far (s the last probe): double
+            k = min(2 * s, k_max)
             continue
         start = start or (s, u)
         if u - s == 1:
-            return s, u, start
+            if probe.confirm(s):
+                return s, u, start
+            known[s], k, last = False, None, None
+            continue
         zero = _margin_zero(margins, u) if n_guided < SIME_GUIDED else None
         if zero is None or creeping:
             k, guided, last = (s + u) // 2, None, None
@@ -697,18 +952,11 @@ def _bisect(stable_at, k_lo: int, k_hi: int) -> tuple[int, int]:
 
 def _half_step_cct(stable_half, k_lo: int, k_hi: int, k_max: int) -> int:
     """Lattice index of the CCT at half the step, from the bracket (k_lo, k_hi = k_lo + 1)
-    found at the full step: both ends rerun; an end whose verdict changed is pushed away
-    (distance doubled each time, within [0, k_max]) until the verdict is restored, then
-    the new bracket is bisected.  An end pushed to the limit of the range is returned as
-    is (the CCT at h/2 lies beyond it)."""
-    if not stable_half(k_lo):
-        step, k_hi = 1, k_lo
-        while k_lo > 0:
-            k_hi, k_lo = k_lo, max(k_lo - step, 0)
-            step *= 2
-            if stable_half(k_lo):
-                return _bisect(stable_half, k_lo, k_hi)[0]
-        return 0
+    found at the full step: the unstable end rerun first (stable at h/2, the stable end
+    is taken to be stable too: the verdict monotone), else the stable end; an end whose
+    verdict changed is pushed away (distance doubled each time, within [0, k_max]) until
+    the verdict is restored, then the new bracket is bisected.  An end pushed to the
+    limit of the range is returned as is (the CCT at h/2 lies beyond it)."""
     if stable_half(k_hi):
         step, k_lo = 1, k_hi
         while k_hi < k_max:
@@ -717,6 +965,14 @@ def _half_step_cct(stable_half, k_lo: int, k_hi: int, k_max: int) -> int:
             if not stable_half(k_hi):
                 return _bisect(stable_half, k_lo, k_hi)[0]
         return k_max
+    if not stable_half(k_lo):
+        step, k_hi = 1, k_lo
+        while k_lo > 0:
+            k_hi, k_lo = k_lo, max(k_lo - step, 0)
+            step *= 2
+            if stable_half(k_lo):
+                return _bisect(stable_half, k_lo, k_hi)[0]
+        return 0
     return k_lo
 
 
@@ -842,20 +1098,14 @@ def _above_limit(k_max: int, fault: LineFault, tol, freq):
     )
 
 
-def _run(sim, fault: LineFault, t_clear, t_end, h, limit, stop, extra):
-    """One probe: (result, diverged).  A run that diverged after a machine separated, or
-    whose network has no solution after the fault is cleared (voltage collapse), gives its
-    partial result and True (unstable); a failure while the fault is on is raised, naming
-    the fault and the clearing time (the model's limit, not a verdict)."""
+def _outcome(fault: LineFault, t_clear: float, call) -> tuple[SimulationResult, bool]:
+    """One probe's run, ``call()`` (its SimulationResult): (result, diverged).  A run that
+    diverged after a machine separated, or whose network has no solution after the fault
+    is cleared (voltage collapse), gives its partial result and True (unstable); a failure
+    while the fault is on is raised, naming the fault and the clearing time (the model's
+    limit, not a verdict)."""
     try:
-        return sim.run(
-            fault.events(t_clear),
-            t_end,
-            h=h,
-            separation_limit=limit,
-            stop_at_separation=stop,
-            **extra,
-        ), False
+        return call(), False
     except NumericalInstabilityError as exc:
         raise NumericalInstabilityError(
             f"{fault.describe()}, cleared after {t_clear:g} s: {exc}", result=exc.result

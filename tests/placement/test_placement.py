@@ -220,17 +220,21 @@ def test_damping_rows_predict_the_recomputed_eigenvalues_to_first_order(kundur_d
 def counted_place():
     """place() on Kundur Case 1 for a 4 % CCT gain, with every Simulator.run counted."""
     calls = []
-    original = Simulator.run
+    original, started = Simulator.run, Simulator.start
 
     def run(self, *a, **kw):
         calls.append(kw.get("storage"))
         return original(self, *a, **kw)
 
-    Simulator.run = run
+    def start(self, *a, **kw):  # a CCT search's provisional probes
+        calls.append(kw.get("storage"))
+        return started(self, *a, **kw)
+
+    Simulator.run, Simulator.start = run, start
     try:
         res = place("kundur", [Contingency(CASE1, 0.280)])
     finally:
-        Simulator.run = original
+        Simulator.run, Simulator.start = original, started
     return res, calls
 
 
@@ -411,13 +415,17 @@ def test_a_start_already_evaluated_is_not_simulated_again():
     base = evaluations("kundur", cons)
     known = evaluations("kundur", cons, uniform, opts=VerifyOptions(base=base, scan="full"))
     calls = []
-    original = Simulator.run
+    original, started = Simulator.run, Simulator.start
 
     def run(self, *a, **kw):
         calls.append(1)
         return original(self, *a, **kw)
 
-    Simulator.run = run
+    def start(self, *a, **kw):  # a CCT search's provisional probes
+        calls.append(1)
+        return started(self, *a, **kw)
+
+    Simulator.run, Simulator.start = run, start
     try:
         res = place(
             "kundur",
@@ -426,7 +434,7 @@ def test_a_start_already_evaluated_is_not_simulated_again():
             warm=WarmStart(base=base, start=uniform, evaluations=known),
         )
     finally:
-        Simulator.run = original
+        Simulator.run, Simulator.start = original, started
     again = place(
         "kundur", cons, options=PlaceOptions(max_iter=2), warm=WarmStart(base=base, start=uniform)
     )

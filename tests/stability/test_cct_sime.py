@@ -181,14 +181,18 @@ def test_cli_screen_takes_the_search_and_keeps_the_bisection_s_cells(tmp_path):
 
 def counting_runs(sim):
     """The simulator with its runs counted in ``sim.runs[0]`` (every run of a search, a
-    verdict's too)."""
-    run, sim.runs = sim.run, [0]
+    verdict's too: whole runs and those started to be paused)."""
+    run, start, sim.runs = sim.run, sim.start, [0]
 
     def counted(*args, **kw):
         sim.runs[0] += 1
         return run(*args, **kw)
 
-    sim.run = counted
+    def counted_start(*args, **kw):
+        sim.runs[0] += 1
+        return start(*args, **kw)
+
+    sim.run, sim.start = counted, counted_start
     return sim
 
 
