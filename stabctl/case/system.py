@@ -54,7 +54,7 @@ from stabctl.models import pss as _pss
 from stabctl.models import shafts as _shafts
 from stabctl.models import svcs as _svcs
 from stabctl.models.converters import CONVERTER
-from stabctl.models.converters.rules import COMPONENTS
+from stabctl.models.converters.rules import COMPONENTS, share_sums
 from stabctl.models.declaration import LEAD_LAG_MIN, Family, array_dataclass, choices_message
 from stabctl.models.exciters import EXCITER, SATURATED_EXCITERS
 from stabctl.models.governors import GOVERNOR
@@ -163,6 +163,12 @@ _PROBLEM = re.compile(
 def _fmt(x) -> str:
     x = float(x)
     return str(int(x)) if x.is_integer() else repr(x)
+
+
+def _listed(numbers: np.ndarray) -> str:
+    """Device numbers for a message, the first five of more than six."""
+    shown = [_fmt(n) for n in numbers]
+    return ", ".join(shown) if len(shown) <= 6 else f"{', '.join(shown[:5])}, ... ({len(shown)})"
 
 
 @dataclass(frozen=True, eq=False)
@@ -1379,6 +1385,7 @@ class Case:
         object.__setattr__(self, "events", _check_events(self.events))
         object.__setattr__(self, "extra", _freeze_extra(self.extra))
         self._check_references()
+        self._check_shares()
 
     # -- validation -------------------------------------------------------------------
 
@@ -1418,6 +1425,31 @@ class Case:
                 f"machine {_fmt(gov.machine[bad[0]])} is an infinite bus (a classical machine "
                 "of H = 0, its speed fixed): a governor has nothing to govern there",
             )
+
+    def _check_shares(self):
+        """The shares of the generation of each bus with converters (ibr_con ``pfrac``,
+        ``qfrac``) summed with its machines' (mac_con's): at most 1, with a machine 1
+        (`stabctl.models.converters.rules.share_sums`, import-andes's check of an ANDES
+        file's ``gammap``, ``gammaq``); a converter's start above its bus's generation
+        was refused only as the run started, for a limit it then met."""
+        conv, mac = self.converters, self.machines
+        if not len(conv):
+            return
+        at_conv, at_mac = self.bus_indices(conv.bus), self.bus_indices(mac.bus)
+        for b in dict.fromkeys(at_conv.tolist()):
+            rows, machines = np.flatnonzero(at_conv == b), at_mac == b
+            sums = {
+                f: float(getattr(conv, f)[rows].sum() + getattr(mac, f)[machines].sum())
+                for f in ("pfrac", "qfrac")
+            }
+            fld, why = share_sums(sums, bool(machines.any()))
+            if why:
+                devs = f"converters {_listed(conv.number[rows])}"
+                if machines.any():
+                    devs += f" and machines {_listed(mac.number[machines])}"
+                conv._fail(
+                    rows[0], fld, f"bus {_fmt(self.buses.number[b])}'s {devs} {why}", rule=why
+                )
 
     def _check_regulation(self):
         """Remote regulation: PV generator buses, PQ regulated buses, one set point and

@@ -77,10 +77,11 @@ electrical control (REECA1E) or by two, a REGCP1 whose PLL is a PLL2, measures a
 bus or runs at another frequency, a remote bus ``igreg`` or ``busr``, a nominal frequency
 other than the system's, a wind chain with a missing link or a second drive train, or a
 static generator sharing its bus with another.  A machine on a converter's static
-generator takes its ``gammap``/``gammaq`` of it; converters and machines taking other
-than all of their static generator's P and Q are refused (CaseError: ANDES drops the rest
-of a replaced generator's power and starts off its power flow), but for converters alone
-on a bus without machine, kept with a change named in the summary from the written
+generator takes its ``gammap``/``gammaq`` of it; a share outside [0, 1], converters taking
+more than all of their static generator's P or Q, and converters and machines taking
+other than all of it are refused (CaseError: ANDES drops the rest of a replaced
+generator's power and starts off its power flow), but for converters alone on a bus
+without machine taking less than all of it, kept with a change named in the summary from the written
 tables: their ``pfrac``, ``qfrac`` and the rest of the bus's generation, which a run nets
 into the bus's load.
 
@@ -139,6 +140,7 @@ from stabctl.models.converters import (
     WTDTA1,
 )
 from stabctl.models.converters.rules import RULES as CONVERTER_RULES
+from stabctl.models.converters.rules import SHARES, share_sums
 from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
 from stabctl.models.shafts import SHAFT
@@ -673,7 +675,11 @@ def _file_inputs(path: Path, ss) -> _Given:
 
     Refused, naming file, sheet, row, idx, parameter and value: a sheet (json key) that
     is no ANDES model (InputError: ANDES skips it); CaseError for a formula without a
-    stored value; a status ``u`` other than 0 or 1; a line of zero impedance (r = x = 0);
+    stored value; a link to a device the case does not hold (`_check_references`); a
+    json ``true``/``false``, list or object where ANDES reads a number (it reads true as
+    1; a list failed in its set-up, naming nothing of the file); a status ``u`` other
+    than 0 or 1; a line of zero impedance (r = x = 0); a share ``gammap``/``gammaq``
+    outside [0, 1] (`stabctl.models.converters.rules.SHARES`);
     a value of :data:`_REQUIRED_INPUTS` left out or other than a number; in any model
     stabctl reads, a value ANDES would replace by its default (`_violated`: 0 where its
     declaration says non-zero, a sign it must not have, a PVD1 current limit of 0 or -1.1
@@ -718,8 +724,7 @@ def _file_inputs(path: Path, ss) -> _Given:
             line = f"; spreadsheet row {lines[k - 1]}" if k <= len(lines) else ""
             where = f"{path.name}: {sheet} row {k} (idx {row.get('idx')}{line})"
             _check_row(where, model, row)
-            if dynamic or model in _CONVERTER_FAMILY:
-                _check_finders(where, m, row, ss)
+            _check_references(where, m, row, ss)
             values = {}
             for name, p in m.params.items():
                 if not isinstance(p, NumParam) or isinstance(p, ExtParam):
@@ -727,6 +732,11 @@ def _file_inputs(path: Path, ss) -> _Given:
                 v = row.get(name)
                 empty = v is None or (isinstance(v, float) and v != v)
                 number = not empty and isinstance(v, (int, float)) and not isinstance(v, bool)
+                if isinstance(v, (bool, list, dict)) and p.vtype is float:
+                    read = f"reads it as {int(v)}" if isinstance(v, bool) else "cannot read it"
+                    raise CaseError(
+                        f"{where}: {name} = {json.dumps(v)}: not a number (ANDES {read})"
+                    )
                 if name in _REQUIRED_INPUTS.get(model, ()) and not (number and np.isfinite(v)):
                     raise CaseError(
                         f"{where}: {name} "
@@ -755,7 +765,8 @@ def _file_inputs(path: Path, ss) -> _Given:
                         f"{where}: {name} = {v:g} ({rule}: ANDES would run with its "
                         f"default {p.default!r})"
                     )
-            for law in CONVERTER_RULES.get(model, ()):  # the ibr_con table's own, the same
+            shares = (law for law in SHARES if law.names[0] in m.params)  # machines' too
+            for law in (*CONVERTER_RULES.get(model, ()), *shares):  # the ibr_con table's own
                 if all(n in values for n in law.names) and not law.holds(values):
                     shown = ", ".join(f"{n} = {values[n]:g}" for n in law.names)
                     raise CaseError(f"{where}: {shown}: it must be {law.what}")
@@ -805,30 +816,64 @@ def _default_text(m, p) -> str:
     return f"{d!r}, unset"
 
 
-def _check_finders(where: str, m, row: dict, ss) -> None:
-    """CaseError for a row naming a device its model finds by idx (ANDES's
-    ``DeviceFinder``: a PVD1's, ESD1's or REPCA1's ``busf``, a frequency measurement)
-    that the case does not hold: ANDES would add a BusFreq with its defaults at the
-    device's bus instead."""
+def _check_references(where: str, m, row: dict, ss) -> None:
+    """CaseError for a row naming a device that the case does not hold, before ANDES links
+    the devices (its set-up's message names neither sheet nor row, at times another model):
+    a device its model finds by idx (ANDES's ``DeviceFinder``: a PVD1's, ESD1's or REPCA1's
+    ``busf``, a frequency measurement), for which ANDES would add a BusFreq with its defaults
+    at the device's bus instead; every idx it takes values of that device by (the indexer
+    of an ``Ext*`` value: a converter's ``gen``, a REECA1's ``reg``, a WTARA1's ``rego``,
+    ...); and every other idx of a model or group (an ``IdxParam``'s: a converter's
+    ``bus``) the case has devices of (a Bus's ``area`` where it has no Area is left to
+    ANDES, which does not need it)."""
+    from andes.core.param import IdxParam
     from andes.core.service import DeviceFinder
 
-    for svc in vars(m).values():  # ANDES keeps its DeviceFinder services as attributes
-        if not isinstance(svc, DeviceFinder):
-            continue
-        name = svc.u.name
+    finders = {}
+    links: dict[str, str] = {}
+    for name, p in m.params.items():  # of a model or group the case has (a Bus's area)
+        if isinstance(p, IdxParam) and isinstance(p.model, str) and _holds(ss, p.model):
+            links[name] = p.model
+    for svc in vars(m).values():  # ANDES keeps its services and Ext* values as attributes
+        if isinstance(svc, DeviceFinder):
+            finders[svc.u.name] = svc
+        indexer, model = getattr(svc, "indexer", None), getattr(svc, "model", None)
+        if isinstance(indexer, IdxParam) and indexer.name in m.params and isinstance(model, str):
+            links.setdefault(indexer.name, model)
+    for name, target in {**links, **{n: f.model for n, f in finders.items()}}.items():
         v = row.get(name)
         if v is None or (isinstance(v, float) and v != v):
-            continue  # none named: ANDES finds or adds one at the bus, as documented
+            continue  # none named: ANDES finds or adds one (busf), or none is needed
         # ANDES looks it up in the parameter's model or group (busf: any FreqMeasurement)
-        if svc.model in ss.models:
-            known = ss.models[svc.model].idx.v
+        if target in ss.models:
+            known, what = ss.models[target].idx.v, target
+        elif target in ss.groups:
+            group = ss.groups[target]
+            known = group.get_all_idxes()
+            members = ", ".join(n for n, k in group.models.items() if k.n)
+            what = f"{target} ({members or 'none in the case'})"
         else:
-            known = ss.groups[svc.model].get_all_idxes()
-        if v not in known:
+            continue
+        if v in known:
+            continue
+        shown = int(v) if isinstance(v, float) and v.is_integer() else v
+        if name in finders:
             raise CaseError(
-                f"{where}: {name} = {v!r}: no {svc.model} of that idx in the case (ANDES "
-                f"would add a {svc.default_model} with its defaults at the device's bus instead)"
+                f"{where}: {name} = {shown!r}: no {target} of that idx in the case (ANDES "
+                f"would add a {finders[name].default_model} with its defaults at the "
+                "device's bus instead)"
             )
+        raise CaseError(
+            f"{where}: {name} = {shown!r}: no {what} of that idx in the case (ANDES cannot "
+            "link the device to it)"
+        )
+
+
+def _holds(ss, name: str) -> bool:
+    """Whether ANDES's ``ss`` holds devices of model or group ``name``."""
+    if name in ss.models:
+        return ss.models[name].n > 0
+    return name in ss.groups and any(k.n for k in ss.groups[name].models.values())
 
 
 def _check_row(where: str, model: str, row: dict) -> None:
@@ -1245,9 +1290,10 @@ def _converters(ss, numbers: dict, file: str):
     the static generators the mapped converters replace, each row's device (converter
     number -> ``"MODEL idx"``) and each row's origin (`stabctl.io.provenance.Origin`: the
     device and the ANDES parameter of each column).  CaseError (naming ``file``) for a
-    static generator whose machines and converters together take other than all of its P
-    or Q: the rest would be lost at a machine's bus (`_netted_shares` names the rest a bus
-    without machine nets)."""
+    static generator whose converters take more than all of its P or Q, or whose machines
+    and converters together take other than all of it: the rest would be lost at a
+    machine's bus (`stabctl.models.converters.rules.share_sums`, a case's check of its
+    tables; `_netted_shares` names the rest a bus without machine nets)."""
     rows, refused, replaced, protected = [], [], set(), set()
     origins: list[Origin] = []
     share: dict = {}
@@ -1264,12 +1310,7 @@ def _converters(ss, numbers: dict, file: str):
         for k in _in_service(m):
             where = f"{name} {m.idx.v[k]}"
             gen = m.gen.v[k]
-            sg = ss.PV if gen in ss.PV.idx.v else ss.Slack
-            if gen not in sg.idx.v:
-                raise CaseError(
-                    f"{_device_where(ss, file, name, k)}: gen = {gen!r}: its static generator "
-                    "is no PV or Slack of the case"
-                )
+            sg = ss.PV if gen in ss.PV.idx.v else ss.Slack  # one of them: `_check_references`
             bus = sg.bus.v[list(sg.idx.v).index(gen)]
             if kind != REGCA1 and m.busfreq.v[k] not in ss.BusFreq.idx.v:
                 raise CaseError(
@@ -1323,12 +1364,11 @@ def _converters(ss, numbers: dict, file: str):
                 share[m.gen.v[k]][2].append(f"{name} {m.idx.v[k]}")
                 share[m.gen.v[k]][3] = True
     for gen, (gp, gq, devs, machine) in share.items():
-        if machine and (abs(gp - 1) > 1e-9 or abs(gq - 1) > 1e-9):
+        _, why = share_sums({"gammap": gp, "gammaq": gq}, machine)
+        if why:
             raise CaseError(
-                f"{file}: static generator {gen}: its machines and converters "
-                f"({', '.join(devs)}) take gammap {gp:g} and gammaq {gq:g} of its power, "
-                "not 1 (ANDES drops the rest and starts off its power flow; stabctl nets "
-                "the rest into the load of a bus without machine only)"
+                f"{file}: static generator {gen}: its {'machines and ' * machine}converters "
+                f"({', '.join(devs)}) {why}; ANDES starts off its power flow"
             )
     return rows, refused, replaced, labels, origins
 

@@ -3,6 +3,7 @@
 Expected values are PSTess's d2asbegp.m / d_minniWECC_base data (PST column order).
 """
 
+import json
 import re
 from pathlib import Path
 
@@ -544,3 +545,46 @@ def test_kundur_bus_numbers_map_onto_kundurs_book():
     }
     assert loads == {4, 14}
     assert {book[int(b)] for b in case.machines.bus} == {1, 2, 3, 4}
+
+
+def test_converter_shares_of_a_bus_s_generation_must_not_exceed_it(tmp_path):
+    """A case file whose converters at one bus take more than all of its generation (ibr_con
+    ``pfrac`` edited to 2: the run refused it only as it started, for a current limit the
+    converter then met): refused as the file is read, naming the file, the table, the row,
+    the field and the sums; at a bus with a machine, machines and converters take all of
+    it, as import-andes requires of an ANDES file's shares (an idle converter, 0, is
+    fine)."""
+    from stabctl.io.pst import case_to_dict
+
+    kundur = load_case("kundur")
+    mac_bus = int(kundur.machines.bus[0])
+    free = int(next(b for b in kundur.buses.number if b not in set(kundur.machines.bus)))
+
+    def with_converters(*rows):
+        table = ConverterTable.from_matrix([[n, b, 1, 100.0, p, q, 0.0, 1] for n, b, p, q in rows])
+        return kundur.replace(converters=table)
+
+    with_converters((1, mac_bus, 0.0, 0.0), (2, free, 0.6, 1.0), (3, free, 0.4, 0.0))
+    for rows, fld, sums in (
+        (((1, free, 0.6, 0.5), (2, free, 0.6, 0.5)), "pfrac", "pfrac 1.2 and qfrac 1"),
+        (((1, mac_bus, 0.0, 0.5),), "qfrac", "pfrac 1 and qfrac 1.5"),
+    ):
+        with pytest.raises(CaseError, match=rf"field '{fld}': bus \d+'s converters .*take {sums} "):
+            with_converters(*rows)
+    with pytest.raises(
+        CaseError,
+        match=rf"field 'pfrac': bus {mac_bus}'s converters 1 and machines 1 take pfrac "
+        r"0.5 and qfrac 1 of its power, not 1",
+    ):
+        with_converters((1, mac_bus, -0.5, 0.0))
+    data = case_to_dict(with_converters((1, free, 0.5, 0.5), (2, free, 0.5, 0.5)))
+    conv = data["tables"]["converters"]
+    conv["rows"][0][conv["columns"].index("pfrac")] = 2.0
+    (tmp_path / "edited.json").write_text(json.dumps(data))
+    expected = (
+        f"{tmp_path / 'edited.json'}: table 'converters' row 1 (converter 1), field 'pfrac': "
+        f"bus {free}'s converters 1, 2 take pfrac 2.5 and qfrac 1 of its power: more than all "
+        "of it (at most 1)"
+    )
+    with pytest.raises(CaseError, match=f"^{re.escape(expected)}$"):
+        load_case(tmp_path / "edited.json")

@@ -25,6 +25,7 @@ pd = pytest.importorskip("pandas")
 
 
 WT3, ESD1, PVD1 = "ieee14/ieee14_wt3.xlsx", "ieee14/ieee14_esd1.xlsx", "ieee14/ieee14_pvd1.xlsx"
+SOLAR = "ieee14/ieee14_solar.xlsx"
 
 
 def edited(tmp_path, case: str, model: str, **values):
@@ -107,6 +108,27 @@ def edited(tmp_path, case: str, model: str, **values):
         (PVD1, "PVD1", {"v0": 1.2}, "v0 = 1.2, v1 = 1.1: it must be v0 <= v1"),
         (PVD1, "PVD1", {"fn": 0.0}, "fn = 0: it must be fn > 0 (the rated frequency)"),
         (PVD1, "PVD1", {"frflag": 2.0}, "frflag = 2: it must be 0 <= frflag <= 1"),
+        # a share of the static generator's power out of [0, 1] (summed, it was the only
+        # figure named, without the device or value)
+        (ESD1, "ESD1", {"gammap": -0.1}, "gammap = -0.1: it must be 0 <= gammap <= 1 (a share"),
+        (SOLAR, "REGCA1", {"gammaq": 1.5}, "gammaq = 1.5: it must be 0 <= gammaq <= 1"),
+        # a VDL curve whose points fall: ANDES (and stabctl) took it out of service silently
+        (
+            WT3,
+            "REECA1",
+            {"Vq2": 0.1},
+            "Vq1 = 0.2, Vq2 = 0.1, Vq3 = 0.8, Vq4 = 1: it must be Vq1 <= Vq2 <= Vq3 <= Vq4 "
+            "(the points of the VDL1 curve: ANDES takes the curve out of service",
+        ),
+        (WT3, "REECA1", {"Vp4": 0.7}, "Vp3 = 0.8, Vp4 = 0.7: it must be Vp1 <= Vp2 <= Vp3 <= Vp4"),
+        (WT3, "REECA1", {"Ip1": 5.0}, "Ip1 = 5, Ip2 = 4, Ip3 = 8, Ip4 = 10: it must be Ip1 <= "),
+        # a link to a device the case does not hold (ANDES's own message named neither sheet
+        # nor row, at times another model: WTPTA1 for a WTARA1's rego, as 99.0)
+        (ESD1, "ESD1", {"bus": 999}, "bus = 999: no ACNode (Bus) of that idx in the case (ANDES"),
+        (PVD1, "PVD1", {"bus": "four"}, "bus = 'four': no ACNode (Bus) of that idx in the case"),
+        (SOLAR, "REGCA1", {"bus": 77}, "bus = 77: no ACNode (Bus) of that idx in the case"),
+        (WT3, "WTARA1", {"rego": 99}, "rego = 99: no RenGovernor (WTDTA1) of that idx in the case"),
+        (WT3, "REECA1", {"reg": 99}, "reg = 99: no RenGen (REGCA1) of that idx in the case"),
     ],
 )
 def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
@@ -203,8 +225,8 @@ def test_a_pvd1_naming_a_missing_generator_is_refused(tmp_path):
     path = edited(tmp_path, "ieee14/ieee14_pvd1.xlsx", "PVD1", gen=9999)
     with pytest.raises(
         CaseError,
-        match=r"^PVD1_gen\.xlsx: PVD1 row 1 \(idx \S+\): gen = 9999: its static generator is "
-        "no PV or Slack",
+        match=r"^PVD1_gen\.xlsx: PVD1 row 1 \(idx \S+; spreadsheet row 2\): gen = 9999: no "
+        r"StaticGen \(PV, Slack\) of that idx in the case",
     ):
         read_andes_case(path, on_unsupported="skip")
 
@@ -263,18 +285,36 @@ def test_machine_and_converter_shares_not_adding_to_one_are_refused(tmp_path):
     with pd.ExcelWriter(path) as w:
         for name, rows in sheets.items():
             rows.to_excel(w, sheet_name=name, index=False)
-    out = tmp_path / "out.json"
-    res = CliRunner().invoke(
-        main, ["import-andes", str(path), "-o", str(out), "--skip-unsupported"]
-    )
-    assert res.exit_code == 2
     assert re.search(
         r"static generator 1: its machines and converters \(REGCA1 REGCA1_5, GENCLS "
         rf"GENCLS_1\) take gammap {turbine + machine:g} and gammaq {turbine + machine:g} "
         r"of its power, not 1",
-        res.output,
+        refused_when_skipping(path),
     )
-    assert not out.exists()
+
+
+def refused_when_skipping(path: Path) -> str:
+    """What `import-andes --skip-unsupported` of ``path`` says as it refuses it (exit 2,
+    nothing written)."""
+    out = path.with_suffix(".out.json")
+    res = CliRunner().invoke(
+        main, ["import-andes", str(path), "-o", str(out), "--skip-unsupported"]
+    )
+    assert res.exit_code == 2 and not out.exists()
+    return res.output
+
+
+def test_converters_taking_more_than_all_of_their_generator_s_power_are_refused(tmp_path):
+    """ieee14_esd1's ten ESD1 on one static generator, each taking gammap 0.5 of its power
+    (each share in [0, 1]; summed 5): refused naming the generator, the devices and the
+    sums, with --skip-unsupported too (it was kept with the rest, -4 of the bus's P,
+    netted into its load), nothing written."""
+    path = edited(tmp_path, ESD1, "ESD1", gammap=0.5)
+    assert re.search(
+        r"ESD1_gammap\.xlsx: static generator 6: its converters \(ESD1 1, ESD1 2, .*ESD1 10\) "
+        r"take gammap 5 and gammaq 1 of its power: more than all of it \(at most 1\)",
+        refused_when_skipping(path),
+    )
 
 
 @pytest.mark.parametrize("name", ["ieee14/ieee14_pvd1.xlsx", "ieee14/ieee14_esd1.xlsx"])

@@ -72,6 +72,21 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             ": r = x = 0 between buses 5 and 6: a zero impedance",
         ),
         ([("Toggler", 2, "t", -1)], "Toggle 1: t = -1 s: an event time must be finite and >= 0"),
+        # a link to a device the case does not hold, any model (ANDES's message named
+        # neither sheet nor row); a machine's share of its static generator out of [0, 1]
+        (
+            [("Line", 2, "bus2", 999)],
+            "Line row 1 (idx Line_0; spreadsheet row 2): bus2 = 999: no ACNode (Bus) of that "
+            "idx in the case (ANDES cannot link the device to it)",
+        ),
+        (
+            [("TGOV1", 2, "syn", 9)],
+            "TGOV1 row 1 (idx 1; spreadsheet row 2): syn = 9: no SynGen (GENROU) of that idx",
+        ),
+        (
+            [("GENROU", 2, "gammap", 1.2)],
+            "GENROU row 1 (idx 1; spreadsheet row 2): gammap = 1.2: it must be 0 <= gammap <= 1",
+        ),
         (
             [("GENROU", 2, "bus", 7)],
             "GENROU 1 is at bus 7, its static generator Slack 1 at bus 1 (bus 7 has no PV "
@@ -258,14 +273,14 @@ def run_cli(*args, cwd):
 
 def test_andes_s_log_is_said_in_stabctl_s_words_not_shown(tmp_path):
     """ANDES's own log lines reached stderr (its handler, set up on first use): a case ANDES
-    cannot set up (a line to bus 999) is one error line with ANDES's words; a case whose
-    ANDES power flow fails imports with stabctl's warning only."""
-    bad = cells_edited(tmp_path, [("Line", 2, "bus2", 999)])
+    cannot set up (a REECA1 option out of its choices) is one error line with ANDES's
+    words; a case whose ANDES power flow fails imports with stabctl's warning only."""
+    bad = cells_edited(tmp_path, [("REECA1", 2, "PFFLAG", 2)], case="kundur/kundur_reg.xlsx")
     res = run_cli("import-andes", bad, "-o", "bad.json", cwd=tmp_path)
     assert res.returncode == 2, res.stderr
     assert res.stderr.splitlines() == [
-        "error: edited.xlsx: ANDES cannot read the case: <Line> cannot retrieve <a2> from "
-        "<Bus> using <bus2>: KeyError('<Bus>: device not exist with idx=999.')"
+        "error: edited.xlsx: ANDES cannot read the case: option 2.0 is invalid for "
+        "REECA1.PFFLAG. Options are (0, 1)."
     ]
     assert not (tmp_path / "bad.json").exists()
     heavy = cells_edited(tmp_path, [("PQ", 2, "p0", 100.0)])  # beyond what the grid carries
@@ -390,3 +405,35 @@ def test_an_andes_json_giving_a_key_twice_is_refused(tmp_path):
     path.write_text(text[:-1] + ', "Area": [{"idx": 9, "u": 1, "name": "9"}]}')
     with pytest.raises(InputError, match=r'^twice.json: key "Area" given twice in one object'):
         read_andes_case(path)
+
+
+@pytest.mark.parametrize(
+    "field, value, shown, why",
+    [
+        ("Sn", True, "true", "ANDES reads it as 1"),
+        ("u", False, "false", "ANDES reads it as 0"),
+        ("Sn", [1], "[1]", "ANDES cannot read it"),
+        ("Sn", {"v": 1}, '{"v": 1}', "ANDES cannot read it"),
+    ],
+)
+def test_a_json_value_that_is_no_number_is_refused_naming_model_row_and_field(
+    tmp_path, field, value, shown, why
+):
+    """ieee14_pvd1.json with a PVD1 value JSON true (ANDES ran it as 1 without a word), a
+    list or an object (ANDES failed with numpy's "inhomogeneous shape", naming nothing of
+    the file): refused naming the model, the row, the field and the value, as stabctl's
+    own case files refuse them, nothing written."""
+    import json
+
+    data = json.loads(Path(andes.get_case("ieee14/ieee14_pvd1.json")).read_text())
+    data["PVD1"][0][field] = value
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(
+        CaseError,
+        match=rf"^edited\.json: PVD1 row 1 \(idx 1\): {field} = {re.escape(shown)}: not a number "
+        rf"\({why}\)$",
+    ):
+        read_andes_case(path, on_unsupported="skip")
+    res = run_cli("import-andes", path, "-o", "out.json", "--skip-unsupported", cwd=tmp_path)
+    assert res.returncode == 2 and not (tmp_path / "out.json").exists()

@@ -349,7 +349,7 @@ def andes_edited(tmp_path, case: str, model: str, field: str, value):
             "ESD1",
             "gen",
             99,
-            r"gen = 99: its static generator is no PV or Slack of the case",
+            r"gen = 99: no StaticGen \(PV, Slack\) of that idx in the case",
         ),
     ],
 )

@@ -732,11 +732,12 @@ COLS = dict(regc=1, Tg=0.02, gb_Te=0.01, gb_Rsource=0.01, gb_Xsource=0.2)
 Z = 0.01 + 0.2j
 
 
-def regcb1(x_changes=(), V=1.0, P_changes=(), v0=1.0, **cols):
+def regcb1(x_changes=(), V=1.0, P_changes=(), v0=1.0, qgen=0.1, **cols):
     """(derivatives dx, injected S, states x, packed P) of the bus-2 REGCB1 at bus voltage
     V, its initial states (at v0 pu, default 1) changed as given (slot, value) and its
-    packed columns P_changes (name, value)."""
+    packed columns P_changes (name, value); bus 2 generating 0.5 + j qgen pu."""
     case = make_case(REGCB_ROW, **{**COLS, **cols})
+    case = case.replace(buses=case.buses.replace(qgen=np.array([0.0, qgen])))
     V0 = np.full(2, v0, complex)
     cp = conv.converter_params(case, V0, case.buses.pgen + 1j * case.buses.qgen)
     x = conv.initialise(cp, V0)
@@ -856,7 +857,7 @@ INTERPSS |= dict(gb_Te=0.012, gb_Imax=1.25, gb_PQFlag=1, gb_Rsource=0.0, gb_Xsou
 def test_regcb1_meets_interpss_s_published_test_values():
     # InterPSS's Regcb1ModelTest (its published asserts, not a run of ours): at 1 pu, P .5,
     # Q .2 the states Ip .5, Iq .2, Vf 1, Eq .02, Ed 1.008, at rest
-    dx, _, x, _ = regcb1(qfrac=2.0, **INTERPSS)
+    dx, _, x, _ = regcb1(qgen=0.2, **INTERPSS)
     want = {RG.Ip: 0.5, RG.Iq: 0.2, RG.V_filter: 1.0, GB.Eq: 0.02, GB.Ed: 1.008}
     assert all(x[slot, 0] == pytest.approx(v, abs=1e-12) for slot, v in want.items())
     assert np.max(np.abs(dx)) < 1e-12

@@ -10,11 +10,13 @@ specifications (as ANDES 2.0 ``renewable/regca1.py``, ``reeca1.py``, ``reecb1.py
 implement them); ANDES 2.0 ``distributed/pvd1.py``, ``esd1.py``; the equations'
 divisions, limit pairs and rest points (docs/ibr.md).
 
-Judged not impossible, so accepted without a word: a REECA1 voltage-dependent current
-limit (Vq1..Vq4, Iq1..Iq4; Vp, Ip) whose points do not rise (ANDES 2.0 ``reeca1.py``
-takes that curve out of service, its ``zVDL1``/``zVDL2``, and so does stabctl); WTARA1's
-aerodynamic gain Ka = 0 (ANDES declares it non-negative: the turbine's power then does
-not depend on its pitch, no division); a WTTQA1 speed curve sp1..sp4 that does not rise
+An ANDES file's REECA1 whose voltage-dependent current limit's points fall (Vq1..Vq4,
+Iq1..Iq4 of VDL1; Vp1..Vp4, Ip1..Ip4 of VDL2) is refused: ANDES 2.0 ``reeca1.py`` takes
+that curve out of service without a word (its ``zVDL1``/``zVDL2``); an ibr_con row's such
+curve is out of service as in ANDES (the table's route, PSS/E's REEC_A data included, is
+left as it was).  Judged not impossible, so accepted without a word: WTARA1's aerodynamic
+gain Ka = 0 (ANDES declares it non-negative: the turbine's power then does not depend on
+its pitch, no division); a WTTQA1 speed curve sp1..sp4 that does not rise
 (neither ANDES nor the WECC WTGTRQ_A specification orders it, nothing divides by its
 steps: only its power points p1..p4 must rise).
 """
@@ -42,7 +44,7 @@ from stabctl.models.converters.table import (
     WTDTA1,
 )
 
-__all__ = ["Rule", "RULES", "COMPONENTS"]
+__all__ = ["Rule", "RULES", "COMPONENTS", "SHARES", "share_sums"]
 
 
 @dataclass(frozen=True)
@@ -114,6 +116,65 @@ def _rising(names: tuple[str, ...], of: str) -> Rule:
     )
 
 
+def _not_falling(names: tuple[str, ...], of: str) -> Rule:
+    """Each of ``names`` at or above the one before: the points of ``of``, which ANDES 2.0
+    takes out of service where they fall (REECA1's ``zVDL1``, ``zVDL2``)."""
+    return Rule(
+        names,
+        lambda *v: np.logical_and.reduce([a <= b for a, b in zip(v, v[1:])]),
+        f"{' <= '.join(names)} (the points of {of}: ANDES takes the curve out of service "
+        "where they fall)",
+    )
+
+
+#: a device's share of its static generator's P or Q (ANDES's ``gammap``, ``gammaq``: a
+#: machine's, a converter's), a fraction of that generator's power (an ANDES file's)
+SHARES = tuple(
+    Rule((g,), lambda v: (v >= 0) & (v <= 1), f"0 <= {g} <= 1 (a share of its static "
+    "generator's power)")
+    for g in ("gammap", "gammaq")
+)  # fmt: skip
+
+#: the tolerance of summed shares (`share_sums`)
+_SHARE_TOL = 1e-9
+
+
+def share_sums(sums: Mapping[str, float], machine: bool) -> tuple[str, str]:
+    """Why the shares of one generation (a bus's, an ANDES static generator's) that its
+    converters and machines take together cannot be, '' if they can.
+
+    Parameters
+    ----------
+    sums : mapping of str to float
+        The shares summed over the converters and machines, by name (``pfrac``, ``qfrac``
+        of a case's tables; ``gammap``, ``gammaq`` of an ANDES file).
+    machine : bool
+        Whether a machine takes a share: then the shares must add up to 1 (the rest would
+        be lost: a run nets the rest into the load of a bus without machine only).
+
+    Returns
+    -------
+    name : str
+        The first of ``sums`` that cannot be, '' if none: each at most 1 (more than all of
+        the generation puts a converter's power-flow point above the bus's), with a
+        machine 1.
+    why : str
+        ``"take pfrac 2.9 and qfrac 1 of its power: more than all of it ..."``, '' if
+        none.
+    """
+    shown = " and ".join(f"{n} {v:.12g}" for n, v in sums.items())
+    for name, v in sums.items():
+        if v > 1 + _SHARE_TOL:
+            return name, f"take {shown} of its power: more than all of it (at most 1)"
+    for name, v in sums.items():
+        if machine and abs(v - 1) > _SHARE_TOL:
+            return name, (
+                f"take {shown} of its power, not 1 (stabctl nets the rest into the load of "
+                "a bus without machine only)"
+            )
+    return "", ""
+
+
 #: the state of charge's limits: fractions of En, the lower below the upper, the initial
 #: one between them (ANDES 2.0 ESD1; WECC REEC_C)
 _SOC = (
@@ -140,6 +201,12 @@ _REEC = (
     _ordered("VMAX", "VMIN", "the voltage control"),
     _ordered("PMAX", "PMIN", "the P order"),
     _around_zero("dPmax", "dPmin", "the P reference"),
+)
+#: an ANDES file's REECA1's voltage-dependent current limits VDL1 (Iq) and VDL2 (Ip): their
+#: voltage and current points do not fall (ANDES 2.0 reeca1.py's ``zVDL1``, ``zVDL2``)
+_REEC_VDL = tuple(
+    _not_falling(tuple(f"{x}{j}" for j in range(1, 5)), f"the {curve} curve")
+    for x, curve in (("Vq", "VDL1"), ("Iq", "VDL1"), ("Vp", "VDL2"), ("Ip", "VDL2"))
 )
 #: the lags an ANDES file's REECA1 (REECB1) must have, as the ibr_con table's
 #: `stabctl.models.converters.converter_params` does (its Pe filter Tp may be 0: none)
@@ -245,8 +312,8 @@ RULES: Mapping[str, tuple[Rule, ...]] = MappingProxyType(
         "ESD1": (*_PVD, *_ESD, *_PVD_FILE),
         "REGCA1": (*_REGC, _lag("Tg"), _lag("Tfltr")),
         "REGCP1": (*_REGC, _lag("Tg"), _lag("Tfltr")),
-        "REECA1": (*_REEC, *_REEC_LAGS),
-        "REECA1E": (*_REEC, *_REEC_LAGS),
+        "REECA1": (*_REEC, *_REEC_LAGS, *_REEC_VDL),
+        "REECA1E": (*_REEC, *_REEC_LAGS, *_REEC_VDL),
         "REECB1": (*_REEC, *_REEC_LAGS),
         "REPCA1": (*_REPC, *(_lag(t) for t in ("Tfltr", "Tfv", "Tp", "Tg"))),
         # the case route's H and Htfrac check is `wind.check`'s
