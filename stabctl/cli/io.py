@@ -451,7 +451,7 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
         ("out of the network", imported.out_of_service),
         ("netted", imported.netted),
         ("left out with its netted generator", imported.netted_controls),
-        ("changed", imported.changed),
+        ("changed", imported.changed_summary),
         ("held", imported.held_summary),
     ):
         for item in items:

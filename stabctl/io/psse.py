@@ -60,7 +60,9 @@ class PsseImport(NamedTuple):
     :attr:`stabctl.io.psse_raw.RawData.switched_off`), and the DYR records of the netted
     generators' controls, left out with them; the records whose control stabctl holds at
     their RAW setting (:attr:`stabctl.io.psse_raw.RawData.held`), each, and as the lines
-    that name them in a summary (:func:`held_lines`)."""
+    that name them in a summary (:func:`held_lines`); ``changed`` as a summary names them
+    (the IDE 2 buses read as load buses, :attr:`stabctl.io.psse_raw.RawData.load_buses`,
+    by :func:`held_lines`)."""
 
     case: Case
     left_out: tuple[str, ...]
@@ -71,6 +73,7 @@ class PsseImport(NamedTuple):
     netted_controls: tuple[str, ...] = ()
     held: tuple[str, ...] = ()
     held_summary: tuple[str, ...] = ()
+    changed_summary: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -187,7 +190,11 @@ def import_psse(
         )
     except CaseError as exc:  # the record and parameters the table's row came from
         raise _located(exc, origins, where) from None
-    changed = (*(str(c) for c in raw.changed), *changed)
+    changed = (
+        *(str(c) for c in raw.changed),
+        *(str(h.source) for h in raw.load_buses),
+        *changed,
+    )
     if changed:
         warnings.warn(
             f"{where}: read {len(changed)} record(s) with a value other than the file's: "
@@ -212,24 +219,33 @@ def import_psse(
         tuple(with_netted),
         tuple(str(h.source) for h in raw.held),
         tuple(held),
+        (
+            *(str(c) for c in changed[: len(raw.changed)]),
+            *held_lines(raw.load_buses),
+            *changed[len(raw.changed) + len(raw.load_buses) :],
+        ),
     )
 
 
 #: records of one kind named one by one in :func:`held_lines` up to this many
 HELD_ONE_BY_ONE = 5
-#: what a summary line of many held records of a kind says of them
+#: what a summary line of many records of a kind (:func:`held_lines`) says of them
 _HELD_MANY = {
-    "switched shunt": "held at BINIT (MODSW not 0: not switched in the power flow or the dynamics)",
-    "transformer": "held at their RAW ratio and angle (COD > 0: their tap or phase control "
-    "not modelled in the power flow or the dynamics)",
+    "switched shunt": "switched shunts held at BINIT (MODSW not 0: not switched in the "
+    "power flow or the dynamics)",
+    "transformer": "transformers held at their RAW ratio and angle (COD > 0: their tap or "
+    "phase control not modelled in the power flow or the dynamics)",
+    "IDE 2 bus": "IDE 2 buses without a generator in service (none, or netted) read as "
+    "load buses (PSS/E)",
 }
 
 
 def held_lines(held: Sequence[Held]) -> list[str]:
-    """Lines naming the records whose control is held at its RAW setting
-    (:class:`stabctl.io.psse_raw.Held`), per kind in file order: each record
-    (``file:line record: why``) when a kind has at most :data:`HELD_ONE_BY_ONE`, else one
-    line with their count, why and their buses (a transformer's joined by ``-``)."""
+    """Lines naming records by kind (:class:`stabctl.io.psse_raw.Held`: the controls held
+    at their RAW setting, the IDE 2 buses read as load buses), per kind in file order:
+    each record (``file:line record: why``) when a kind has at most
+    :data:`HELD_ONE_BY_ONE`, else one line with their count, why and their buses (a
+    transformer's joined by ``-``)."""
     lines: list[str] = []
     for kind in dict.fromkeys(h.kind for h in held):
         of_kind = [h for h in held if h.kind == kind]
@@ -237,7 +253,7 @@ def held_lines(held: Sequence[Held]) -> list[str]:
             lines += [str(h.source) for h in of_kind]
         else:
             at = ", ".join(h.at for h in of_kind)
-            lines.append(f"{len(of_kind)} {kind}s {_HELD_MANY[kind]}, at buses {at}")
+            lines.append(f"{len(of_kind)} {_HELD_MANY[kind]}, at buses {at}")
     return lines
 
 

@@ -28,7 +28,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
 * buses: number, BASKV, IDE (1 load, 2 generator, 3 swing; 4 isolated buses are dropped
   with every record at them, as PSS/E leaves them out of the solution), VM, VA; the
   records dropped so, and those out of service (status 0), are each named with why
-  (:attr:`RawData.switched_off`);
+  (:attr:`RawData.switched_off`); an IDE 2 bus without a generator in service is a load
+  bus (PSS/E's type 1), named in :attr:`RawData.load_buses`;
 * loads (in service): PL + jQL constant power, IP + jIQ constant current (MW/Mvar at
   1 pu), YP + jYQ constant admittance (MW/Mvar at 1 pu, YQ < 0 inductive). The admittance
   part is exact as a bus shunt ``G + jB = (YP + jYQ) / SBASE``. The constant-current part
@@ -45,7 +46,10 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   MBASE). Several generators at one bus add up; the bus is PV (IDE 2) or swing (IDE 3) at
   VS, with Q limits the sums of QT and QB (a sum of exactly 0 is a limit at 0 in PSS/E
   but "no limit" in PST's bus table: it is written as +-1e-9 pu, :data:`ZERO_Q_LIMIT`).
-  An IDE 2 bus without generator in service is a load bus. Generators the caller nets
+  An IDE 2 bus without generator in service is a load bus. A wind machine's Q limits
+  come from PG and WPF (POM Generator Data): WMOD 2 +-|PG| tan(acos |WPF|), WMOD 3 both
+  PG tan(acos |WPF|) with the sign of WPF (a fixed Q), named in ``changed``; QT and QB
+  are not used then. Generators the caller nets
   (``net``: those without a machine model in the DYR data, PSS/E's netting) are a
   negative constant-power load PG + jQG at their bus instead (its composition in the
   dynamic run as the bus's loads, above), and leave the bus's Q limits;
@@ -62,7 +66,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   WINDV1, WINDV2, ANG1. The circuit bus I - ideal t1:1 - Z - ideal 1:t2 - bus J is PST's
   branch with tap t1/t2 on the I side and impedance Z*t2^2 (MATPOWER's convention when
   t2 = 1); the phase is PST's, the opposite sign of ANG1 (:mod:`stabctl.network.ybus`). Taps
-  stay at WINDV (automatic adjustment COD is not modelled, as ANDES); the magnetizing
+  stay at WINDV (automatic adjustment COD is not modelled, as ANDES; a winding with COD
+  > 0, which PSS/E would adjust, is named in :attr:`RawData.held`); the magnetizing
   admittance MAG1 + jMAG2 (CM 1: pu on SBASE) is a shunt at the winding-1 bus, switched
   with the transformer (``line`` columns 11-12; MATPOWER's ``psse_convert_xfmr`` puts it
   at that bus too); CM 2 (no-load loss and current) and impedance correction tables
@@ -77,7 +82,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   ``Z1 = (Z12 + Z31 - Z23)/2``, ``Z2 = (Z12 + Z23 - Z31)/2``, ``Z3 = (Z23 + Z31 - Z12)/2``,
   so that the impedance measured between two windings' buses with the third open is the
   RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
-* switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
+* switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt; one
+  with MODSW other than 0, which PSS/E would switch, is named in :attr:`RawData.held`.
 
 Skipped without a word: area, zone, owner and inter-area transfer data, substations
 without node-breaker data, v36 switching device rating sets, load types, interfaces and
@@ -97,7 +103,13 @@ Refused as ``file:line record: what``, the field by its POM name with its value 
 file writes it: a status other than 0 (out of service) or 1 (in service) of a load, fixed
 shunt, generator, branch, two-winding transformer or switched shunt (a three-winding
 transformer's STAT: 0 to 4), a bus number I outside PSS/E's 1 to :data:`MAX_BUS` (the
-other records' buses must be in the bus data). A record of several lines names the file
+other records' buses must be in the bus data), and the codes and limits outside the POM's
+ranges, read by stabctl or not: a transformer's CW, CZ, CM, NMETR, ZCOD, COD and under
+control its CONT bus, RMA/RMI and VMA/VMI (:func:`_check_transformer`), a branch's MET, a
+generator's GTAP, RMPCT, PT/PB, ownership fractions, WMOD and WPF
+(:func:`_check_generator`), a switched shunt's MODSW, ADJM, BINIT against its blocks and
+under control VSWHI/VSWLO and its regulated bus (:func:`_check_switched_shunt`). A record
+of several lines names the file
 line of the field at fault and which line of the record it is (``(line 3 of the
 record)``).
 
@@ -217,9 +229,11 @@ class RawSource:
 
 
 class Held(NamedTuple):
-    """A record whose automatic control stabctl does not model, held at its RAW setting:
-    ``kind`` (``"switched shunt"`` or ``"transformer"``), ``at`` (its bus, or its buses
-    joined by ``-``) and ``source`` (:class:`RawSource`, the record named with why)."""
+    """A record a summary names by kind and place (:func:`stabctl.io.psse.held_lines`):
+    ``kind`` (``"switched shunt"`` or ``"transformer"`` held at its RAW setting, its
+    automatic control not modelled; ``"IDE 2 bus"`` read as a load bus), ``at`` (its bus,
+    or its buses joined by ``-``) and ``source`` (:class:`RawSource`, the record named
+    with why)."""
 
     kind: str
     at: str
@@ -287,14 +301,16 @@ class RawData:
         vreg_con: remote voltage regulation (:class:`stabctl.case.RegulationTable`
             rows: generator bus, regulated bus, VS, share), shape (n, 4).
         changed: records read otherwise than they say, each named with the reason
-            (a plant whose IREG bus is a generator bus regulates its own bus, an IDE 2
-            bus without a generator in service is a load bus, a wind machine's Q limits
-            come from WMOD and WPF, as PSS/E).
+            (a plant whose IREG bus is a generator bus regulates its own bus, a wind
+            machine's Q limits come from WMOD and WPF, as PSS/E).
         netted_ids: (bus, ID) of the generators in ``netted``.
         held: the records in the network whose control PSS/E would adjust and stabctl
             holds at their RAW setting (:class:`Held`), in file order: switched shunts
             with MODSW other than 0 at BINIT, transformers with a winding's COD > 0 at
             their ratio and angle.
+        load_buses: the IDE 2 buses without a generator in service (none, or all
+            netted), read as load buses as PSS/E reads them (:class:`Held`, kind
+            ``"IDE 2 bus"``), in file order.
     """
 
     name: str
@@ -315,6 +331,7 @@ class RawData:
     changed: tuple[RawSource, ...] = ()
     netted_ids: frozenset[tuple[int, str]] = frozenset()
     held: tuple[Held, ...] = ()
+    load_buses: tuple[Held, ...] = ()
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
@@ -773,6 +790,7 @@ class _Builder:
     remote: dict = field(default_factory=dict)
     changed: list = field(default_factory=list)  # RawSource of records read otherwise
     held: list = field(default_factory=list)  # Held: controls not modelled, at their setting
+    load_buses: list = field(default_factory=list)  # Held: IDE 2 buses read as load buses
     bus_src: dict = field(default_factory=dict)  # bus number -> its record's RawSource
 
     def once(self, rec: _Rec, key: tuple, what: str):
@@ -1477,7 +1495,7 @@ def _remote_regulation(b: _Builder) -> np.ndarray:
 
 def _demote_idle_pv(b: _Builder):
     """IDE 2 buses without an in-service generator are load buses (PSS/E's type 1), each
-    named in ``changed`` (with its generators netted, or none in service)."""
+    named in ``load_buses`` (with its generators netted, or none in service)."""
     with_gen = {g.bus for g in b.gens}
     netted = {bus for bus, _ in b.netted_ids}
     for num, row in b.buses.items():
@@ -1485,9 +1503,8 @@ def _demote_idle_pv(b: _Builder):
             row[9] = PQ
             why = "its generators netted" if num in netted else "no generator in service"
             src = b.bus_src[num]
-            b.changed.append(
-                RawSource(src.file, src.line, f"{src.record}: IDE 2, {why}: a load bus (PSS/E)")
-            )
+            said = RawSource(src.file, src.line, f"{src.record}: IDE 2, {why}: a load bus (PSS/E)")
+            b.load_buses.append(Held("IDE 2 bus", str(num), said))
 
 
 def _check_netted_swing(b: _Builder):
@@ -1592,4 +1609,5 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         changed=tuple(b.changed),
         netted_ids=frozenset(b.netted_ids),
         held=tuple(sorted(b.held, key=lambda h: h.source.line)),
+        load_buses=tuple(b.load_buses),
     )

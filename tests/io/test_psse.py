@@ -904,14 +904,23 @@ def test_a_wind_machine_s_q_limits_come_from_wpf_as_pss_e_derives_them(tmp_path,
 
 def test_an_ide_2_bus_without_a_generator_in_service_is_named_as_a_load_bus(tmp_path):
     """PSS/E takes an IDE 2 bus without an in-service generator as a load bus (type 1):
-    so does stabctl, naming the bus's record in ``changed`` (it had been silent)."""
+    so does stabctl, naming the bus's record in ``load_buses`` and the import's
+    ``changed`` (it had been silent); many such buses make one summary line."""
+    from stabctl.io.psse import held_lines
+
     raw = tmp_path / "pv.raw"
     old = "    4,'SUB         ', 115.0000,1,"
     raw.write_text(V33.read_text().replace(old, old.replace(",1,", ",2,")))
     data = read_raw(raw)
     assert data.bus[data.bus[:, 0] == 4][0][9] == PQ
-    assert [str(c) for c in data.changed] == [
-        "pv.raw:7 bus 4: IDE 2, no generator in service: a load bus (PSS/E)"
+    said = "pv.raw:7 bus 4: IDE 2, no generator in service: a load bus (PSS/E)"
+    assert [str(h.source) for h in data.load_buses] == [said]
+    with pytest.warns(UserWarning, match="IDE 2, no generator in service"):
+        imported = import_psse(raw, DATA / "five_bus.dyr")
+    assert said in imported.changed and said in imported.changed_summary
+    assert held_lines(data.load_buses * 6) == [
+        "6 IDE 2 buses without a generator in service (none, or netted) read as load buses "
+        "(PSS/E), at buses 4, 4, 4, 4, 4, 4"
     ]
 
 
