@@ -991,16 +991,16 @@ def _check_generator(rec: _Rec, what: str, o: int) -> tuple[float, float] | None
     if rec.num(0, 16 + o, 9999.0) < rec.num(0, 17 + o, -9999.0):
         rec.fail(f"{what}: {rec.given(0, 16 + o, 17 + o)}: PT must be >= PB")
     for name in ("F1", "F2", "F3", "F4"):
-        k = rec.index(name)
-        if k is not None and rec.num(0, k, 1.0) < 0:
-            rec.fail(f"{what}: {name} {rec.written(0, k)} must be >= 0 (an ownership fraction)")
+        kf = rec.index(name)
+        if kf is not None and rec.num(0, kf, 1.0) < 0:
+            rec.fail(f"{what}: {name} {rec.written(0, kf)} must be >= 0 (an ownership fraction)")
     wmod = _code(rec, 0, "WMOD", range(4), what, 0)
     if wmod not in (2, 3):
         return None
-    k = rec.index("WPF")
-    wpf = 1.0 if k is None else rec.num(0, k, 1.0)
+    kw = rec.index("WPF")
+    wpf = 1.0 if kw is None else rec.num(0, kw, 1.0)
     if not 0 < abs(wpf) <= 1:
-        shown = "blank" if k is None else rec.shown(0, k, wpf)
+        shown = "blank" if kw is None else rec.shown(0, kw, wpf)
         rec.fail(f"{what}: WPF {shown} must be within -1 to 1 and not 0 (WMOD {wmod})")
     q = abs(rec.num(0, 2, 0.0)) * math.tan(math.acos(abs(wpf)))
     if wmod == 2:
