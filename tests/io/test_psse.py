@@ -950,6 +950,8 @@ def test_controls_not_modelled_are_named_as_held_at_their_raw_setting(tmp_path):
     assert [line for line in res.stdout.splitlines() if line.startswith("  held: ")] == [
         f"  held: {h}" for h in imported.held
     ]
+    res = run("import-psse", raw, DATA / "five_bus.dyr", "-o", tmp_path / "h.json", "--json")
+    assert json.loads(res.stdout)["held"] == list(imported.held)
     locked = tmp_path / "locked.raw"
     locked.write_text(V33.read_text().replace("    4,1,0,1,1.05000", "    4,0,0,1,1.05000"))
     assert read_raw(locked).held == ()
