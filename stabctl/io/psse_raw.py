@@ -948,8 +948,9 @@ def _generator(b: _Builder, rec: _Rec):
     b.once(rec, (num, gid), what)
     row = b.bus_row(rec, num, "generator")
     o = _nreg_offset(b.version)
+    off = b.out(rec, what, (num,), 14 + o)  # its status first: a shifted record shows there
     wind = _check_generator(rec, what, o)
-    if b.out(rec, what, (num,), 14 + o) or row is None:
+    if off or row is None:
         b.out_of_service.append((num, gid))
         return
     if not rec.num(0, 6, 1.0) > 0:  # a scheduled voltage, pu
@@ -1355,8 +1356,9 @@ def _switched_shunt(b: _Builder, rec: _Rec):
         b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "switched shunt")
     o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
+    off = b.out(rec, what, (num,), 3 + o)  # its status first: a shifted record shows there
     modsw = _check_switched_shunt(b, rec, what)
-    if b.out(rec, what, (num,), 3 + o) or row is None:
+    if off or row is None:
         return
     k = cast(int, rec.index("BINIT"))
     row[8] += rec.num(0, k) / b.base
