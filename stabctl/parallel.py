@@ -56,7 +56,7 @@ import threading
 import time
 import traceback
 import warnings
-from collections.abc import Callable, Generator, Iterator, Mapping
+from collections.abc import Callable, Generator, Iterable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
@@ -987,6 +987,40 @@ def check_records_case(path: str | Path, cases: Mapping, remedy: str) -> None:
                 f"{cases[case]} now)"
             )
             raise InputError(f"{where} {why}; {remedy}")
+
+
+def check_records_jobs(
+    path: str | Path, keys: Iterable[str], whose: Callable[[dict], str], remedy: str
+) -> None:
+    """Refuse a records file that holds a record of none of a run's jobs: a run that
+    reports on its own jobs only (a screening's table) would leave it out without a word.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The records file (JSON lines, `run_sweep`'s output); a missing file passes.
+    keys : iterable of str
+        The run's job keys.
+    whose : callable
+        ``whose(record)``: whose record it is, in words (``"a sweep-cct record"``).
+    remedy : str
+        What the user does instead, ending the message.
+
+    Raises
+    ------
+    InputError
+        Naming the file, the line and job of the first record of another run, and whose
+        it is.
+    """
+    path, mine = Path(path), set(keys)
+    if not path.exists():
+        return
+    for n, _, rec, _why in _record_lines(path):
+        if rec is not None and rec["key"] not in mine:
+            raise InputError(
+                f"{path} line {n}: job {rec['key']} is {whose(rec)}, none of this run's "
+                f"{len(mine)} job(s): {remedy}"
+            )
 
 
 def _differences(old: dict, new: Mapping) -> str:

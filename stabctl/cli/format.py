@@ -461,7 +461,7 @@ def print_modes(st, no_pss: bool) -> None:
             f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
             "(excluded from damping statistics)"
         )
-    click.echo(ma.table())
+    click.echo(ma.table(st.case.machine_name))
 
 
 def _source_line(src: dict, seed: int) -> str:

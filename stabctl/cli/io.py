@@ -354,9 +354,13 @@ def import_psse(
     the worst mismatch and its bus (every analysis command would refuse it); --keep-unsolved
     writes it all the same, with a warning. The summary names each record left out, out of
     the network (isolated buses and what is at them, equipment out of service: left out as
-    PSS/E leaves them) and generator netted with why, and compares the power flow (Q limits
-    on) with the RAW's own solution (the largest voltage and angle differences and their
-    buses; a warning above 1e-3).
+    PSS/E leaves them), generator netted and record read otherwise than written (an IDE 2
+    bus without generator in service is a load bus, a wind machine's Q limits come from
+    WMOD and WPF, as PSS/E) with why, the switched shunts (MODSW not 0) held at BINIT and
+    the transformers (COD > 0) held at their ratio and angle (their control is not
+    modelled; one line per kind with their buses when more than 5), and compares the power
+    flow (Q limits on) with the RAW's own solution (the largest voltage and angle
+    differences and their buses; a warning above 1e-3).
 
     \b
     Example (ANDES's cases/kundur files; their TOGGLE record, a disturbance, is left out):
@@ -402,6 +406,7 @@ def import_psse(
         netted=list(imported.netted),
         netted_controls=list(imported.netted_controls),
         changed=list(imported.changed),
+        held=list(imported.held),
         infeasible=list(infeasible),
         islands=list(islands),
         powerflow_against_raw=against_raw,
@@ -440,7 +445,8 @@ def _leave_out_infeasible(case, asked: bool) -> tuple:
 
 def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
     """import-psse's summary lines: the counts, then each record left out, out of the
-    network, netted or changed."""
+    network, netted or changed, and the controls held at their RAW setting (each, or one
+    line per kind when many: `stabctl.io.psse.held_lines`)."""
     click.echo(
         f"{text}; {len(imported.left_out)} record(s) left out, "
         f"{len(imported.out_of_service)} out of the network (as PSS/E), "
@@ -453,13 +459,15 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
         + ", "
         f"{len(infeasible)} control(s) outside their limits left out"
         + (f", {len(islands)} island(s) without a swing bus left out" if islands else "")
+        + (f", {len(imported.held)} control(s) held at their RAW setting" if imported.held else "")
     )
     for what, items in (
         ("left out", imported.left_out),
         ("out of the network", imported.out_of_service),
         ("netted", imported.netted),
         ("left out with its netted generator", imported.netted_controls),
-        ("changed", imported.changed),
+        ("changed", imported.changed_summary),
+        ("held", imported.held_summary),
     ):
         for item in items:
             click.echo(f"  {what}: {item}")

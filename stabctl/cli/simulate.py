@@ -508,7 +508,13 @@ def simulate(
         fleet = uniform_fleet(
             case, esd_pct, controller(deadband_hz, v_gate, coi, hysteresis_hz), model=esd_model
         )
-    validate_events(case, events, tf)  # an unknown bus or line before compiling
+    try:
+        validate_events(case, events, tf)  # an unknown bus or line before compiling
+    except InputError as exc:  # a reclosure named by its option
+        said = str(exc)
+        for a, b, t in close:
+            said = said.replace(str(_line_close(a, b, t)), f"--close {a} {b} at {t:g} s")
+        raise InputError(said) from None
     sim = Simulator(
         case,
         conventions=conventions,

@@ -100,8 +100,13 @@ def _check_switchings(what: str, sw: list) -> None:
         if closing and last is None:
             raise InputError(f"{what}: {ev} closes it while it is not open")
         if closing and not t > last[1]:
+            opened = last[2]
             raise InputError(
-                f"{what}: {ev} closes it at or before {last[2]} opens it ({last[1]:g} s)"
+                f"{what}: {ev} comes at or before the far end of the fault at bus "
+                f"{opened.bus} (at {opened.t:g} s) clears at {last[1]:g} s: the circuit is "
+                "open only from then"
+                if isinstance(opened, Fault)
+                else f"{what}: {ev} comes at or before {opened}, which opens it"
             )
         if not closing and last is not None:
             raise InputError(

@@ -21,15 +21,18 @@ synthetic grids (ACTIVSg) often come without dynamic data.
 The records PSS/E leaves out of the network (isolated buses and the records at them,
 equipment out of service) are left out too, each named in one warning and in
 ``PsseImport.out_of_service``; so are the dynamic records of generators out of service,
-as PSS/E ignores them. Records that stabctl cannot represent are collected from both
-files and either refused together (``on_unsupported="error"``: one
-:class:`~stabctl.errors.CaseError` listing every one as ``file:line record``) or left out
-with one warning listing them (``"skip"``).
+as PSS/E ignores them. The switched shunts and transformers whose automatic control
+stabctl does not model (MODSW not 0; a winding's COD > 0) stay at their RAW setting
+(BINIT; ratio and angle), named in one warning and in ``PsseImport.held``. Records
+that stabctl cannot represent are collected from both files and either refused together
+(``on_unsupported="error"``: one :class:`~stabctl.errors.CaseError` listing every one as
+``file:line record``) or left out with one warning listing them (``"skip"``).
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
 
@@ -37,10 +40,10 @@ import numpy as np
 
 from stabctl.case import Case
 from stabctl.errors import CaseError, advice
-from stabctl.io.psse_raw import RawData, read_raw
+from stabctl.io.psse_raw import Held, RawData, read_raw
 from stabctl.io.pst import case_from_matrices
 
-__all__ = ["load_psse", "import_psse", "PsseImport"]
+__all__ = ["load_psse", "import_psse", "PsseImport", "held_lines"]
 
 _MODES = ("error", "skip")
 _UNMODELLED = ("error", "net")
@@ -55,7 +58,11 @@ class PsseImport(NamedTuple):
     and the records left out of the network as PSS/E leaves them (isolated buses and what
     is at them, equipment out of service, the DYR records of generators out of service:
     :attr:`stabctl.io.psse_raw.RawData.switched_off`), and the DYR records of the netted
-    generators' controls, left out with them."""
+    generators' controls, left out with them; the records whose control stabctl holds at
+    their RAW setting (:attr:`stabctl.io.psse_raw.RawData.held`), each, and as the lines
+    that name them in a summary (:func:`held_lines`); ``changed`` as a summary names them
+    (the IDE 2 buses read as load buses, :attr:`stabctl.io.psse_raw.RawData.load_buses`,
+    by :func:`held_lines`)."""
 
     case: Case
     left_out: tuple[str, ...]
@@ -64,6 +71,9 @@ class PsseImport(NamedTuple):
     changed: tuple[str, ...] = ()
     out_of_service: tuple[str, ...] = ()
     netted_controls: tuple[str, ...] = ()
+    held: tuple[str, ...] = ()
+    held_summary: tuple[str, ...] = ()
+    changed_summary: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -180,11 +190,22 @@ def import_psse(
         )
     except CaseError as exc:  # the record and parameters the table's row came from
         raise _located(exc, origins, where) from None
-    changed = (*(str(c) for c in raw.changed), *changed)
+    changed = (
+        *(str(c) for c in raw.changed),
+        *(str(h.source) for h in raw.load_buses),
+        *changed,
+    )
     if changed:
         warnings.warn(
             f"{where}: read {len(changed)} record(s) with a value other than the file's: "
             + "; ".join(changed),
+            UserWarning,
+            stacklevel=3,
+        )
+    held = held_lines(raw.held)
+    if held:
+        warnings.warn(
+            f"{where}: {len(raw.held)} control(s) held at their RAW setting: " + "; ".join(held),
             UserWarning,
             stacklevel=3,
         )
@@ -196,7 +217,44 @@ def import_psse(
         changed,
         tuple(off_network),
         tuple(with_netted),
+        tuple(str(h.source) for h in raw.held),
+        tuple(held),
+        (
+            *(str(c) for c in changed[: len(raw.changed)]),
+            *held_lines(raw.load_buses),
+            *changed[len(raw.changed) + len(raw.load_buses) :],
+        ),
     )
+
+
+#: records of one kind named one by one in :func:`held_lines` up to this many
+HELD_ONE_BY_ONE = 5
+#: what a summary line of many records of a kind (:func:`held_lines`) says of them
+_HELD_MANY = {
+    "switched shunt": "switched shunts held at BINIT (MODSW not 0: not switched in the "
+    "power flow or the dynamics)",
+    "transformer": "transformers held at their RAW ratio and angle (COD > 0: their tap or "
+    "phase control not modelled in the power flow or the dynamics)",
+    "IDE 2 bus": "IDE 2 buses without a generator in service (none, or netted) read as "
+    "load buses (PSS/E)",
+}
+
+
+def held_lines(held: Sequence[Held]) -> list[str]:
+    """Lines naming records by kind (:class:`stabctl.io.psse_raw.Held`: the controls held
+    at their RAW setting, the IDE 2 buses read as load buses), per kind in file order:
+    each record (``file:line record: why``) when a kind has at most
+    :data:`HELD_ONE_BY_ONE`, else one line with their count, why and their buses (a
+    transformer's joined by ``-``)."""
+    lines: list[str] = []
+    for kind in dict.fromkeys(h.kind for h in held):
+        of_kind = [h for h in held if h.kind == kind]
+        if len(of_kind) <= HELD_ONE_BY_ONE:
+            lines += [str(h.source) for h in of_kind]
+        else:
+            at = ", ".join(h.at for h in of_kind)
+            lines.append(f"{len(of_kind)} {_HELD_MANY[kind]}, at buses {at}")
+    return lines
 
 
 def _located(exc: CaseError, origins: dict, where: str) -> CaseError:

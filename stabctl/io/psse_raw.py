@@ -28,7 +28,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
 * buses: number, BASKV, IDE (1 load, 2 generator, 3 swing; 4 isolated buses are dropped
   with every record at them, as PSS/E leaves them out of the solution), VM, VA; the
   records dropped so, and those out of service (status 0), are each named with why
-  (:attr:`RawData.switched_off`);
+  (:attr:`RawData.switched_off`); an IDE 2 bus without a generator in service is a load
+  bus (PSS/E's type 1), named in :attr:`RawData.load_buses`;
 * loads (in service): PL + jQL constant power, IP + jIQ constant current (MW/Mvar at
   1 pu), YP + jYQ constant admittance (MW/Mvar at 1 pu, YQ < 0 inductive). The admittance
   part is exact as a bus shunt ``G + jB = (YP + jYQ) / SBASE``. The constant-current part
@@ -45,7 +46,10 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   MBASE). Several generators at one bus add up; the bus is PV (IDE 2) or swing (IDE 3) at
   VS, with Q limits the sums of QT and QB (a sum of exactly 0 is a limit at 0 in PSS/E
   but "no limit" in PST's bus table: it is written as +-1e-9 pu, :data:`ZERO_Q_LIMIT`).
-  An IDE 2 bus without generator in service is a load bus. Generators the caller nets
+  An IDE 2 bus without generator in service is a load bus. A wind machine's Q limits
+  come from PG and WPF (POM Generator Data): WMOD 2 +-|PG| tan(acos |WPF|), WMOD 3 both
+  PG tan(acos |WPF|) with the sign of WPF (a fixed Q), named in ``changed``; QT and QB
+  are not used then. Generators the caller nets
   (``net``: those without a machine model in the DYR data, PSS/E's netting) are a
   negative constant-power load PG + jQG at their bus instead (its composition in the
   dynamic run as the bus's loads, above), and leave the bus's Q limits;
@@ -62,7 +66,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   WINDV1, WINDV2, ANG1. The circuit bus I - ideal t1:1 - Z - ideal 1:t2 - bus J is PST's
   branch with tap t1/t2 on the I side and impedance Z*t2^2 (MATPOWER's convention when
   t2 = 1); the phase is PST's, the opposite sign of ANG1 (:mod:`stabctl.network.ybus`). Taps
-  stay at WINDV (automatic adjustment COD is not modelled, as ANDES); the magnetizing
+  stay at WINDV (automatic adjustment COD is not modelled, as ANDES; a winding with COD
+  > 0, which PSS/E would adjust, is named in :attr:`RawData.held`); the magnetizing
   admittance MAG1 + jMAG2 (CM 1: pu on SBASE) is a shunt at the winding-1 bus, switched
   with the transformer (``line`` columns 11-12; MATPOWER's ``psse_convert_xfmr`` puts it
   at that bus too); CM 2 (no-load loss and current) and impedance correction tables
@@ -77,7 +82,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   ``Z1 = (Z12 + Z31 - Z23)/2``, ``Z2 = (Z12 + Z23 - Z31)/2``, ``Z3 = (Z23 + Z31 - Z12)/2``,
   so that the impedance measured between two windings' buses with the third open is the
   RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
-* switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt.
+* switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt; one
+  with MODSW other than 0, which PSS/E would switch, is named in :attr:`RawData.held`.
 
 Skipped without a word: area, zone, owner and inter-area transfer data, substations
 without node-breaker data, v36 switching device rating sets, load types, interfaces and
@@ -100,7 +106,13 @@ Refused as ``file:line record: what``, the field by its POM name with its value 
 file writes it: a status other than 0 (out of service) or 1 (in service) of a load, fixed
 shunt, generator, branch, two-winding transformer or switched shunt (a three-winding
 transformer's STAT: 0 to 4), a bus number I outside PSS/E's 1 to :data:`MAX_BUS` (the
-other records' buses must be in the bus data). A record of several lines names the file
+other records' buses must be in the bus data), and the codes and limits outside the POM's
+ranges, read by stabctl or not: a transformer's CW, CZ, CM, NMETR, ZCOD, COD and under
+control its CONT bus, RMA/RMI and VMA/VMI (:func:`_check_transformer`), a branch's MET, a
+generator's GTAP, RMPCT, PT/PB, ownership fractions, WMOD and WPF
+(:func:`_check_generator`), a switched shunt's MODSW, ADJM, BINIT against its blocks and
+under control VSWHI/VSWLO and its regulated bus (:func:`_check_switched_shunt`). A record
+of several lines names the file
 line of the field at fault and which line of the record it is (``(line 3 of the
 record)``).
 
@@ -117,7 +129,7 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NoReturn
+from typing import NamedTuple, NoReturn, cast
 
 import numpy as np
 
@@ -125,7 +137,7 @@ from stabctl.case import PQ, PV, SWING
 from stabctl.errors import CaseError
 from stabctl.io.inputs import input_file, plain_float
 
-__all__ = ["RawSource", "Generator", "RawData", "read_raw", "split_fields"]
+__all__ = ["RawSource", "Held", "Generator", "RawData", "read_raw", "split_fields"]
 
 _SECTIONS: dict[int, tuple[str, ...]] = {
     32: (
@@ -219,6 +231,18 @@ class RawSource:
         return f"{self.file}:{self.line} {self.record}"
 
 
+class Held(NamedTuple):
+    """A record a summary names by kind and place (:func:`stabctl.io.psse.held_lines`):
+    ``kind`` (``"switched shunt"`` or ``"transformer"`` held at its RAW setting, its
+    automatic control not modelled; ``"IDE 2 bus"`` read as a load bus), ``at`` (its bus,
+    or its buses joined by ``-``) and ``source`` (:class:`RawSource`, the record named
+    with why)."""
+
+    kind: str
+    at: str
+    source: RawSource
+
+
 @dataclass(frozen=True)
 class Generator:
     """One in-service generator of the RAW file (RAW order).
@@ -280,8 +304,16 @@ class RawData:
         vreg_con: remote voltage regulation (:class:`stabctl.case.RegulationTable`
             rows: generator bus, regulated bus, VS, share), shape (n, 4).
         changed: records read otherwise than they say, each named with the reason
-            (a plant whose IREG bus is a generator bus regulates its own bus, as PSS/E).
+            (a plant whose IREG bus is a generator bus regulates its own bus, a wind
+            machine's Q limits come from WMOD and WPF, as PSS/E).
         netted_ids: (bus, ID) of the generators in ``netted``.
+        held: the records in the network whose control PSS/E would adjust and stabctl
+            holds at their RAW setting (:class:`Held`), in file order: switched shunts
+            with MODSW other than 0 at BINIT, transformers with a winding's COD > 0 at
+            their ratio and angle.
+        load_buses: the IDE 2 buses without a generator in service (none, or all
+            netted), read as load buses as PSS/E reads them (:class:`Held`, kind
+            ``"IDE 2 bus"``), in file order.
     """
 
     name: str
@@ -301,6 +333,8 @@ class RawData:
     vreg_con: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     changed: tuple[RawSource, ...] = ()
     netted_ids: frozenset[tuple[int, str]] = frozenset()
+    held: tuple[Held, ...] = ()
+    load_buses: tuple[Held, ...] = ()
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
@@ -362,6 +396,13 @@ class _Rec:
         """The POM name of field ``k`` (0-based) of line ``row``, else ``field {k + 1}``."""
         names = self.names[row] if row < len(self.names) else ()
         return (names[k] if k < len(names) else None) or f"field {k + 1}"
+
+    def index(self, name: str, row: int = 0) -> int | None:
+        """The 0-based position of the field the POM names ``name`` on line ``row``, None
+        when the line is too short to hold it or the version's layout has no such field."""
+        names = self.names[row] if row < len(self.names) else ()
+        k = list(names).index(name) if name in names else None
+        return k if k is not None and k < len(self.lines[row]) else None
 
     def written(self, row: int, k: int) -> str:
         """Field ``k`` of line ``row`` as the file writes it (stripped; '' if absent)."""
@@ -645,7 +686,10 @@ _NAMES: dict[str, dict[int, tuple[tuple[str, ...], ...]]] = {
         36: (_BRANCH_34,),
     },
     "switched shunt": {
-        32: (("I",) + _SWSH + ("STAT",) + _SWSH_REG + ("RMPCT", "RMIDNT", "BINIT") + _BANKS,),
+        32: (
+            ("I",) + _SWSH + ("STAT", "VSWHI", "VSWLO", "SWREM", "RMPCT", "RMIDNT", "BINIT")
+            + _BANKS,
+        ),
         34: (
             ("I",) + _SWSH + ("STAT",) + _SWSH_REG + ("RMPCT", "RMIDNT", "BINIT") + _BANKS
             + ("NREG",),
@@ -814,6 +858,9 @@ class _Builder:
     #: remote bus
     remote: dict = field(default_factory=dict)
     changed: list = field(default_factory=list)  # RawSource of records read otherwise
+    held: list = field(default_factory=list)  # Held: controls not modelled, at their setting
+    load_buses: list = field(default_factory=list)  # Held: IDE 2 buses read as load buses
+    bus_src: dict = field(default_factory=dict)  # bus number -> its record's RawSource
 
     def once(self, rec: _Rec, key: tuple, what: str):
         """CaseError when a record with the same identity came before (a duplicated
@@ -876,6 +923,7 @@ def _bus(b: _Builder, rec: _Rec):
     if vm <= 0:
         rec.fail(f"bus {num}: VM {rec.written(0, 7)} must be > 0")
     kind = {1: PQ, 2: PV, 3: SWING}[ide]
+    b.bus_src[num] = rec.source(f"bus {num}")
     b.solution[num] = (vm, rec.num(0, 8, 0.0))
     b.buses[num] = [
         num,
@@ -991,12 +1039,14 @@ def _generator(b: _Builder, rec: _Rec):
     b.once(rec, (num, gid), what)
     row = b.bus_row(rec, num, "generator")
     o = _nreg_offset(b.version)
-    if b.out(rec, what, (num,), 14 + o) or row is None:
+    off = b.out(rec, what, (num,), 14 + o)  # its status first: a shifted record shows there
+    wind = _check_generator(rec, what, o)
+    if off or row is None:
         b.out_of_service.append((num, gid))
         return
     if not rec.num(0, 6, 1.0) > 0:  # a scheduled voltage, pu
         rec.fail(f"{what}: {rec.given(0, 6)}: VS must be > 0")
-    if rec.num(0, 4, 9999.0) < rec.num(0, 5, -9999.0):
+    if wind is None and rec.num(0, 4, 9999.0) < rec.num(0, 5, -9999.0):
         rec.fail(f"{what}: {rec.given(0, 4, 5)}: QT must be >= QB")
     why = None if b.net is None else b.net(num, gid)
     if why:
@@ -1016,11 +1066,56 @@ def _generator(b: _Builder, rec: _Rec):
     if first != ireg:
         return b.skip(rec, f"{what}: IREG {ireg} differs from bus {num}'s first generator's")
     if ireg != num:
-        rmpct = rec.num(0, 15 + o, 100.0)
-        if rmpct < 0:
-            rec.fail(f"{what}: RMPCT {rec.written(0, 15 + o)} must be >= 0")
-        b.remote.setdefault(num, [ireg, vs, 0.0, rec])[2] += rmpct
-    _add_generator(b, rec, row, vs if ireg == num else row[1], o, gid)
+        b.remote.setdefault(num, [ireg, vs, 0.0, rec])[2] += rec.num(0, 15 + o, 100.0)
+    _add_generator(b, rec, row, vs if ireg == num else row[1], o, gid, wind)
+
+
+def _check_generator(rec: _Rec, what: str, o: int) -> tuple[float, float] | None:
+    """CaseError naming the field for a generator value outside the POM's range (Generator
+    Data), used by stabctl or not: GTAP and RMPCT not > 0, PT below PB, an ownership
+    fraction Fi below 0, WMOD other than 0 to 3, and where WMOD is 2 or 3 a WPF whose
+    magnitude is not within 0 (excluded) to 1.  Returns the Q limits (QT, QB) in Mvar
+    PSS/E derives from PG and WPF for WMOD 2 (+-|PG| tan(acos |WPF|)) and 3 (both
+    PG tan(acos |WPF|), of the sign of PG times that of WPF: a fixed Q), else None."""
+    for k, name in ((13 + o, "GTAP"), (15 + o, "RMPCT")):
+        if not rec.num(0, k, 1.0) > 0:
+            rec.fail(f"{what}: {name} {rec.written(0, k)} must be > 0")
+    if rec.num(0, 16 + o, 9999.0) < rec.num(0, 17 + o, -9999.0):
+        rec.fail(f"{what}: {rec.given(0, 16 + o, 17 + o)}: PT must be >= PB")
+    for name in ("F1", "F2", "F3", "F4"):
+        kf = rec.index(name)
+        if kf is not None and rec.num(0, kf, 1.0) < 0:
+            rec.fail(f"{what}: {name} {rec.written(0, kf)} must be >= 0 (an ownership fraction)")
+    wmod = _code(rec, 0, "WMOD", range(4), what, 0)
+    if wmod not in (2, 3):
+        return None
+    kw = rec.index("WPF")
+    wpf = 1.0 if kw is None else rec.num(0, kw, 1.0)
+    if not 0 < abs(wpf) <= 1:
+        shown = "blank" if kw is None else rec.shown(0, kw, wpf)
+        rec.fail(f"{what}: WPF {shown} must be within -1 to 1 and not 0 (WMOD {wmod})")
+    q = abs(rec.num(0, 2, 0.0)) * math.tan(math.acos(abs(wpf)))
+    if wmod == 2:
+        return q, -q + 0.0  # no -0
+    q *= math.copysign(1.0, wpf) * math.copysign(1.0, rec.num(0, 2, 0.0))
+    return q + 0.0, q + 0.0
+
+
+def _code(rec: _Rec, row: int, name: str, allowed: Sequence[int], what: str, default: int) -> int:
+    """The integer field the POM names ``name`` on line ``row`` (``default`` when blank or
+    not in the version's layout), refused naming the field and its text when not one of
+    ``allowed``."""
+    k = rec.index(name, row)
+    code = default if k is None else rec.int(row, k, default)
+    if code not in allowed:
+        values = [str(v) for v in allowed]
+        want = (
+            f"within {values[0]} to {values[-1]}"
+            if len(values) > 3
+            else f"{', '.join(values[:-1])} or {values[-1]}"
+        )
+        rec.fail(f"{what}: {name} {rec.written(row, cast(int, k))} must be {want}", row)
+    return code
 
 
 def _net_generator(b: _Builder, rec: _Rec, num: int, what: str):
@@ -1032,13 +1127,28 @@ def _net_generator(b: _Builder, rec: _Rec, num: int, what: str):
     b.netted.append((num, rec.source(what)))
 
 
-def _add_generator(b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: str):
+def _add_generator(
+    b: _Builder, rec: _Rec, row: list, vs: float, o: int, gid: str, wind: tuple | None
+):
+    """The generator into its bus row (PG, QG, VS, Q limits: QT and QB, or ``wind``'s,
+    named in ``changed``) and the generator list."""
     pg, qg = rec.num(0, 2, 0.0), rec.num(0, 3, 0.0)
+    qt, qb = wind or (rec.num(0, 4, 9999.0), rec.num(0, 5, -9999.0))
+    if wind is not None:
+        wmod, k = _code(rec, 0, "WMOD", range(4), "", 0), rec.index("WPF")
+        b.changed.append(
+            rec.source(
+                f"generator at bus {row[0]} '{gid}': Q limits QT {qt:.6g}, QB {qb:.6g} Mvar from "
+                f"PG {rec.written(0, 2)} and WPF {rec.shown(0, k, 1.0) if k else 'blank'} "
+                f"(WMOD {wmod}, PSS/E's rule) instead of QT {rec.written(0, 4)}, "
+                f"QB {rec.written(0, 5)}"
+            )
+        )
     row[1] = vs
     row[3] += pg / b.base
     row[4] += qg / b.base
-    row[10] += rec.num(0, 4, 9999.0) / b.base
-    row[11] += rec.num(0, 5, -9999.0) / b.base
+    row[10] += qt / b.base
+    row[11] += qb / b.base
     mbase = rec.num(0, 8 + o, b.base)
     if mbase <= 0:
         rec.fail(f"generator at bus {row[0]} '{gid}': MBASE {rec.written(0, 8 + o)} must be > 0")
@@ -1072,6 +1182,7 @@ def _branch(b: _Builder, rec: _Rec):
     what = f"branch {i}-{j} '{ckt}'"
     b.once(rec, (min(i, j), max(i, j), ckt), what)
     _ends(b, rec, i, j, "branch")
+    _code(rec, 0, "MET", (1, 2), what, 1)  # the metered end (v36: not in the heading)
     k = 19 if b.version >= 34 else 9  # GI
     if b.out(rec, what, (i, j), k + 4):
         return
@@ -1097,10 +1208,12 @@ def _transformer(b: _Builder, rec: _Rec):
     if k3 != 0:
         return _three_winding(b, rec, (i, j, k3), f"three-winding {what}")
     ends = _ends(b, rec, i, j, "transformer")
+    controls = _check_transformer(b, rec, (2,), what)
     if b.out(rec, what, (i, j), 11) or ends is None:
         return
     if not _modelled(b, rec, (2,), what):
         return
+    _hold_transformer(b, rec, controls, f"{i}-{j}", what)
     g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
     t1, t2 = (_ratio(rec, row, e[12], e[0], what) for row, e in ((2, ends[0]), (3, ends[1])))
     z = _impedance(b, rec, (0, 2), ends[0][12], ends[0][0], what)
@@ -1136,6 +1249,7 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
     rows = [b.bus_row(rec, n, f"{what} winding {w + 1}") for w, n in enumerate(buses)]
     if len(set(buses)) != 3:
         rec.fail(f"{what}: its three windings must be at three different buses")
+    controls = _check_transformer(b, rec, (2, 3, 4), what)
     stat = rec.int(0, 11, 1)
     if stat not in (0, *_WINDINGS_IN):
         rec.fail(f"{what}: STAT {rec.written(0, 11)} must be 0, 1, 2, 3 or 4")
@@ -1150,6 +1264,9 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
         return
     if not _modelled(b, rec, (2, 3, 4), what):
         return
+    in_service = [2 + w for w in windings]
+    held = [(row, cod) for row, cod in controls if row in in_service]
+    _hold_transformer(b, rec, held, "-".join(map(str, buses)), what)
     kvs = [b.base_kv[n] for n in buses]
     z12, z23, z31 = (_impedance(b, rec, (3 * p, 2 + p), kvs[p], buses[p], what) for p in range(3))
     if 0 in (z12, z23, z31):
@@ -1170,15 +1287,90 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
         b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if mag else []))
 
 
+#: the POM's transformer control modes (COD; negative: the same control, switched off)
+_COD = {
+    1: "voltage",
+    2: "reactive power flow",
+    3: "active power flow",
+    4: "dc line",
+    5: "asymmetric active power flow",
+}
+
+
+def _check_transformer(b: _Builder, rec: _Rec, rows: tuple, what: str) -> list:
+    """CaseError naming the field for a transformer code outside the POM's range (Transformer
+    Data), used by stabctl or not: CW, CZ (1 to 3), CM, NMETR (1 or 2), ZCOD (v34 and
+    later: 0 or 1), and on each winding line of ``rows`` COD (-5 to 5); for a winding
+    under control (COD not 0) a CONT bus that is not in the bus data, RMA below RMI or VMA
+    below VMI.  Returns (line, COD) of the windings whose control is on (COD > 0)."""
+    for name, allowed, default in (
+        ("CW", (1, 2, 3), 1),
+        ("CZ", (1, 2, 3), 1),
+        ("CM", (1, 2), 1),
+        ("NMETR", (1, 2), 2),
+        ("ZCOD", (0, 1), 0),
+    ):
+        _code(rec, 0, name, allowed, what, default)
+    controls = []
+    for row in rows:
+        w = row - 1
+        cod = _code(rec, row, f"COD{w}", range(-5, 6), what, 0)
+        if cod == 0:
+            continue
+        k = rec.index(f"CONT{w}", row)
+        cont = 0 if k is None else abs(rec.int(row, k, 0))
+        if cont and cont not in b.base_kv:
+            rec.fail(
+                f"{what}: CONT{w} {rec.written(row, cast(int, k))}: bus {cont} is not in the "
+                "bus data",
+                row,
+            )
+        for hi, lo in ((f"RMA{w}", f"RMI{w}"), (f"VMA{w}", f"VMI{w}")):
+            khi, klo = rec.index(hi, row), rec.index(lo, row)
+            if (
+                khi is not None
+                and klo is not None
+                and rec.num(row, khi, 1.1) < rec.num(row, klo, 0.9)
+            ):
+                rec.fail(
+                    f"{what}: {rec.given(row, khi, klo)}: {hi} must be >= {lo} (COD{w} {cod})", row
+                )
+        if cod > 0:
+            controls.append((row, cod))
+    return controls
+
+
+def _hold_transformer(b: _Builder, rec: _Rec, controls: list, at: str, what: str):
+    """Name in ``held`` a transformer in the network whose windings of ``controls`` ((line,
+    COD) from :func:`_check_transformer`) PSS/E adjusts: stabctl holds their RAW ratio and
+    angle."""
+    if not controls:
+        return
+    modes = []
+    for row, cod in controls:
+        k = rec.index(f"CONT{row - 1}", row)
+        cont = 0 if k is None or cod != 1 else abs(rec.int(row, k, 0))
+        of = f" of bus {cont}" if cont else ""
+        modes.append(f"COD{row - 1} {cod}: {_COD[cod]} control{of}")
+    b.held.append(
+        Held(
+            "transformer",
+            at,
+            rec.source(
+                f"{what}: held at its RAW ratio and angle ({'; '.join(modes)}, not modelled "
+                "in the power flow or the dynamics)"
+            ),
+        )
+    )
+
+
 def _ratio(rec: _Rec, row: int, kv: float, bus: int, what: str) -> float:
     """Turns ratio in pu of the base voltage ``kv`` (BASKV, 0: not given) of bus ``bus``,
     the winding's on line ``row`` (CW, WINDVw, NOMVw; POM Transformer Data: WINDV blank is
     1.0 under CW 1 and 3, NOMV under CW 2; NOMV 0 or blank is the bus base voltage).  A
     WINDV or NOMV that is not > 0 (NOMV: >= 0), or kV given where the bus has no base
     voltage, is refused naming the field."""
-    cw = rec.int(0, 4, 1)
-    if cw not in (1, 2, 3):
-        rec.fail(f"{what}: CW {rec.written(0, 4)} must be 1, 2 or 3")
+    cw = rec.int(0, 4, 1)  # 1 to 3 (_check_transformer)
     w = row - 1
     nomv = _nominal(rec, row, kv, bus, w, what)
     windv = rec.num(row, 0, nomv if cw == 2 else 1.0)
@@ -1218,10 +1410,8 @@ def _impedance(b: _Builder, rec: _Rec, at: tuple, kv: float, bus: int, what: str
     ``bus`` (its NOMV on line ``at[1]``) by CZ."""
     cz = rec.int(0, 5, 1)
     r, x = rec.num(1, at[0]), rec.num(1, at[0] + 1)
-    if cz == 1:
+    if cz == 1:  # 1 to 3 (_check_transformer)
         return complex(r, x)
-    if cz not in (2, 3):
-        rec.fail(f"{what}: CZ {rec.written(0, 5)} must be 1, 2 or 3")
     sbase = rec.num(1, at[0] + 2, b.base)
     if sbase <= 0:
         name = rec.name(1, at[0] + 2)
@@ -1257,8 +1447,60 @@ def _switched_shunt(b: _Builder, rec: _Rec):
         b.once(rec, (num, rec.text(0, 1)), what)
     row = b.bus_row(rec, num, "switched shunt")
     o = 1 if b.version >= 35 else 0  # v35 inserts ID after I
-    if not b.out(rec, what, (num,), 3 + o) and row is not None:
-        row[8] += rec.num(0, 9 + o + _nreg_offset(b.version)) / b.base
+    off = b.out(rec, what, (num,), 3 + o)  # its status first: a shifted record shows there
+    modsw = _check_switched_shunt(b, rec, what)
+    if off or row is None:
+        return
+    k = cast(int, rec.index("BINIT"))
+    row[8] += rec.num(0, k) / b.base
+    if modsw != 0:
+        held = (
+            f"{what}: held at BINIT {rec.written(0, k)} Mvar (MODSW {modsw}: not switched in "
+            "the power flow or the dynamics)"
+        )
+        b.held.append(Held("switched shunt", str(num), rec.source(held)))
+
+
+def _check_switched_shunt(b: _Builder, rec: _Rec, what: str) -> int:
+    """CaseError naming the field for a switched shunt value outside the POM's range
+    (Switched Shunt Data), used by stabctl or not: MODSW other than 0 to 6, ADJM other
+    than 0 or 1, a BINIT outside the range its blocks in service reach (the sum of the
+    negative Ni Bi to that of the positive), and under control (MODSW not 0) VSWHI below
+    VSWLO or a regulated bus (SWREM; v34 and later SWREG) not in the bus data.  Returns
+    MODSW."""
+    modsw = _code(rec, 0, "MODSW", range(7), what, 1)
+    _code(rec, 0, "ADJM", (0, 1), what, 0)
+    if modsw != 0:
+        khi, klo = cast(int, rec.index("VSWHI")), cast(int, rec.index("VSWLO"))
+        if rec.num(0, khi, 1.0) < rec.num(0, klo, 1.0):
+            rec.fail(f"{what}: {rec.given(0, khi, klo)}: VSWHI must be >= VSWLO (MODSW {modsw})")
+        name = "SWREM" if b.version < 34 else "SWREG"
+        k = cast(int, rec.index(name))
+        reg = rec.int(0, k, 0)
+        if reg and reg not in b.base_kv:
+            rec.fail(f"{what}: {name} {rec.written(0, k)}: bus {reg} is not in the bus data")
+    low = high = 0.0
+    blocks = []
+    for n in range(1, 9):
+        kn, kb, ks = rec.index(f"N{n}"), rec.index(f"B{n}"), rec.index(f"S{n}")
+        if kn is None or (ks is not None and rec.int(0, ks, 1) == 0):
+            continue
+        steps, mvar = rec.int(0, kn, 0), 0.0 if kb is None else rec.num(0, kb, 0.0)
+        if steps < 0:
+            rec.fail(f"{what}: N{n} {rec.written(0, kn)} must be >= 0")
+        if steps and mvar:
+            blocks.append(rec.given(0, kn, cast(int, kb)))
+            low, high = low + min(steps * mvar, 0.0), high + max(steps * mvar, 0.0)
+    k = cast(int, rec.index("BINIT"))
+    binit = rec.num(0, k)
+    slack = 1e-6 * max(1.0, abs(binit))
+    if not low - slack <= binit <= high + slack:
+        given = ", ".join(blocks) or "none"
+        rec.fail(
+            f"{what}: BINIT {rec.written(0, k)} Mvar is outside the {low:g} to {high:g} Mvar "
+            f"its blocks in service reach ({given})"
+        )
+    return modsw
 
 
 _HANDLERS = {
@@ -1320,7 +1562,7 @@ def _remote_regulation(b: _Builder) -> np.ndarray:
     """``vreg_con`` rows of the plants regulating a remote bus (share: the plant's RMPCT
     over its group's); a plant whose IREG bus is not a load bus regulates its own bus, as
     PSS/E (POM Generator Data, IREG), listed in ``changed``; CaseError for an IREG bus not
-    in the bus data or a group without reactive share."""
+    in the bus data."""
     with_gen = {g.bus for g in b.gens}
     rows = []
     for num, (ireg, vs, rmpct, rec) in b.remote.items():
@@ -1339,23 +1581,24 @@ def _remote_regulation(b: _Builder) -> np.ndarray:
         b.changed.append(rec.source(f"generator at bus {num}: {why} (PSS/E)"))
         b.buses[num][1] = vs
     out = np.array(rows, float).reshape(-1, 4)
-    for r in np.unique(out[:, 1]):
+    for r in np.unique(out[:, 1]):  # RMPCT > 0 (_check_generator): a positive sum
         grp = out[:, 1] == r
-        total = out[grp, 3].sum()
-        if total <= 0:
-            b.remote[int(out[grp, 0][0])][3].fail(
-                f"the plants regulating bus {int(r)} have RMPCT 0 in all"
-            )
-        out[grp, 3] /= total
+        out[grp, 3] /= out[grp, 3].sum()
     return out
 
 
 def _demote_idle_pv(b: _Builder):
-    """IDE 2 buses without an in-service generator are load buses (PSS/E)."""
+    """IDE 2 buses without an in-service generator are load buses (PSS/E's type 1), each
+    named in ``load_buses`` (with its generators netted, or none in service)."""
     with_gen = {g.bus for g in b.gens}
+    netted = {bus for bus, _ in b.netted_ids}
     for num, row in b.buses.items():
         if row[9] == PV and num not in with_gen:
             row[9] = PQ
+            why = "its generators netted" if num in netted else "no generator in service"
+            src = b.bus_src[num]
+            said = RawSource(src.file, src.line, f"{src.record}: IDE 2, {why}: a load bus (PSS/E)")
+            b.load_buses.append(Held("IDE 2 bus", str(num), said))
 
 
 def _check_netted_swing(b: _Builder):
@@ -1459,4 +1702,6 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         vreg_con=vreg_con,
         changed=tuple(b.changed),
         netted_ids=frozenset(b.netted_ids),
+        held=tuple(sorted(b.held, key=lambda h: h.source.line)),
+        load_buses=tuple(b.load_buses),
     )

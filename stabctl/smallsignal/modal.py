@@ -25,6 +25,7 @@ Conventions (docs/modal.md):
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,26 +125,33 @@ class ModalAnalysis:
         a1, a2 = (", ".join(str(a) for a in sorted(side)) for side in self.area_groups(i))
         return f"{a1} vs {a2 or '-'}"
 
-    def table(self) -> str:
+    def table(self, name: Callable[[int], str] | None = None) -> str:
         """The electromechanical modes as text, one line each by frequency: index,
         frequency (Hz), damping ratio (column ``zeta``, -Re lambda / |lambda|), kind, the
         machines swinging against each other (at most six a side) and an inter-area mode's
         areas (what ``stabctl eig`` prints).
+
+        Parameters
+        ----------
+        name : callable or None, optional
+            How a machine is named from its number (``stabctl eig``: the case's
+            `stabctl.case.Case.machine_name`, ``"G2 (bus 3)"``); default ``"G2"``.
 
         Returns
         -------
         str
             A header line and one line per electromechanical mode.
         """
+        named = name or (lambda k: f"G{k}")
         lines = [f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  {'kind':<10} machines"]
         em = self.electromechanical
         for i in em[np.argsort(self.freq_hz[em])]:
             g1, g2 = self.groups(i)
-            against = " ".join(f"G{k}" for k in g2[:6]) or "others (each < 0.2)"
+            against = " ".join(named(k) for k in g2[:6]) or "others (each < 0.2)"
             areas = f"  [areas {self.area_sides(i)}]" if self.kind[i] == "inter-area" else ""
             lines.append(
                 f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {self.kind[i]:<10} "
-                f"{' '.join(f'G{k}' for k in g1[:6])} vs {against}{areas}"
+                f"{' '.join(named(k) for k in g1[:6])} vs {against}{areas}"
             )
         return "\n".join(lines)
 

@@ -995,7 +995,11 @@ def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
 def check_search_range(search: SearchOptions) -> None:
     """Refuse, before any run, a search whose range from t_lo to t_max holds no whole
     lattice cell (a t_max below the tolerance): every search with these settings would
-    fail, whatever the fault.
+    fail, whatever the fault; and one whose tolerance is not below t_max: its one cell
+    spans the whole range, so every search would report a CCT of 0 (or above t_max),
+    whatever the fault.  The sweeps (`cct_jobs`) and the CLI's searches check their
+    settings so; `critical_clearing_time` takes such a one-cell bracket (a caller that
+    already knows its upper end unstable).
 
     Parameters
     ----------
@@ -1005,9 +1009,16 @@ def check_search_range(search: SearchOptions) -> None:
     Raises
     ------
     InputError
-        The range narrower than the tolerance (the search's own rule and message).
+        The range narrower than the tolerance (the search's own rule and message), or
+        the tolerance not below t_max.
     """
     _lattice_bounds(search.tol, search.t_lo, _first_upper(search), search.t_max)
+    if not search.tol < search.t_max:
+        raise InputError(
+            f"the CCT tolerance {search.tol:g} s is not below t_max {search.t_max:g} s: one "
+            "step would span the whole search, whose CCT would read 0 (or above t_max) "
+            "whatever the fault"
+        )
 
 
 def _first_upper(o: SearchOptions) -> float:
@@ -1367,14 +1378,16 @@ def cct_jobs(
     (`SearchOptions.to_inputs`: error_check only when off) and the model settings
     (`ModelOptions.to_inputs`: q_limits only when off).
 
-    Checks every fault's bus and line against the case first (UnknownBusError, CaseError)
-    so that bad input fails before any job runs, then compiles the simulator's kernels in
+    Checks the search settings (`check_search_range`: InputError) and every fault's bus
+    and line against the case first (UnknownBusError, CaseError) so that bad input fails
+    before any job runs, then compiles the simulator's kernels in
     this process if they are not cached (`compile_here`).
     """
     from stabctl.dynamics.events import validate
     from stabctl.io import load_case
     from stabctl.parallel import Job
 
+    check_search_range(search)
     case = load_case(case_name)
     faults = list(faults)
     for f in faults:

@@ -20,6 +20,16 @@ from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
 
 
+def _whose(rec: dict) -> str:
+    """Whose a CCT record of none of a screening's jobs is: a sweep-cct's when its fault
+    has trips, a storage rating or a fault time no screening gives, else a sweep-cct's or
+    another screening's (of other buses or lines)."""
+    inputs = rec.get("inputs") or {}
+    if inputs.get("trips") or inputs.get("esd_pct") is not None or inputs.get("t_fault") != 1.0:
+        return "a sweep-cct record (trips, a storage rating or a fault time no screening has)"
+    return "a sweep-cct record or another screening's (of other buses or lines)"
+
+
 def screening_faults(
     case: Case, buses=None, lines: bool = False, t_fault: float = 1.0
 ) -> list[LineFault]:
@@ -144,12 +154,22 @@ def screen(
     Raises
     ------
     InputError, UnknownBusError
-        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`.
+        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`; `out`
+        holding a record of none of the screening's faults (a sweep-cct's, another
+        screening's: `stabctl.parallel.check_records_jobs`), which its table would leave
+        out.
     """
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
+    jobs = cct_jobs(case_name, faults, search=search, model=model)
+    parallel.check_records_jobs(
+        out,
+        (j.key for j in jobs),
+        _whose,
+        "its table would leave it out; give another output file (--out)",
+    )
     report = parallel.run_sweep(  # looked up at call time (a test may patch it)
-        cct_jobs(case_name, faults, search=search, model=model),
+        jobs,
         out,
         workers=runner.workers,
         scheduler=runner.scheduler,

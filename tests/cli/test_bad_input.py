@@ -1346,6 +1346,80 @@ def test_a_search_limit_below_the_tolerance_is_refused_before_any_sweep(
 
 
 @pytest.mark.parametrize(
+    "args",
+    [
+        ("screen", "kundur", "--buses", 3, "--workers", 1, "--out", "s.jsonl"),
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--workers", 1, "--t-max", 1),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101, "--t-max", 1),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3, "--t-max", 1),
+    ],
+)
+def test_a_tolerance_not_below_the_search_limit_is_refused_before_any_run(
+    no_simulation, tmp_path, monkeypatch, args
+):
+    """cct with --tol-ms 1000 and --t-max 1 printed a CCT of 0.000 s: the search's one
+    step spans its whole range, so every CCT reads 0 (or above t_max) whatever the fault.
+    Refused up front, for the sweeps and place too, nothing recorded."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    limit = [] if "--t-max" in args else ["--t-max", 1]
+    res = run(*args, *limit, "--tol-ms", 1000)
+    assert_error(
+        res, "--tol-ms 1000 with --t-max 1 s", "the CCT tolerance 1 s is not below t_max 1 s"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
+def test_a_sweep_s_search_settings_are_checked_by_the_library_too():
+    """`cct_jobs` (the sweeps' and the screening's jobs) refuses the settings before any
+    job, as the CLI does."""
+    from stabctl.stability.cct import SearchOptions, cct_jobs
+
+    with pytest.raises(InputError, match="tolerance 1 s is not below t_max 1 s"):
+        cct_jobs("kundur", [], search=SearchOptions(tol=1.0, t_max=1.0))
+
+
+@pytest.mark.parametrize(
+    "inputs, whose",
+    [
+        (
+            {"bus": 3, "far_bus": 101, "t_fault": 1.0, "trips": [], "esd_pct": None},
+            "a sweep-cct record or another screening's (of other buses or lines)",
+        ),
+        (
+            {"bus": 3, "far_bus": 101, "t_fault": 1.0, "trips": [], "esd_pct": 20.0},
+            "a sweep-cct record (trips, a storage rating or a fault time no screening has)",
+        ),
+    ],
+)
+def test_a_screening_refuses_a_records_file_with_other_runs_records(
+    no_simulation, tmp_path, monkeypatch, inputs, whose
+):
+    """screen appended its records to a file of sweep-cct records and left those out of
+    its table without a word: a record of none of the screening's faults is refused,
+    naming the file, its line and whose it is, before any run; the file is left as it
+    was."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    key = "kundur/3-101/t1/esd" + ("-none" if inputs["esd_pct"] is None else "20")
+    record = {"key": key, "inputs": {"case": "kundur", **inputs}, "status": "failed"}
+    text = json.dumps({**record, "error": "stand-in"}) + "\n"
+    (tmp_path / "mix.jsonl").write_text(text)
+    res = run("screen", "kundur", "--buses", 3, "--tol-ms", 10, "--out", "mix.jsonl")
+    assert_error(
+        res,
+        f"mix.jsonl line 1: job {key} is {whose}, none of this run's 1 job(s): its table "
+        "would leave it out; give another output file (--out)",
+    )
+    assert (tmp_path / "mix.jsonl").read_text() == text
+
+
+@pytest.mark.parametrize(
     "key,value,needle",
     [
         ("solver_options", {"tol": 1e-3}, "unknown key(s) ['solver_options']"),

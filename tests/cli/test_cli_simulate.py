@@ -497,6 +497,15 @@ def test_trip_and_close_name_a_circuit(tmp_path):
         (["--bus-fault", "3:-1:0", 1, 1.1], ["R and X must be >= 0"]),
         (["--close", 3, 101, 1.0], ["closes it while it is not open"]),
         (["--trip", 3, 101, "--t-trip", 1.5, "--close", 3, 101, 1.0], ["not open"]),
+        # a reclosure before the faulted line is open at both ends: said in plain words
+        (
+            ["--fault", 3, "--far-bus", 101, "--clear-cycles", 6, "--far-clear-cycles", 12]
+            + ["--close", 3, 101, 1.15],
+            [
+                "--close 3 101 at 1.15 s comes at or before the far end of the fault at bus 3 "
+                "(at 1 s) clears at 1.2 s: the circuit is open only from then"
+            ],
+        ),
         (["--trip-gen", 9, 1.0], ["machine 9"]),
         (["--load-step", 999, 1.0, 0.1, 0.0], ["bus 999"]),
         (["--vref-step", 9, 1.0, 0.01], ["machine 9"]),

@@ -984,3 +984,175 @@ def test_an_exciter_that_cannot_start_is_named_by_the_import_that_keeps_it(tmp_p
     )
     res, _, out = imported(tmp_path, lines, "--leave-out-infeasible")
     assert res.exit_code == 0 and "1 control(s) outside their limits left out" in res.output
+
+
+#: the five-bus case's generator at bus 3 '1' from its ZX on (v33)
+GEN_3_1 = "2.00000E-1, 0.00000E+0, 0.00000E+0,1.00000,1,  100.0,   200.000,     0.000,   1,1.0000"
+#: the five-bus case's switched shunt (v33: bus 4, MODSW 1, SWREM 0, BINIT 30 of one block)
+SWSH = "    4,1,0,1,1.05000,0.95000,     0,100.0,'            ',    30.00,   1,    30.00"
+
+
+@pytest.mark.parametrize(
+    "source, old, new, expected",
+    [
+        # transformer codes, used by stabctl or not
+        (
+            FIVE_BUS,
+            "'1 ',2,2,1,",
+            "'1 ',2,2,5,",
+            "edited.raw:26 transformer record (line 1 of the record): transformer 2-3 '1': "
+            "CM 5 must be 1 or 2",
+        ),
+        (
+            FIVE_BUS,
+            "'1 ',2,2,1,",
+            "'1 ',2,0,1,",
+            "edited.raw:26 transformer record (line 1 of the record): transformer 2-3 '1': "
+            "CZ 0 must be 1, 2 or 3",
+        ),
+        (
+            FIVE_BUS,
+            "0.00000E+0,2,'T1",
+            "0.00000E+0,3,'T1",
+            "edited.raw:26 transformer record (line 1 of the record): transformer 2-3 '1': "
+            "NMETR 3 must be 1 or 2",
+        ),
+        (
+            V35,
+            "'            ', 0\n 5.00000E-03",
+            "'            ', 7\n 5.00000E-03",
+            "edited.raw:49 transformer record (line 1 of the record): transformer 2-3 '1': "
+            "ZCOD 7 must be 0 or 1",
+        ),
+        # a winding's control: its code, its controlled bus, its limits
+        (
+            FIVE_BUS,
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.10000,",
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 9,      0, 1.10000,",
+            "edited.raw:28 transformer record (line 3 of the record): transformer 2-3 '1': "
+            "COD1 9 must be within -5 to 5",
+        ),
+        (
+            FIVE_BUS,
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.10000,",
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 1,     77, 1.10000,",
+            "edited.raw:28 transformer record (line 3 of the record): transformer 2-3 '1': "
+            "CONT1 77: bus 77 is not in the bus data",
+        ),
+        (
+            FIVE_BUS,
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0, 1.10000,",
+            "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, -1,     3, 0.8,",
+            "edited.raw:28 transformer record (line 3 of the record): transformer 2-3 '1': "
+            "RMA1 = 0.8, RMI1 = 0.90000: RMA1 must be >= RMI1 (COD1 -1)",
+        ),
+        (
+            FIVE_BUS,
+            "0.05000,1,1,",
+            "0.05000,1,3,",
+            "edited.raw:24 branch record: branch 1-2 '3': MET 3 must be 1 or 2",
+        ),
+        # generator fields
+        (
+            FIVE_BUS,
+            GEN_3_1,
+            GEN_3_1.replace("0.00000E+0,1.00000,1", "0.00000E+0,0.0,1"),
+            "edited.raw:18 generator record: generator at bus 3 '1': GTAP 0.0 must be > 0",
+        ),
+        (
+            FIVE_BUS,
+            GEN_3_1,
+            GEN_3_1.replace("200.000,     0.000", "-50.0,     0.000"),
+            "edited.raw:18 generator record: generator at bus 3 '1': PT = -50.0, PB = 0.000: "
+            "PT must be >= PB",
+        ),
+        (
+            FIVE_BUS,
+            GEN_3_1,
+            GEN_3_1.replace("   1,1.0000", "   1,-0.5"),
+            "edited.raw:18 generator record: generator at bus 3 '1': F1 -0.5 must be >= 0 (an "
+            "ownership fraction)",
+        ),
+        # RMPCT must be positive, whether the plant regulates a remote bus or its own
+        (
+            FIVE_BUS,
+            GEN_3_1,
+            GEN_3_1.replace("100.0", "-100.0"),
+            "edited.raw:18 generator record: generator at bus 3 '1': RMPCT -100.0 must be > 0",
+        ),
+        (
+            V35,
+            "   0,1.0000, 0, 1.000\n    3,'2 '",
+            "   0,1.0000, 4, 1.000\n    3,'2 '",
+            "edited.raw:33 generator record: generator at bus 3 '1': WMOD 4 must be within 0 to 3",
+        ),
+        (
+            V35,
+            "   0,1.0000, 0, 1.000\n    3,'2 '",
+            "   0,1.0000, 2, 0.0\n    3,'2 '",
+            "edited.raw:33 generator record: generator at bus 3 '1': WPF 0.0 must be within -1 "
+            "to 1 and not 0 (WMOD 2)",
+        ),
+        (
+            V35,
+            "   0,1.0000, 0, 1.000\n    3,'2 '",
+            "   0,1.0000, 3, -1.5\n    3,'2 '",
+            "edited.raw:33 generator record: generator at bus 3 '1': WPF -1.5 must be within -1 "
+            "to 1 and not 0 (WMOD 3)",
+        ),
+        # switched shunt fields
+        (
+            FIVE_BUS,
+            SWSH,
+            SWSH.replace("    30.00,   1", "    100.0,   1"),
+            "edited.raw:47 switched shunt record: switched shunt at bus 4: BINIT 100.0 Mvar is "
+            "outside the 0 to 30 Mvar its blocks in service reach (N1 = 1, B1 = 30.00)",
+        ),
+        (
+            FIVE_BUS,
+            SWSH,
+            SWSH.replace("1.05000,0.95000", "0.90000,0.95000"),
+            "edited.raw:47 switched shunt record: switched shunt at bus 4: VSWHI = 0.90000, "
+            "VSWLO = 0.95000: VSWHI must be >= VSWLO (MODSW 1)",
+        ),
+        (
+            FIVE_BUS,
+            SWSH,
+            SWSH.replace("     0,100.0", "     99,100.0"),
+            "edited.raw:47 switched shunt record: switched shunt at bus 4: SWREM 99: bus 99 is "
+            "not in the bus data",
+        ),
+        (
+            FIVE_BUS,
+            SWSH,
+            SWSH.replace("    4,1,0,1", "    4,1,2,1"),
+            "edited.raw:47 switched shunt record: switched shunt at bus 4: ADJM 2 must be 0 or 1",
+        ),
+        (
+            FIVE_BUS,
+            SWSH,
+            SWSH.replace("    4,1,0,1", "    4,7,0,1"),
+            "edited.raw:47 switched shunt record: switched shunt at bus 4: MODSW 7 must be within "
+            "0 to 6",
+        ),
+        (
+            V35,
+            "  30.00, 1, 1,  30.00",
+            "  30.00, 0, 1,  30.00",
+            "edited.raw:89 switched shunt record: switched shunt at bus 4 '1': BINIT 30.00 Mvar "
+            "is outside the 0 to 0 Mvar its blocks in service reach (none)",
+        ),
+    ],
+)
+def test_a_raw_code_or_limit_outside_the_pom_s_range_is_refused_naming_its_field(
+    tmp_path, source, old, new, expected
+):
+    """The POM's ranges of the transformer, branch, generator and switched shunt fields,
+    whether stabctl reads the field or not (NMETR, MET, ZCOD, GTAP, PT and PB, the
+    ownership fractions): a value outside is refused naming the record's line, the field
+    and its text (each had been read as its default, or as nothing, without a word).  A
+    bus a control names (CONT, SWREM) must be in the bus data; a control's upper limit
+    must not be below its lower; a switched shunt's BINIT must be reachable by its
+    blocks in service (v35 and later: a block's status Si)."""
+    line, _ = refused_raw(tmp_path, source, old, new)
+    assert line == f"error: {expected}", line

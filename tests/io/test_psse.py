@@ -749,13 +749,19 @@ def test_power_flow_is_reported_against_the_raw_files_own_solution(tmp_path):
     """PSS/E's EXST1 run (TVC system: a step-down transformer 4-3 with WINDV2 1.04, which
     ANDES's reader drops): stabctl's power flow of the imported case (Q limits on, as
     simulate solves it) is compared with the RAW's VM, VA, bus by bus: within 1e-4 here
-    (the RAW's voltages are written to 5 decimals), no warning."""
+    (the RAW's voltages are written to 5 decimals), no warning but the one naming the
+    transformer whose voltage control (COD1 1) is held at the RAW's ratio."""
     exst1 = RUNS / "EXST1"
     out = tmp_path / "exst1.json"
     res = run("import-psse", exst1 / "TVC_System_32.raw", exst1 / "TVC_System.dyr", "-o", out)
     assert res.exit_code == 0, res.output
     assert "power flow against the RAW's solution (Q limits on" in res.stdout
-    assert "warning" not in res.stderr
+    warned = [line for line in res.stderr.splitlines() if line.startswith("warning")]
+    assert warned == [
+        "warning: TVC_System_32.raw + TVC_System.dyr: 1 control(s) held at their RAW setting: "
+        "TVC_System_32.raw:23 transformer 4-3 '1': held at its RAW ratio and angle (COD1 1: "
+        "voltage control of bus 3, not modelled in the power flow or the dynamics)"
+    ], res.stderr
     res = run(
         "import-psse", exst1 / "TVC_System_32.raw", exst1 / "TVC_System.dyr", "-o", out, "--json"
     )
@@ -861,3 +867,96 @@ def test_the_import_help_example_runs_as_written(tmp_path, monkeypatch):
         assert res.exit_code == 0, (line, res.output)
         outputs.append(res.output)
     assert "kundur_full.dyr:37 TOGGLE" in outputs[0] and "stable" in outputs[1]
+
+
+#: the five-bus v35 case's generator at bus 3 '1' (PG 150 MW, QT 100, QB -50): WMOD, WPF
+WIND_TAIL = "   0,1.0000, 0, 1.000\n    3,'2 '"
+
+
+@pytest.mark.parametrize(
+    "wmod, wpf, qt, qb",
+    [
+        # WMOD 2: +-|PG| tan(acos |WPF|) = +-150 * 0.75, with generator 3 '2's 60 and -20
+        (2, "0.800", 112.5 + 60.0, -112.5 - 20.0),
+        # WMOD 3: a fixed Q of PG tan(acos |WPF|), the sign of PG times that of WPF
+        (3, "-0.800", -112.5 + 60.0, -112.5 - 20.0),
+    ],
+)
+def test_a_wind_machine_s_q_limits_come_from_wpf_as_pss_e_derives_them(tmp_path, wmod, wpf, qt, qb):
+    """POM Generator Data: WMOD 2 gives limits of equal magnitude and opposite sign from the
+    machine's P and WPF, WMOD 3 a fixed Q (limits equal); QT and QB are not used.  The
+    generator is named in ``changed`` with the limits and the fields they come from."""
+    raw = tmp_path / "wind.raw"
+    text = (DATA / "five_bus_v35.raw").read_text()
+    assert text.count(WIND_TAIL) == 1
+    raw.write_text(text.replace(WIND_TAIL, WIND_TAIL.replace(" 0, 1.000", f" {wmod}, {wpf}")))
+    data = read_raw(raw)
+    row = data.bus[data.bus[:, 0] == 3][0]
+    assert (row[10], row[11]) == pytest.approx((qt / 100.0, qb / 100.0), abs=1e-12)
+    (said,) = [str(c) for c in data.changed if "generator" in str(c)]
+    q = 112.5 if wmod == 2 else -112.5
+    assert said == (
+        f"wind.raw:33 generator at bus 3 '1': Q limits QT {q:g}, QB {-q if wmod == 2 else q:g} "
+        f"Mvar from PG 150.000 and WPF {wpf} (WMOD {wmod}, PSS/E's rule) instead of QT 100.000, "
+        "QB -50.000"
+    )
+
+
+def test_an_ide_2_bus_without_a_generator_in_service_is_named_as_a_load_bus(tmp_path):
+    """PSS/E takes an IDE 2 bus without an in-service generator as a load bus (type 1):
+    so does stabctl, naming the bus's record in ``load_buses`` and the import's
+    ``changed`` (it had been silent); many such buses make one summary line."""
+    from stabctl.io.psse import held_lines
+
+    raw = tmp_path / "pv.raw"
+    old = "    4,'SUB         ', 115.0000,1,"
+    raw.write_text(V33.read_text().replace(old, old.replace(",1,", ",2,")))
+    data = read_raw(raw)
+    assert data.bus[data.bus[:, 0] == 4][0][9] == PQ
+    said = "pv.raw:7 bus 4: IDE 2, no generator in service: a load bus (PSS/E)"
+    assert [str(h.source) for h in data.load_buses] == [said]
+    with pytest.warns(UserWarning, match="IDE 2, no generator in service"):
+        imported = import_psse(raw, DATA / "five_bus.dyr")
+    assert said in imported.changed and said in imported.changed_summary
+    assert held_lines(data.load_buses * 6) == [
+        "6 IDE 2 buses without a generator in service (none, or netted) read as load buses "
+        "(PSS/E), at buses 4, 4, 4, 4, 4, 4"
+    ]
+
+
+def test_controls_not_modelled_are_named_as_held_at_their_raw_setting(tmp_path):
+    """A switched shunt that PSS/E switches (MODSW not 0) stays at BINIT, a transformer
+    winding under control (COD > 0) at its ratio and angle: each is named in `held` (a
+    locked shunt, MODSW 0, or a control switched off, COD < 0, is as PSS/E holds it: not
+    named), in the import's warning and in the CLI's summary; many of a kind make one
+    line with their buses."""
+    from stabctl.io.psse import held_lines
+    from stabctl.io.psse_raw import Held, RawSource
+
+    winding = "240.00,   0.000,   0.000,   100.00,   100.00,   100.00, 0,      0,"
+    raw = tmp_path / "held.raw"
+    raw.write_text(V33.read_text().replace(winding, winding.replace(" 0,      0,", " 1,      3,")))
+    with pytest.warns(UserWarning, match=r"2 control\(s\) held at their RAW setting"):
+        imported = import_psse(raw, DATA / "five_bus.dyr")
+    assert imported.held == (
+        "held.raw:26 transformer 2-3 '1': held at its RAW ratio and angle (COD1 1: voltage "
+        "control of bus 3, not modelled in the power flow or the dynamics)",
+        "held.raw:47 switched shunt at bus 4: held at BINIT 30.00 Mvar (MODSW 1: not switched "
+        "in the power flow or the dynamics)",
+    )
+    res = run("import-psse", raw, DATA / "five_bus.dyr", "-o", tmp_path / "h.json")
+    assert res.exit_code == 0, res.output
+    assert "2 control(s) held at their RAW setting" in res.stdout
+    assert [line for line in res.stdout.splitlines() if line.startswith("  held: ")] == [
+        f"  held: {h}" for h in imported.held
+    ]
+    res = run("import-psse", raw, DATA / "five_bus.dyr", "-o", tmp_path / "h.json", "--json")
+    assert json.loads(res.stdout)["held"] == list(imported.held)
+    locked = tmp_path / "locked.raw"
+    locked.write_text(V33.read_text().replace("    4,1,0,1,1.05000", "    4,0,0,1,1.05000"))
+    assert read_raw(locked).held == ()
+    many = [Held("switched shunt", str(n), RawSource("a.raw", n, f"shunt {n}")) for n in range(6)]
+    assert held_lines(many) == [
+        "6 switched shunts held at BINIT (MODSW not 0: not switched in the power flow or the "
+        "dynamics), at buses 0, 1, 2, 3, 4, 5"
+    ]

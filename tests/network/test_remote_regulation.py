@@ -91,12 +91,16 @@ def test_a_generator_bus_as_ireg_means_own_regulation_and_is_said(tmp_path):
 
 
 def test_bad_remote_data_is_refused_by_name(tmp_path):
+    """An IREG bus that is not there; an RMPCT that is not > 0 (POM: RMPCT must be
+    positive), whether the plant shares a remote bus or not."""
     with pytest.raises(CaseError, match="IREG bus 9 is not in the bus data"):
         case_of(tmp_path, ireg3=9)
-    with pytest.raises(CaseError, match="RMPCT 0 in all"):
+    with pytest.raises(CaseError, match=r"RMPCT 0\.0 must be > 0"):
         case_of(tmp_path, rm3=0.0, rm4=0.0)
-    with pytest.raises(CaseError, match=r"RMPCT -5\.0 must be >= 0"):
+    with pytest.raises(CaseError, match=r"RMPCT -5\.0 must be > 0"):
         case_of(tmp_path, rm3=-5.0)
+    with pytest.raises(CaseError, match=r"RMPCT -5\.0 must be > 0"):
+        case_of(tmp_path, rm3=-5.0, ireg3=0)
 
 
 def test_the_case_file_keeps_the_regulation(tmp_path):
