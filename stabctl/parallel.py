@@ -1273,12 +1273,55 @@ def _connect(scheduler: str, workers: int, timeout: float):
             _close_cluster(cluster)
             raise
     try:
+        if address.startswith("tcp://"):  # (an inproc:// cluster runs on this process's loop)
+            _handshake(address, timeout)
         return _started_client(address, timeout=timeout)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
         raise InputError(
             f"no Dask scheduler answers at {address} within {timeout:g} s "
             f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
         ) from None
+
+
+def _handshake(address: str, timeout: float) -> None:
+    """Open a Dask connection to `address` and close it, the whole within `timeout` s,
+    before a client connects: Dask's ``connect`` times out the TCP connection but waits
+    for the peer's handshake without end, so a client of a peer that accepts and says
+    nothing (a scheduler hung, another program's port) waited for ever, its time-out
+    notwithstanding.
+
+    Parameters
+    ----------
+    address : str
+        A Dask TCP address (``tcp://host:port``).
+    timeout : float
+        Seconds.
+
+    Raises
+    ------
+    TimeoutError
+        No handshake within `timeout` s (said so in its message).
+    OSError
+        No connection (Dask's own errors: refused, timed out).
+
+    Notes
+    -----
+    Source: distributed 2026.8 ``comm/core.py``: ``connect`` (the TCP connection
+    retried within its time-out, then ``await comm.read()`` of the handshake with
+    none).
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def shake() -> None:
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(shake(), timeout))
+    except TimeoutError:
+        raise TimeoutError("it accepted the connection and sent no Dask handshake") from None
 
 
 def dask_setup(worker) -> None:
