@@ -1306,6 +1306,8 @@ def _handshake(address: str, timeout: float) -> None:
 
     Notes
     -----
+    Run on an event loop of its own in a thread of its own, as the client's start runs
+    on its own loop thread: a caller's thread may run a loop already (a notebook's).
     Source: distributed 2026.8 ``comm/core.py``: ``connect`` (the TCP connection
     retried within its time-out, then ``await comm.read()`` of the handshake with
     none).
@@ -1315,13 +1317,26 @@ def _handshake(address: str, timeout: float) -> None:
     from distributed.comm import connect
 
     async def shake() -> None:
-        comm = await connect(address, timeout=timeout)
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
         await comm.close()
 
-    try:
-        asyncio.run(asyncio.wait_for(shake(), timeout))
-    except TimeoutError:
-        raise TimeoutError("it accepted the connection and sent no Dask handshake") from None
+    ended: list[BaseException | None] = []
+
+    def run() -> None:
+        try:
+            asyncio.run(shake())
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            ended.append(exc)
+        else:
+            ended.append(None)
+
+    thread = threading.Thread(target=run, name="stabctl-dask-handshake", daemon=True)
+    thread.start()
+    thread.join()  # (a daemon: Ctrl-C ends the wait, the thread ends within timeout)
+    if isinstance(ended[0], TimeoutError):
+        raise TimeoutError("it accepted the connection and sent no Dask handshake")
+    if ended[0] is not None:
+        raise ended[0]
 
 
 def dask_setup(worker) -> None:
