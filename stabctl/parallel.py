@@ -1307,12 +1307,70 @@ def _connect(scheduler: str, workers: int, timeout: float):
             _close_cluster(cluster)
             raise
     try:
+        if address.startswith("tcp://"):  # (an inproc:// cluster runs on this process's loop)
+            _handshake(address, timeout)
         return _started_client(address, timeout=timeout)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
         raise InputError(
             f"no Dask scheduler answers at {address} within {timeout:g} s "
             f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
         ) from None
+
+
+def _handshake(address: str, timeout: float) -> None:
+    """Open a Dask connection to `address` and close it, the whole within `timeout` s,
+    before a client connects: Dask's ``connect`` times out the TCP connection but waits
+    for the peer's handshake without end, so a client of a peer that accepts and says
+    nothing (a scheduler hung, another program's port) waited for ever, its time-out
+    notwithstanding.
+
+    Parameters
+    ----------
+    address : str
+        A Dask TCP address (``tcp://host:port``).
+    timeout : float
+        Seconds.
+
+    Raises
+    ------
+    TimeoutError
+        No handshake within `timeout` s (said so in its message).
+    OSError
+        No connection (Dask's own errors: refused, timed out).
+
+    Notes
+    -----
+    Run on an event loop of its own in a thread of its own, as the client's start runs
+    on its own loop thread: a caller's thread may run a loop already (a notebook's).
+    Source: distributed 2026.8 ``comm/core.py``: ``connect`` (the TCP connection
+    retried within its time-out, then ``await comm.read()`` of the handshake with
+    none).
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def shake() -> None:
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
+        await comm.close()
+
+    ended: list[BaseException | None] = []
+
+    def run() -> None:
+        try:
+            asyncio.run(shake())
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            ended.append(exc)
+        else:
+            ended.append(None)
+
+    thread = threading.Thread(target=run, name="stabctl-dask-handshake", daemon=True)
+    thread.start()
+    thread.join()  # (a daemon: Ctrl-C ends the wait, the thread ends within timeout)
+    if isinstance(ended[0], TimeoutError):
+        raise TimeoutError("it accepted the connection and sent no Dask handshake")
+    if ended[0] is not None:
+        raise ended[0]
 
 
 def dask_setup(worker) -> None:

@@ -512,11 +512,21 @@ def test_a_records_file_starting_with_a_byte_order_mark_is_read_whole(tmp_path, 
     assert not [w for w in recwarn if "d.jsonl" in str(w.message)]
 
 
+@pytest.mark.parametrize(
+    "reply, why",
+    [
+        (b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50, ""),
+        (b"", "it accepted the connection and sent no Dask handshake"),
+    ],
+    ids=["web-server", "silent"],
+)
 def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time_box(
-    tmp_path, monkeypatch
+    tmp_path, monkeypatch, reply, why
 ):
     """A web server where the scheduler should be: "Unable to allocate 3.07 EiB" (a length
-    read from its HTTP reply) or a hang; now one InputError within SCHEDULER_TIMEOUT_S."""
+    read from its HTTP reply) or a hang; a peer that accepts and says nothing: a hang
+    (Dask's handshake has no time-out).  Now one InputError within SCHEDULER_TIMEOUT_S
+    naming the address."""
     pytest.importorskip("distributed")
     import socket
     import threading
@@ -524,6 +534,7 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
     monkeypatch.setattr("stabctl.parallel.SCHEDULER_TIMEOUT_S", 3.0)
     server = socket.create_server(("127.0.0.1", 0))
     port = server.getsockname()[1]
+    held = []  # each connection stays open: the peer neither answers nor hangs up
 
     def serve():
         while True:
@@ -531,13 +542,14 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
                 conn, _ = server.accept()
             except OSError:
                 return
-            conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50)
+            held.append(conn)
+            conn.sendall(reply)
 
     threading.Thread(target=serve, daemon=True).start()
     t0 = time.perf_counter()
     try:
         with pytest.raises(
-            InputError, match=rf"no Dask scheduler answers at tcp://127.0.0.1:{port}"
+            InputError, match=rf"no Dask scheduler answers at tcp://127.0.0.1:{port} .*{why}"
         ):
             run_sweep(
                 jobs_of(square, 1),
@@ -547,6 +559,8 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
             )
     finally:
         server.close()
+        for conn in held:
+            conn.close()
     assert time.perf_counter() - t0 < 20
     assert not (tmp_path / "d.jsonl").exists()
     # the client whose start failed is closed, not left to Dask's finaliser

@@ -642,6 +642,7 @@ def track(
         + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
         + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + (f"; {gaps}" if (gaps := sources.gap_line(got)) else "")
+        + "".join(f"; {unsent}" for unsent in got.unsent)
         + f"; wrote {out_path}"
     )
     if got.short:

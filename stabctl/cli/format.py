@@ -466,13 +466,14 @@ def print_modes(st, no_pss: bool) -> None:
 
 def _source_line(src: dict, seed: int) -> str:
     """What a received stream brought (`estimate rmse --source`)."""
-    from stabctl.estimation.sources import unused_values
+    from stabctl.estimation.sources import Unsent, unused_values
 
     return (
         f"frames from {src['address']}: {src['frames']} time stamps, {src['data_frames']} "
         f"data frames from {src['streams']} stream(s), "
         f"{unused_values(src['flagged']) or 'no PMU value flagged unusable by its STAT'}, "
         f"{src['missing']} missing (labelled seed {seed})"
+        + "".join(f"; {Unsent(**unsent)}" for unsent in src["unsent"])
     )
 
 

@@ -19,6 +19,7 @@ and where, with exit status 2; nothing is written in that case (:func:`reports_e
 
 from __future__ import annotations
 
+import _thread
 import functools
 import math
 import os
@@ -66,16 +67,72 @@ class Terminated(KeyboardInterrupt):
 #: the signal that ended the running command (`_interrupt`), None while none came
 _received: list[int] = []
 
+#: the signal whose interrupt was dropped, raised inside Python code that C called and
+#: that drops what it raises (`_unraisable`), until it is raised again
+_dropped: list[int] = []
+
+#: seconds after which a dropped interrupt is delivered again (`_deliver_again`)
+AGAIN_S = 0.05
+
 
 def _raise_terminated(signum, frame):
+    """SIGTERM or SIGHUP as `Terminated`, remembered (`_received`)."""
     _received.append(signum)
+    _dropped.clear()
     raise Terminated(signum)
 
 
 def _raise_interrupt(signum, frame):
     """SIGINT as Python's own handler (KeyboardInterrupt), remembered (`_received`)."""
     _received.append(signum)
+    _dropped.clear()
     raise KeyboardInterrupt
+
+
+def _as_interrupt(signum: int) -> KeyboardInterrupt:
+    """The interrupt a signal ends a command with: KeyboardInterrupt for SIGINT, else
+    `Terminated`."""
+    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+
+
+def _unraisable(previous):
+    """The ``sys.unraisablehook`` while a command runs.  A signal handled while Python
+    code that C called runs (a ctypes callback: llvmlite's object-cache notification while
+    numba compiles) raises its interrupt there, and the C caller prints the exception
+    (``Exception ignored on calling ctypes callback function ... Terminated: 15``) and
+    drops it: the command ran on.  Such an interrupt is not printed but delivered again
+    `AGAIN_S` s later in the main thread (`_deliver_again`), in the code that runs then,
+    again until it is raised where it propagates; a command that returns first ends on it
+    (`_sigterm_as_interrupt`).  Any other error goes to `previous`.
+
+    Parameters
+    ----------
+    previous : callable
+        The hook before (Python's default, or one a caller installed).
+
+    Returns
+    -------
+    callable
+        The hook.
+    """
+
+    def hook(unraisable):
+        if isinstance(unraisable.exc_value, KeyboardInterrupt) and _received:
+            _dropped[:] = [_received[-1]]
+            again = threading.Timer(AGAIN_S, _deliver_again)
+            again.daemon = True
+            again.start()
+        else:
+            previous(unraisable)
+
+    return hook
+
+
+def _deliver_again() -> None:
+    """The dropped signal (`_dropped`) delivered to the main thread again, as if it came
+    anew (its handler runs there), if it was not raised meanwhile."""
+    if _dropped:
+        _thread.interrupt_main(signal.Signals(_dropped[0]))
 
 
 #: the signals a command ends on as on Ctrl-C (`Terminated`)
@@ -92,11 +149,15 @@ def _sigterm_as_interrupt():
     started with ignored stays ignored: ``nohup stabctl screen ...`` goes on when its
     terminal closes.  Each signal is remembered
     (`_received`), so that an error the interrupt caused in code that does not let it
-    through ends the command as the interrupt does (`_interrupt`)."""
+    through ends the command as the interrupt does (`_interrupt`), and an interrupt that
+    code called from C dropped is delivered again (`_unraisable`), or raised when the block
+    ends if it has not come again by then."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     _received.clear()
+    _dropped.clear()
+    hook, sys.unraisablehook = sys.unraisablehook, _unraisable(sys.unraisablehook)
     previous = {
         sig: signal.signal(sig, _raise_terminated)
         for sig in _ENDING_SIGNALS
@@ -108,7 +169,11 @@ def _sigterm_as_interrupt():
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_interrupt)
     try:
         yield
+        if _dropped:  # the block ended before the dropped interrupt came again
+            raise _as_interrupt(_dropped[0])
     finally:
+        _dropped.clear()
+        sys.unraisablehook = hook
         for sig, handler in previous.items():
             signal.signal(sig, handler)
 
@@ -139,8 +204,7 @@ def _interrupt(exc: BaseException) -> KeyboardInterrupt | None:
         cause = cause.__cause__ or cause.__context__
     if not _received:
         return None
-    signum = _received[0]
-    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+    return _as_interrupt(_received[0])
 
 
 def _quiet_stdout() -> None:

@@ -479,7 +479,9 @@ def check_config(cfg2, cfg: StreamConfig) -> Layout:
     Raises
     ------
     InputError
-        An IDCODE, station names or DATA_RATE other than cfg's, a PMU without exactly
+        An IDCODE, station names or DATA_RATE other than cfg's, a PMU whose FNOM is not
+        the case's nominal frequency (cfg's `StreamConfig.f0`: its FREQ, a deviation
+        from its FNOM, would be read as one from the case's), a PMU without exactly
         one voltage phasor, or without exactly one current phasor where cfg needs one,
         or an integer phasor used whose PHUNIT scale is 0: each named (``its CFG-2``,
         the field, the PMU); the caller adds the source.
@@ -492,6 +494,11 @@ def check_config(cfg2, cfg: StreamConfig) -> Layout:
     ):
         if theirs != ours:
             raise InputError(f"its CFG-2 {field} {theirs}, not the {ours} expected")
+    if off := [b for b in bl if b.fnom != cfg.f0]:
+        raise InputError(
+            f"its CFG-2 FNOM {off[0].fnom:g} Hz (PMU {', '.join(b.station for b in off)}), "
+            f"not the case's nominal frequency {cfg.f0:g} Hz: PMUs of another system"
+        )
     return Layout(
         int(cfg2.get_time_base()),
         tuple(bl),
@@ -1074,21 +1081,41 @@ def recorded_frames(path) -> tuple:
 
 
 def read_config(data: bytes, what: str):
-    """A CFG-2 frame's bytes as pyc37 reads them (``ConfigFrame2``).
+    """A CFG-2 frame's bytes as pyc37 reads them (``ConfigFrame2``): the one reading of
+    a CFG-2 wherever one is expected (a recording's first frame, a server's or a plant's
+    answer to 'cfg2', one resent mid-stream).  Its frame type (SYNC bits 6-4) is checked
+    first, and only a CFG-2 is handed to pyc37's CFG-2 parser: a CFG-1 has the CFG-2's
+    layout but gives what a PMU can report, not what it sends (C37.118.2-2011), which
+    pyc37 read as a CFG-2 without a word, and pyc37's parser of any frame recursed
+    without end on a CFG-3.
+
+    Parameters
+    ----------
+    data : bytes
+        The frame.
+    what : str
+        Its source, for messages (``its CFG-2``, ``r.c37: first frame``).
+
+    Returns
+    -------
+    pyc37 ConfigFrame2
 
     Raises
     ------
     InputError
-        Bytes that are not a readable configuration frame, named by ``what``.
+        A frame of another type (``... is a CFG-3 (SYNC frame type 5), not the CFG-2
+        expected``), or a CFG-2 that is not readable (its CRC, its fields), named by
+        ``what``.
     """
+    if len(data) >= 2 and (kind := frame_kind(data)) != "CFG-2":
+        raise InputError(
+            f"{what} is a {kind} (SYNC frame type {data[1] >> 4 & 0x7}), not the CFG-2 expected"
+        )
     f = _pyc37()
-    try:
-        cfg2 = f.CommonFrame.convert2frame(data)
+    try:  # pyc37 turns any error of its parse (a frame cut, a field out of range) into this
+        return f.ConfigFrame2.convert2frame(data)
     except f.FrameError as exc:
         raise InputError(f"{what} is not a configuration frame: {exc}") from None
-    if not isinstance(cfg2, f.ConfigFrame1):
-        raise InputError(f"{what} is a {type(cfg2).__name__}, not CFG-2")
-    return cfg2
 
 
 def replay(path, cfg: StreamConfig) -> list[Frame]:

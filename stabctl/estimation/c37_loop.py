@@ -473,8 +473,10 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     Raises
     ------
     InputError
-        No plant there, no whole frame within `timeout` s, a CFG-2 that does not describe
-        the controller's stream (`c37.check_config`), or a frame after 'start' that is
+        No plant there, no whole frame within `timeout` s, an answer to 'cfg2' that is
+        not a readable CFG-2 (`c37.read_config`: a CFG-1 or CFG-3 among them), a CFG-2
+        that does not describe the controller's stream (`c37.check_config`: its FNOM the
+        case's nominal frequency among its fields), or a frame after 'start' that is
         neither a data frame of the stream (`c37.parse_frame`) nor the end-of-run header
         (its CRC valid).
     PlantStopped

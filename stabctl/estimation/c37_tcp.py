@@ -995,11 +995,11 @@ def receive(
         whose `Stream.short` says it was interrupted, or None before the CFG-2 came.
     InputError
         No server there, no whole frame within `timeout` s before the first data frame, a
-        reply to 'cfg2' that is not a valid configuration frame (its CRC), a peer of
-        another protocol or bytes off a frame's start (a FRAMESIZE that is not the
-        frame's), a connection reset or closed before the first data frame, a first data
-        frame refused, or more than `MAX_FRAMES` frames of a stream without a stated end:
-        each named with host:port.
+        reply to 'cfg2' that is not a readable CFG-2 (`c37.read_config`: its frame type,
+        its CRC), a peer of another protocol or bytes off a frame's start (a FRAMESIZE
+        that is not the frame's), a connection reset or closed before the first data
+        frame, a first data frame refused, or more than `MAX_FRAMES` frames of a stream
+        without a stated end: each named with host:port.
     """
     from pyc37.frame import CommandFrame
 
@@ -1025,8 +1025,6 @@ def receive(
                     f"serves another stream than IDCODE {idcode}, which these commands "
                     f"addressed (its messages say which)"
                 )
-            if cfg2[1] & 0x70 != 0x30:  # frame type 011: CFG-2
-                raise InputError(f"answered 'cfg2' with frame type {cfg2[1] >> 4 & 7}")
             config = c37.read_config(cfg2, "its CFG-2")
             conn.sendall(CommandFrame(idcode, "start").convert2bytes())
             short, refused = _data_frames(conn, config, end, data, timeout)
@@ -1053,7 +1051,7 @@ def _interrupted_stream(cfg2, data: list, end: End) -> Stream | None:
     """The `Stream` an interrupted `receive` hands on: its CFG-2 (None: it had not come,
     and None is returned) and the data frames received, `Stream.short` naming the
     interrupt, the frames and the last time stamp."""
-    if not cfg2 or cfg2[1] & 0x70 != 0x30:
+    if not cfg2:
         return None
     try:
         config = c37.read_config(cfg2, "its CFG-2")

@@ -7,7 +7,9 @@ merged by time stamp into one `pmu.Frame` per reporting instant.
 A source is written ``tcp://HOST:PORT[,HOST:PORT...]`` or as a file path.  Each stream's
 CFG-2 names its PMUs by station name (a `pmu.PMU` label, ``B3:G1``); every PMU of the run
 must be in exactly one stream.  Time: t = 0 of the run is the CFG-2 frame's own time
-stamp (SOC), as `c37.config_frame` writes it.
+stamp (SOC), as `c37.config_frame` writes it; of several streams, the earliest CFG-2's:
+their data frames are merged on the time stamps as sent (one clock), and streams that
+share none are refused, their offset named (`merge`).
 """
 
 from __future__ import annotations
@@ -122,6 +124,9 @@ class Received:
     short : tuple of str
         Each stream that stopped before its stated end (`c37_tcp.End`), with what cut it;
         empty: every stream whole.
+    unsent : tuple of Unsent
+        Each stream that sent no frame at time stamps other streams sent (its PMUs'
+        values there among `missing`), in stream order; empty for one stream.
     flagged : dict
         `absent` by reason (`c37.STAT_UNUSABLE`'s, `c37.TIME_QUALITY_FAULT`'s), the
         reasons that occurred only.
@@ -145,6 +150,7 @@ class Received:
     flagged: dict = dataclasses.field(default_factory=dict)
     gaps: tuple = ()
     breaks: tuple = ()
+    unsent: tuple = ()
 
     @property
     def gap_frames(self) -> int:
@@ -161,6 +167,7 @@ class Received:
             "flagged": dict(self.flagged),
             "missing": self.missing,
             "gaps": [dataclasses.asdict(g) for g in self.gaps],
+            "unsent": [dataclasses.asdict(u) for u in self.unsent],
             "short": list(self.short),
         }
 
@@ -196,6 +203,35 @@ class Gap:
     def __str__(self) -> str:
         what = "filled with missing values" if self.filled else "the estimator restarts after it"
         return f"{self.frames} after t = {self.after:.4f} s, to {self.until:.4f} s ({what})"
+
+
+@dataclass(frozen=True)
+class Unsent:
+    """The time stamps that other streams of a source sent and one stream did not: its
+    PMUs' values there are missing (a stream that lost frames, or whose clock is off by
+    part of the time the streams cover).
+
+    Attributes
+    ----------
+    stream : str
+        The stream (``stream 2 (127.0.0.1:4713)``).
+    instants : int
+        Time stamps it did not send.
+    first, last : float
+        The first and the last of them (s; t = 0 is the earliest CFG-2's).
+    """
+
+    stream: str
+    instants: int
+    first: float
+    last: float
+
+    def __str__(self) -> str:
+        return (
+            f"{self.stream} sent no frame at {self.instants} time stamp(s) the other "
+            f"streams sent, t = {self.first:.4f} s to {self.last:.4f} s (its PMUs' values "
+            "missing there)"
+        )
 
 
 def gap_line(received: Received) -> str:
@@ -293,11 +329,12 @@ def read_frames(
         ``received`` attribute saying how many data frames had come from which server.
     InputError
         As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
-        ``--source``); more TCP servers than PMUs; a stream at another rate, a station
-        that is not one of `pmus` or in two streams, a PMU in no stream, a data frame that
-        is not readable or not the stream's (`c37.parse_frame`; over TCP as received:
-        `c37_tcp.Stream.refused`), a stream whose time stamps repeat or go backwards, or
-        frames whose every value is absent.
+        ``--source``); more TCP servers than PMUs; a stream at another rate or nominal
+        frequency (`c37.check_config`), a station that is not one of `pmus` or in two
+        streams, a PMU in no stream, a data frame that is not readable or not the
+        stream's (`c37.parse_frame`; over TCP as received: `c37_tcp.Stream.refused`), a
+        stream whose time stamps repeat or go backwards, streams that share no time stamp
+        (`merge`), or frames whose every value is absent.
     """
     from stabctl.estimation.c37_tcp import End, Stream, receive
 
@@ -305,6 +342,7 @@ def read_frames(
     if source.path is not None:
         cfg2, data = c37.recorded_frames(source.path)
         streams = [_recorded_to(end, cfg2, data, str(source.path))]
+        names = [str(source.path)]
     else:
         if len(source.servers) > len(pmus):
             raise InputError(
@@ -352,8 +390,13 @@ def read_frames(
             for (h, p), g in zip(source.servers, got)
             if isinstance(g, Stream)
         ]
+        names = [
+            f"stream {k + 1} ({hostport(h, p)})"
+            for k, ((h, p), g) in enumerate(zip(source.servers, got))
+            if isinstance(g, Stream)
+        ]
     try:
-        received = merge(case, pmus, rate, [(cfg2, data) for cfg2, data, _ in streams])
+        received = merge(case, pmus, rate, [(cfg2, data) for cfg2, data, _ in streams], names)
     except InputError as exc:
         raise InputError(f"--source {source}: {exc}") from None
     if not received.frames:
@@ -418,20 +461,45 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
     return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"
 
 
-def merge(case, pmus, rate: float, streams) -> Received:
+def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
     """One `Frame` per time stamp from streams of (CFG-2 as pyc37 reads it, data frames'
     bytes); each stream's values go to its PMUs' columns (by station name), those of a
-    time stamp a stream did not send are NaN and invalid.
+    time stamp a stream did not send are NaN and invalid, and said (`Received.unsent`).
+    The time stamps are read on one clock, t = 0 the earliest CFG-2's: a stream whose
+    clock is off by more than the time the streams cover shares no time stamp with the
+    first, and is refused naming the offset (merged, its frames would be of other
+    instants than the first's, or, read each from its own CFG-2's time stamp, taken as
+    simultaneous).
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+        The case (its nominal frequency, the PMU buses' rated kV).
+    pmus : sequence of PMU
+        The run's PMUs, one column each.
+    rate : float
+        Frames per second.
+    streams : sequence of (pyc37 ConfigFrame2, sequence of bytes)
+        Each stream's CFG-2 and data frames.
+    stream_names : sequence of str, optional
+        Each stream's name in messages (default ``stream 1``, ``stream 2``, ...).
+
+    Returns
+    -------
+    Received
 
     Raises
     ------
     InputError
-        As `read_frames`.
+        As `read_frames`; a stream that shares no time stamp with the first (both
+        sending frames).
     """
+    called = list(stream_names or (f"stream {s + 1}" for s in range(len(streams))))
     labels = [p.label for p in pmus]
     owner: dict[str, int] = {}
     parsed = []
     flagged: collections.Counter = collections.Counter()
+    epoch = min((cfg2.get_soc() for cfg2, _ in streams), default=0)
     for s, (cfg2, data) in enumerate(streams):
         check_order(data, cfg2, f"stream {s + 1}")
         names = cfg2.get_station_name()
@@ -443,9 +511,7 @@ def merge(case, pmus, rate: float, streams) -> Received:
                 raise InputError(f"station {name!r} is in streams {owner[name] + 1} and {s + 1}")
             owner[name] = s
         cols = [labels.index(n) for n in names]
-        cfg = c37.stream_config(
-            case, [pmus[c] for c in cols], rate, cfg2.get_id_code(), cfg2.get_soc()
-        )
+        cfg = c37.stream_config(case, [pmus[c] for c in cols], rate, cfg2.get_id_code(), epoch)
         try:
             c37.check_config(cfg2, cfg)
         except InputError as exc:
@@ -462,7 +528,31 @@ def merge(case, pmus, rate: float, streams) -> Received:
         parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
-    return dataclasses.replace(_by_time_stamp(len(labels), parsed, rate), flagged=dict(flagged))
+    return dataclasses.replace(
+        _by_time_stamp(len(labels), parsed, rate),
+        flagged=dict(flagged),
+        unsent=_unsent([frames for _, frames in parsed], called),
+    )
+
+
+def _unsent(streams, names) -> tuple:
+    """The `Unsent` time stamps of each of `streams` (each a list of `Frame`): those
+    another stream sent; refused if a stream shares none with the first (both sending)."""
+    stamps = [{round(f.t * c37.TIME_BASE): f.t for f in frames} for frames in streams]
+    for s in range(1, len(stamps)):
+        if stamps[0] and stamps[s] and not stamps[0].keys() & stamps[s].keys():
+            t0, ts = min(stamps[0].values()), min(stamps[s].values())
+            raise InputError(
+                f"{names[s]} shares no time stamp with {names[0]}: its first is "
+                f"{ts - t0:+.6f} s from {names[0]}'s (t = {ts:.6f} s and {t0:.6f} s, t = 0 "
+                "the earliest CFG-2's): their clocks disagree, or they are of other times"
+            )
+    every = {k: t for own in stamps for k, t in own.items()}
+    out = []
+    for name, own in zip(names, stamps):
+        if lack := sorted(every.keys() - own.keys()):
+            out.append(Unsent(name, len(lack), every[lack[0]], every[lack[-1]]))
+    return tuple(out)
 
 
 def check_order(data, cfg2, what: str) -> None:

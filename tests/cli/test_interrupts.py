@@ -396,6 +396,39 @@ def test_a_hangup_the_command_was_started_ignoring_is_still_ignored():
     assert res.exit_code == 0 and "went on" in res.output, (res.output, res.exception)
 
 
+@pytest.mark.parametrize("goes_on", [True, False], ids=["works-on", "returns"])
+@pytest.mark.parametrize("sig,status", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
+def test_an_interrupt_dropped_by_a_callback_from_c_still_ends_the_command(sig, status, goes_on):
+    """A signal handled while Python code that C called runs (llvmlite's object-cache
+    notification, a ctypes callback, as numba compiles) raised its interrupt there, and
+    ctypes printed it ("Exception ignored on calling ctypes callback function ...
+    Terminated: 15") and dropped it: `stabctl compile` ran on with its compile child.  The
+    interrupt is delivered again and ends the command with its one line and status,
+    whether the command works on after the callback or returns at once."""
+    import ctypes
+
+    import click
+
+    from stabctl.cli.options import reports_errors
+
+    @ctypes.CFUNCTYPE(None)
+    def from_c():
+        signal.raise_signal(sig)
+
+    @click.command()
+    @reports_errors
+    def long_work():
+        from_c()
+        for _ in range(200 if goes_on else 0):  # 10 s at most
+            time.sleep(0.05)
+        click.echo("went on")
+
+    res = CliRunner().invoke(long_work, [])
+    assert res.exit_code == status, (res.output, res.exception)
+    assert res.stderr.startswith("interrupted: ") and "Exception ignored" not in res.stderr
+    assert ("went on" in res.stdout) is not goes_on
+
+
 def _catches(pid: int, sig: int) -> bool:
     """Whether process pid has a handler for sig (its SigCgt mask in /proc)."""
     try:

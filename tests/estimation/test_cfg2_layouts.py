@@ -116,15 +116,14 @@ def merged(kundur, head, body):
         ({"polar": True, "ph_float": False}, 0.0),
         ({"fr_float": True}, 6e-4),
         ({"time_base": 1000}, 0.0),
-        ({"fnom": 50}, 0.0),
         ({"order": "IV"}, 0.0),
     ],
-    ids=["polar", "integer", "polar-integer", "float-FREQ", "TIME_BASE-1000", "FNOM-50", "I-V"],
+    ids=["polar", "integer", "polar-integer", "float-FREQ", "TIME_BASE-1000", "I-V"],
 )
 def test_a_stream_is_read_as_its_cfg2_says(kundur, layout, f_tol):
     """Streams whose CFG-2 says polar phasors, 16-bit integer phasors (PHUNIT 10 V or A
-    per bit), floating-point FREQ/DFREQ (the actual frequency), TIME_BASE 1000, FNOM 50 Hz
-    (a 60 Hz PMU's FREQ +10 Hz from it) or the current phasor before the voltage were read
+    per bit), floating-point FREQ/DFREQ (the actual frequency), TIME_BASE 1000 or the
+    current phasor before the voltage were read
     with stabctl's own layout (exit 0, frequencies off by Hz, phasors swapped).  Each is
     read back to the frames of stabctl's own stream: the same time stamps and absent
     values, the phasors and frequencies within what the layout's resolution allows."""
@@ -153,15 +152,18 @@ def test_a_stream_is_read_as_its_cfg2_says(kundur, layout, f_tol):
         ({"order": "VV"}, "PMU B1:G1: 2 voltage phasor(s) (PHUNIT type 0) among its PHNMR 2"),
         ({"fr_float": True, "pyc37_freq": True}, "data frame 1: PMU B1:G1: floating-point FREQ "
          "(FORMAT bit 3) 5.46559e-06 Hz is not within FNOM 60 +- 32.767 Hz"),
+        ({"fnom": 50}, "its CFG-2 FNOM 50 Hz (PMU B1:G1, B2:G2, B11:G3, B12:G4), not the "
+         "case's nominal frequency 60 Hz"),
     ],
-    ids=["PHNMR-1", "two-voltages", "FREQ-deviation"],
+    ids=["PHNMR-1", "two-voltages", "FREQ-deviation", "FNOM-50"],
 )  # fmt: skip
 def test_a_cfg2_not_read_is_refused_naming_field_and_pmu(kundur, layout, needle):
     """A CFG-2 with one phasor (the voltage) where the machine PMU's current is needed
     raised an IndexError (a traceback); one with two voltage phasors, or a floating-point
     FREQ holding the deviation (as pyc37 writes it, where the standard has the actual
-    frequency), was read wrong.  Each is refused naming the stream, the field and the
-    PMU."""
+    frequency), was read wrong; one whose FNOM is 50 Hz on a 60 Hz case was read as PMUs
+    of that case, their FREQ taken from 50 Hz.  Each is refused naming the stream, the
+    field and the PMU."""
     with pytest.raises(InputError) as err:
         merged(kundur, *build(kundur, **layout))
     assert str(err.value).startswith("stream 1") and needle in str(err.value), err.value

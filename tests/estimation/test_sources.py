@@ -4,6 +4,7 @@ the estimators exactly the figures of the same seed's frames encoded and parsed 
 process, and figures within the wire's quantisation of those drawn in process."""
 
 import contextlib
+import dataclasses
 
 import numpy as np
 import pytest
@@ -66,6 +67,7 @@ def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
         "flagged": {"absent (STAT bits 15-14 = 10)": int((~drawn.valid).sum())},
         "missing": 0,
         "gaps": [],
+        "unsent": [],
         "short": [],
     }
     assert got.absent > 0
@@ -101,11 +103,12 @@ def test_two_streams_merge_into_the_one_stream(kundur_run, tmp_path):
         assert figures(case, res, got.frames) == figures(case, res, one.frames)
 
 
-def encoded(case, pmus, cols, idcode, frames):
-    """(CFG-2, data frames) of a stream of the PMUs cols."""
+def encoded(case, pmus, cols, idcode, frames, data_s=0.0, cfg_s=0):
+    """(CFG-2, data frames) of a stream of the PMUs cols; its data frames stamped data_s
+    s later, its CFG-2 cfg_s s later (a whole number)."""
     cfg = c37.stream_config(case, [pmus[c] for c in cols], SETTINGS.rate, idcode)
-    cfg2 = c37.config_frame(cfg)
-    return cfg2, [c37.data_frame(cfg, cfg2, f.of(cols)) for f in frames]
+    cfg2 = c37.config_frame(dataclasses.replace(cfg, epoch=cfg.epoch + cfg_s))
+    return cfg2, [c37.data_frame(cfg, cfg2, f._replace(t=f.t + data_s).of(cols)) for f in frames]
 
 
 def test_a_stream_missing_time_stamps_marks_them_missing(kundur_run):
@@ -123,6 +126,76 @@ def test_a_stream_missing_time_stamps_marks_them_missing(kundur_run):
     k = 10  # a time stamp the second stream skipped
     assert not got.frames[k].valid[2:].any() and np.isnan(got.frames[k].freq[2:]).all()
     assert np.array_equal(got.frames[k].valid[:2], drawn.valid[k, :2])
+
+
+def test_streams_are_merged_on_one_clock(kundur_run):
+    """Two streams, each read from its own CFG-2's time stamp: the second's clock 10 s
+    off (its CFG-2 and data frames alike) was merged as if simultaneous, and its CFG-2
+    alone stamped 1 s later moved its frames 1 s.  On one clock (t = 0 the earliest
+    CFG-2's) the first is refused naming the offset, the second is the merge of the
+    streams on time; and the time stamps a stream did not send (its data frames 0.5 s
+    late: 30 at each end), NaN without a word, are named."""
+    case, _res, pmus, drawn = kundur_run
+    frames = list(drawn)[:121]
+    a = encoded(case, pmus, [0, 1], 1, frames)
+    same = sources.merge(case, pmus, SETTINGS.rate, [a, encoded(case, pmus, [2, 3], 10, frames)])
+    assert same.unsent == () and same.missing == 0
+    moved = sources.merge(case, pmus, 60, [a, encoded(case, pmus, [2, 3], 10, frames, cfg_s=1)])
+    assert figures(case, _res, moved.frames) == figures(case, _res, same.frames)
+    b = encoded(case, pmus, [2, 3], 10, frames, data_s=10.0, cfg_s=10)
+    with pytest.raises(
+        InputError,
+        match=r"^stream 2 shares no time stamp with stream 1: its first is \+10\.000000 s "
+        r"from stream 1's \(t = 10\.000000 s and 0\.000000 s",
+    ):
+        sources.merge(case, pmus, SETTINGS.rate, [a, b])
+    late = sources.merge(
+        case, pmus, SETTINGS.rate, [a, encoded(case, pmus, [2, 3], 10, frames, data_s=0.5)]
+    )
+    assert len(late.frames) == 151 and late.missing == 2 * 30 + 2 * 30
+    assert late.unsent == (
+        sources.Unsent("stream 1", 30, 121 / 60, 150 / 60),
+        sources.Unsent("stream 2", 30, 0.0, 29 / 60),
+    )
+    assert str(late.unsent[1]) == (
+        "stream 2 sent no frame at 30 time stamp(s) the other streams sent, t = 0.0000 s to "
+        "0.4833 s (its PMUs' values missing there)"
+    )
+    assert late.summary()["unsent"][1] == {
+        "stream": "stream 2", "instants": 30, "first": 0.0, "last": 29 / 60
+    }  # fmt: skip
+
+
+def test_track_names_the_time_stamps_a_stream_did_not_send(kundur_run, tmp_path):
+    """`estimate track` of two servers, the second's frames 0.5 s late: its line names the
+    time stamps each server did not send, by server."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    case, _res, pmus, drawn = kundur_run
+    frames = list(drawn)[:121]
+    halves = [
+        StreamServer(*encoded(case, pmus, [0, 1], 1, frames), speed=float("inf")),
+        StreamServer(*encoded(case, pmus, [2, 3], 10, frames, 0.5), speed=float("inf")),
+    ]
+    with contextlib.ExitStack() as stack:
+        for server in halves:
+            stack.enter_context(server)
+        (h1, p1), (h2, p2) = (s.address for s in halves)
+        res = CliRunner().invoke(
+            main,
+            ["estimate", "track", "kundur", "--source", f"tcp://{h1}:{p1},{h2}:{p2}",
+             "--idcode", "1,10", "--frames", "121", "--out", str(tmp_path / "t.csv")],
+        )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith("tracked 151 frames")
+    assert (
+        f"; stream 1 ({h1}:{p1}) sent no frame at 30 time stamp(s) the other streams sent, "
+        "t = 2.0167 s to 2.5000 s (its PMUs' values missing there); "
+        f"stream 2 ({h2}:{p2}) sent no frame at 30 time stamp(s) the other streams sent, "
+        "t = 0.0000 s to 0.4833 s (its PMUs' values missing there); wrote"
+    ) in res.stdout, res.stdout
 
 
 @pytest.mark.parametrize(

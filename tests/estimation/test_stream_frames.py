@@ -262,6 +262,84 @@ def test_replay_checks_every_frame_before_it_listens(wire, tmp_path, monkeypatch
     one_error(res, f"data frame {frame}: a data frame of IDCODE 999, not the stream's 1")
 
 
+def _typed(frame: bytes, kind: int) -> bytes:
+    """frame with another frame type in its SYNC word (bits 6-4), its CRC valid."""
+    return _crc(frame[:1] + bytes([frame[1] & 0x8F | kind << 4]) + frame[2:])
+
+
+@pytest.mark.parametrize("kind, name", [(2, "CFG-1"), (5, "CFG-3"), (7, "frame of type 7")])
+def test_a_configuration_frame_of_another_type_is_refused_wherever_a_cfg2_is_read(
+    wire, tmp_path, monkeypatch, kind, name
+):
+    """A recording whose first frame is a CFG-3, or a server or a plant answering 'cfg2'
+    with one: pyc37's parser recursed without end (a RecursionError traceback); a CFG-1
+    was read as the CFG-2 (`pmu replay` served it, `estimate track` tracked it, `pmu
+    control` took a plant's).  Each is one error line naming the frame type."""
+    import stabctl.cli.pmu as cli_pmu
+
+    _, _, head, body = wire
+    odd = _typed(head, kind)
+    said = f"is a {name} (SYNC frame type {kind}), not the CFG-2 expected"
+    rec, out = tmp_path / "odd.c37", tmp_path / "t.csv"
+    rec.write_bytes(odd + b"".join(body))
+    monkeypatch.setattr(cli_pmu, "_serve", lambda servers: pytest.fail("served"))
+    one_error(run("pmu", "replay", rec, "--port", 0, "--speed", 0), f"first frame {said}")
+    one_error(run("estimate", "track", "kundur", "--source", rec, "--out", out), said)
+    srv, port = _server(odd, b"".join(body))
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--frames", 10, "--out", out,
+        )  # fmt: skip
+    one_error(res, f"127.0.0.1:{port}: its CFG-2 {said}")
+    assert not out.exists()
+    srv, port = _server(odd, b"")
+    with srv:
+        res = run("pmu", "control", "kundur", f"127.0.0.1:{port}", "--esd-pct", 5)
+    one_error(res, f"127.0.0.1:{port}'s CFG-2 {said}")
+
+
+def test_a_cfg2_pyc37_cannot_read_is_one_error(wire):
+    """A CFG-2, its CRC valid, whose fields pyc37 cannot read (NUM_PMU 65535 in a frame of
+    four PMUs, a frame cut after 60 bytes): an error naming it, not a traceback."""
+    _, _, head, _ = wire
+    for odd in (head[:18] + (65535).to_bytes(2, "big") + head[20:], head[:60]):
+        odd = _crc(odd[:2] + len(odd).to_bytes(2, "big") + odd[4:])
+        with pytest.raises(InputError, match=r"^its CFG-2 is not a configuration frame: "):
+            c37.read_config(odd, "its CFG-2")
+
+
+def test_pmus_of_another_nominal_frequency_are_refused(wire, tmp_path):
+    """PMUs whose CFG-2 says FNOM 50 Hz on a 60 Hz case were read, their FREQ (a deviation
+    from 50 Hz) taken as 10 Hz swings: `estimate track` said 7751 mHz where the swing was
+    202 mHz and `pmu control` commanded 34 ESD starts instead of 4, each with exit status
+    0.  A recording, a server and a plant are refused, naming FNOM, the PMUs and the
+    case's frequency."""
+    import dataclasses
+
+    cfg, _, _, body = wire
+    head = c37.config_frame(dataclasses.replace(cfg, f0=50.0)).convert2bytes()
+    labels = ", ".join(p.label for p in cfg.pmus)
+    said = f"its CFG-2 FNOM 50 Hz (PMU {labels}), not the case's nominal frequency 60 Hz"
+    rec, out = tmp_path / "fifty.c37", tmp_path / "t.csv"
+    rec.write_bytes(head + b"".join(body))
+    one_error(run("estimate", "track", "kundur", "--source", rec, "--out", out), said)
+    srv, port = _server(head, b"".join(body))
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--frames", 10, "--out", out,
+        )  # fmt: skip
+    one_error(res, said)
+    assert not out.exists()
+    srv, port = _server(head, b"")
+    with srv:
+        res = run(
+            "pmu", "control", "kundur", f"127.0.0.1:{port}", "--esd-pct", 5, "--estimator", "ekf"
+        )
+    one_error(res, f"the plant at 127.0.0.1:{port}: {said}")
+
+
 # -- a whole frame within the time-out -------------------------------------------------------
 
 
