@@ -1074,7 +1074,9 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
     was reached (or, with no end stated, the server closed), else (what cut the stream,
     why a frame was refused or '').  `budget` (s) is the longest wait for the next data
     frame, whatever else comes meanwhile (a server sending header frames and no data
-    frame is cut as a silent one is); the connection's time-out is left at it."""
+    frame is cut as a silent one is: a frame that begins within it has `budget` from its
+    first byte to end, so a wait that runs out in the middle of a header frame is no
+    frame cut short); the connection's time-out is left at it."""
     soc = cfg2.get_soc()
     since = time.monotonic()  # of 'start', then of the last data frame
     try:
@@ -1082,8 +1084,8 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
             try:
                 if (left := since + budget - time.monotonic()) <= 0:
                     raise TimeoutError("timed out")
-                conn.settimeout(left)
-                frame = _read_frame(conn)
+                conn.settimeout(budget)  # a frame begun by then has `budget` to end
+                frame = _read_frame(conn, first_byte=left)
             except FrameTimeout:
                 cut = f"sent part of a frame and not the rest within {budget:g} s"
             except TimeoutError:
