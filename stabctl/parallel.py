@@ -989,38 +989,33 @@ def check_records_case(path: str | Path, cases: Mapping, remedy: str) -> None:
             raise InputError(f"{where} {why}; {remedy}")
 
 
-def check_records_jobs(
-    path: str | Path, keys: Iterable[str], whose: Callable[[dict], str], remedy: str
-) -> None:
-    """Refuse a records file that holds a record of none of a run's jobs: a run that
-    reports on its own jobs only (a screening's table) would leave it out without a word.
+def other_records(path: str | Path, keys: Iterable[str], whose: Callable[[dict], str]) -> list[str]:
+    """The records of a records file that are none of a run's jobs, named: a run that
+    reports on its own jobs only (a screening's table) names them rather than leave them
+    out without a word (a file may hold a wider screening's or a sweep-cct's records).
 
     Parameters
     ----------
     path : str or pathlib.Path
-        The records file (JSON lines, `run_sweep`'s output); a missing file passes.
+        The records file (JSON lines, `run_sweep`'s output); a missing file has none.
     keys : iterable of str
         The run's job keys.
     whose : callable
         ``whose(record)``: whose record it is, in words (``"a sweep-cct record"``).
-    remedy : str
-        What the user does instead, ending the message.
 
-    Raises
-    ------
-    InputError
-        Naming the file, the line and job of the first record of another run, and whose
-        it is.
+    Returns
+    -------
+    list of str
+        One per such record, in file order: ``"line N: job KEY (whose)"``.
     """
     path, mine = Path(path), set(keys)
     if not path.exists():
-        return
-    for n, _, rec, _why in _record_lines(path):
-        if rec is not None and rec["key"] not in mine:
-            raise InputError(
-                f"{path} line {n}: job {rec['key']} is {whose(rec)}, none of this run's "
-                f"{len(mine)} job(s): {remedy}"
-            )
+        return []
+    return [
+        f"line {n}: job {rec['key']} ({whose(rec)})"
+        for n, _, rec, _why in _record_lines(path)
+        if rec is not None and rec["key"] not in mine
+    ]
 
 
 def _differences(old: dict, new: Mapping) -> str:

@@ -9,6 +9,7 @@ its reason (never dropped).
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 from stabctl import parallel
@@ -53,6 +54,8 @@ ABOVE = AboveSearchLimit.label
 INSECURE = InsecureContingency.label
 #: every verdict of a CCT record, in the order summaries count them
 VERDICTS = ("cct", ABOVE, INSECURE, "failed")
+#: records of other jobs a screening names when its records file holds them
+OTHERS_SHOWN = 5
 
 
 def verdict(rec: dict) -> str:
@@ -154,20 +157,26 @@ def screen(
     Raises
     ------
     InputError, UnknownBusError
-        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`; `out`
-        holding a record of none of the screening's faults (a sweep-cct's, another
-        screening's: `stabctl.parallel.check_records_jobs`), which its table would leave
-        out.
+        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`.
+
+    Warns
+    -----
+    UserWarning
+        `out` holds records of none of the screening's faults (a wider screening's, a
+        sweep-cct's: `stabctl.parallel.other_records`), named (the first OTHERS_SHOWN):
+        kept in the file, left out of the table.
     """
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
     jobs = cct_jobs(case_name, faults, search=search, model=model)
-    parallel.check_records_jobs(
-        out,
-        (j.key for j in jobs),
-        _whose,
-        "its table would leave it out; give another output file (--out)",
-    )
+    others = parallel.other_records(out, (j.key for j in jobs), _whose)
+    if others:
+        shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
+        warnings.warn(
+            f"{out} holds {len(others)} record(s) of none of this screening's "
+            f"{len(jobs)} fault(s), kept in the file and left out of its table: {shown}",
+            stacklevel=2,
+        )
     report = parallel.run_sweep(  # looked up at call time (a test may patch it)
         jobs,
         out,

@@ -1395,27 +1395,33 @@ def test_a_sweep_s_search_settings_are_checked_by_the_library_too():
         ),
     ],
 )
-def test_a_screening_refuses_a_records_file_with_other_runs_records(
+def test_a_screening_names_the_records_of_other_runs_in_its_file(
     no_simulation, tmp_path, monkeypatch, inputs, whose
 ):
     """screen appended its records to a file of sweep-cct records and left those out of
-    its table without a word: a record of none of the screening's faults is refused,
-    naming the file, its line and whose it is, before any run; the file is left as it
-    was."""
+    its table without a word: a record of none of the screening's faults is named in a
+    warning (the file, its line, whose it is) before any run, and kept in the file."""
+    from stabctl.stability.cct import SearchOptions
+    from stabctl.stability.screening import screen
+
     monkeypatch.chdir(tmp_path)
     import stabctl.parallel
 
-    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    def no_sweep(*a, **k):
+        raise InputError("no sweep here")
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", no_sweep)
     key = "kundur/3-101/t1/esd" + ("-none" if inputs["esd_pct"] is None else "20")
     record = {"key": key, "inputs": {"case": "kundur", **inputs}, "status": "failed"}
     text = json.dumps({**record, "error": "stand-in"}) + "\n"
     (tmp_path / "mix.jsonl").write_text(text)
-    res = run("screen", "kundur", "--buses", 3, "--tol-ms", 10, "--out", "mix.jsonl")
-    assert_error(
-        res,
-        f"mix.jsonl line 1: job {key} is {whose}, none of this run's 1 job(s): its table "
-        "would leave it out; give another output file (--out)",
+    said = (
+        "mix.jsonl holds 1 record(s) of none of this screening's 1 fault(s), kept in the "
+        f"file and left out of its table: line 1: job {key} ({whose})"
     )
+    with pytest.warns(UserWarning, match=re.escape(said)):
+        with pytest.raises(InputError, match="no sweep here"):
+            screen("kundur", "mix.jsonl", buses=[3], search=SearchOptions(tol=0.01))
     assert (tmp_path / "mix.jsonl").read_text() == text
 
 
