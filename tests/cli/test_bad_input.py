@@ -1419,9 +1419,11 @@ def test_a_screening_names_the_records_of_other_runs_in_its_file(
         "mix.jsonl holds 1 record(s) of none of this screening's 1 fault(s), kept in the "
         f"file and left out of its table: line 1: job {key} ({whose})"
     )
-    with pytest.warns(UserWarning, match=re.escape(said)):
-        with pytest.raises(InputError, match="no sweep here"):
-            screen("kundur", "mix.jsonl", buses=[3], search=SearchOptions(tol=0.01))
+    with (
+        pytest.warns(UserWarning, match=re.escape(said)),
+        pytest.raises(InputError, match="no sweep here"),
+    ):
+        screen("kundur", "mix.jsonl", buses=[3], search=SearchOptions(tol=0.01))
     assert (tmp_path / "mix.jsonl").read_text() == text
 
 
