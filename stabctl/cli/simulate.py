@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -337,6 +338,13 @@ def _check_ends(own: list, given: list, tf: float, end: _RunEnd) -> None:
 )
 @click.option("--stop-at-separation", is_flag=True, help="Stop the run at loss of synchronism.")
 @click.option(
+    "--check-step",
+    is_flag=True,
+    help="Run again at half the step and report both verdicts: a verdict that changes "
+    "there is within the step's error (a fault cleared near its CCT; `stabctl cct` gives "
+    "the CCT with its half-step error bar).",
+)
+@click.option(
     "--method",
     type=click.Choice(["heun", "trapezoid"]),
     default="heun",
@@ -385,6 +393,7 @@ def simulate(
     q_limits,
     separation_limit,
     stop_at_separation,
+    check_step,
     method,
     suspect_starts,
     out_path,
@@ -409,8 +418,8 @@ def simulate(
     fault through the line), after M cycles the far end opens too and the line stays out.
     A verdict (separated or not) of a fault cleared within a few ms of its critical
     clearing time may depend on the step (the run at half the step can give the other
-    one, and simulate does not say so): confirm it with `stabctl cct`, which reports the
-    CCT with its half-step error bar.
+    one): --check-step runs again at h/2 and says whether the verdict holds; `stabctl cct`
+    reports the CCT with its half-step error bar.
 
     \b
     PSS/E study events, each with its time, in any number and order: --bus-fault (through
@@ -526,16 +535,18 @@ def simulate(
     sub = sim.sub_stepped(h, method)
     from stabctl.progress import runs_shown
 
+    run = functools.partial(
+        sim.run,
+        events,
+        t_end=tf,
+        separation_limit=separation_limit,
+        stop_at_separation=stop_at_separation,
+        storage=fleet,
+        method=method,
+    )
     with runs_shown():  # a run longer than a few seconds shows a bar of simulated time
-        result = sim.run(
-            events,
-            t_end=tf,
-            h=h,
-            separation_limit=separation_limit,
-            stop_at_separation=stop_at_separation,
-            storage=fleet,
-            method=method,
-        )
+        result = run(h=h)
+        halved = _step_check(run(h=h / 2), h / 2) if check_step else None
     esd = (
         None
         if esd_pct is None
@@ -579,6 +590,7 @@ def simulate(
                 "events": [str(e) for e in events],
                 "suspect_starts": list(sim.suspect),
                 "files": written,
+                **({} if halved is None else {"step_check": halved}),
             }
         )
         return
@@ -612,5 +624,37 @@ def simulate(
             f"{machine_list(case, result.separated)} separate"
             + (" (run stopped)" if stop_at_separation else "")
         )
+    if halved is not None:
+        click.echo(_step_check_line(result, halved))
     for w in written:
         click.echo(f"wrote {w}")
+
+
+def _verdict(result) -> str:
+    """A run's verdict in one word: stable, separated or de-energised."""
+    if result.de_energised_s is not None:
+        return "de-energised"
+    return "stable" if result.stable else "separated"
+
+
+def _step_check(result, h: float) -> dict:
+    """The run at half the step (`--check-step`), for the summary: its step (s), verdict
+    and separation time (s, None if none)."""
+    return {
+        "step_s": h,
+        "verdict": _verdict(result),
+        "t_separation_s": None if result.stable else result.t_separation,
+    }
+
+
+def _step_check_line(result, halved: dict) -> str:
+    """`--check-step`'s line: the verdict holds at h/2, or it changes there (the
+    clearing within the step's error of the CCT)."""
+    at = f"at half the step (h = {step_text(halved['step_s'])})"
+    if halved["verdict"] == _verdict(result):
+        return f"step check: {halved['verdict']} {at} too"
+    return (
+        f"step check: {halved['verdict']} {at}, {_verdict(result)} at the step: the verdict "
+        "depends on the step (a clearing within its error of the CCT; `stabctl cct` gives "
+        "the CCT with its half-step error bar)"
+    )

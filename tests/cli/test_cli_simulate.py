@@ -671,3 +671,27 @@ def test_tripping_every_machine_is_reported_as_de_energised_not_stable(tmp_path)
     res = run("simulate", "kundur", *trips, "--tf", 2, "--json")
     d = json.loads(res.stdout)
     assert d["stable"] is False and d["verdict"] == "de-energised" and d["de_energised_s"] == 1.0
+
+
+def test_check_step_reports_the_verdict_at_half_the_step():
+    """--check-step runs again at h/2.  Kundur's fault on line 3-101 at a 10 ms step has
+    its CCT at 0.153 s and at 0.154 s at h/2 (`stabctl cct ... --step 0.01`: numerical
+    error 1 ms), so a clearing at 0.154 s (9.24 cycles) separates at h and is stable at
+    h/2: the verdict depends on the step, and simulate says so; at 6 cycles both are
+    stable."""
+    fault = ("kundur", "--fault", "3", "--far-bus", "101", "--step", "0.01", "--check-step")
+    near = ("--clear-cycles", "9.24", "--far-clear-cycles", "9.24")
+    res = run("simulate", *fault, *near)
+    assert res.exit_code == 0, res.output
+    assert "loss of synchronism" in res.output
+    assert (
+        "step check: stable at half the step (h = 5 ms), separated at the step: the verdict "
+        "depends on the step" in res.output
+    )
+    res = run("simulate", *fault, *near, "--json")
+    d = json.loads(res.stdout)
+    assert not d["stable"]
+    assert d["step_check"] == {"step_s": 0.005, "verdict": "stable", "t_separation_s": None}
+    res = run("simulate", *fault, "--clear-cycles", "6", "--far-clear-cycles", "6")
+    assert res.exit_code == 0, res.output
+    assert "step check: stable at half the step (h = 5 ms) too" in res.output
