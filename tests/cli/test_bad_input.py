@@ -1320,6 +1320,15 @@ def test_a_sweep_whose_runs_end_before_a_clearing_is_refused_before_any_work(
     assert not out.exists()
 
 
+def _no_sweep_here(tmp_path, monkeypatch) -> None:
+    """Work in tmp_path with the fault file f.csv; a sweep that starts fails the test."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+
+
 @pytest.mark.parametrize(
     "args",
     [
@@ -1335,11 +1344,7 @@ def test_a_search_limit_below_the_tolerance_is_refused_before_any_sweep(
     """screen and sweep-cct with --tol-ms 900 and --t-max 0.5 recorded every job failed
     (the search range narrower than the tolerance) and exited 0; refused up front by the
     CCT search's own rule, for cct and place too, nothing recorded."""
-    monkeypatch.chdir(tmp_path)
-    import stabctl.parallel
-
-    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
-    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    _no_sweep_here(tmp_path, monkeypatch)
     res = run(*args, "--tol-ms", 900)
     assert_error(res, "--tol-ms 900 with --t-max 0.5 s", "narrower than the tolerance 0.9 s")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
@@ -1360,11 +1365,7 @@ def test_a_tolerance_not_below_the_search_limit_is_refused_before_any_run(
     """cct with --tol-ms 1000 and --t-max 1 printed a CCT of 0.000 s: the search's one
     step spans its whole range, so every CCT reads 0 (or above t_max) whatever the fault.
     Refused up front, for the sweeps and place too, nothing recorded."""
-    monkeypatch.chdir(tmp_path)
-    import stabctl.parallel
-
-    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
-    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    _no_sweep_here(tmp_path, monkeypatch)
     limit = [] if "--t-max" in args else ["--t-max", 1]
     res = run(*args, *limit, "--tol-ms", 1000)
     assert_error(
