@@ -682,8 +682,9 @@ _NAMES: dict[str, dict[int, tuple[tuple[str, ...], ...]]] = {
             + ("ST", "MET", "LEN") + _OWNERS,
         ),
         34: (_BRANCH_34 + ("MET", "LEN") + _OWNERS,),
-        #: v36: a field more after STAT than PSS/E's heading shows: the rest not named
-        36: (_BRANCH_34,),
+        #: v36: a field more after STAT than PSS/E's heading shows (MET, LEN, the owners
+        #: or that field first): the rest named by position, each a number
+        36: (_BRANCH_34 + tuple(f"field {n} (after STAT)" for n in range(25, 36)),),
     },
     "switched shunt": {
         32: (

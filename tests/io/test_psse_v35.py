@@ -9,6 +9,7 @@ windings, v35 moves them after IREG, SWREG and CONT). The IEEE
 14-bus and 24-bus pairs are public (tests/data/psse/NOTICE): v33 files and their v35
 forms; the 14-bus bus records carry the IEEE solution."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -287,3 +288,23 @@ def test_v36_branch_fields_are_read_from_their_v36_columns(tmp_path):
     line = read_raw(_write(tmp_path, text.replace(old, new))).line
     np.testing.assert_allclose(line[1, :5], [1, 2, 0.02, 0.2, 0.1])
     np.testing.assert_allclose(line[1, 10:14], [0.01, 0.02, 0.03, 0.04])
+
+
+@pytest.mark.parametrize(
+    "tail, field",
+    [
+        (" 0.00000,1,1, 1O.00,   1,1.0000\n", "field 26 (after STAT) = '1O.00'"),
+        (
+            " 0.00000,1,0,1, 10.00,   1,0.5000,   2,0.2000,   3,0.2000,   4,0.1x00\n",
+            "field 35 (after STAT) = '0.1x00'",
+        ),
+    ],
+    ids=["heading layout", "field more after STAT"],
+)
+def test_v36_branch_fields_after_stat_must_be_numbers(tmp_path, tail, field):
+    """Every field after a v36 branch's STAT (MET, LEN, the owners, or Xplore 36.1's field
+    more first) is a number in PSS/E's layouts: text there is refused, named by position."""
+    text = V36.read_text().replace(" 0.00000,1,1, 10.00,   1,1.0000\n", tail, 1)
+    assert text != V36.read_text()
+    with pytest.raises(CaseError, match=rf"v35\.raw:44 branch record: {re.escape(field)}"):
+        read_raw(_write(tmp_path, text))
