@@ -159,11 +159,13 @@ def check_suffix(path, allowed, option) -> Path | None:
     Raises
     ------
     InputError
-        Another suffix, a directory, or a place that cannot be written.
+        A file another parameter names as an input (said first: the graver mistake),
+        another suffix, a directory, or a place that cannot be written.
     """
     if path is None:
         return None
     p = Path(path)
+    not_an_input(p, option)
     if p.suffix.lower() not in allowed:
         raise InputError(f"{option} {path}: the file name must end in {' or '.join(allowed)}")
     if p.exists() and p.is_dir():

@@ -117,16 +117,14 @@ def _misses(dispatchers) -> int:
     return sum(sum(d.stats.cache_misses.values()) for d in dispatchers)
 
 
-def _warm(names) -> None:
-    """Compile (or load) every part for each case, one line per part and case: compiled
-    if a kernel of the part was not in the cache before or numba compiled one (new
-    argument types)."""
+def _warm(cases) -> None:
+    """Compile (or load) every part for each (name, case) of `cases`, one line per part
+    and case: compiled if a kernel of the part was not in the cache before or numba
+    compiled one (new argument types)."""
     from stabctl._jit.cache import cached
-    from stabctl.io import load_case
 
     kernels, t_all, n_compiled = _kernels(), time.perf_counter(), 0
-    for name in names:
-        case = load_case(name)
+    for name, case in cases:
         cold = {part: not all(map(cached, ds)) for part, ds in kernels.items()}
         for part, action in _warm_steps(case):
             misses, t0 = _misses(kernels[part]), time.perf_counter()
@@ -206,10 +204,14 @@ def compile_kernels(case_names, check):
       stabctl compile kundur
       stabctl compile --check
     """
-    from stabctl.io import list_cases
+    from stabctl.io import list_cases, load_case
 
+    # every case read first: an unknown one is an error before any compiling, and with
+    # --check too (which compiles for no case)
+    names = list(case_names) or ([] if check else list(list_cases()))
+    cases = [(name, load_case(name)) for name in names]
     if check:
         if not _check():
             raise SystemExit(1)
         return
-    _warm(list(case_names) or list(list_cases()))
+    _warm(cases)

@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from stabctl.cli.checks import check_writable, model_settings
+from stabctl.cli.checks import check_suffix, model_settings
 from stabctl.cli.format import (
     closed_loop_lines,
     estimator_cct_lines,
@@ -429,7 +429,6 @@ def closed_loop(
     "--esd-pct",
     type=FLOAT,
     required=True,
-    default=None,
     metavar="P",
     help="ESD of P % of each generator's MVA at its HV bus (% of machine MVA), "
     "the paper's bang-bang COI control (Table 3).",
@@ -493,7 +492,6 @@ def cct(
 @click.option(
     "--source",
     required=True,
-    default=None,
     metavar="tcp://HOST:PORT[,...]|FILE",
     help="The C37.118.2 streams over TCP or the recording to track.",
 )
@@ -574,7 +572,7 @@ def track(
 
     if out_path is None:
         raise InputError("estimate track needs --out FILE.csv")
-    check_writable(out_path, "--out")
+    check_suffix(out_path, (".csv",), "--out")
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )

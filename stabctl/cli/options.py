@@ -579,6 +579,12 @@ def json_option(what: str = "the result"):
     return click.option("--json", "as_json", is_flag=True, help=f"Print {what} as JSON.")
 
 
+def _lower_first(text: str) -> str:
+    """`text` with its first letter lowered to follow a colon, unless it starts an acronym
+    (``"JSON lines"`` stays as it is)."""
+    return text if text[1:2].isupper() else text[:1].lower() + text[1:]
+
+
 def out_file_option(default=None, metavar="FILE", help="Output file."):
     """``--out FILE``: an output file (never a directory), into ``out_path``."""
     return click.option(
@@ -588,7 +594,7 @@ def out_file_option(default=None, metavar="FILE", help="Output file."):
         default=default,
         show_default=default is not None,
         metavar=metavar,
-        help=f"Output file: {help[0].lower()}{help[1:]}",
+        help=f"Output file: {_lower_first(help)}",
     )
 
 
@@ -604,7 +610,7 @@ def out_dir_option(help="Report directory."):
         show_default=True,
         metavar="DIR",
         type=click.Path(),
-        help=f"Output directory: {help[0].lower()}{help[1:]}",
+        help=f"Output directory: {_lower_first(help)}",
     )
 
 
@@ -802,6 +808,12 @@ def fault_options(required: bool, t_fault: bool = True, far_required: bool | Non
     `far_required` (default `required`): whether --far-bus must be given (without it the
     fault is cleared without loss of a line)."""
     far_required = required if far_required is None else far_required
+
+    def default(required: bool) -> dict:
+        # no default=None beside required=True: click >= 8.3 no longer enforces required
+        # on an option that has a default, even None
+        return {} if required else {"default": None}
+
     return lambda func: _apply(
         func,
         (
@@ -809,7 +821,7 @@ def fault_options(required: bool, t_fault: bool = True, far_required: bool | Non
                 "--fault",
                 type=INT,
                 required=required,
-                default=None,
+                **default(required),
                 metavar="BUS",
                 help="Three-phase (bolted) fault at bus BUS (bus number as in the data).",
             ),
@@ -817,7 +829,7 @@ def fault_options(required: bool, t_fault: bool = True, far_required: bool | Non
                 "--far-bus",
                 type=INT,
                 required=far_required,
-                default=None,
+                **default(far_required),
                 metavar="BUS",
                 help="Far end of the faulted line BUS-FAR_BUS, tripped at clearing."
                 + (
@@ -921,7 +933,10 @@ def read_fault_list(case, case_name: str, src: str):
     return [f for f, _ in rows]
 
 
-def tol_options(t_max: float = 1.0, t_max_help: str = "a CCT above it is an error"):
+def tol_options(
+    t_max: float = 1.0,
+    t_max_help: str = "a fault still stable there is a verdict: CCT above it, robust",
+):
     """``--tol-ms MS`` and ``--t-max S`` of the CCT searches."""
     return lambda func: _apply(
         func,
@@ -961,11 +976,17 @@ def esd_model_option(func):
     )(func)
 
 
-def storage_options(rating_help: str = "", multiple: bool = False, with_rating: bool = True):
+def storage_options(
+    rating_help: str = "",
+    multiple: bool = False,
+    with_rating: bool = True,
+    critical: bool = False,
+):
     """The storage option set: ``--esd-pct`` (one rating, or with ``multiple`` a list),
     ``--deadband-hz``, ``--v-gate``, ``--coi``, ``--hysteresis-hz``: the paper's bang-bang
     COI control (Table 3). ``with_rating`` False: the controller options only (`place`
-    sizes the storage itself)."""
+    sizes the storage itself). ``critical``: ``--coi`` offers ``critical`` too (only a
+    command that finds the fault's critical machines, `stabctl cct`, can take it)."""
     esd = (
         click.option(
             "--esd-pct",
@@ -1004,12 +1025,16 @@ def storage_options(rating_help: str = "", multiple: bool = False, with_rating: 
             ),
             click.option(
                 "--coi",
-                type=click.Choice(["system", "rest", "critical"]),
+                type=click.Choice(["system", "rest", *(["critical"] if critical else [])]),
                 default="system",
                 show_default=True,
-                help="COI of the whole system or of the rest of it; critical (cct only, "
-                "not the paper's law): of the other group, the fault's critical machines "
-                "(SIME, from the run without storage) or the rest.",
+                help="COI of the whole system or of the rest of it"
+                + (
+                    "; critical (not the paper's law): of the other group, the fault's "
+                    "critical machines (SIME, from the run without storage) or the rest."
+                    if critical
+                    else "."
+                ),
             ),
             click.option(
                 "--hysteresis-hz",

@@ -8,7 +8,7 @@ import sys
 
 import click
 
-from stabctl.cli.checks import check_writable, model_settings, search_settings
+from stabctl.cli.checks import check_suffix, model_settings, search_settings
 from stabctl.cli.format import print_json, print_plan
 from stabctl.cli.options import (
     FLOAT,
@@ -152,7 +152,10 @@ from stabctl.errors import InputError
 )
 @storage_options(with_rating=False)
 @esd_model_option
-@tol_options()
+@tol_options(
+    t_max_help="a fault still stable there is a verdict: CCT above it, robust; a CCT "
+    "target at or above it is refused"
+)
 @click.option(
     "--max-iter",
     type=INT,
@@ -266,8 +269,7 @@ def place(
             raise InputError(f"{opt} must be > 0, got {v:g}")
     req = Requirement(required_clearing_cycles, target_cct_gain, target_cct_s)
     levels = _load_levels(load_levels)
-    if out_path:
-        check_writable(out_path, "--out")
+    check_suffix(out_path, (".json",), "--out")
     case = load_case(case_name)
     n_mac = len(case.machines.bus)
     cost = CostModel(

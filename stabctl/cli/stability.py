@@ -11,7 +11,6 @@ from stabctl.cli.checks import (
     check_power_flow,
     check_run_end,
     check_suffix,
-    check_writable,
     model_settings,
     search_settings,
 )
@@ -94,7 +93,7 @@ search_option = click.option(
     "(repeatable; TO or TO:1, the option's form in simulate); both circuits of a double "
     "line: --circuit 2 --trip BUS FAR_BUS.",
 )
-@storage_options()
+@storage_options(critical=True)
 @esd_model_option
 @tol_options()
 @tf_option()
@@ -386,7 +385,7 @@ def sweep_cct(
     ctrl = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
-    check_writable(out_path, "--out")
+    check_suffix(out_path, (".jsonl",), "--out")
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
     check_storage_given(next((p for p in ratings if p is not None), None))
@@ -427,7 +426,7 @@ def sweep_cct(
     is_flag=True,
     help="Also fault the from-end of every branch with the branch tripped (N-1).",
 )
-@tol_options(0.5, "a fault still stable there is a verdict: CCT above it, robust")
+@tol_options(0.5)
 @out_file_option(
     "screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search (rerunning resumes)."
 )
@@ -477,7 +476,7 @@ def screen(
     case = load_case(case_name)
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
-    check_writable(out_path, "--out")
+    check_suffix(out_path, (".jsonl",), "--out")
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault
     rows = run_screen(

@@ -8,6 +8,7 @@ import math
 import re
 from pathlib import Path
 
+import click
 import pytest
 from click.testing import CliRunner
 
@@ -567,6 +568,74 @@ def test_an_output_that_is_a_broken_or_looping_link_is_refused_before_any_work(
 
 
 @pytest.mark.parametrize(
+    "args,name,suffix",
+    [
+        (("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", 10), "pl.txt", ".json"),
+        (("estimate", "track", "kundur", "--source", "rec.c37"), "tr7.txt", ".csv"),
+        (("sweep-cct", "kundur", "--faults", "DEFAULT"), "r.json", ".jsonl"),
+        (("screen", "kundur", "--buses", 3), "s.txt", ".jsonl"),
+    ],
+)
+def test_an_output_named_for_another_format_is_refused_before_any_work(
+    no_simulation, tmp_path, monkeypatch, args, name, suffix
+):
+    """`place --out pl.txt` and `estimate track --out tr7.txt` were taken although their
+    help names FILE.json and FILE.csv; every --out whose help names a file type refuses
+    another ending, as `simulate` and `import-psse` do (exit 2, nothing written)."""
+    monkeypatch.chdir(tmp_path)
+    import stabctl.parallel
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", lambda *a, **k: pytest.fail("sweep ran"))
+    assert_error(run(*args, "--out", name), f"--out {name}: the file name must end in {suffix}")
+    assert list(tmp_path.iterdir()) == []
+
+
+def _required_options(group=main, words=()):
+    """(arguments, option) for each required option of each command: the command's words,
+    ``kundur`` for each argument it needs and ``1`` for each of its other required
+    options, the option itself left out."""
+    for name, cmd in sorted(group.commands.items()):
+        if isinstance(cmd, click.Group):
+            yield from _required_options(cmd, (*words, name))
+            continue
+        required = [p for p in cmd.params if isinstance(p, click.Option) and p.required]
+        arguments = ["kundur" for p in cmd.params if isinstance(p, click.Argument) and p.required]
+        for p in required:
+            others = [a for q in required if q is not p for a in (q.opts[0], "1")]
+            yield (*words, name, *arguments, *others), p.opts[0]
+
+
+REQUIRED_OPTIONS = list(_required_options())
+
+
+def test_the_required_options_are_all_found():
+    found = {(" ".join(a[: a.index("kundur")]), o) for a, o in REQUIRED_OPTIONS if "kundur" in a}
+    assert {
+        ("cct", "--fault"),
+        ("estimate rmse", "--far-bus"),
+        ("estimate closed-loop", "--far-bus"),
+        ("estimate cct", "--esd-pct"),
+        ("estimate track", "--source"),
+        ("pmu serve", "--far-bus"),
+        ("pmu plant", "--fault"),
+    } <= found
+
+
+@pytest.mark.parametrize("args,option", REQUIRED_OPTIONS)
+def test_a_required_option_left_out_is_named_before_any_work(
+    no_simulation, tmp_path, monkeypatch, args, option
+):
+    """click 8.3 no longer enforces ``required=True`` on an option declared with
+    ``default=None``: `estimate cct` without --esd-pct ended in a TypeError, `estimate
+    rmse` without --far-bus ran and printed "line 3-None", `pmu serve` without --far-bus
+    started serving and `cct` without --fault called bus None unknown.  Every option the
+    help marks [required] is click's missing-option error (exit 2), before any work."""
+    monkeypatch.chdir(tmp_path)
+    assert_error(run(*args), f"Missing option '{option}'")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
     "args,needle",
     [
         (("estimate", "rmse", "kundur", "--runs", 1, "--tf", 2), "with --tf 2 s"),
@@ -726,7 +795,7 @@ def test_a_fault_list_s_unknown_line_is_named_before_any_work(
     and the fault."""
     faults = tmp_path / "f.csv"
     faults.write_text(text, encoding="utf-8")
-    out = tmp_path / "o.jsonl"
+    out = tmp_path / ("o.jsonl" if command[0] == "sweep-cct" else "o.json")
     res = run(command[0], "kundur", "--faults", faults, *command[1:], "--out", out)
     assert_error(res, f"--faults {faults}:{line}: {needle}")
     assert not out.exists()
@@ -1908,8 +1977,8 @@ NO_LENGTH = "as it starts: a fault of no length would do nothing"
             "--fault 3 --far-bus 101 --clear-cycles 0: cleared at 1 s",
         ),
         (
-            ("pmu", "serve", "kundur", "--fault", 3, "--clear-cycles", 0),
-            "--fault 3 --clear-cycles 0: cleared at 1 s",
+            ("pmu", "serve", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 0),
+            "--fault 3 --far-bus 101 --clear-cycles 0: cleared at 1 s",
         ),
     ],
 )

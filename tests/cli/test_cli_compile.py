@@ -202,3 +202,24 @@ def test_compile_check_names_the_cache_numba_really_uses(tmp_path):
     assert check.returncode in (0, 1), check.stdout + check.stderr
     assert check.stdout.splitlines()[-1].endswith("(the package's __pycache__ directories)")
     assert list(cache.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["--check", "nocase"], ["kundur", "nocase"]])
+def test_compile_names_an_unknown_case_before_anything(monkeypatch, args):
+    """`compile --check nocase` reported the cache and exited 0, the case passed over;
+    every case named is read first, so an unknown one is one error line naming it (as
+    other commands do, exit 2), before any check or compiling."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import compile as compile_cli
+    from stabctl.cli import main
+
+    def refuse(*a, **k):
+        raise AssertionError("checked or compiled before the cases were read")
+
+    monkeypatch.setattr(compile_cli, "_check", refuse)
+    monkeypatch.setattr(compile_cli, "_warm_steps", refuse)
+    res = CliRunner().invoke(main, ["compile", *args])
+    assert res.exit_code == 2, (res.output, res.exception)
+    assert res.stderr == "error: unknown case 'nocase': built-ins are kundur, miniwecc\n"
+    assert res.stdout == ""

@@ -20,7 +20,8 @@ UNIT = re.compile(r"\((s|ms|Hz|Hz/s|pu|rad|MW|cycles|frames/s|%[^);]*)[;)]")
 #: (command, option) -> why its signature may differ from the other commands'
 DIFFERENCES = {
     ("screen", "--t-max"): "bus faults cleared without loss of a line: CCTs above 0.5 s "
-    "are recorded as failed, not searched",
+    "are recorded as robust, not searched",
+    ("cct", "--coi"): "critical too: only cct finds the fault's critical machines",
     ("sweep-cct", "--esd-pct"): "a list of ratings (repeatable, comma-separated, 'none')",
     ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it (a "
     "RAW + DYR pair as PSS/E states it, as import-psse) unless told otherwise",
@@ -57,7 +58,9 @@ def _signature(name, p) -> dict:
         "type": kind,
         "multiple": p.multiple,
         "flag": p.is_flag,
-        "default": p.default,
+        # a required option has no default (declared without one: click >= 8.3 does not
+        # enforce required=True beside default=None), as one left out means none
+        "default": None if p.required else p.default,
         "unit": m and m.group(1),
     }
     if name in OWN_DEFAULT:
@@ -183,3 +186,46 @@ def test_examples_in_help_keep_their_lines():
         for line in out.splitlines():
             assert not re.search(r"\S\s+Examples?:", line), (name, line)
             assert not re.search(r"Examples?:\s+\S", line), (name, line)
+
+
+def test_coi_offers_critical_only_where_it_is_taken():
+    """`simulate`, `estimate *` and `pmu plant/control` offered --coi critical and then
+    refused it ("cct only"): only `cct`, which finds the critical machines, lists it;
+    elsewhere it is click's invalid choice (exit 2)."""
+    choices = {
+        c: _options(cmd)["--coi"].type.choices
+        for c, cmd in COMMANDS.items()
+        if "--coi" in _options(cmd)
+    }
+    assert {"simulate", "estimate rmse", "pmu plant", "pmu control", "place"} <= set(choices)
+    assert {c for c, offered in choices.items() if "critical" in offered} == {"cct"}
+    assert "[system|rest|critical]" in CliRunner().invoke(main, ["cct", "--help"]).output
+    help_ = CliRunner().invoke(main, ["simulate", "--help"]).output
+    assert "[system|rest]" in help_ and "critical" not in help_.split("--coi")[1].split("--")[0]
+    args = ["simulate", "kundur", "--fault", "3", "--esd-pct", "5", "--coi", "critical"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and "Invalid value for '--coi'" in res.output, res.output
+
+
+def test_t_max_of_every_cct_search_is_a_verdict_not_an_error():
+    """`cct`, `sweep-cct` and `place` said "a CCT above it is an error" of --t-max, where a
+    fault still stable there is a verdict (robust, exit 0), as `screen` said."""
+    with_t_max = {
+        c: _options(cmd)["--t-max"].help
+        for c, cmd in COMMANDS.items()
+        if "--t-max" in _options(cmd)
+    }
+    assert {"cct", "sweep-cct", "screen", "place"} <= set(with_t_max)
+    for cname, text in with_t_max.items():
+        assert "a fault still stable there is a verdict: CCT above it, robust" in text, cname
+        assert "error" not in text, cname
+
+
+def test_help_keeps_acronyms_capitalised():
+    """The --out help of `sweep-cct` and `screen` read "Output file: jSON lines" (the first
+    letter of the text lowered after the colon)."""
+    for name, _ in _commands():
+        out = CliRunner().invoke(main, [*name.split(), "--help"]).output
+        assert not re.search(r"Output (file|directory): [a-z][A-Z]", out), (name, out)
+    for name in ("sweep-cct", "screen"):
+        assert "Output file: JSON lines" in CliRunner().invoke(main, [name, "--help"]).output
