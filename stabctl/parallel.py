@@ -79,12 +79,17 @@ class Job:
     `check`, if given, is the schema of the job's records: ``check(record)`` says what
     makes a record of the job one its func cannot have written (a CCT out of its range, a
     list of machines that is text), or None; a resumed sweep handles such a record as a
-    damaged line (`set_aside_damaged`), never as the job's result."""
+    damaged line (`set_aside_damaged`), never as the job's result.  `compared`, if given,
+    maps a job's inputs (as they read back from the file) to the form a resumed sweep
+    compares (an input left to its default and the same value given count as the same
+    inputs: a CCT search's t_end None and the fault time + 5 s it stands for,
+    `stabctl.stability.cct.compared_inputs`); else the inputs are compared as they are."""
 
     key: str
     func: Callable[..., dict]
     inputs: Mapping = field(default_factory=dict)
     check: Callable[[dict], str | None] | None = None
+    compared: Callable[[dict], dict] | None = None
 
 
 @dataclass(frozen=True)
@@ -126,6 +131,7 @@ class SweepReport:
     the output file (finished now or before); ran / skipped / failed count this call's
     jobs (failed: among those run now); failed_before counts the jobs recorded as failed
     before and not run again (without `retry_failed`), failed_before_keys their keys;
+    ran_keys the keys of the jobs run now (the others' records read from the file);
     wall_time_s is this call's."""
 
     out: Path
@@ -136,6 +142,7 @@ class SweepReport:
     wall_time_s: float
     failed_before: int = 0
     failed_before_keys: tuple = ()
+    ran_keys: tuple = ()
 
 
 #: Dask runs a job again this many times when its task fails outside `run_job` (which
@@ -849,6 +856,7 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         wall_time_s=time.perf_counter() - wall,
         failed_before=len(failed_keys),
         failed_before_keys=failed_keys,
+        ran_keys=tuple(j.key for j in todo),
     )
 
 
@@ -932,10 +940,14 @@ def _check_jobs(jobs, done: dict, out: Path) -> None:
         if j.key in seen:
             raise InputError(f"duplicate job key {j.key!r}")
         seen.add(j.key)
-        if j.key in done and done[j.key].get("inputs") != _normalised(j.inputs):
+        if j.key not in done:
+            continue
+        old = done[j.key].get("inputs")
+        same = j.compared or (lambda inputs: inputs)
+        if not isinstance(old, dict) or same(old) != same(_normalised(j.inputs)):
             raise InputError(
                 f"{out} already holds job {j.key!r} with other inputs ("
-                f"{_differences(done[j.key].get('inputs') or {}, j.inputs)}); "
+                f"{input_differences(old if isinstance(old, dict) else {}, j.inputs, same)}); "
                 "use another output file"
             )
 
@@ -1018,12 +1030,30 @@ def other_records(path: str | Path, keys: Iterable[str], whose: Callable[[dict],
     ]
 
 
-def _differences(old: dict, new: Mapping) -> str:
+def input_differences(old: dict, new: Mapping, same: Callable[[dict], dict] | None = None) -> str:
+    """The inputs that differ between a record's and a job's, named.
+
+    Parameters
+    ----------
+    old : dict
+        The record's inputs (as read from its file).
+    new : Mapping
+        The job's inputs.
+    same : callable or None, optional
+        The form the inputs are compared in (`Job.compared`); None (default): as they are.
+
+    Returns
+    -------
+    str
+        ``"KEY: OLD there, NEW now"`` for each input whose compared forms differ, in key
+        order, comma-separated (the values as recorded and given).
+    """
     new = _normalised(new)
+    a, b = (old, new) if same is None else (same(old), same(new))
     return ", ".join(
         f"{k}: {old.get(k)!r} there, {new.get(k)!r} now"
-        for k in sorted(set(old) | set(new))
-        if old.get(k) != new.get(k)
+        for k in sorted(set(a) | set(b))
+        if a.get(k) != b.get(k)
     )
 
 

@@ -1040,6 +1040,34 @@ def test_cli_sweep_cct_on_a_local_dask_cluster_leaves_none_open(tmp_path, monkey
     assert_no_dask_client_left()
 
 
+@pytest.mark.parametrize("recorded, given", [(None, 6), (6.0, None)])
+def test_a_sweep_resumed_with_the_default_run_end_given_or_left_out_reruns_nothing(
+    tmp_path, monkeypatch, recorded, given
+):
+    """Records made without --tf (t_end None) were refused by a rerun with --tf 6 ("other
+    inputs (t_end: None there, 6.0 now)"), though 6 s is the default run end of a fault
+    at 1 s (+ 5 s); the effective run ends are compared, either way round, and nothing
+    runs again.  Another run end (--tf 7) is still other inputs."""
+    import stabctl.stability.cct as cct
+
+    monkeypatch.setattr(cct, "compile_here", lambda *a, **k: None)  # no run needed here
+    out = tmp_path / "k.jsonl"
+    jobs = cct_jobs("kundur", [LineFault(3, 101)], search=SearchOptions(t_end=recorded))
+    assert jobs[0].inputs["t_end"] == recorded
+    record = {"key": jobs[0].key, "inputs": jobs[0].inputs, "status": "failed", "error": "x"}
+    out.write_text(json.dumps(record) + "\n")
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    args = ("sweep-cct", "kundur", "--faults", faults, "--workers", 1, "--out", out)
+    res = run(*args, *(() if given is None else ("--tf", given)))
+    assert res.exit_code == 0, res.output
+    assert "1 job(s): 0 run now, 1 already in" in res.stdout
+    res = run(*args, "--tf", 7)
+    assert res.exit_code == 2, res.output
+    assert f"with other inputs (t_end: {recorded!r} there, 7.0 now)" in res.stderr
+    assert lines(out) == [record]
+
+
 def test_cli_sweep_cct_faults_csv(tmp_path):
     faults = tmp_path / "faults.csv"
     faults.write_text("bus,far_bus,t_fault\n3,101,0.5\n")

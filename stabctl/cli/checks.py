@@ -174,8 +174,19 @@ def check_suffix(path, allowed, option) -> Path | None:
     return p
 
 
-def search_settings(tol_ms, t_max, tf):
+def search_settings(tol_ms, t_max, tf, tf_option: bool = True):
     """The CCT search settings of ``--tol-ms``, ``--t-max`` and ``--tf``.
+
+    Parameters
+    ----------
+    tol_ms : float
+        ``--tol-ms``.
+    t_max : float
+        ``--t-max``, s.
+    tf : float or None
+        ``--tf``, s (None: not given).
+    tf_option : bool, optional
+        Whether the command has ``--tf`` (named in a refusal of --t-max); default True.
 
     Returns
     -------
@@ -185,8 +196,10 @@ def search_settings(tol_ms, t_max, tf):
     Raises
     ------
     InputError
-        A value not > 0, or a --t-max below the tolerance (no search could run:
-        `stabctl.stability.cct.check_search_range`).
+        A value not > 0, a --t-max below the tolerance (no search could run:
+        `stabctl.stability.cct.check_search_range`), or without --tf a --t-max that
+        leaves less than `stabctl.stability.cct.MIN_AFTER_CLEARING_S` of the runs after
+        the latest clearing.
     """
     if not tol_ms > 0:
         raise InputError(f"--tol-ms must be > 0, got {tol_ms:g}")
@@ -194,8 +207,16 @@ def search_settings(tol_ms, t_max, tf):
         raise InputError(f"--t-max must be > 0 s, got {t_max:g}")
     if tf is not None and not tf > 0:
         raise InputError(f"--tf must be > 0 s, got {tf:g}")
-    from stabctl.stability.cct import SearchOptions, check_search_range
+    from stabctl.stability.cct import (
+        MIN_AFTER_CLEARING_S,
+        T_AFTER_FAULT,
+        SearchOptions,
+        check_search_range,
+        default_run_end_problem,
+    )
 
+    if tf is None and T_AFTER_FAULT - t_max < MIN_AFTER_CLEARING_S - 1e-9:
+        raise InputError(default_run_end_problem(t_max, "--t-max", "--tf" if tf_option else None))
     search = SearchOptions(tol=tol_ms / 1000.0, t_max=t_max, t_end=tf)
     try:
         check_search_range(search)
@@ -205,8 +226,10 @@ def search_settings(tol_ms, t_max, tf):
 
 
 def check_run_end(faults, search) -> None:
-    """Refuse, before any search runs, a --tf that ends a fault's runs before its latest
-    clearing (each search would fail on its own, recorded as a failed job).
+    """Refuse, before any search runs, a --tf that ends a fault's runs less than
+    `stabctl.stability.cct.MIN_AFTER_CLEARING_S` after its latest clearing (each search
+    would fail on its own, recorded as a failed job, or read a probe cleared past the
+    CCT stable: the CCT above --t-max).
 
     Parameters
     ----------
@@ -217,16 +240,26 @@ def check_run_end(faults, search) -> None:
     Raises
     ------
     InputError
-        Naming the first such fault, its latest clearing and --tf.
+        Naming the first such fault, its latest clearing, --tf, the minimum and what to
+        change.
     """
+    from stabctl.stability.cct import MIN_AFTER_CLEARING_S
+
     if search.t_end is None:
         return
+    least = MIN_AFTER_CLEARING_S
     for f in faults:
-        if not search.t_end > f.t_fault + search.t_max:
+        latest = f.t_fault + search.t_max
+        if search.t_end - latest < least - 1e-9:
+            most = search.t_end - f.t_fault - least
+            lower = f" or --t-max {most:g} s or less" if most > 0 else ""
             raise InputError(
                 f"--tf {search.t_end:g} s: {f.describe()} is cleared as late as "
-                f"{f.t_fault + search.t_max:g} s (its start + --t-max {search.t_max:g} s); "
-                "the runs must end after it"
+                f"{latest:g} s (its start + --t-max {search.t_max:g} s); the runs must end "
+                f"at least {least:g} s after it, the time a probe cleared past the CCT "
+                "can take to separate (one that has not separated reads stable: the CCT "
+                f"comes out high, or above --t-max): give --tf {latest + least:g} s or "
+                f"more{lower}"
             )
 
 

@@ -365,7 +365,7 @@ def print_sweep(rep, n_jobs: int) -> None:
 
     verdicts = [verdict(r) for r in rep.records.values()]
     click.echo(
-        f"{n_jobs} job(s): {rep.ran} run now, {rep.skipped} already in {rep.out}; "
+        f"{n_jobs} job(s): {run_counts(rep.ran, rep.skipped, rep.out)}; "
         f"{verdicts.count('cct')} CCT(s) found, {verdicts.count(ABOVE)} above the search "
         f"limit (robust), {verdicts.count(INSECURE)} N-1 insecure (CCT 0), "
         f"{verdicts.count('failed')} failed; wall {rep.wall_time_s:.1f} s"
@@ -377,7 +377,28 @@ def print_sweep(rep, n_jobs: int) -> None:
         )
 
 
-def print_screening(case, rows, tol_s: float | None = None) -> None:
+def run_counts(ran: int, reused: int, out) -> str:
+    """How many of a resumable command's jobs ran now and how many it read from its
+    records file: ``"N run now, M already in FILE"`` (`sweep-cct`'s and `screen`'s
+    summary lines).
+
+    Parameters
+    ----------
+    ran : int
+        Jobs run now.
+    reused : int
+        Jobs whose records were already in the file.
+    out : str or pathlib.Path
+        The records file.
+
+    Returns
+    -------
+    str
+    """
+    return f"{ran} run now, {reused} already in {out}"
+
+
+def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
     """Print the `screen` table, one row per fault in the given order.
 
     Parameters
@@ -389,6 +410,9 @@ def print_screening(case, rows, tol_s: float | None = None) -> None:
     tol_s : float or None, optional
         The searches' tolerance, s: the CCTs with the decimals it needs
         (`time_decimals`); None (default): 3.
+    out : str or pathlib.Path or None, optional
+        The records file: the summary says how many searches ran now and how many were
+        read from it (`run_counts`, from the rows' ``run_now``); None (default): not said.
     """
     n, c = time_decimals(tol_s), cycle_decimals(tol_s)
     from stabctl.stability.screening import ABOVE, INSECURE, VERDICTS
@@ -425,8 +449,10 @@ def print_screening(case, rows, tol_s: float | None = None) -> None:
             click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {said}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
+    ran = sum(bool(r.get("run_now")) for r in rows)
+    reused = "" if out is None else f"{run_counts(ran, len(rows) - ran, out)}; "
     click.echo(
-        f"{len(rows)} fault(s): {counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
+        f"{len(rows)} fault(s): {reused}{counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
         f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
         f"{counts['failed']} failed; {sum(bool(r.get('islanded')) for r in rows)} island "
         "load buses (their load shed, counted in the verdicts above)"

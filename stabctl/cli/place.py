@@ -245,7 +245,7 @@ def place(
         screening_brackets,
     )
 
-    search = search_settings(tol_ms, t_max, None)
+    search = search_settings(tol_ms, t_max, None, tf_option=False)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
     if max_sites is not None and max_sites < 1:

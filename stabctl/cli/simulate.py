@@ -531,6 +531,7 @@ def simulate(
         suspect_starts=suspect_starts,
         subintervals=subintervals_chosen(),
     )
+    sim.check_separation_limit(separation_limit, "--separation-limit")
     h = sim.default_h if step is None else step
     sub = sim.sub_stepped(h, method)
     from stabctl.progress import runs_shown

@@ -173,6 +173,7 @@ def cct(
     model = model_settings(conventions, None, q_limits)
     case = load_case(case_name)
     line_fault = LineFault(fault, far_bus, t_fault, circuit, _trips(trip))
+    check_run_end([line_fault], search)  # before the simulator is built
     fault_ev, *trip_evs = line_fault.events(0.0)
     check_option_events(
         case,
@@ -484,7 +485,7 @@ def screen(
         out_path,
         buses=bus_list,
         lines=lines,
-        search=replace(search_settings(tol_ms, t_max, None), method=method),
+        search=replace(search_settings(tol_ms, t_max, None, tf_option=False), method=method),
         model=model,
         runner=RunnerOptions(workers, scheduler),
         retry_failed=retry_failed,
@@ -498,7 +499,7 @@ def screen(
     if as_json:
         print_json(rows)
         return
-    print_screening(case, rows, tol_ms / 1000)
+    print_screening(case, rows, tol_ms / 1000, out_path)
 
 
 def _bus_list(text: str) -> list[int]:

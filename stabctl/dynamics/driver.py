@@ -464,7 +464,9 @@ class Simulator:
             Bad semantics or method (the trapezoid with "pst" semantics or storage),
             events (clearing before the fault, negative time), `t_end` or step (not
             positive and finite, too large for the case's fastest time constant under
-            Heun, or more steps than `stabctl.dynamics.grid.check_step_count` allows).
+            Heun, or more steps than `stabctl.dynamics.grid.check_step_count` allows), a
+            `separation_limit` not above every machine's angle from the COI at the start
+            (`check_separation_limit`).
         UnknownBusError, CaseError
             An event, storage device or ``voltages`` naming a bus, line or machine not
             in the case.
@@ -477,6 +479,7 @@ class Simulator:
         """
         semantics = self._semantics(semantics)
         _check_method(method, semantics, storage)
+        self.check_separation_limit(separation_limit)
         if monitor is not None and method != "heun":
             raise InputError(f"a run monitor needs the heun method, got {method!r}")
         if method == "trapezoid":  # no storage (`_check_method`): this simulator's run
@@ -557,6 +560,7 @@ class Simulator:
         runs it pauses only)."""
         semantics = self._semantics(semantics)
         _check_method("heun", semantics, storage)
+        self.check_separation_limit(separation_limit)
         sim = self._for_storage(storage)
         if sim is not self:
             return sim._handle(
@@ -707,6 +711,36 @@ class Simulator:
             [n.faulted for n in nets],
         )
 
+    def check_separation_limit(self, limit: float, name: str = "separation limit") -> None:
+        """Refuse a loss-of-synchronism limit not above every machine's angle from its
+        island's COI at the power-flow point: every run would report the separation of
+        that machine at t = 0, whatever its disturbance.
+
+        Parameters
+        ----------
+        limit : float
+            The separation limit, rad (`run`'s ``separation_limit``).
+        name : str, optional
+            What the limit is called in the message (the CLI's ``--separation-limit``).
+
+        Raises
+        ------
+        InputError
+            Naming the limit and the machine farthest from the COI at the start, with
+            its angle.
+        """
+        angle = self.model.x0[: self.model.mp.n]
+        dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
+        i = int(np.argmax(dev)) if dev.size else 0
+        if dev.size and not limit > dev[i]:
+            machine = self.case.machine_name(self.case.machines.number[i])
+            raise InputError(
+                f"{name} {limit:g} rad is not above the angle of {machine} from the "
+                f"centre of inertia at the start, {dev[i]:.4g} rad (before any "
+                "disturbance): every run would lose synchronism at t = 0; give a limit "
+                f"above {dev[i]:.4g} rad (default pi)"
+            )
+
     def _semantics(self, semantics: str | None) -> str:
         if semantics is None:
             return "pst" if self.conventions == "pstess" else "exact"
@@ -771,6 +805,7 @@ class Simulator:
         """
         if storage is None or storage.controller.kind != law.EXTERNAL:
             raise InputError("run_commanded needs a fleet whose controller is ExternalCommands")
+        self.check_separation_limit(separation_limit)
         sim = self._for_storage(storage)
         if sim is not self:
             return sim.run_commanded(

@@ -125,6 +125,16 @@ T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
 #: how long a probe runs after its clearing before it is judged provisionally stable, s
 #: (`SearchOptions.provisional_s`)
 PROVISIONAL_S = 2.0
+#: the least time a search's runs go on after its latest clearing (fault time + t_max), s.
+#: A probe cleared past the CCT must have separated (pi rad from the COI) before its run
+#: ends, else it reads stable and the CCT comes out high, or "above t_max" (line 3-101
+#: with t_end 1.5 s and t_max 0.3 s: its CCT is 0.154 s).  The first swing can take far
+#: longer than a second near the CCT: Kundur's DEFAULT faults cleared 1 ms past their CCT
+#: pass pi rad 2.41 s (3-101) and 3.28 s (13-101) after the clearing, 13-101 cleared at
+#: 0.6 s 2.88 s after it; with 3 s after t_max line 13-101's CCT read 0.409 s instead of
+#: 0.408 s, with 2 s "above t_max" at a t_max of 0.6 s.  The default run end (the fault
+#: start + T_AFTER_FAULT) leaves 4 s after the default t_max.
+MIN_AFTER_CLEARING_S = 3.5
 
 
 class Runner(Protocol):
@@ -473,7 +483,10 @@ def critical_clearing_time(
     Raises
     ------
     InputError
-        Bad settings; unstable at t_lo > 0.
+        Bad settings (among them a run end less than MIN_AFTER_CLEARING_S after the
+        latest clearing, `check_run_end`, or a separation limit some machine's angle
+        from the COI reaches before the fault, `Simulator.check_separation_limit`);
+        unstable at t_lo > 0.
     InsecureContingency
         Unstable even when cleared at once (t_lo = 0): N-1 insecure, CCT 0 (an
         InputError, a verdict).
@@ -511,10 +524,12 @@ def critical_clearing_time(
     o = SearchOptions() if search is None else search
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
     t_hi = _first_upper(o)
-    _check_settings(fault, o.tol, o.t_lo, t_hi, o.t_max, t_end)
+    _check_settings(fault, o, t_hi, t_end)
     if o.provisional_s is not None and not o.provisional_s > 0:
         raise InputError(f"provisional_s must be > 0 s or None, got {o.provisional_s:g}")
     check_trips(sim.case, fault)
+    if hasattr(sim, "check_separation_limit"):  # a Simulator: before any run
+        sim.check_separation_limit(o.separation_limit)
     if o.method not in METHODS:
         raise InputError(f"CCT search method must be one of {METHODS}, got {o.method!r}")
     h = sim.default_h if h is None else h
@@ -976,20 +991,70 @@ def _half_step_cct(stable_half, k_lo: int, k_hi: int, k_max: int) -> int:
     return k_lo
 
 
-def _check_settings(fault: LineFault, tol, t_lo, t_hi, t_max, t_end) -> None:
-    if not tol > 0:
-        raise InputError(f"CCT tolerance must be > 0 s, got {tol:g}")
-    if not 0 <= t_lo < t_hi <= t_max:
+def _check_settings(fault: LineFault, o: SearchOptions, t_hi, t_end) -> None:
+    if not o.tol > 0:
+        raise InputError(f"CCT tolerance must be > 0 s, got {o.tol:g}")
+    if not 0 <= o.t_lo < t_hi <= o.t_max:
         raise InputError(
-            f"CCT search bounds need 0 <= t_lo < t_hi <= t_max, got {t_lo:g}, {t_hi:g}, {t_max:g} s"
+            "CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "
+            f"{o.t_lo:g}, {t_hi:g}, {o.t_max:g} s"
         )
     if fault.t_fault < 0:
         raise InputError(f"fault time must be >= 0 s, got {fault.t_fault:g}")
-    if not t_end > fault.t_fault + t_max:
-        raise InputError(
-            f"run end {t_end:g} s (t_end, --tf) must come after the latest clearing "
-            f"(fault at {fault.t_fault:g} s + t_max {t_max:g} s)"
-        )
+    problem = _run_end_problem(fault.t_fault, o.t_max, t_end, o.t_end is not None)
+    if problem is not None:
+        raise InputError(problem)
+
+
+def _run_end_problem(t_fault: float, t_max: float, t_end: float, given: bool) -> str | None:
+    """What is wrong with a search's run end `t_end` (s, absolute; `given`: set, else the
+    default fault time + T_AFTER_FAULT) for a fault at `t_fault` cleared as late as
+    t_max: less than MIN_AFTER_CLEARING_S after that latest clearing; None if nothing."""
+    latest = t_fault + t_max
+    left = t_end - latest
+    if left >= MIN_AFTER_CLEARING_S - 1e-9:
+        return None
+    where = f"only {left:g} s after" if left > 0 else "at" if left == 0 else f"{-left:g} s before"
+    end = (
+        f"run end {t_end:g} s (t_end, --tf)"
+        if given
+        else f"default run end {t_end:g} s (the fault start + {T_AFTER_FAULT:g} s)"
+    )
+    fixes = [f"a t_end (--tf) of at least {latest + MIN_AFTER_CLEARING_S:g} s"]
+    most = t_end - t_fault - MIN_AFTER_CLEARING_S
+    if most > 0:
+        fixes.insert(given, f"a t_max (--t-max) of at most {most:g} s")
+    return (
+        f"{end} is {where} the latest clearing (fault at {t_fault:g} s + t_max "
+        f"{t_max:g} s = {latest:g} s); the runs must go on at least "
+        f"{MIN_AFTER_CLEARING_S:g} s after it, the time a probe cleared past the CCT can "
+        "take to separate (one that has not separated reads stable: the CCT comes out "
+        f"high, or above t_max): give {' or '.join(fixes)}"
+    )
+
+
+def check_run_end(fault: LineFault, search: SearchOptions) -> None:
+    """Refuse a search whose runs end less than MIN_AFTER_CLEARING_S after its latest
+    clearing (the fault time + t_max), before any run: a probe cleared past the CCT might
+    not have separated by then and would read stable (`critical_clearing_time` refuses
+    it so too; the sweeps check every fault first).
+
+    Parameters
+    ----------
+    fault : LineFault
+        The fault (its start time).
+    search : SearchOptions
+        ``t_max`` and ``t_end`` (s; None: the fault start + T_AFTER_FAULT).
+
+    Raises
+    ------
+    InputError
+        Naming the run end, the fault time, t_max, the minimum and what to change.
+    """
+    t_end = fault.t_fault + T_AFTER_FAULT if search.t_end is None else search.t_end
+    problem = _run_end_problem(fault.t_fault, search.t_max, t_end, search.t_end is not None)
+    if problem is not None:
+        raise InputError(f"{fault.describe()}: {problem}")
 
 
 def check_search_range(search: SearchOptions) -> None:
@@ -997,9 +1062,11 @@ def check_search_range(search: SearchOptions) -> None:
     lattice cell (a t_max below the tolerance): every search with these settings would
     fail, whatever the fault; and one whose tolerance is not below t_max: its one cell
     spans the whole range, so every search would report a CCT of 0 (or above t_max),
-    whatever the fault.  The sweeps (`cct_jobs`) and the CLI's searches check their
-    settings so; `critical_clearing_time` takes such a one-cell bracket (a caller that
-    already knows its upper end unstable).
+    whatever the fault; and, with the default run end (``t_end`` None: the fault start +
+    T_AFTER_FAULT), a t_max that leaves less than MIN_AFTER_CLEARING_S after it (a given
+    t_end is checked per fault, `check_run_end`).  The sweeps (`cct_jobs`) and the CLI's
+    searches check their settings so; `critical_clearing_time` takes such a one-cell
+    bracket (a caller that already knows its upper end unstable).
 
     Parameters
     ----------
@@ -1009,8 +1076,8 @@ def check_search_range(search: SearchOptions) -> None:
     Raises
     ------
     InputError
-        The range narrower than the tolerance (the search's own rule and message), or
-        the tolerance not below t_max.
+        The range narrower than the tolerance (the search's own rule and message), the
+        tolerance not below t_max, or a t_max too close to the default run end.
     """
     _lattice_bounds(search.tol, search.t_lo, _first_upper(search), search.t_max)
     if not search.tol < search.t_max:
@@ -1019,6 +1086,42 @@ def check_search_range(search: SearchOptions) -> None:
             "step would span the whole search, whose CCT would read 0 (or above t_max) "
             "whatever the fault"
         )
+    if search.t_end is None and T_AFTER_FAULT - search.t_max < MIN_AFTER_CLEARING_S - 1e-9:
+        raise InputError(default_run_end_problem(search.t_max, "t_max", "t_end"))
+
+
+def default_run_end_problem(t_max: float, t_max_name: str, t_end_name: str | None) -> str:
+    """The refusal of a t_max too close to the default run end (the fault start +
+    T_AFTER_FAULT): it leaves less than MIN_AFTER_CLEARING_S after the latest clearing.
+
+    Parameters
+    ----------
+    t_max : float
+        The search limit, s.
+    t_max_name : str
+        What t_max is called (``"t_max"``, the CLI's ``"--t-max"``).
+    t_end_name : str or None
+        What the run end is called (``"t_end"``, ``"--tf"``), None where it cannot be
+        given (the message then offers a lower t_max only).
+
+    Returns
+    -------
+    str
+        The message: t_max, the run end, the minimum and what to change.
+    """
+    later = (
+        ""
+        if t_end_name is None
+        else f", or a {t_end_name} of at least the fault start + {t_max + MIN_AFTER_CLEARING_S:g} s"
+    )
+    return (
+        f"{t_max_name} {t_max:g} s: the runs end {T_AFTER_FAULT:g} s after the fault start "
+        f"(the default), only {T_AFTER_FAULT - t_max:g} s after the latest clearing; they "
+        f"must go on at least {MIN_AFTER_CLEARING_S:g} s after it, the time a probe "
+        "cleared past the CCT can take to separate (one that has not separated reads "
+        f"stable: the CCT comes out high, or above t_max): give a {t_max_name} of at most "
+        f"{T_AFTER_FAULT - MIN_AFTER_CLEARING_S:g} s{later}"
+    )
 
 
 def _first_upper(o: SearchOptions) -> float:
@@ -1378,10 +1481,10 @@ def cct_jobs(
     (`SearchOptions.to_inputs`: error_check only when off) and the model settings
     (`ModelOptions.to_inputs`: q_limits only when off).
 
-    Checks the search settings (`check_search_range`: InputError) and every fault's bus
-    and line against the case first (UnknownBusError, CaseError) so that bad input fails
-    before any job runs, then compiles the simulator's kernels in
-    this process if they are not cached (`compile_here`).
+    Checks the search settings (`check_search_range`: InputError), every fault's bus and
+    line against the case (UnknownBusError, CaseError) and its run end (`check_run_end`)
+    first so that bad input fails before any job runs, then compiles the simulator's
+    kernels in this process if they are not cached (`compile_here`).
     """
     from stabctl.dynamics.events import validate
     from stabctl.io import load_case
@@ -1392,6 +1495,7 @@ def cct_jobs(
     faults = list(faults)
     for f in faults:
         validate(case, f.events(0.0), 0.0)
+        check_run_end(f, search)
     recorded = search.to_inputs()  # the records' field order, kept since v0.1:
     checked = {"error_check": recorded.pop("error_check")} if "error_check" in recorded else {}
     settings = {**recorded, **model.to_inputs(), **checked}
@@ -1402,6 +1506,7 @@ def cct_jobs(
             key=cct_key(case_name, f, p, model),
             func=cct_job,
             check=cct_record_problem,
+            compared=compared_inputs,
             inputs={
                 "case": case_name,
                 "case_digest": digest,
@@ -1413,6 +1518,33 @@ def cct_jobs(
         for f in faults
         for p in ratings
     ]
+
+
+def compared_inputs(inputs: dict) -> dict:
+    """A CCT job's recorded inputs as a resumed sweep compares them (`Job.compared` of
+    `stabctl.parallel`): t_end None (the default run end) read as the run end it stands
+    for, the fault time + T_AFTER_FAULT, so that records made without --tf and a rerun
+    with that same --tf (or the reverse) are the same job.
+
+    Parameters
+    ----------
+    inputs : dict
+        The inputs (`cct_jobs`), as they read back from a records file.
+
+    Returns
+    -------
+    dict
+        A copy, t_end the effective run end (s, rounded to 1e-9 s) where the fault time
+        is a number.
+    """
+    out = dict(inputs)
+    t_fault, t_end = out.get("t_fault", 1.0), out.get("t_end")
+    if isinstance(t_fault, (int, float)) and not isinstance(t_fault, bool):
+        if t_end is None:
+            t_end = t_fault + T_AFTER_FAULT
+        if isinstance(t_end, (int, float)) and not isinstance(t_end, bool):
+            out["t_end"] = round(float(t_end), 9)
+    return out
 
 
 #: the columns of a fault list (`read_faults`): required, then optional; the last three

@@ -18,17 +18,40 @@ from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import AboveSearchLimit, InsecureContingency
 from stabctl.io import load_case
 from stabctl.parallel import RunnerOptions
-from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
+from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs, fault_of_inputs
 
 
-def _whose(rec: dict) -> str:
-    """Whose a CCT record of none of a screening's jobs is: a sweep-cct's when its fault
-    has trips, a storage rating or a fault time no screening gives, else a sweep-cct's or
-    another screening's (of other buses or lines)."""
+def _whose(rec: dict, jobs=()) -> str:
+    """Whose a CCT record of none of a screening's jobs is: one of `jobs`' faults screened
+    with other inputs (named: conventions, step, search settings ...) when its fault,
+    storage rating and case are a job's; else a sweep-cct's when its fault has trips, a
+    storage rating or a fault time no screening gives, else a sweep-cct's or another
+    screening's (of other buses or lines)."""
     inputs = rec.get("inputs") or {}
+    same = _same_fault(inputs, jobs)
+    if same is not None:
+        differ = parallel.input_differences(inputs, same.inputs, same.compared)
+        return f"the same fault screened with other inputs ({differ or 'none named'})"
     if inputs.get("trips") or inputs.get("esd_pct") is not None or inputs.get("t_fault") != 1.0:
         return "a sweep-cct record (trips, a storage rating or a fault time no screening has)"
     return "a sweep-cct record or another screening's (of other buses or lines)"
+
+
+def _same_fault(inputs: dict, jobs):
+    """The job of `jobs` whose case, fault and storage rating a record's `inputs` have, or
+    None (inputs that do not read as a fault have none)."""
+    try:
+        fault = fault_of_inputs(inputs)
+    except (KeyError, TypeError, ValueError):
+        return None
+    for j in jobs:
+        if (
+            fault_of_inputs(j.inputs) == fault
+            and j.inputs.get("esd_pct") == inputs.get("esd_pct")
+            and j.inputs.get("case") == inputs.get("case")
+        ):
+            return j
+    return None
 
 
 def screening_faults(
@@ -146,7 +169,8 @@ def screen(
     Returns
     -------
     list of dict
-        One row per fault: key, bus, far_bus, status, verdict (`verdict`; with
+        One row per fault: key, bus, far_bus, status, whether this call searched it
+        (``run_now``; False: its record read from `out`), verdict (`verdict`; with
         :data:`ABOVE` the search's limit ``t_max_s``; with :data:`INSECURE` CCT 0 and the
         reason), the buses it islands from every generator (``islanded``) and the
         machines it cuts off the main grid with their islands' buses
@@ -162,14 +186,15 @@ def screen(
     Warns
     -----
     UserWarning
-        `out` holds records of none of the screening's faults (a wider screening's, a
-        sweep-cct's: `stabctl.parallel.other_records`), named (the first OTHERS_SHOWN):
-        kept in the file, left out of the table.
+        `out` holds records of none of the screening's jobs (a wider screening's, a
+        sweep-cct's, or its own faults' screened with other inputs, those named:
+        `stabctl.parallel.other_records`), named (the first OTHERS_SHOWN): kept in the
+        file, left out of the table.
     """
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
     jobs = cct_jobs(case_name, faults, search=search, model=model)
-    others = parallel.other_records(out, (j.key for j in jobs), _whose)
+    others = parallel.other_records(out, (j.key for j in jobs), lambda r: _whose(r, jobs))
     if others:
         shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
         warnings.warn(
@@ -185,7 +210,7 @@ def screen(
         progress=runner.progress,
         retry_failed=retry_failed,
     )
-    before = set(report.failed_before_keys)
+    before, ran = set(report.failed_before_keys), set(report.ran_keys)
     rows = []
     for fault, rec in zip(faults, report.records.values()):
         row = {
@@ -193,6 +218,7 @@ def screen(
             "bus": fault.bus,
             "far_bus": fault.far_bus,
             "status": rec["status"],
+            "run_now": rec["key"] in ran,
         }
         row["verdict"] = verdict(rec)
         row["islanded"] = islanded_buses(rec)

@@ -117,6 +117,7 @@ def controlled_cct_jobs(
             func=controlled_cct_job,
             inputs={**j.inputs, **extra},
             check=j.check,
+            compared=j.compared,
         )
         for j in jobs
     ]

@@ -1389,6 +1389,99 @@ def test_a_sweep_whose_runs_end_before_a_clearing_is_refused_before_any_work(
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101),
+        ("sweep-cct", "kundur", "--faults", "DEFAULT", "--workers", 1, "--out", "o.jsonl"),
+    ],
+)
+def test_a_search_whose_runs_end_too_soon_after_its_latest_clearing_is_refused(
+    no_simulation, tmp_path, monkeypatch, command
+):
+    """Kundur's line 3-101 with --tf 1.5 and --t-max 0.3 read "CCT above the search
+    limit" (exit 0, cct_s null; sweep-cct recorded the same) though its CCT is 0.154 s:
+    the probes cleared near --t-max had 0.2 s to separate.  Refused before any run, naming
+    --tf, the latest clearing, the minimum and what to give; no records file."""
+    from stabctl.stability.cct import MIN_AFTER_CLEARING_S
+
+    assert MIN_AFTER_CLEARING_S == 3.5
+    monkeypatch.chdir(tmp_path)
+    res = run(*command, "--tf", 1.5, "--t-max", 0.3)
+    assert_error(
+        res,
+        "--tf 1.5 s: fault at bus 3 on line 3-101 at 1 s is cleared as late as 1.3 s",
+        "the runs must end at least 3.5 s after it",
+        "give --tf 4.8 s or more",
+    )
+    assert list(tmp_path.iterdir()) == []
+    res = run(*command, "--tf", 5, "--t-max", 1)  # 3 s after: --t-max 0.5 or --tf 5.5
+    assert_error(res, "give --tf 5.5 s or more or --t-max 0.5 s or less")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_library_search_refuses_a_run_end_too_soon_after_its_latest_clearing():
+    """`critical_clearing_time` and `cct_jobs` refuse it too, naming the fault time,
+    t_max, t_end and the minimum, before any run (the stand-in runner never runs)."""
+    from stabctl.stability.cct import (
+        LineFault,
+        SearchOptions,
+        cct_jobs,
+        check_run_end,
+        critical_clearing_time,
+    )
+
+    class NoRuns:
+        def __getattr__(self, name):
+            raise AssertionError(f"the runner's {name} was used")
+
+    fault, search = LineFault(3, 101), SearchOptions(t_max=0.3, t_end=1.5)
+    said = (
+        "run end 1.5 s (t_end, --tf) is only 0.2 s after the latest clearing (fault at 1 s "
+        "+ t_max 0.3 s = 1.3 s); the runs must go on at least 3.5 s after it"
+    )
+    with pytest.raises(
+        InputError, match=re.escape(said) + ".*give a t_end \\(--tf\\) of at least 4.8 s"
+    ):
+        critical_clearing_time(NoRuns(), fault, search)
+    with pytest.raises(InputError, match="fault at bus 3 on line 3-101 at 1 s: " + re.escape(said)):
+        check_run_end(fault, search)
+    with pytest.raises(InputError, match=re.escape(said)):
+        cct_jobs("kundur", [fault], search=search)
+    check_run_end(fault, SearchOptions(t_max=0.3, t_end=4.8))  # exactly 3.5 s after: taken
+    with pytest.raises(InputError, match=r"t_max 2 s: the runs end 5 s after the fault"):
+        cct_jobs("kundur", [fault], search=SearchOptions(t_max=2.0))
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("screen", "kundur", "--buses", 3, "--workers", 1, "--out", "s.jsonl"),
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--workers", 1),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3),
+    ],
+)
+def test_a_search_limit_too_close_to_the_default_run_end_is_refused_before_any_run(
+    no_simulation, tmp_path, monkeypatch, args
+):
+    """Without --tf the runs end 5 s after the fault start: a --t-max of 2 s left the
+    probes cleared near it 3 s to separate.  Refused up front by every search command,
+    naming --t-max, the run end and the largest --t-max (and --tf where it can be
+    given); nothing recorded."""
+    _no_sweep_here(tmp_path, monkeypatch)
+    res = run(*args, "--t-max", 2)
+    assert_error(
+        res,
+        "--t-max 2 s: the runs end 5 s after the fault start (the default), only 3 s "
+        "after the latest clearing; they must go on at least 3.5 s after it",
+        "give a --t-max of at most 1.5 s",
+    )
+    tf = args[0] in ("cct", "sweep-cct")
+    assert ("or a --tf of at least the fault start + 5.5 s" in res.stderr) == tf
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
 def _no_sweep_here(tmp_path, monkeypatch) -> None:
     """Work in tmp_path with the fault file f.csv; a sweep that starts fails the test."""
     monkeypatch.chdir(tmp_path)
@@ -1495,6 +1588,39 @@ def test_a_screening_names_the_records_of_other_runs_in_its_file(
     ):
         screen("kundur", "mix.jsonl", buses=[3], search=SearchOptions(tol=0.01))
     assert (tmp_path / "mix.jsonl").read_text() == text
+
+
+def test_a_screening_names_what_differs_in_its_own_faults_screened_with_other_inputs(
+    no_simulation, tmp_path, monkeypatch
+):
+    """screen --conventions pstess on a file screened at ieee called the earlier records
+    "a sweep-cct record or another screening's (of other buses or lines)", though they are
+    the same buses at other conventions: the warning names the inputs that differ."""
+    import stabctl.parallel
+    import stabctl.stability.cct as cct
+    from stabctl.dynamics.options import ModelOptions
+    from stabctl.stability.screening import screen
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cct, "compile_here", lambda *a, **k: None)
+
+    def no_sweep(*a, **k):
+        raise InputError("no sweep here")
+
+    monkeypatch.setattr(stabctl.parallel, "run_sweep", no_sweep)
+    search = cct.SearchOptions(tol=0.01)
+    (job,) = cct.cct_jobs("kundur", [cct.LineFault(3, None)], search=search)
+    record = {"key": job.key, "inputs": job.inputs, "status": "failed", "error": "stand-in"}
+    (tmp_path / "s.jsonl").write_text(json.dumps(record) + "\n")
+    said = (
+        "line 1: job kundur/bus3/t1/esd-none (the same fault screened with other inputs "
+        "(conventions: 'ieee' there, 'pstess' now))"
+    )
+    with (
+        pytest.warns(UserWarning, match=re.escape(said)),
+        pytest.raises(InputError, match="no sweep here"),
+    ):
+        screen("kundur", "s.jsonl", buses=[3], search=search, model=ModelOptions("pstess"))
 
 
 @pytest.mark.parametrize(

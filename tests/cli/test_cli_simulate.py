@@ -416,6 +416,20 @@ def test_pss_e_study_events_in_any_number_and_order():
     assert "  PREF of machine 1 stepped by +0.05 pu at 4 s" in text.stdout.splitlines()
 
 
+def test_a_separation_limit_below_the_initial_angle_spread_is_refused(tmp_path):
+    """`simulate kundur --separation-limit 0.3 --tf 1` (a flat run) reported "loss of
+    synchronism at t = 0.0000 s: G1", exit 0: G1 starts 0.3632 rad from the COI."""
+    out = tmp_path / "o.csv"
+    res = run("simulate", "kundur", "--separation-limit", 0.3, "--tf", 1, "--out", out)
+    assert_bad_input(
+        res,
+        tmp_path,
+        "--separation-limit 0.3 rad is not above the angle of G1 (bus 1) from the centre "
+        "of inertia at the start, 0.3632 rad",
+        "give a limit above 0.3632 rad",
+    )
+
+
 def test_a_tripped_machine_is_named_and_not_a_separation():
     """`--trip-gen 4 1`: G4 out of service from 1 s.  Its rotor runs away, but the machines
     left in service stay within pi of their own COI (checked here from the angles): the

@@ -255,6 +255,33 @@ def test_bad_clearing_and_times(kundur):
         kundur.run([], t_end=1.0, h=0.0)
 
 
+def test_a_separation_limit_not_above_the_initial_angle_spread_is_refused(kundur):
+    """A flat run with a separation limit of 0.3 rad reported loss of synchronism at
+    t = 0 (G1), the limit below G1's angle from the COI before any disturbance.  Refused
+    naming the machine and its angle (the flat run's first point, COI weights H*MVA), by
+    `run`, `start` and the CCT search before any run; a limit above it runs stable."""
+    from stabctl.dynamics.coi import coi_angle
+    from stabctl.stability.cct import SearchOptions, critical_clearing_time
+
+    flat = kundur.run([], t_end=0.1)
+    m = kundur.case.machines
+    dev = np.abs(flat.angle[0] - coi_angle(flat.angle[:1], m.H * m.mva)[0])
+    assert int(np.argmax(dev)) == 0 and dev[0] == pytest.approx(0.3632, abs=1e-4)
+    said = (
+        "separation limit 0.3 rad is not above the angle of G1 (bus 1) from the centre of "
+        "inertia at the start, 0.3632 rad"
+    )
+    with pytest.raises(InputError, match=re.escape(said)):
+        kundur.run([], t_end=1.0, separation_limit=0.3)
+    with pytest.raises(InputError, match=re.escape(said)):
+        kundur.start([], t_end=1.0, separation_limit=0.3)
+    with pytest.raises(InputError, match=re.escape(said)):
+        critical_clearing_time(kundur, LineFault(3, 101), SearchOptions(separation_limit=0.3))
+    with pytest.raises(InputError, match=r"limit 0\.363 rad is not above .* 0\.3632 rad"):
+        kundur.run([], t_end=1.0, separation_limit=0.363)
+    assert kundur.run([], t_end=1.0, separation_limit=0.37).stable
+
+
 def test_a_circuit_or_machine_tripped_twice_is_refused(kundur):
     """The second trip of an open circuit did nothing, silently."""
     from stabctl.dynamics.events import GeneratorTrip

@@ -75,13 +75,19 @@ def test_cli_screen_writes_map_and_reports_failures(tmp_path):
     assert by_bus[3]["verdict"] == "cct" and by_bus[101]["verdict"] == "above t_max"
     assert by_bus[101]["t_max_s"] == 0.4 and "error" not in by_bus[101]
     assert (tmp_path / "m.png").stat().st_size > 10000
+    assert [r["run_now"] for r in rows] == [True, True]
+    # as after an interrupted screening: one record kept, the other search runs again
+    out = tmp_path / "s.jsonl"
+    out.write_text(out.read_text().splitlines(keepends=True)[0])
     again = ["screen", "kundur", "--buses", "3,101", "--t-max", "0.4", "--workers", "1"]
-    text = CliRunner().invoke(main, [*again, "--out", str(tmp_path / "s.jsonl")]).stdout
+    text = CliRunner().invoke(main, [*again, "--out", str(out)]).stdout
     assert ">0.400" in text and "robust: stable when cleared there" in text
     assert (
-        "2 fault(s): 1 CCT(s) found, 1 above the search limit (robust), 0 N-1 insecure "
-        "(CCT 0), 0 failed" in text
+        f"2 fault(s): 1 run now, 1 already in {out}; 1 CCT(s) found, 1 above the search "
+        "limit (robust), 0 N-1 insecure (CCT 0), 0 failed" in text
     )
+    rows = json.loads(CliRunner().invoke(main, [*again, "--out", str(out), "--json"]).stdout)
+    assert [r["run_now"] for r in rows] == [False, False]
 
 
 def test_spectral_layout_is_finite_and_distinct():
