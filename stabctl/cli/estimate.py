@@ -15,6 +15,7 @@ import numpy as np
 from stabctl.cli.checks import check_suffix, model_settings
 from stabctl.cli.format import (
     closed_loop_lines,
+    counted,
     estimator_cct_lines,
     print_estimate,
     print_json,
@@ -558,7 +559,9 @@ def track(
     instants no stream sent are counted and said: a gap of at most 1 s is filled with
     missing values, after a longer one the estimator starts again.  Interrupted (Ctrl-C,
     SIGTERM) while estimating, the frames estimated so far are written likewise, as a
-    partial estimate (exit status 130, 143), and said.
+    partial estimate (exit status 130, 143), and said; interrupted before (a TCP stream is
+    estimated once received), no frame is estimated and nothing is written, and it says
+    how many frames had come.
 
     \b
     Example:
@@ -592,52 +595,55 @@ def track(
             "recording's frames carry their own IDCODE)",
         )
     codes = stream_idcodes(idcode, len(src.servers)) if src.path is None else 1
-    case = load_case(case_name)
-    law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
-    ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
-    try:
+    try:  # the case, its estimators (compiled if not cached) and the frames
+        case = load_case(case_name)
+        law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
+        ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
         got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end, idcode=codes)
     except KeyboardInterrupt as exc:  # said with what had come, and that it is not tracked
-        if received := getattr(exc, "received", ""):
-            left = "left as it was" if Path(out_path).exists() else "not written"
-            exc.kept = (  # type: ignore[attr-defined]
-                f"nothing is tracked: the {received} had come, short of {end}; a stream "
-                f"is tracked once received, so they are lost ({out_path} {left})"
-            )
+        left = "left as it was" if Path(out_path).exists() else "not written"
+        received = getattr(exc, "received", "")
+        exc.kept = (  # type: ignore[attr-defined]
+            f"nothing is tracked: the {received} had come, short of {end}; a stream "
+            f"is tracked once received, so they are lost ({out_path} {left})"
+            if received and not received.startswith("0 ")
+            else f"no frame was estimated: none had come from {src} yet, so nothing is "
+            f"kept ({out_path} {left})"
+        )
         raise
     why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
-    kept = f"{len(got.frames)} frames tracked"
+    kept = f"{counted(len(got.frames), 'frame')} tracked"
     if got.short:
         refuse_short_over(out_path, why, kept)
     try:
         d = cl.track(ctrl, got.frames, got.breaks)
     except KeyboardInterrupt as exc:  # what was estimated is kept, as record keeps frames
         d = ctrl.diagnostics()
-        what = f"{len(d.t)} of the {len(got.frames)} frames from {src} estimated"
+        what = f"{len(d.t)} of the {counted(len(got.frames), 'frame')} from {src} estimated"
         exc.kept = (  # type: ignore[attr-defined]
             keep_interrupted(
                 out_path,
                 what,
                 len(d.t),
-                "frames estimated",
+                "frame estimated" if len(d.t) == 1 else "frames estimated",
                 "a partial estimate",
                 lambda: _write_track(out_path, ctrl, d, esd_pct is not None),
             )
             if d.t.size
-            else f"nothing is kept: {what}"
+            else f"no frame was estimated yet, so nothing is kept: {what}"
         )
         raise
     _write_track(out_path, ctrl, d, esd_pct is not None)
     worst = np.unravel_index(np.argmax(np.abs(d.rel)), d.rel.shape) if d.rel.size else None
     click.echo(
-        f"tracked {len(got.frames)} frames from {src} with {estimator}"
+        f"tracked {counted(len(got.frames), 'frame')} from {src} with {estimator}"
         + (
             ""
             if worst is None
             else f": largest |f_i - f_COI| {1e3 * abs(d.rel[worst]):.1f} mHz "
             f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
         )
-        + (f"; {d.starts} ESD starts" if esd_pct is not None else "")
+        + (f"; {counted(d.starts, 'ESD start')}" if esd_pct is not None else "")
         + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + (f"; {gaps}" if (gaps := sources.gap_line(got)) else "")
         + "".join(f"; {unsent}" for unsent in got.unsent)

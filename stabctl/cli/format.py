@@ -13,6 +13,25 @@ import click
 from stabctl.errors import SimulationError, StabctlError
 
 
+def counted(n: int, noun: str, plural: str | None = None) -> str:
+    """A count and its noun, singular for one: ``"1 frame"``, ``"181 frames"``.
+
+    Parameters
+    ----------
+    n : int
+        The count.
+    noun : str
+        The noun for one.
+    plural : str, optional
+        The noun for any other count; default `noun` + "s".
+
+    Returns
+    -------
+    str
+    """
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+
+
 def one_line(exc) -> str:
     """The error message on one line; a diverged run also says where it stopped.
 
@@ -548,7 +567,7 @@ def print_estimate(d) -> None:
         f"frequency window {p['window_cycles']:g} cycles, latency {1000 * p['latency_s']:g} ms, "
         f"lost {p['drop_prob']:g}; "
         + (
-            f"{d['runs']} runs, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}"
+            f"{counted(d['runs'], 'run')}, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}"
             if d.get("source") is None
             else _source_line(d["source"], d["seed"])
         )
@@ -564,15 +583,19 @@ def print_estimate(d) -> None:
         ("forecast", "rel_forecast_rmse_mhz"),
         ("NIS in 95%", "nis_inside"),
     )
-    click.echo(f"{'estimator':9}" + "".join(f"{c:>17}" for c, _ in cols))
-    for name, fig in d["estimators"].items():
-        cells = [
-            f"{'-':>17}"
-            if fig[k]["mean"] is None
-            else f"{fig[k]['mean']:>10.3f} +-{fig[k]['std']:<5.3f}"
-            for _, k in cols
-        ]
-        click.echo(f"{name:9}" + "".join(cells))
+    figs = d["estimators"]
+    click.echo(
+        _table(
+            ["estimator", *(c for c, _ in cols)],
+            [[name, *(_mean_std(fig[k]) for _, k in cols)] for name, fig in figs.items()],
+        )
+    )
+    if any(
+        fig[k]["mean"] is not None and fig[k]["std"] is None
+        for fig in figs.values()
+        for _, k in cols
+    ):
+        click.echo("n/a: no spread, one run gave the figure")
     if any(fig[k]["mean"] is None for fig in d["estimators"].values() for _, k in cols[:-1]):
         click.echo(
             "-: no error to take (a COI or relative speed needs an estimate of every "
@@ -583,7 +606,7 @@ def print_estimate(d) -> None:
     if d["false_actions"] is not None:
         a = d["ambient"]
         click.echo(
-            f"no fault, {a['runs']} runs of {a['t_s']:g} s, ambient load {a['pct']:g} % "
+            f"no fault, {counted(a['runs'], 'run')} of {a['t_s']:g} s, ambient load {a['pct']:g} % "
             f"(tau {a['tau_s']:g} s), deadband {1000 * a['deadband_hz']:g} mHz: false ESD "
             "actions per run (largest |f_i - f_COI|, largest std of f_i - f_COI; mHz)"
         )
@@ -592,6 +615,36 @@ def print_estimate(d) -> None:
             click.echo(f"  {name:5} {_or_dash(act, '8.2f')}  ({_or_dash(mx)}, {_or_dash(sd)})")
         if any(f[k]["mean"] is None for f in d["false_actions"].values() for k in f):
             click.echo("-: no run to take it from (no estimate of every machine at one time)")
+
+
+def _mean_std(fig: dict) -> tuple[str, str]:
+    """A figure's mean and its ``+-`` spread as text: '-' for no mean, 'n/a' for no
+    spread (fewer than two runs gave it)."""
+    if fig["mean"] is None:
+        return "-", ""
+    return f"{fig['mean']:.3f}", "+-" + ("n/a" if fig["std"] is None else f"{fig['std']:.3f}")
+
+
+def _table(head: list, rows: list) -> str:
+    """A text table, each column as wide as its widest cell and two spaces apart: the
+    first column left-aligned, the others right-aligned; a cell given as a (mean,
+    spread) pair is aligned on both parts within its column."""
+    body = []
+    for k in range(len(head)):
+        cells = [row[k] for row in rows]
+        if cells and isinstance(cells[0], tuple):
+            wm, ws = (max(len(c[j]) for c in cells) for j in (0, 1))
+            cells = [f"{m:>{wm}} {sd:<{ws}}" if ws else f"{m:>{wm}}" for m, sd in cells]
+        body.append(cells)
+    widths = [max(len(str(head[k])), *(len(c) for c in body[k])) for k in range(len(head))]
+    lines = [
+        "  ".join(
+            f"{cell:<{widths[0]}}" if k == 0 else f"{cell:>{widths[k]}}"
+            for k, cell in enumerate(line)
+        ).rstrip()
+        for line in [head, *zip(*body)]
+    ]
+    return "\n".join(lines)
 
 
 def _or_dash(value, spec: str = ".2f") -> str:
@@ -744,7 +797,9 @@ def estimator_cct_lines(
         + (
             "failed"
             if s["mean"] is None
-            else f"{s['mean']:7.2f} +- {s['std']:.2f} ({s['min']:.2f}..{s['max']:.2f})"
+            else f"{s['mean']:7.2f}"
+            + (" +- n/a (one run)" if s["std"] is None else f" +- {s['std']:.2f}")
+            + f" ({s['min']:.2f}..{s['max']:.2f})"
         )
         + f"  runs {s['runs']}, failed {s['failed']}"
         for e, s in table.items()
@@ -788,7 +843,7 @@ def _link_text(link) -> str:
         return ""
     rt = link["round_trip_ms"]
     return (
-        f"  over TCP: {link['frames']} frames, round trip median {rt['median']:.2f} ms, "
+        f"  over TCP: {counted(link['frames'], 'frame')}, round trip median {rt['median']:.2f} ms, "
         f"99th percentile {rt['p99']:.2f} ms, largest {rt['max']:.2f} ms, "
         f"{link['late']} later than the latency"
         + "".join(f"\n  dropped peer {p}" for p in link.get("dropped_peers", ()))

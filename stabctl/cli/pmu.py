@@ -12,6 +12,7 @@ import socket
 import click
 
 from stabctl.cli.checks import check_writable
+from stabctl.cli.format import counted
 from stabctl.cli.options import (
     FLOAT,
     INT,
@@ -345,7 +346,8 @@ def _serve(servers) -> None:
 
     for server in servers:
         click.echo(
-            f"serving {server.n_frames} frames on {hostport(*server.address)} (C37.118.2, "
+            f"serving {counted(server.n_frames, 'frame')} on {hostport(*server.address)} "
+            "(C37.118.2, "
             f"IDCODE {server.idcode}); waiting for a PDC",
             err=True,
         )
@@ -377,7 +379,8 @@ def _serve(servers) -> None:
         raise InputError(f"{'; '.join(short)}: the stream was not sent whole")
     sent, total = (sum(getattr(s, a) for s in servers) for a in ("n_sent", "n_frames"))
     click.echo(
-        f"sent {sent} of {total} frames" + (f" on {len(servers)} ports" if len(servers) > 1 else "")
+        f"sent {sent} of {counted(total, 'frame')}"
+        + (f" on {len(servers)} ports" if len(servers) > 1 else "")
     )
 
 
@@ -449,7 +452,7 @@ def record(address, out, frames, idcode):
         collections.Counter(why for d in data for why in c37.flags(cfg2, d) if why)
     )
     click.echo(
-        f"recorded {len(data)} frames from {address} to {out}"
+        f"recorded {counted(len(data), 'frame')} from {address} to {out}"
         + (f"; {gaps}" if gaps else "")
         + (f"; {flagged}" if flagged else "")
     )
@@ -673,6 +676,8 @@ def control(
     d = ctrl.diagnostics()
     flagged, gaps = unused_values(got.flagged), gaps_line(got.gaps, " (no frame sent)")
     click.echo(
-        f"controller ({estimator}): answered {got.frames} frames from {address}, {d.starts} "
-        f"ESD starts" + (f"; {flagged}" if flagged else "") + (f"; {gaps}" if gaps else "")
+        f"controller ({estimator}): answered {counted(got.frames, 'frame')} from {address}, "
+        f"{counted(d.starts, 'ESD start')}"
+        + (f"; {flagged}" if flagged else "")
+        + (f"; {gaps}" if gaps else "")
     )

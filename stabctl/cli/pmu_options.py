@@ -345,7 +345,8 @@ def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> 
     n : int
         The items kept (at least 1).
     noun : str
-        What they are, after their number (``"received"``, ``"frames estimated"``).
+        What they are, after their number, singular for one (``"received"``, ``"frames
+        estimated"``, ``"frame estimated"``).
     partial : str
         What `out` then is (``"a partial recording"``).
     write : callable
@@ -356,12 +357,13 @@ def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> 
     str
         Where the items are, or why they are lost.
     """
+    are = "is" if n == 1 else "are"
     if Path(out).exists():
-        return f"{what}; {out} is left as it was (the {n} {noun} are not written over it)"
+        return f"{what}; {out} is left as it was (the {n} {noun} {are} not written over it)"
     try:
         write()
     except OSError as exc:
-        return f"{what}; the {n} {noun} are lost: {out}: {exc.strerror or exc}"
+        return f"{what}; the {n} {noun} {are} lost: {out}: {exc.strerror or exc}"
     except KeyboardInterrupt:
-        return f"{what}; the {n} {noun} are lost: interrupted again while writing {out}"
-    return f"{what}; the {n} {noun} are in {out}, {partial}"
+        return f"{what}; the {n} {noun} {are} lost: interrupted again while writing {out}"
+    return f"{what}; the {n} {noun} {are} in {out}, {partial}"

@@ -849,14 +849,12 @@ def cct_study(
 
 
 def _spread(values) -> dict:
-    """Mean, standard deviation, range of finite values (failed runs: NaN, counted)."""
+    """Mean, standard deviation (None from fewer than two: no spread), range of finite
+    values (failed runs: NaN, counted)."""
     v = np.asarray(values, float)
     ok = v[np.isfinite(v)]
-    stats = (
-        (float(ok.mean()), float(ok.std()), float(ok.min()), float(ok.max()))
-        if ok.size
-        else (None,) * 4
-    )
+    std = float(ok.std()) if ok.size > 1 else None
+    stats = (float(ok.mean()), std, float(ok.min()), float(ok.max())) if ok.size else (None,) * 4
     return {
         **dict(zip(("mean", "std", "min", "max"), stats)),
         "runs": int(v.size),

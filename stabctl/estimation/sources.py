@@ -415,7 +415,8 @@ def _came(source: Source, came: list) -> str:
     frames from tcp://... (n1 from HOST:PORT, ...)``."""
     each = ", ".join(f"{len(d)} from {hostport(h, p)}" for (h, p), d in zip(source.servers, came))
     total = sum(len(d) for d in came)
-    return f"{total} data frames from {source}" + (f" ({each})" if len(came) > 1 else "")
+    frames = "data frame" if total == 1 else "data frames"
+    return f"{total} {frames} from {source}" + (f" ({each})" if len(came) > 1 else "")
 
 
 def unused_values(flagged: dict) -> str:

@@ -164,8 +164,8 @@ def monte_carlo(
 ) -> dict:
     """Errors of every estimator over `runs` PMU streams (seeds seed .. seed + runs - 1).
 
-    Returns {estimator: {metric: {"mean", "std", "min", "max", "runs": [...]}}}.
-    Raises InputError for runs < 1.
+    Returns {estimator: {metric: {"mean", "std", "min", "max", "runs": [...]}}} ("std"
+    None from fewer than two runs: no spread).  Raises InputError for runs < 1.
     """
     if runs < 1:
         raise InputError(f"need at least one Monte-Carlo run, got {runs}")
@@ -207,7 +207,8 @@ def received_errors(
     Returns
     -------
     dict
-        {estimator: {metric: {"mean", "std", "min", "max", "runs": [one value]}}}.
+        {estimator: {metric: {"mean", "std", "min", "max", "runs": [one value]}}}, "std"
+        None (one run: no spread).
 
     Raises
     ------
@@ -233,12 +234,14 @@ def _stream_figures(case, result, pmus, streams, window, coi) -> dict:
 
 
 def _summary(values) -> dict:
+    """Mean, standard deviation (None from fewer than two runs: no spread), range and
+    values of a metric over the runs (NaN: a run that gave none, left out)."""
     v = np.asarray(values, float)
     if np.all(np.isnan(v)):
         return {"mean": None, "std": None, "min": None, "max": None, "runs": [None] * v.size}
     return {
         "mean": float(np.nanmean(v)),
-        "std": float(np.nanstd(v)),
+        "std": float(np.nanstd(v)) if np.count_nonzero(~np.isnan(v)) > 1 else None,
         "min": float(np.nanmin(v)),
         "max": float(np.nanmax(v)),
         "runs": [float(x) for x in v],

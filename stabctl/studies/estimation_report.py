@@ -173,7 +173,8 @@ def markdown(name: str, fig: dict, generated_by: str = "stabctl paper") -> str:
     for e, m in fig["rmse"].items():
 
         def cell(k, m=m):
-            return f"{m[k]['mean']:.2f} +- {m[k]['std']:.2f}"
+            std = m[k]["std"]
+            return f"{m[k]['mean']:.2f}" + ("" if std is None else f" +- {std:.2f}")
 
         lines.append(
             f"| {e} | {cell('speed_rmse_mhz')} | {cell('coi_rmse_mhz')} | "

@@ -15,6 +15,19 @@ def test_omib_json_reports_table1_and_eac():
     assert abs(out["eac"]["t_cr_s"] - out["eac"]["t_cr_bisection_s"]) < 1e-3
 
 
+def test_omib_tables_the_durations_shortest_first():
+    """Durations from -c and from the positional MORE_CYCLES, given in any order, are
+    tabled shortest first, in the text and in the JSON."""
+    args = ["omib", "-c", "6", "12", "-c", "15"]
+    res = CliRunner().invoke(main, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    assert [c["cycles"] for c in json.loads(res.output)["cases"]] == [6.0, 12.0, 15.0]
+    res = CliRunner().invoke(main, ["omib", "-c", "15", "6", "-c", "12"])
+    assert res.exit_code == 0, res.output
+    rows = [line.split()[0] for line in res.output.splitlines()[1:4]]
+    assert rows == ["6.00", "12.00", "15.00"]
+
+
 def test_bad_arguments_exit_nonzero_with_message():
     runner = CliRunner()
     for args in (

@@ -446,6 +446,40 @@ def test_an_interrupted_track_keeps_what_it_estimated(
             assert head.startswith("t_s,f_") and len(rows) == 30
 
 
+@pytest.mark.parametrize(
+    "at, said",
+    [
+        (2, "the 1 frame estimated is in {out}, a partial estimate; "),
+        (1, "no frame was estimated yet, so nothing is kept: 0 of the {n} frames from "),
+    ],
+)
+def test_an_interrupted_track_counts_one_frame_or_none(
+    kundur_recording, tmp_path, monkeypatch, at, said
+):
+    """Interrupted after one frame estimated, `estimate track` said "the 1 frames
+    estimated are in"; before any, "nothing is kept" without saying no frame was
+    estimated."""
+    from stabctl.estimation.closed_loop import LoopController
+
+    act = LoopController.act
+    calls = []
+
+    def interrupted(self, frame):
+        calls.append(frame.t)
+        if len(calls) == at:
+            raise KeyboardInterrupt
+        return act(self, frame)
+
+    monkeypatch.setattr(LoopController, "act", interrupted)
+    out = tmp_path / "t.csv"
+    args = ["estimate", "track", "kundur", "--source", str(kundur_recording), "--out", str(out)]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 130, res.output
+    n = len(c37.recorded_frames(kundur_recording)[1])
+    assert said.format(out=out, n=n) in res.stderr, res.stderr
+    assert out.exists() == (at == 2)
+
+
 def test_a_server_listens_on_ipv6(kundur_recording, tmp_path):
     """`--host ::1` could not be served (the listening socket was IPv4 only, while --allow
     took IPv6 addresses): a replay on ::1, allowed only to ::1, is recorded from

@@ -353,6 +353,37 @@ def test_sigint_or_sigterm_ends_estimate_track_of_an_endless_stream(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize(
+    "target",
+    ["stabctl.cli.estimate.stream_controller", "stabctl.estimation.sources.read_frames"],
+    ids=["setting-up", "before-the-first-frame"],
+)
+def test_estimate_track_interrupted_before_any_frame_came_says_none_was_estimated(
+    tmp_path, monkeypatch, target
+):
+    """Interrupted while its estimators were set up (compiled, seconds) or before a frame
+    had come, `estimate track` said only "nothing is kept; the work starts again", though
+    its help promises the frames estimated: the line says that no frame was estimated
+    because none had come, and that --out is not written."""
+    monkeypatch.chdir(tmp_path)
+    module, name = target.rsplit(".", 1)
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(__import__(module, fromlist=[name]), name, interrupted)
+    args = ["estimate", "track", "kundur", "--source", "tcp://127.0.0.1:9", "--frames", "181"]
+    args += ["--out", "t.csv"]
+    monkeypatch.setattr(sys, "argv", ["stabctl", *args])
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 130, (res.output, res.exception)
+    assert res.stderr.strip().splitlines() == [
+        "interrupted: no frame was estimated: none had come from tcp://127.0.0.1:9 yet, so "
+        "nothing is kept (t.csv not written); run again with: stabctl " + " ".join(args)
+    ]
+    assert list(tmp_path.iterdir()) == []
+
+
 def _record_interrupted(tmp_path, cfg2: bytes, data: list, sig) -> tuple:
     """`pmu record --frames 121 -o r.c37` of an endless stream of `data`, sent `sig` once
     a few frames came: (exit status, stdout, stderr, the server's port, the command)."""

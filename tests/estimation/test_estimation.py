@@ -388,6 +388,64 @@ def test_estimate_rmse_with_nearly_every_frame_lost_says_why_a_figure_is_missing
     assert "warning" not in res.stderr, res.stderr
 
 
+def test_estimate_rmse_of_one_run_has_no_spread_and_its_columns_stay_apart():
+    """One run has no spread: its standard deviations are null in the JSON (not 0) and
+    "+-n/a" in the text, said under the table.  With --k-sigma 0.001 the noise is a
+    thousand sigma and the errors tens of thousands of mHz: every column is as wide as
+    its widest cell, two spaces apart, so the header and each row split into the same
+    columns and each cell reads back as the JSON's figure."""
+    args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101", "--runs", "1"]
+    args += ["--ambient-s", "0", "--tf", "3", "--k-sigma", "0.001"]
+    res = CliRunner().invoke(main, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    figs = json.loads(res.stdout)["estimators"]
+    assert all(m["std"] is None for fig in figs.values() for m in fig.values()), figs
+    assert max(f["speed_rmse_mhz"]["mean"] for f in figs.values()) > 1e4  # cells widen
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("estimator"))
+    head = lines[k].split("  ")
+    head = [h.strip() for h in head if h.strip()]
+    assert head[1:] == [
+        "speed",
+        "COI",
+        "relative",
+        "rel. max",
+        "at arrival",
+        "forecast",
+        "NIS in 95%",
+    ]
+    keys = ["speed_rmse_mhz", "coi_rmse_mhz", "rel_rmse_mhz", "rel_max_mhz"]
+    keys += ["rel_arrival_rmse_mhz", "rel_forecast_rmse_mhz", "nis_inside"]
+    for line, (name, fig) in zip(lines[k + 1 :], figs.items()):
+        cells = [c.strip() for c in line.split("  ") if c.strip()]
+        assert cells[0] == name and len(cells) == 1 + len(keys), line
+        for cell, key in zip(cells[1:], keys):
+            if fig[key]["mean"] is None:  # the raw frequency has no NIS
+                assert cell == "-"
+                continue
+            mean, spread = cell.split(" ")
+            assert float(mean) == pytest.approx(fig[key]["mean"], abs=1e-3) and spread == "+-n/a"
+    assert lines[k + 1 + len(figs)] == "n/a: no spread, one run gave the figure"
+    assert "+-0.000" not in res.stdout and "; 1 run, seeds 0..0" in res.stdout
+
+
+def test_a_cct_of_one_seed_has_no_spread():
+    """`estimate cct --runs 1` printed "+- 0.00": one CCT found has no spread (null in the
+    JSON, "n/a" in the text); two have one."""
+    from stabctl.cli.format import estimator_cct_lines
+    from stabctl.estimation.closed_loop import _spread
+    from stabctl.estimation.settings import PMUSettings
+
+    one, two = _spread([11.5]), _spread([11.5, 12.0, np.nan])
+    assert one["std"] is None and one["mean"] == 11.5
+    assert two["std"] == pytest.approx(0.25) and two["failed"] == 1
+    lines = estimator_cct_lines({"ekf": one, "kf": two}, 3, 101, 5, PMUSettings(), 1, 0)
+    assert lines[1] == "  ekf     11.50 +- n/a (one run) (11.50..11.50)  runs 1, failed 0"
+    assert lines[2] == "  kf      11.75 +- 0.25 (11.50..12.00)  runs 3, failed 1"
+
+
 def test_estimate_cct_commands_wecc_batteries():
     """`estimate cct --esd-model wecc`: every estimator's loop commands batteries, whose
     CCT with exact measurements is 11.5 cycles against the ideal devices' 12 (the

@@ -236,3 +236,12 @@ def test_a_leap_second_is_read_across_in_order(wire, tmp_path):
         assert res.exit_code == 2, res.output
         assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
         assert "its FRACSEC flags a leap second (C37.118.2-2011 Table 3)" in res.stderr
+
+
+def test_one_frame_tracked_is_said_in_the_singular(wire, tmp_path):
+    """A recording of one data frame was "tracked 1 frames": one frame is said as one."""
+    _, head, body = wire
+    res = _track(tmp_path, head, body[:1])
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith("tracked 1 frame from "), res.stdout
+    assert len((tmp_path / "t.csv").read_text().splitlines()) == 2
