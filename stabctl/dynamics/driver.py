@@ -22,6 +22,7 @@ raises SimulationError; both carry the trajectory up to that point.
 
 from __future__ import annotations
 
+import functools
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -729,17 +730,28 @@ class Simulator:
             Naming the limit and the machine farthest from the COI at the start, with
             its angle.
         """
-        angle = self.model.x0[: self.model.mp.n]
-        dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
-        i = int(np.argmax(dev)) if dev.size else 0
-        if dev.size and not limit > dev[i]:
+        widest = self._widest_start
+        if widest is not None and not limit > widest[1]:
+            i, dev = widest
             machine = self.case.machine_name(self.case.machines.number[i])
             raise InputError(
                 f"{name} {limit:g} rad is not above the angle of {machine} from the "
-                f"centre of inertia at the start, {dev[i]:.4g} rad (before any "
+                f"centre of inertia at the start, {dev:.4g} rad (before any "
                 "disturbance): every run would lose synchronism at t = 0; give a limit "
-                f"above {dev[i]:.4g} rad (default pi)"
+                f"above {dev:.4g} rad (default pi)"
             )
+
+    @functools.cached_property
+    def _widest_start(self) -> tuple[int, float] | None:
+        """The machine farthest from its island's COI at the power-flow point and that
+        angle, rad (`check_separation_limit`, asked before every run: taken once); None
+        without machines."""
+        angle = self.model.x0[: self.model.mp.n]
+        dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
+        if not dev.size:
+            return None
+        i = int(np.argmax(dev))
+        return i, float(dev[i])
 
     def _semantics(self, semantics: str | None) -> str:
         if semantics is None:

@@ -285,18 +285,25 @@ def test_a_configuration_frame_of_another_type_is_refused_wherever_a_cfg2_is_rea
     monkeypatch.setattr(cli_pmu, "_serve", lambda servers: pytest.fail("served"))
     one_error(run("pmu", "replay", rec, "--port", 0, "--speed", 0), f"first frame {said}")
     one_error(run("estimate", "track", "kundur", "--source", rec, "--out", out), said)
-    srv, port = _server(odd, b"".join(body))
-    with srv:
-        res = run(
-            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
-            "--frames", 10, "--out", out,
-        )  # fmt: skip
+    res, port = _tracked_over_tcp(odd, b"".join(body), out)
     one_error(res, f"127.0.0.1:{port}: its CFG-2 {said}")
     assert not out.exists()
     srv, port = _server(odd, b"")
     with srv:
         res = run("pmu", "control", "kundur", f"127.0.0.1:{port}", "--esd-pct", 5)
     one_error(res, f"127.0.0.1:{port}'s CFG-2 {said}")
+
+
+def _tracked_over_tcp(head: bytes, body: bytes, out):
+    """`estimate track` of 10 frames from a server sending `head` (its CFG-2) and `body`:
+    (the CLI result, the server's port)."""
+    srv, port = _server(head, body)
+    with srv:
+        res = run(
+            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
+            "--frames", 10, "--out", out,
+        )  # fmt: skip
+    return res, port
 
 
 def test_a_cfg2_pyc37_cannot_read_is_one_error(wire):
@@ -324,12 +331,7 @@ def test_pmus_of_another_nominal_frequency_are_refused(wire, tmp_path):
     rec, out = tmp_path / "fifty.c37", tmp_path / "t.csv"
     rec.write_bytes(head + b"".join(body))
     one_error(run("estimate", "track", "kundur", "--source", rec, "--out", out), said)
-    srv, port = _server(head, b"".join(body))
-    with srv:
-        res = run(
-            "estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}",
-            "--frames", 10, "--out", out,
-        )  # fmt: skip
+    res, _ = _tracked_over_tcp(head, b"".join(body), out)
     one_error(res, said)
     assert not out.exists()
     srv, port = _server(head, b"")
