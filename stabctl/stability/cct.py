@@ -99,7 +99,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Protocol, cast
 
 import numpy as np
 
@@ -391,6 +391,13 @@ class SearchOptions:
         continued to t_end when the search closes a cell on it (module docstring);
         default PROVISIONAL_S.  None: every probe runs to t_end.  Only with the default
         criterion, without early_stop, on a runner that starts runs it can continue.
+    guess_s : float or None
+        A clearing time expected near the CCT, s (>= 0), e.g. the CCT of the same fault
+        cleared without its line trip (`stabctl.stability.screening.screen`): the search
+        probes that cell and the next first, widens outwards from them (the step doubled
+        each time, `_around_guess`), then narrows as `method` does.  It ends in the same
+        cell as without a guess wherever the verdict is monotone in the clearing time;
+        bisection still checks t_lo first.  Default None: no guess.
 
     A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
     job's inputs, and method, early_stop and provisional_s when not their defaults
@@ -409,11 +416,12 @@ class SearchOptions:
     method: str = "bisection"
     early_stop: bool = False
     provisional_s: float | None = PROVISIONAL_S
+    guess_s: float | None = None
 
     def to_inputs(self) -> dict:
         """Fields of a sweep job's recorded inputs: tol, t_max, t_end, error_check when
         off, method when not the default, early_stop when on, provisional_s when not the
-        default.  Raises InputError when a
+        default, guess_s when given.  Raises InputError when a
         field a record cannot hold is not its default."""
         default = SearchOptions()
         for name in ("t_lo", "t_hi", "separation_limit", "criterion", "stop_at_separation"):
@@ -432,6 +440,7 @@ class SearchOptions:
             **(
                 {} if self.provisional_s == PROVISIONAL_S else {"provisional_s": self.provisional_s}
             ),
+            **({} if self.guess_s is None else {"guess_s": self.guess_s}),
         }
 
     @classmethod
@@ -445,6 +454,7 @@ class SearchOptions:
             method=inputs.get("method", "bisection"),
             early_stop=inputs.get("early_stop", False),
             provisional_s=inputs.get("provisional_s", PROVISIONAL_S),
+            guess_s=inputs.get("guess_s"),
         )
 
 
@@ -527,6 +537,8 @@ def critical_clearing_time(
     _check_settings(fault, o, t_hi, t_end)
     if o.provisional_s is not None and not o.provisional_s > 0:
         raise InputError(f"provisional_s must be > 0 s or None, got {o.provisional_s:g}")
+    if o.guess_s is not None and not 0 <= o.guess_s < math.inf:
+        raise InputError(f"guess_s must be a clearing time >= 0 s or None, got {o.guess_s:g}")
     check_trips(sim.case, fault)
     if hasattr(sim, "check_separation_limit"):  # a Simulator: before any run
         sim.check_separation_limit(o.separation_limit)
@@ -579,10 +591,59 @@ def _search(probe: _Probes, bounds) -> tuple[int, int, tuple[int, int]]:
     unstable) pair found), the stable end confirmed by a whole run."""
     k_lo, k_hi, k_max = bounds
     fault, tol, freq = probe.fault, probe.o.tol, probe.sim.case.freq_hz
-    if probe.o.method == "sime":
+    sime, guess = probe.o.method == "sime", probe.o.guess_s
+    if guess is not None and k_max - k_lo >= 2:  # room for a guessed cell and its neighbours
+        if not sime and not probe.stable_at(k_lo):  # bisection's own check
+            _lower_bound_unstable(k_lo, fault, tol)
+        found = _around_guess(
+            probe, bounds, round(guess / tol), freq, GUESS_GALLOPS if sime else None
+        )
+        if sime:
+            return _sime_search(probe, bounds, fault, tol, freq, seeded=found)
+        k_lo, k_hi = cast(tuple, found)  # no limit on the widening: a bracket
+    elif sime:
         return _sime_search(probe, bounds, fault, tol, freq)
-    k_lo, k_hi = _bracket(probe.stable_at, k_lo, k_hi, k_max, fault, tol, freq)
+    else:
+        k_lo, k_hi = _bracket(probe.stable_at, k_lo, k_hi, k_max, fault, tol, freq)
     return (*_bisect_confirmed(probe, k_lo, k_hi), (k_lo, k_hi))
+
+
+#: widening steps from a guessed cell before the "sime" search goes on from its margins
+#: (`_around_guess`): 2 reach 7 cells from the guess's neighbour
+GUESS_GALLOPS = 2
+
+
+def _around_guess(probe: _Probes, bounds, k_guess: int, freq, gallops) -> tuple | None:
+    """A (stable, unstable) lattice bracket found from a guessed cell
+    (`SearchOptions.guess_s`): the guess k (kept within (k_lo, k_max)) probed, then k + 1
+    when stable there (k - 1 when not): a verdict that changes closes the cell at once.
+    Stable at both: the probe at k_max (stable there: AboveSearchLimit, the fault robust,
+    as the doubling reaching it), then 2, 4, 8 ... cells above k + 1 until unstable.
+    Unstable at both: 2, 4, 8 ... cells below k - 1 until stable, k_lo at most (unstable
+    there: N-1 insecure, `_lower_bound_unstable`).  None after `gallops` such steps (None:
+    no limit) without a bracket.  A verdict the search already has is not run again."""
+    k_lo, _, k_max = bounds
+    fault, tol = probe.fault, probe.o.tol
+
+    def stable_at(k: int) -> bool:
+        return probe.verdicts[k] if k in probe.verdicts else probe.stable_at(k)
+
+    k = min(max(k_guess, k_lo + 1), k_max - 1)
+    up = stable_at(k)
+    j = k + 1 if up else k - 1
+    if stable_at(j) != up:
+        return (k, j) if up else (j, k)
+    if up and (j == k_max or stable_at(k_max)):
+        _above_limit(k_max, fault, tol, freq)
+    gap = 2
+    while gallops is None or gap <= 2**gallops:
+        nxt = min(j + gap, k_max) if up else max(j - gap, k_lo)
+        if stable_at(nxt) != up:
+            return (j, nxt) if up else (nxt, j)
+        if nxt == k_lo:
+            _lower_bound_unstable(k_lo, fault, tol)
+        j, gap = nxt, 2 * gap
+    return None
 
 
 #: the provisional stable runs a search keeps to continue (`_Probes.held`): the highest
@@ -812,7 +873,7 @@ def _bisect_confirmed(probe: _Probes, k_lo: int, k_hi: int) -> tuple[int, int]:
 METHODS = ("sime", "bisection")
 
 
-def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq):
+def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq, seeded=False):
     """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
     the first (stable, unstable) pair found), the stable end confirmed
     (`_Probes.confirm`: a provisional stable end that separates when continued is
@@ -859,13 +920,19 @@ def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq):
     2 cells (the bracket creeping) are followed by a bisection step; after SIME_GUIDED
     guided probes, bisection.  A probe at k_max found stable raises AboveSearchLimit.
     ``probe.margins`` (lattice index -> margin or None) is filled for each unstable
-    probe."""
+    probe.
+
+    `seeded`, a (stable, unstable) pair already found from a guess or None when the guess's
+    probes found none (`_around_guess`), starts the search from the verdicts the probe has
+    (no probe at k_max, no doubling); False (default): no guess."""
     k_lo, k_hi, k_max = bounds
     stable_at, margins, swings = probe.stable_at, probe.margins, probe.swings
     known: dict[int, bool] = {}
     at_max: dict[int, bool] = {}
     held: dict = {}
-    if k_max > k_hi:  # robust in one run when gentle there; else reused by the doubling
+    if seeded is not False:
+        known.update(probe.verdicts)
+    elif k_max > k_hi:  # robust in one run when gentle there; else reused by the doubling
         try:
             at_max[k_max] = stable_at(k_max)
         except SimulationError:  # a long fault the doubling may never reach: left to it
@@ -874,9 +941,9 @@ def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq):
             _above_limit(k_max, fault, tol, freq)
         if k_max in margins:  # used once the doubling gets there, as its own probe's
             held[k_max] = margins.pop(k_max)
-    start = None
+    start = seeded or None
     n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
-    k: int | None = k_hi
+    k: int | None = k_hi if seeded is False else None
     while True:
         creeping = False
         if k is not None:  # None: a stable end just found unstable, no new probe
@@ -1524,7 +1591,8 @@ def compared_inputs(inputs: dict) -> dict:
     """A CCT job's recorded inputs as a resumed sweep compares them (`Job.compared` of
     `stabctl.parallel`): t_end None (the default run end) read as the run end it stands
     for, the fault time + T_AFTER_FAULT, so that records made without --tf and a rerun
-    with that same --tf (or the reverse) are the same job.
+    with that same --tf (or the reverse) are the same job; a guess (``guess_s``,
+    `SearchOptions.guess_s`) left out, as it only sets where the search starts.
 
     Parameters
     ----------
@@ -1535,9 +1603,10 @@ def compared_inputs(inputs: dict) -> dict:
     -------
     dict
         A copy, t_end the effective run end (s, rounded to 1e-9 s) where the fault time
-        is a number.
+        is a number, without guess_s.
     """
     out = dict(inputs)
+    out.pop("guess_s", None)
     t_fault, t_end = out.get("t_fault", 1.0), out.get("t_end")
     if isinstance(t_fault, (int, float)) and not isinstance(t_fault, bool):
         if t_end is None:
