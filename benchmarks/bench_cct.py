@@ -31,11 +31,16 @@ search with each fault's network stages built as a screening builds them, the N-
 projection from that mean (and from the CPU time per search, which other work on the
 machine inflates less) and how many faults end with the same verdict, cell and
 half-step CCT in both (the two-fault projection above counts CCT searches only).
+``--activsg-guess N`` searches N random line faults of ACTIVSg2000 whose bus fault has a
+CCT (seed 53; the bus fault searched first, as `stabctl screen` does) without and with
+that CCT as the guess (`SearchOptions.guess_s`, the screening's start for such a fault)
+by the sime search at ``--t-max``, and prints the simulations per CCT, the CPU time per
+search of each and how many end with the same verdict, cell and half-step CCT.
 ``--activsg-stages N`` times the network stages of N new bus and N new line faults of
 ACTIVSg2000 (a first run of a fault less a second), updated from the pre-event network's
 reduction (`stabctl.network.lowrank`) and factorised anew.
 Run: python benchmarks/bench_cct.py [--every 4] [--activsg] [--activsg-sample 20]
-         [--activsg-stages 15] [--paper] [--systems kundur miniwecc]
+         [--activsg-guess 20] [--activsg-stages 15] [--paper] [--systems kundur miniwecc]
 """
 
 import argparse
@@ -179,6 +184,60 @@ def n1_sample(case, n: int, t_max: float, seed: int = 53) -> None:
     print(f"same verdict, 1 ms cell and half-step CCT in both: {same}/{len(faults)}")
 
 
+def guessed_sample(case, n: int, t_max: float, seed: int = 53) -> None:
+    """N line faults (`random.Random(seed)`) whose bus fault has a CCT, searched by sime
+    without and with that CCT as the guess: simulations per CCT, CPU per search, and how
+    many end alike (verdict, 1 ms cell and half-step CCT)."""
+    import random
+
+    rng = random.Random(seed)
+    lines = [f for f in screening_faults(case, lines=True) if f.far_bus is not None]
+    rng.shuffle(lines)
+    sim = Simulator(case)
+    sim.run(lines[0].events(0.05), t_end=lines[0].t_fault + 1.0)  # warm-up (compilation)
+    print(
+        f"\nACTIVSg2000 line faults searched from their bus fault's CCT: {n} (seed {seed}), "
+        f"sime, t_max {t_max:g} s, tol 1 ms, half-step error bar"
+    )
+    stats: dict = {"none": [[], 0.0], "guess": [[], 0.0]}
+    same = done = 0
+    bus_cct: dict = {}
+    for f in lines:
+        if done == n:
+            break
+        if f.bus not in bus_cct:
+            bus = _searched(sim, LineFault(f.bus, None), SearchOptions(method="sime", t_max=t_max))
+            bus_cct[f.bus] = bus[0].cct_s if not isinstance(bus[0], str) else None
+        if bus_cct[f.bus] is None:
+            continue
+        outs = []
+        for name, guess in (("none", None), ("guess", bus_cct[f.bus])):
+            res, cpu = _searched(sim, f, SearchOptions(method="sime", t_max=t_max, guess_s=guess))
+            stats[name][1] += cpu
+            if not isinstance(res, str):
+                stats[name][0].append(res.n_simulations)
+                res = (res.bracket, res.cct_half_step_s)
+            outs.append(res)
+        same += outs[0] == outs[1]
+        done += 1
+    for name, (runs, cpu) in stats.items():
+        print(
+            f"  {name:6} {sum(runs) / max(len(runs), 1):6.2f} sims/CCT ({len(runs)} CCTs) "
+            f"{cpu / max(done, 1):6.2f} CPU-s/search"
+        )
+    print(f"  same verdict, 1 ms cell and half-step CCT: {same}/{done}")
+
+
+def _searched(sim, fault, opts):
+    """(the result or the verdict's name, CPU s) of one search."""
+    c0 = time.process_time()
+    try:
+        res = critical_clearing_time(sim, fault, opts)
+    except InputError as exc:
+        res = type(exc).__name__
+    return res, time.process_time() - c0
+
+
 def paper_table():
     """The paper's two faults, both conventions, without and with the error bar."""
     print(
@@ -249,6 +308,13 @@ def main(argv=None):
         metavar="N",
         help="also a random sample of ACTIVSg2000's N-1: N bus and N line faults",
     )
+    ap.add_argument(
+        "--activsg-guess",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also N ACTIVSg2000 line faults searched from their bus fault's CCT",
+    )
     ap.add_argument("--t-max", type=float, default=0.5, help="t_max of the N-1 sample (s)")
     ap.add_argument(
         "--activsg-stages",
@@ -277,7 +343,7 @@ def main(argv=None):
     if "miniwecc" in args.systems:
         mini = load_case("miniwecc")
         compare(f"miniwecc/{args.every}", mini, screening_faults(mini, lines=True)[:: args.every])
-    if args.activsg or args.activsg_sample or args.activsg_stages:
+    if args.activsg or args.activsg_sample or args.activsg_stages or args.activsg_guess:
         case = activsg2000()
     if args.activsg_stages:
         stage_builds(case, args.activsg_stages)
@@ -286,6 +352,8 @@ def main(argv=None):
         n1_projection(compare("activsg2000", case, faults))
     if args.activsg_sample:
         n1_sample(case, args.activsg_sample, args.t_max)
+    if args.activsg_guess:
+        guessed_sample(case, args.activsg_guess, args.t_max)
     if args.paper:
         paper_table()
 

@@ -15,7 +15,10 @@ E = Delta[S_e, k], E2 = Delta[k, S_e] and G = A_ee^-1 P (one solve per node of S
     Y_red' = Y_red + Delta[k, k] - (A_ke G) F + E2 P^T rec'.
 
 A planning case's stage then costs a few sparse solves instead of one per kept node
-(ACTIVSg2000: 334 right-hand sides, 42 ms of a bus fault's 60-100 ms stage).  Nodes a
+(ACTIVSg2000: 334 right-hand sides, 42 ms of a bus fault's 60-100 ms stage).  rec' is
+kept in that form (`LowRankRows`), its rows formed when read: a run reads those of the
+machines' buses and of the buses it records (none in a CCT search), and ACTIVSg2000's
+whole rec' is 10.7 MB, 9 ms to form (a tenth of a robust fault's search).  Nodes a
 stage adds (fault nodes of a line cleared at one end) are isolated nodes of the
 pre-event network, A = 1 on their diagonal.
 """
@@ -64,9 +67,58 @@ class SparseReduction(NamedTuple):
     a_ke: sp.csr_matrix
 
 
+class LowRankRows:
+    """A matrix kept as ``top - G @ F`` (`updated`'s rec'): `top` the base's rec with zero
+    rows below it for the nodes a stage adds, G (n_rows, r), F (r, m) complex; its rows
+    formed when indexed.
+
+    Parameters
+    ----------
+    top : ndarray, shape (n_top, m), complex
+        The base's rows (not copied).
+    G : ndarray, shape (n_rows, r), complex
+        n_rows >= n_top.
+    F : ndarray, shape (r, m), complex
+    """
+
+    def __init__(self, top: np.ndarray, G: np.ndarray, F: np.ndarray) -> None:
+        self.top, self.G, self.F = top, G, F
+        self.shape = (G.shape[0], top.shape[1])
+        self.dtype = np.dtype(complex)
+
+    def __getitem__(self, key) -> LowRankRows | np.ndarray:
+        """Rows: a leading slice ``[:n]`` stays in this form; an array of row indices
+        (ints, shape (k,)) gives them as an ndarray (k, m)."""
+        if isinstance(key, slice) and key.start is None and key.step is None:
+            n = self.shape[0] if key.stop is None else min(key.stop, self.shape[0])
+            return LowRankRows(self.top[:n], self.G[:n], self.F)
+        return self.rows(key)
+
+    def rows(self, key) -> np.ndarray:
+        """Rows `key` (int indices, shape (k,)) formed, shape (k, m); equal to the whole
+        matrix's rows to rounding (a product of fewer rows may take another of BLAS's
+        kernels)."""
+        rows = np.asarray(key, int)
+        out = np.zeros((rows.size, self.shape[1]), complex)
+        inside = rows < self.top.shape[0]
+        out[inside] = self.top[rows[inside]]
+        return out - self.G[rows] @ self.F
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        """Every row (the whole matrix formed)."""
+        whole = np.zeros(self.shape, complex)
+        whole[: self.top.shape[0]] = self.top
+        whole -= self.G @ self.F
+        return whole if dtype is None else whole.astype(dtype)
+
+    def all_finite(self) -> bool:
+        """Whether every entry is finite (the base's rows are: G and F are checked)."""
+        return bool(np.all(np.isfinite(self.G)) and np.all(np.isfinite(self.F)))
+
+
 def updated(
     base: SparseReduction, full: sp.csr_matrix, keep: np.ndarray, elim: np.ndarray
-) -> tuple[np.ndarray, np.ndarray] | None:
+) -> tuple[LowRankRows, np.ndarray] | None:
     """The reduction of a stage (rec, Yred) from `base`'s, or None when the stage changes
     more than `MAX_CHANGED` nodes, keeps other nodes, or is close to singular (then the
     caller reduces it in full).
@@ -82,9 +134,9 @@ def updated(
 
     Returns
     -------
-    tuple of ndarray or None
-        rec (elim.size, keep.size) and Yred (keep.size, keep.size), complex; None: not
-        updated.
+    tuple or None
+        rec (elim.size, keep.size; a `LowRankRows`) and Yred (keep.size, keep.size),
+        complex; None: not updated.
     """
     n0, n = base.full.shape[0], full.shape[0]
     if n < n0 or not np.array_equal(keep, base.keep):
@@ -108,11 +160,12 @@ def updated(
         rhs[pos[old], np.arange(rhs.shape[1])] = 1.0
         G[:n_e0, old] = base.lu.solve(rhs)
     G[pos[~old], np.flatnonzero(~old)] = 1.0  # an added node: isolated, A = 1
-    rec0 = base.rec if n == n0 else np.vstack([base.rec, np.zeros((n - n0, keep.size))])
+    rec0 = np.zeros((s_e.size, keep.size), complex)  # the base's rows of S_e (0: added)
+    rec0[old] = base.rec[pos[old]]
     C = np.eye(s_e.size) + G[pos] @ D
     if s_e.size and not np.linalg.cond(C) < MAX_COND:
         return None
-    F = E + D @ np.linalg.solve(C, rec0[pos] - G[pos] @ E) if s_e.size else E
-    rec = rec0 - G @ F
+    F = E + D @ np.linalg.solve(C, rec0 - G[pos] @ E) if s_e.size else E
+    rec = LowRankRows(base.rec, G, F)
     Yred = base.Yred + delta[keep][:, keep].toarray() - (base.a_ke @ G[:n_e0]) @ F + E2 @ rec[pos]
     return rec, Yred

@@ -59,7 +59,9 @@ class ReducedNetwork:
     """Reduced matrices of one network stage (dense complex, pu on the system base).
 
     Y11 (n_mac, n_mac), Y12 (n_mac, n_nc), Y21 (n_nc, n_mac), Y22 (n_nc, n_nc); R (n_bus, n_mac
-    + n_nc) gives every original bus voltage from [psi; V_nc]; Z22 = inv(Y22), the chord of the
+    + n_nc) gives every original bus voltage from [psi; V_nc] (a stage updated from the
+    pre-event network's reduction keeps it as a `stabctl.network.lowrank.LowRankRows`,
+    its rows formed when read); Z22 = inv(Y22), the chord of the
     load iteration; R_mac (n_mac, n_mac + n_nc), R's rows of the machines' buses (one per
     machine, in machine order: their terminal voltages); Z_mac (n_mac,) each machine's internal
     impedance 1 / y_mac in this stage (0 for a tripped machine), with which V_term = psi - Z_mac
@@ -81,7 +83,7 @@ class ReducedNetwork:
     Y12: np.ndarray
     Y21: np.ndarray
     Y22: np.ndarray
-    R: np.ndarray
+    R: np.ndarray | lowrank.LowRankRows
     Z22: np.ndarray
     R_mac: np.ndarray
     Z_mac: np.ndarray
@@ -146,14 +148,15 @@ def reduce_network(
             rec, Yred = factor.rec, factor.Yred
         else:
             (rec, Yred), factor = got, None
-    if not np.all(np.isfinite(rec)):  # every path's check, before any stage is kept
+    finite = rec.all_finite() if isinstance(rec, lowrank.LowRankRows) else np.isfinite(rec).all()
+    if not finite:  # every path's check, before any stage is kept
         raise SimulationError(f"singular network (island without a source) in case '{case.name}'")
     if len(nc_idx):
         R = np.zeros((n_bus, keep.size), complex)
         R[np.asarray(nc_idx, int), n_mac + np.arange(len(nc_idx))] = 1.0
-        R[elim - n_mac] = rec  # every internal node is kept: the eliminated are buses
-    else:  # every bus eliminated, in order: R is rec (10.7 MB on ACTIVSg2000, not copied)
-        R = rec
+        R[elim - n_mac] = np.asarray(rec)  # every internal node is kept: the eliminated are buses
+    else:  # every bus eliminated, in order: R is rec (10.7 MB on ACTIVSg2000, not copied;
+        R = rec  # an updated stage's in low-rank form, `lowrank.LowRankRows`)
     c = np.ascontiguousarray
     Y22 = c(Yred[n_mac:, n_mac:])
     return ReducedNetwork(
@@ -161,9 +164,9 @@ def reduce_network(
         Y12=c(Yred[:n_mac, n_mac:]),
         Y21=c(Yred[n_mac:, :n_mac]),
         Y22=Y22,
-        R=c(R[:n_bus_orig]),
+        R=R[:n_bus_orig] if isinstance(R, lowrank.LowRankRows) else c(R[:n_bus_orig]),
         Z22=c(np.linalg.inv(Y22)) if Y22.size else Y22.copy(),
-        R_mac=c(R[np.asarray(mac_bus, int)]),
+        R_mac=c(R[np.asarray(mac_bus, int)]),  # formed rows of a LowRankRows
         Z_mac=np.divide(1.0, y, out=np.zeros(n_mac, complex), where=y != 0),
         factor=factor,
     )

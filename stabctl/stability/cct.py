@@ -99,7 +99,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Protocol, cast
+from typing import Protocol
 
 import numpy as np
 
@@ -394,10 +394,11 @@ class SearchOptions:
     guess_s : float or None
         A clearing time expected near the CCT, s (>= 0), e.g. the CCT of the same fault
         cleared without its line trip (`stabctl.stability.screening.screen`): the search
-        probes that cell and the next first, widens outwards from them (the step doubled
-        each time, `_around_guess`), then narrows as `method` does.  It ends in the same
-        cell as without a guess wherever the verdict is monotone in the clearing time;
-        bisection still checks t_lo first.  Default None: no guess.
+        probes that cell and the next first, then widens outwards by 2 and 4 cells
+        (`_around_guess`); a cell found that way is bisected, else the search runs as
+        without the guess (the verdicts it has read again, not run).  It ends in the
+        same cell as without a guess wherever the verdict is monotone in the clearing
+        time; bisection still checks t_lo first.  Default None: no guess.
 
     A sweep (`cct_jobs`) records tol, t_max, t_end and error_check (when off) in each
     job's inputs, and method, early_stop and provisional_s when not their defaults
@@ -595,35 +596,35 @@ def _search(probe: _Probes, bounds) -> tuple[int, int, tuple[int, int]]:
     if guess is not None and k_max - k_lo >= 2:  # room for a guessed cell and its neighbours
         if not sime and not probe.stable_at(k_lo):  # bisection's own check
             _lower_bound_unstable(k_lo, fault, tol)
-        found = _around_guess(
-            probe, bounds, round(guess / tol), freq, GUESS_GALLOPS if sime else None
-        )
-        if sime:
-            return _sime_search(probe, bounds, fault, tol, freq, seeded=found)
-        k_lo, k_hi = cast(tuple, found)  # no limit on the widening: a bracket
-    elif sime:
+        found = _around_guess(probe, bounds, round(guess / tol))
+        if found is not None:
+            return (*_bisect_confirmed(probe, *found), found)
+        probe.reuse()  # the search without the guess, its verdicts read again
+    if sime:
         return _sime_search(probe, bounds, fault, tol, freq)
-    else:
-        k_lo, k_hi = _bracket(probe.stable_at, k_lo, k_hi, k_max, fault, tol, freq)
+    k_lo, k_hi = _bracket(probe.stable_at, k_lo, k_hi, k_max, fault, tol, freq)
     return (*_bisect_confirmed(probe, k_lo, k_hi), (k_lo, k_hi))
 
 
-#: widening steps from a guessed cell before the "sime" search goes on from its margins
-#: (`_around_guess`): 2 reach 7 cells from the guess's neighbour
+#: widening steps from a guessed cell (`_around_guess`): 2 reach 7 cells beyond the
+#: guess's neighbour
 GUESS_GALLOPS = 2
 
 
-def _around_guess(probe: _Probes, bounds, k_guess: int, freq, gallops) -> tuple | None:
-    """A (stable, unstable) lattice bracket found from a guessed cell
-    (`SearchOptions.guess_s`): the guess k (kept within (k_lo, k_max)) probed, then k + 1
-    when stable there (k - 1 when not): a verdict that changes closes the cell at once.
-    Stable at both: the probe at k_max (stable there: AboveSearchLimit, the fault robust,
-    as the doubling reaching it), then 2, 4, 8 ... cells above k + 1 until unstable.
-    Unstable at both: 2, 4, 8 ... cells below k - 1 until stable, k_lo at most (unstable
-    there: N-1 insecure, `_lower_bound_unstable`).  None after `gallops` such steps (None:
-    no limit) without a bracket.  A verdict the search already has is not run again."""
+def _around_guess(probe: _Probes, bounds, k_guess: int) -> tuple[int, int] | None:
+    """A (stable, unstable) lattice bracket near a guessed cell (`SearchOptions.guess_s`),
+    or None.
+
+    The guess k (kept within (k_lo, k_max)) is probed, then k + 1 when stable there (k - 1
+    when not): a verdict that changes closes the cell.  Stable at both: the probe at k_max
+    (as the search without a guess starts; stable there: None), then GUESS_GALLOPS steps
+    of 2, 4 ... cells above k + 1 until one is unstable; unstable at both, as many below
+    k - 1 (k_lo at most) until one is stable.  None when none is: the search then runs as
+    without the guess, so that a guess far off (a trip that moves the CCT, a verdict not
+    monotone) never leads it elsewhere.  A verdict the search already has is not run
+    again.
+    """
     k_lo, _, k_max = bounds
-    fault, tol = probe.fault, probe.o.tol
 
     def stable_at(k: int) -> bool:
         return probe.verdicts[k] if k in probe.verdicts else probe.stable_at(k)
@@ -634,14 +635,14 @@ def _around_guess(probe: _Probes, bounds, k_guess: int, freq, gallops) -> tuple 
     if stable_at(j) != up:
         return (k, j) if up else (j, k)
     if up and (j == k_max or stable_at(k_max)):
-        _above_limit(k_max, fault, tol, freq)
+        return None
     gap = 2
-    while gallops is None or gap <= 2**gallops:
+    for _ in range(GUESS_GALLOPS):
         nxt = min(j + gap, k_max) if up else max(j - gap, k_lo)
+        if nxt == j:
+            return None
         if stable_at(nxt) != up:
             return (j, nxt) if up else (nxt, j)
-        if nxt == k_lo:
-            _lower_bound_unstable(k_lo, fault, tol)
         j, gap = nxt, 2 * gap
     return None
 
@@ -707,11 +708,30 @@ class _Probes:
         self.provisional: set[int] = set()
         self.held: dict[int, tuple] = {}
         self.n_steps = self.reruns = self.resumed = self.overturned = 0
+        #: verdicts at the step read again instead of run (`reuse`): (verdict, margin,
+        #: swing) by lattice index
+        self.reusable: dict[int, tuple] = {}
+
+    def reuse(self) -> None:
+        """Let the search start again (a guess that found no cell, `_around_guess`): each
+        verdict found so far at the step is given again, with its margin and swing, when
+        the search asks for it, instead of being run; the others are run."""
+        self.reusable = {
+            k: (ok, self.margins.pop(k, _ABSENT), self.swings.pop(k, _ABSENT))
+            for k, ok in self.verdicts.items()
+        }
 
     def stable_at(self, k: int, step: float | None = None) -> bool:
         """The verdict at clearing time k*tol (s) and step `step` (s; default h):
         provisional when the probe is (class docstring)."""
         step = self.h if step is None else step
+        if step == self.h and k in self.reusable:
+            ok, margin, swing = self.reusable.pop(k)
+            if margin is not _ABSENT:
+                self.margins[k] = margin
+            if swing is not _ABSENT:
+                self.swings[k] = swing
+            return ok
         t_clear = _lattice(k, self.o.tol)
         pause = self.fault.t_fault + t_clear + (self.window or 0.0)
         if step != self.h or self.window is None or k in self.whole or pause >= self.t_end:
@@ -846,6 +866,10 @@ class _Probes:
             del self.held[min(self.held)]
 
 
+#: a margin or swing a verdict read again does not have (`_Probes.reuse`)
+_ABSENT = object()
+
+
 def _steps(res) -> int:
     """A run's time steps from t = 0 (0 for a stand-in result without times)."""
     return max(len(getattr(res, "t", ())) - 1, 0)
@@ -873,7 +897,7 @@ def _bisect_confirmed(probe: _Probes, k_lo: int, k_hi: int) -> tuple[int, int]:
 METHODS = ("sime", "bisection")
 
 
-def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq, seeded=False):
+def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq):
     """The "sime" search on the lattice: returns (k_stable, k_unstable = k_stable + 1,
     the first (stable, unstable) pair found), the stable end confirmed
     (`_Probes.confirm`: a provisional stable end that separates when continued is
@@ -920,19 +944,13 @@ def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq, seeded=Fal
     2 cells (the bracket creeping) are followed by a bisection step; after SIME_GUIDED
     guided probes, bisection.  A probe at k_max found stable raises AboveSearchLimit.
     ``probe.margins`` (lattice index -> margin or None) is filled for each unstable
-    probe.
-
-    `seeded`, a (stable, unstable) pair already found from a guess or None when the guess's
-    probes found none (`_around_guess`), starts the search from the verdicts the probe has
-    (no probe at k_max, no doubling); False (default): no guess."""
+    probe."""
     k_lo, k_hi, k_max = bounds
     stable_at, margins, swings = probe.stable_at, probe.margins, probe.swings
     known: dict[int, bool] = {}
     at_max: dict[int, bool] = {}
     held: dict = {}
-    if seeded is not False:
-        known.update(probe.verdicts)
-    elif k_max > k_hi:  # robust in one run when gentle there; else reused by the doubling
+    if k_max > k_hi:  # robust in one run when gentle there; else reused by the doubling
         try:
             at_max[k_max] = stable_at(k_max)
         except SimulationError:  # a long fault the doubling may never reach: left to it
@@ -941,9 +959,9 @@ def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq, seeded=Fal
             _above_limit(k_max, fault, tol, freq)
         if k_max in margins:  # used once the doubling gets there, as its own probe's
             held[k_max] = margins.pop(k_max)
-    start = seeded or None
+    start = None
     n_guided, guided, ends, last = 0, None, (k_lo, k_max), None
-    k: int | None = k_hi if seeded is False else None
+    k: int | None = k_hi
     while True:
         creeping = False
         if k is not None:  # None: a stable end just found unstable, no new probe

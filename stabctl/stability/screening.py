@@ -226,30 +226,34 @@ def screen(
             f"{len(jobs)} fault(s), kept in the file and left out of its table: {shown}",
             stacklevel=2,
         )
-    sweep = dict(scheduler=runner.scheduler, progress=runner.progress, retry_failed=retry_failed)
     workers = runner.workers or parallel.default_workers()
     local = runner.scheduler is None and workers > 1 and any(later)
     with parallel.pooled(workers) if local else nullcontext() as pool:  # one pool for both
-        first = parallel.run_sweep(  # looked up at call time (a test may patch it)
-            [j for j, x in zip(jobs, later) if not x], out, workers=workers, pool=pool, **sweep
-        )
-        bus_cct = {
-            f.bus: _cct(first.records[j.key]) for f, j in zip(faults, jobs) if f.far_bus is None
-        }
-        second = (
-            parallel.run_sweep(
-                [_guessed(j, bus_cct[f.bus]) for f, j, x in zip(faults, jobs, later) if x],
+
+        def sweep(some: list) -> parallel.SweepReport:
+            return parallel.run_sweep(  # looked up at call time (a test may patch it)
+                some,
                 out,
                 workers=workers,
+                scheduler=runner.scheduler,
+                progress=runner.progress,
+                retry_failed=retry_failed,
                 pool=pool,
-                **sweep,
             )
-            if any(later)
-            else None
-        )
-    records = {**first.records, **(second.records if second else {})}
-    before = set(first.failed_before_keys) | set(second.failed_before_keys if second else ())
-    ran = set(first.ran_keys) | set(second.ran_keys if second else ())
+
+        reports = [sweep([j for j, x in zip(jobs, later) if not x])]
+        if any(later):
+            bus_cct = {
+                f.bus: _cct(reports[0].records[j.key])
+                for f, j in zip(faults, jobs)
+                if f.far_bus is None
+            }
+            reports.append(
+                sweep([_guessed(j, bus_cct[f.bus]) for f, j, x in zip(faults, jobs, later) if x])
+            )
+    records = {k: rec for r in reports for k, rec in r.records.items()}
+    before = {k for r in reports for k in r.failed_before_keys}
+    ran = {k for r in reports for k in r.ran_keys}
     rows = []
     for fault, rec in zip(faults, (records[j.key] for j in jobs)):
         row = {

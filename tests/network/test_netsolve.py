@@ -181,4 +181,28 @@ def test_a_stage_updated_from_the_pre_event_reduction_is_the_stage_reduced_anew(
             a, b = getattr(updated, name), getattr(anew, name)
             assert a.shape == b.shape
             if b.size:
-                assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max(), (config, name)
+                assert np.abs(np.asarray(a) - b).max() <= 1e-12 * np.abs(b).max(), (config, name)
+
+
+def test_a_low_rank_matrix_gives_the_same_numbers_read_by_rows_by_slice_or_whole():
+    """An updated stage keeps R = [rec; 0] - G F (`stabctl.network.lowrank.LowRankRows`)
+    and forms only the rows a run reads: the whole matrix is that formula's numbers bit
+    for bit; rows read by index (the base's and an added node's) and a leading slice
+    agree with them to rounding (a product of fewer rows may take another BLAS kernel);
+    a non-finite G is found."""
+    from stabctl.network.lowrank import LowRankRows
+
+    rng = np.random.default_rng(1)
+    top = rng.normal(size=(6, 4)) + 1j * rng.normal(size=(6, 4))
+    G = rng.normal(size=(8, 2)) + 1j * rng.normal(size=(8, 2))
+    F = rng.normal(size=(2, 4)) + 1j * rng.normal(size=(2, 4))
+    dense = np.vstack([top, np.zeros((2, 4))]) - G @ F
+    low = LowRankRows(top, G, F)
+    assert low.shape == dense.shape and low.all_finite()
+    assert np.array_equal(np.asarray(low), dense)
+    rows = np.array([7, 0, 3, 3])
+    scale = np.abs(dense).max()
+    assert np.abs(low[rows] - dense[rows]).max() <= 1e-15 * scale
+    assert np.abs(np.asarray(low[:5]) - dense[:5]).max() <= 1e-15 * scale
+    G[1, 0] = np.nan
+    assert not LowRankRows(top, G, F).all_finite()
