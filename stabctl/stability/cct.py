@@ -51,6 +51,13 @@ Neither comes near 5 runs per CCT: the two ends of the final cell and their reru
 h/2 make 4, and the margins of runs far from the CCT (those of the doubling) place no
 probe within a cell of it.
 
+A guess (`SearchOptions.guess_s`, e.g. the CCT of the same fault without its line trip,
+as `stabctl screen --lines` gives each branch fault): its cell and the neighbouring one
+probed first, then 2 and 4 cells further out (`_around_guess`); a cell found that way is
+bisected (the stable end confirmed as above), else the search runs as without the guess,
+the verdicts already found read again instead of run (`_Probes.reuse`), so that a guess
+far off never leads it to another end of a verdict not monotone.
+
 Provisional stable probes (`SearchOptions.provisional_s`, default PROVISIONAL_S): only the
 stable end of the final cell needs its run to t_end to be trusted; a probe is first run
 to provisional_s after its clearing (`stabctl.dynamics.driver.Simulator.start`).
