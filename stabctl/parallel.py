@@ -782,6 +782,7 @@ def run_sweep(
     progress: bool | Callable = True,
     retry_failed: bool = False,
     pool=None,
+    stage: str | None = None,
 ) -> SweepReport:
     """Run `jobs` (Job) not yet recorded in `out`, appending one JSON line per job.
 
@@ -794,6 +795,8 @@ def run_sweep(
         progress: a bar on stderr (True, `stabctl.progress.bar`), none (False), or a
             callable(done, total) called after each record written.  retry_failed: rerun
             keys recorded as failed.
+        stage: what these jobs are when a study runs several sweeps into one file (e.g.
+            'bus faults'), named in the progress bar after the file's name.
 
     Raises:
         InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
@@ -809,10 +812,12 @@ def run_sweep(
         check_scheduler(scheduler)
     out = Path(out)
     with exclusive(out):
-        return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool)
+        return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool, stage)
 
 
-def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, pool) -> SweepReport:
+def _sweep_locked(
+    jobs, out: Path, workers, scheduler, progress, retry_failed, pool, stage
+) -> SweepReport:
     """`run_sweep`'s work once it holds `out`'s lock: repair, read, run, append."""
     check = _schema(jobs)
     set_aside_damaged(out, check)
@@ -835,7 +840,9 @@ def _sweep_locked(jobs, out: Path, workers, scheduler, progress, retry_failed, p
         with (
             _records(todo, scheduler, workers, pool) as results,
             _appender(out) as f,
-            progress_bar(len(todo), out.name, show=progress is True) as bar,
+            progress_bar(
+                len(todo), out.name + (f" ({stage})" if stage else ""), show=progress is True
+            ) as bar,
         ):
             for rec in results:
                 line = _line(rec)

@@ -1430,6 +1430,14 @@ def _cct_record(**result):
             {"key": "k", "status": "verdict", "verdict": "robust"},
             r"verdict \"robust\" is none of a CCT search's",
         ),
+        *(
+            ({**_cct_record(), "inputs": {"t_max": 1.0, "guess_s": g}}, rf"inputs\.guess_s {w}")
+            for g, w in (("abc", '"abc"'), (-5, "-5"), (float("nan"), "NaN"), (True, "true"))
+        ),
+        (
+            {**_cct_record(), "inputs": {"t_max": 1.0, "guess_s": 2.0}},
+            r"not a clearing time in \[0, 1\]",
+        ),
     ],
 )
 def test_the_schema_of_cct_records_refuses_what_no_search_writes(rec, why):

@@ -436,36 +436,35 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
     n, c = time_decimals(tol_s), cycle_decimals(tol_s)
     from stabctl.stability.screening import ABOVE, INSECURE, VERDICTS
 
-    click.echo(f"{'fault':<22} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
+    width = max([22, *(len(_fault_label(r)) for r in rows)])
+    click.echo(f"{'fault':<{width}} {'CCT s':>7} {'cycles':>7} {'err ms':>6}  separated / reason")
     for r in rows:
-        where = f"bus {r['bus']}" + (f" line to {r['far_bus']}" if r["far_bus"] else "")
+        where = f"{_fault_label(r):<{width}}"
         if r.get("islanded"):
-            click.echo(f"{where:<22} islands bus(es) {r['islanded']} (their load shed):")
+            click.echo(f"{where} islands bus(es) {r['islanded']} (their load shed):")
         if r.get("islanded_machines"):
             click.echo(
-                f"{where:<22} islands machine(s) {machine_list(case, r['islanded_machines'])}"
+                f"{where} islands machine(s) {machine_list(case, r['islanded_machines'])}"
                 f" with bus(es) {r['islanded_machine_buses']} (lost; the rest judged):"
             )
         if r["status"] == "ok":
             err = r["numerical_error_s"]
             err = "-" if err is None else f"{1000 * err:.{max(n - 3, 0)}f}"
             click.echo(
-                f"{where:<22} {r['cct_s']:7.{n}f} {r['cct_cycles']:7.{c}f} {err:>6}  "
+                f"{where} {r['cct_s']:7.{n}f} {r['cct_cycles']:7.{c}f} {err:>6}  "
                 + (machine_list(case, r["separated"]) or "-")
             )
         elif r["verdict"] == ABOVE:
             above = f">{r['t_max_s']:.{n}f}"
-            click.echo(
-                f"{where:<22} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there"
-            )
+            click.echo(f"{where} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there")
         elif r["verdict"] == INSECURE:
             click.echo(
-                f"{where:<22} {0.0:7.{n}f} {0.0:7.{c}f} {'-':>6}  N-1 insecure: unstable even "
+                f"{where} {0.0:7.{n}f} {0.0:7.{c}f} {'-':>6}  N-1 insecure: unstable even "
                 "when cleared at once"
             )
         else:
             said = f"{r['error'][:70]}" + (" (recorded before)" if r.get("failed_before") else "")
-            click.echo(f"{where:<22} {'-':>7} {'-':>7} {'-':>6}  {said}")
+            click.echo(f"{where} {'-':>7} {'-':>7} {'-':>6}  {said}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
     ran = sum(bool(r.get("run_now")) for r in rows)
@@ -482,6 +481,17 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
             f"{before} search(es) recorded as failed before were not run again; "
             "--retry-failed reruns them"
         )
+
+
+def _fault_label(row: dict) -> str:
+    """A screening row's fault: 'bus 3', 'bus 3 line to 101', 'bus 3 line to 101 #2' (a
+    circuit other than the first)."""
+    label = f"bus {row['bus']}"
+    if row["far_bus"]:
+        label += f" line to {row['far_bus']}"
+        if row.get("circuit", 1) != 1:
+            label += f" #{row['circuit']}"
+    return label
 
 
 def print_modes(st, no_pss: bool) -> None:

@@ -93,6 +93,17 @@ _LISTEN = (
 _LOOPBACK = ("127.0.0.1", "::1", "localhost")
 
 
+def _loopback(host: str) -> bool:
+    """Whether a server on `host` listens on loopback only: localhost, or an address of
+    127.0.0.0/8 or ::1."""
+    if host in _LOOPBACK:
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a name other than localhost
+        return False
+
+
 def _allowed(host: str, allow: str | None) -> tuple:
     """The --allow list as a tuple of addresses (None, the option left out: empty, any
     peer); InputError for an empty or blank value (it names no peer: it must not mean
@@ -121,7 +132,7 @@ def _allowed(host: str, allow: str | None) -> tuple:
             )
         if why := _unreachable(host, peer):
             click.echo(f"warning: --allow {peer}: {why}: it admits no one", err=True)
-    if host not in _LOOPBACK and not peers:
+    if not _loopback(host) and not peers:
         click.echo(
             f"warning: listening on {host}: any host that reaches this port may connect "
             "(name the peers with --allow IP[,IP...])",

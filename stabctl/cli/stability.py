@@ -427,6 +427,13 @@ def sweep_cct(
     is_flag=True,
     help="Also fault the from-end of every branch with the branch tripped (N-1).",
 )
+@click.option(
+    "--guess/--no-guess",
+    default=True,
+    show_default=True,
+    help="With --lines, start each branch fault's search from its bus fault's CCT (fewer "
+    "runs where a trip moves the CCT little; --no-guess: every search from scratch).",
+)
 @tol_options(0.5)
 @out_file_option(
     "screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search (rerunning resumes)."
@@ -443,6 +450,7 @@ def screen(
     case_name,
     buses,
     lines,
+    guess,
     tol_ms,
     t_max,
     out_path,
@@ -472,7 +480,8 @@ def screen(
     screened bus starts its search from that bus fault's CCT (its cell and neighbours;
     a guess that finds no cell there leaves the search as without it): the same CCTs
     where the verdict is monotone in the clearing time, in fewer runs where a trip
-    moves the CCT little.
+    moves the CCT little (on ACTIVSg2000 half the runs of such a search; Kundur's trips
+    move its CCTs up to 0.24 s and the guesses cost runs there: --no-guess).
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
@@ -489,6 +498,7 @@ def screen(
         out_path,
         buses=bus_list,
         lines=lines,
+        guess=guess,
         search=replace(search_settings(tol_ms, t_max, None, tf_option=False), method=method),
         model=model,
         runner=RunnerOptions(workers, scheduler),

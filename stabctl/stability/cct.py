@@ -1458,14 +1458,15 @@ def cct_record_problem(rec: dict) -> str | None:
     """The schema of a CCT sweep's records (`cct_job`, `stabctl.parallel.Job.check`):
     what makes a record one no CCT search can have written, or None.
 
-    A CCT found holds its CCT and the unstable end of its bracket as finite clearing
-    times with 0 <= cct_s < t_unstable_s <= the search's limit t_max (of the record's
-    inputs; `T_MAX` without one), the CCT in cycles, the numerical error (None or >= 0),
-    the number of simulations (an integer >= 1) and the separated machines (a list of
+    A search's guess (``inputs.guess_s``, `SearchOptions.guess_s`) is a clearing time within
+    [0, t_max].  A CCT found holds its CCT and the unstable end of its bracket as finite
+    clearing times with 0 <= cct_s < t_unstable_s <= the search's limit t_max (of the
+    record's inputs; `T_MAX` without one), the CCT in cycles, the numerical error (None or
+    >= 0), the number of simulations (an integer >= 1) and the separated machines (a list of
     machine numbers); a verdict is one a search gives (`AboveSearchLimit`,
-    `InsecureContingency`); an islanding log (``islanded``, of a CCT or a verdict) is a
-    list of stages, each with its buses (and machines) as lists of numbers.  The kinds of
-    the fields of any record (an object as result, texts as verdict and error) are checked
+    `InsecureContingency`); an islanding log (``islanded``, of a CCT or a verdict) is a list
+    of stages, each with its buses (and machines) as lists of numbers.  The kinds of the
+    fields of any record (an object as result, texts as verdict and error) are checked
     before (`stabctl.parallel`).
 
     Parameters
@@ -1484,6 +1485,9 @@ def cct_record_problem(rec: dict) -> str | None:
     given = (rec.get("inputs") or {}).get("t_max", T_MAX)
     if not (is_number(given) and given > 0):
         return f"inputs.t_max {shown(given)} is not a time in s"
+    guess = (rec.get("inputs") or {}).get("guess_s")
+    if guess is not None and not (is_number(guess) and 0 <= guess <= given):
+        return f"inputs.guess_s {shown(guess)} is not a clearing time in [0, {given:g}] s"
     t_max = given
     slack = 1e-9 * max(1.0, t_max)  # the bracket's rounding
     status = rec["status"]

@@ -164,6 +164,7 @@ def screen(
     *,
     buses=None,
     lines: bool = False,
+    guess: bool = True,
     search: SearchOptions = SearchOptions(),
     model: ModelOptions = ModelOptions(),
     runner: RunnerOptions = RunnerOptions(),
@@ -181,6 +182,9 @@ def screen(
         Faulted buses (default all).
     lines : bool, optional
         Also every branch fault with the branch tripped (`screening_faults`).
+    guess : bool, optional
+        With `lines`, search the bus faults first and start each branch fault at a
+        screened bus from its bus fault's CCT (module docstring); default True.
     search, model, runner : SearchOptions, ModelOptions, RunnerOptions, optional
         The CCT search (tol, t_max; recorded), the model conventions, step and Q limits of
         every run, and where the runs go.
@@ -191,7 +195,8 @@ def screen(
     Returns
     -------
     list of dict
-        One row per fault: key, bus, far_bus, status, whether this call searched it
+        One row per fault: key, bus, far_bus, circuit (None for a bus fault), status,
+        whether this call searched it
         (``run_now``; False: its record read from `out`), verdict (`verdict`; with
         :data:`ABOVE` the search's limit ``t_max_s``; with :data:`INSECURE` CCT 0 and the
         reason), the buses it islands from every generator (``islanded``) and the
@@ -217,7 +222,7 @@ def screen(
     faults = screening_faults(case, buses, lines)
     jobs = cct_jobs(case_name, faults, search=search, model=model)
     faulted = {f.bus for f in faults if f.far_bus is None}
-    later = [f.far_bus is not None and f.bus in faulted for f in faults]
+    later = [guess and f.far_bus is not None and f.bus in faulted for f in faults]
     others = parallel.other_records(out, (j.key for j in jobs), lambda r: _whose(r, jobs))
     if others:
         shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
@@ -230,7 +235,7 @@ def screen(
     local = runner.scheduler is None and workers > 1 and any(later)
     with parallel.pooled(workers) if local else nullcontext() as pool:  # one pool for both
 
-        def sweep(some: list) -> parallel.SweepReport:
+        def sweep(some: list, stage: str | None) -> parallel.SweepReport:
             return parallel.run_sweep(  # looked up at call time (a test may patch it)
                 some,
                 out,
@@ -239,18 +244,20 @@ def screen(
                 progress=runner.progress,
                 retry_failed=retry_failed,
                 pool=pool,
+                stage=stage,
             )
 
-        reports = [sweep([j for j, x in zip(jobs, later) if not x])]
-        if any(later):
+        staged = any(later)
+        first = [j for j, x in zip(jobs, later) if not x]
+        reports = [sweep(first, f"1 of 2: {len(first)} searches" if staged else None)]
+        if staged:
             bus_cct = {
                 f.bus: _cct(reports[0].records[j.key])
                 for f, j in zip(faults, jobs)
                 if f.far_bus is None
             }
-            reports.append(
-                sweep([_guessed(j, bus_cct[f.bus]) for f, j, x in zip(faults, jobs, later) if x])
-            )
+            second = [_guessed(j, bus_cct[f.bus]) for f, j, x in zip(faults, jobs, later) if x]
+            reports.append(sweep(second, f"2 of 2: {len(second)} from bus CCTs"))
     records = {k: rec for r in reports for k, rec in r.records.items()}
     before = {k for r in reports for k in r.failed_before_keys}
     ran = {k for r in reports for k in r.ran_keys}
@@ -260,6 +267,7 @@ def screen(
             "key": rec["key"],
             "bus": fault.bus,
             "far_bus": fault.far_bus,
+            "circuit": None if fault.far_bus is None else fault.circuit,
             "status": rec["status"],
             "run_now": rec["key"] in ran,
         }

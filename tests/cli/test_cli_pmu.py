@@ -328,14 +328,16 @@ def test_record_beyond_the_stream_keeps_what_came_and_says_so(tmp_path):
 
 def test_listening_beyond_loopback_without_allow_list_warns(capsys):
     """`--host 0.0.0.0` with no --allow is named a warning (any host that reaches the
-    port may connect) as the server starts, not when it ends; with --allow it is not.  An
-    empty --host, which listened on every interface, is refused."""
+    port may connect) as the server starts, not when it ends; with --allow it is not, nor
+    on any loopback address (all of 127.0.0.0/8, ::1, localhost).  An empty --host, which
+    listened on every interface, is refused."""
     from stabctl.cli.pmu import _allowed
     from stabctl.errors import InputError
 
     assert _allowed("0.0.0.0", None) == ()
     assert _allowed("0.0.0.0", "10.0.0.5, 10.0.0.6") == ("10.0.0.5", "10.0.0.6")
-    assert _allowed("127.0.0.1", None) == ()
+    for host in ("127.0.0.1", "127.0.0.2", "127.255.0.9", "::1", "localhost"):
+        assert _allowed(host, None) == ()
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("warning: listening on 0.0.0.0: any host")
     with pytest.raises(InputError, match="--host '': an empty address"):

@@ -115,3 +115,25 @@ def test_a_screening_starts_each_branch_fault_from_its_bus_fault_s_cct(kundur, t
     n = len(out.read_text().splitlines())
     again = screen("kundur", out, buses=[3, 1], lines=True, search=opts, runner=runner)
     assert len(out.read_text().splitlines()) == n and not any(r["run_now"] for r in again)
+
+
+def test_cli_screen_without_guesses_and_with_each_circuit_named(tmp_path):
+    """`stabctl screen --lines --no-guess` searches every branch fault from scratch (no
+    ``guess_s`` recorded); rows of parallel circuits name their circuit (`#2`), in the
+    table and in --json."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    out = tmp_path / "s.jsonl"
+    args = ["screen", "kundur", "--buses", "3", "--lines", "--workers", "1", "--out", str(out)]
+    res = CliRunner().invoke(main, [*args, "--no-guess", "--json"])
+    assert res.exit_code == 0, res.output
+    rows = json.loads(res.stdout)
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    assert not any("guess_s" in r["inputs"] for r in records)
+    assert {r["circuit"] for r in rows if (r["bus"], r["far_bus"]) == (3, 101)} == {1, 2}
+    assert all(r["circuit"] is None for r in rows if r["far_bus"] is None)
+    table = CliRunner().invoke(main, args)  # read back: nothing run again
+    assert table.exit_code == 0 and "0 run now" in table.output
+    assert "bus 3 line to 101 #2" in table.output and "bus 3 line to 101 " in table.output
