@@ -257,7 +257,7 @@ def screen(
                 if f.far_bus is None
             }
             second = [_guessed(j, bus_cct[f.bus]) for f, j, x in zip(faults, jobs, later) if x]
-            reports.append(sweep(second, f"2 of 2: {len(second)} from bus CCTs"))
+            reports.append(sweep(second, f"2 of 2: {len(second)} branch faults"))
     records = {k: rec for r in reports for k, rec in r.records.items()}
     before = {k for r in reports for k in r.failed_before_keys}
     ran = {k for r in reports for k in r.ran_keys}
