@@ -19,7 +19,10 @@ A quick run: ``python -m pytest -m "not andes and not dask"``.
 On several processes (pytest-xdist ``-n``) the controller first fills the compiled-kernel
 cache (``stabctl compile``, `pytest_configure`), so that no test meets a cold cache while
 the others load every core: a first compile then takes minutes, and a command's output
-carries its compile notice.
+carries its compile notice.  The commands a test starts import the stabctl the tests import
+(`pytest_configure` puts it first on PYTHONPATH): run from the project root after a plain
+``pip install .``, they would import the installed copy from their own working directory,
+whose cache that compile never filled.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import sys
 
 import pytest
 
+import stabctl
 from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
 
@@ -48,7 +52,12 @@ def pytest_xdist_auto_num_workers(config):
 def pytest_configure(config):
     """Under pytest-xdist, in the controller before the workers start: ``stabctl compile``
     (every built-in case's argument types into the shared on-disk cache; a warm cache
-    only loads, about a second)."""
+    only loads, about a second).  Before it, in every process: the folder of the stabctl
+    under test first on PYTHONPATH, for that compile and every command the tests start."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(stabctl.__file__)))
+    path = os.environ.get("PYTHONPATH", "")
+    if path.split(os.pathsep)[0] != root:
+        os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [root, path]))
     if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
         subprocess.run(
             [sys.executable, "-m", "stabctl.cli", "compile"], capture_output=True, timeout=1200
