@@ -216,9 +216,10 @@ def _main_part(machines: np.ndarray, stage: np.ndarray, size: dict, H, mva) -> i
     (module docstring: an infinite bus's, else the most load, else the largest inertia,
     else the most buses (`size`: (load pu, buses) per label), else the first)."""
     best, rank = -1, (False, -1.0, -1.0, -1)
-    for i in machines:  # in the data's order: a tie keeps the first
-        k = int(stage[i])
-        here = machines[stage[machines] == k]
+    labels = stage[machines]
+    _, first = np.unique(labels, return_index=True)
+    for k in labels[np.sort(first)].tolist():  # in the data's order: a tie keeps the first
+        here = machines[labels == k]
         infinite = bool(np.any(H[here] == 0))
         here_rank = (infinite, size[k][0], float(np.sum(H[here] * mva[here])), size[k][1])
         if here_rank > rank:
