@@ -501,8 +501,8 @@ def cct(
     "until_s",
     type=FLOAT,
     default=None,
-    help="Last time stamp to track (s; t = 0 is the CFG-2's time stamp). A TCP source "
-    "needs --until or --frames.",
+    help="Last time stamp to track (s; t = 0 is the CFG-2's time stamp, SOC and fraction; "
+    "the time elapsed, across a leap second too). A TCP source needs --until or --frames.",
 )
 @click.option(
     "--frames",
@@ -548,9 +548,11 @@ def track(
     would command.  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
     tuned to.  Over TCP the commands address stream --idcode, and every frame is checked
-    (CRC; each data frame's IDCODE, type and size against its CFG-2; a CFG-2 resent must
-    be the one in use: a frame refused refuses the source) and must come whole within
-    30 s, each data frame within 30 s of the one before.  A stream that stops before
+    (CRC; each data frame's IDCODE, type, size and FRACSEC count against its CFG-2, and
+    its time stamp against the one before; a CFG-2 resent must be the one in use: a frame
+    refused refuses the source, exit status 2 and nothing written, where `pmu record`
+    keeps the frames before it) and must come whole within 30 s, each data frame within
+    30 s of the one before.  A stream that stops before
     --until or --frames is tracked as far as it came,
     written, and named an error (exit status 2: the result is partial), unless --out
     exists: a file there is replaced only by the track of a whole stream (the file left

@@ -204,7 +204,9 @@ def _listening(func):
 @tf_option()
 @RATE
 @pmu_noise_options
-@click.option("--seed", type=INT, default=0, show_default=True, help="PMU noise seed.")
+@click.option(
+    "--seed", type=INT, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
+)
 @PMU_AT
 @_serving
 @click.option(
@@ -416,8 +418,8 @@ def record(address, out, frames, idcode):
     """Receive a C37.118.2 stream from the PMU or PDC at HOST:PORT (pyc37's client: CFG-2,
     then 'start', addressed to stream --idcode) and write its CFG-2 and FRAMES data frames
     to OUT, as received (an IPv6 HOST in brackets: [::1]:4712).  Each frame is checked as
-    it comes (CRC; each data frame's IDCODE, type and size against the CFG-2; a CFG-2
-    resent must be the one in use) and must come whole within 30 s, each data frame
+    it comes (CRC; each data frame's IDCODE, type, size and FRACSEC count against the
+    CFG-2; a CFG-2 resent must be the one in use) and must come whole within 30 s, each data frame
     within 30 s of the one before, whatever other frames come between.  A stream that
     stops before FRAMES (the server closes, resets or sends no whole data frame for 30 s,
     or a frame is refused) is written as far as it
@@ -514,7 +516,9 @@ def _host_port(address: str) -> tuple[str, int]:
 
 @pmu.command()
 @fault_run_options
-@click.option("--seed", type=INT, default=0, show_default=True, help="PMU noise seed.")
+@click.option(
+    "--seed", type=INT, default=0, show_default=True, metavar="S", help="Seed of the PMU noise."
+)
 @storage_options(" Required: the ESDs the controller commands.")
 @esd_model_option
 @_listening

@@ -741,7 +741,8 @@ def check_data_frame(cfg2, data: bytes) -> None:
     InputError
         A CRC that fails, another frame type, a data frame of another IDCODE than cfg2's,
         or whose FRAMESIZE is not the size cfg2 gives a data frame (a frame padded or cut,
-        which pyc37 reads without a word).
+        which pyc37 reads without a word), or whose FRACSEC count is not below cfg2's
+        TIME_BASE (`check_fracsec`).
     """
     if not _pyc37().CommonFrame._check_crc(data):
         raise InputError(
@@ -756,6 +757,36 @@ def check_data_frame(cfg2, data: bytes) -> None:
     if (size := int.from_bytes(data[2:4], "big")) != (want := data_frame_size(cfg2)):
         raise InputError(
             f"a data frame of FRAMESIZE {size} bytes, where its CFG-2 makes one {want} bytes"
+        )
+    check_fracsec(data, cfg2.get_time_base(), "a data frame")
+
+
+def check_fracsec(data: bytes, time_base: int, what: str, base: str = "its CFG-2's") -> None:
+    """Refuse a frame whose FRACSEC count (bytes 11-13) is not below TIME_BASE: the count
+    is the fraction of one second of its time stamp (C37.118.2-2011 6.2.2), so a count of
+    TIME_BASE or more stamps no instant of its SOC (a second's rollover written as
+    (SOC, TIME_BASE) instead of (SOC + 1, 0), or a count beyond it).
+
+    Parameters
+    ----------
+    data : bytes
+        The frame (at least 14 bytes).
+    time_base : int
+        Its stream's TIME_BASE (FRACSEC counts per second, the CFG-2's).
+    what : str
+        The frame, the message's start (``a data frame``, ``its CFG-2``).
+    base : str, optional
+        Whose TIME_BASE it is, for the message (``its``: a CFG-2's own).
+
+    Raises
+    ------
+    InputError
+        The count not below `time_base`, naming both.
+    """
+    if (count := int.from_bytes(data[11:14], "big")) >= time_base:
+        raise InputError(
+            f"{what} stamped with FRACSEC count {count}, not below {base} TIME_BASE "
+            f"{time_base}: the count is a fraction of one second (C37.118.2-2011 6.2.2)"
         )
 
 
@@ -909,10 +940,12 @@ def leap_offsets(data, cfg2) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(leap)])
 
 
-def stamp_times(data, cfg2) -> np.ndarray:
+def stamp_times(data, cfg2, leaps: int = 0) -> np.ndarray:
     """Each data frame's time stamp (`frame_time`, s, UNIX) and the positive leap seconds
     before it in its stream (`leap_offsets`): the time the frames were measured at, in
-    order across a leap second.
+    order across a leap second.  The one reading of elapsed time, of a recording whole or
+    of a stream as each frame comes (`c37_tcp.receive`: the frame with the one before it,
+    and the leap seconds before that).
 
     Parameters
     ----------
@@ -920,6 +953,9 @@ def stamp_times(data, cfg2) -> np.ndarray:
         The data frames of one stream, in order.
     cfg2 : pyc37 ConfigFrame2
         Their stream's configuration frame.
+    leaps : int, optional
+        Positive leap seconds in the stream before the first of `data` (0: `data` starts
+        the stream).
 
     Returns
     -------
@@ -927,7 +963,7 @@ def stamp_times(data, cfg2) -> np.ndarray:
         The times (s).
     """
     times = np.array([frame_time(d, cfg2) for d in data], float)
-    return times + leap_offsets(data, cfg2)
+    return times + leaps + leap_offsets(data, cfg2)
 
 
 def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
@@ -1104,8 +1140,8 @@ def read_config(data: bytes, what: str):
     ------
     InputError
         A frame of another type (``... is a CFG-3 (SYNC frame type 5), not the CFG-2
-        expected``), or a CFG-2 that is not readable (its CRC, its fields), named by
-        ``what``.
+        expected``), a CFG-2 that is not readable (its CRC, its fields), or whose FRACSEC
+        count is not below its TIME_BASE (`check_fracsec`), named by ``what``.
     """
     if len(data) >= 2 and (kind := frame_kind(data)) != "CFG-2":
         raise InputError(
@@ -1113,9 +1149,37 @@ def read_config(data: bytes, what: str):
         )
     f = _pyc37()
     try:  # pyc37 turns any error of its parse (a frame cut, a field out of range) into this
-        return f.ConfigFrame2.convert2frame(data)
+        cfg2 = f.ConfigFrame2.convert2frame(data)
     except f.FrameError as exc:
         raise InputError(f"{what} is not a configuration frame: {exc}") from None
+    check_fracsec(data, cfg2.get_time_base(), what, "its")
+    # its time stamp as sent: pyc37 keeps 23 of FRACSEC's 24 bits of count
+    cfg2.stabctl_stamp = (
+        int.from_bytes(data[6:10], "big"),
+        int.from_bytes(data[11:14], "big") / cfg2.get_time_base(),
+    )
+    return cfg2
+
+
+def config_stamp(cfg2) -> tuple[int, float]:
+    """A CFG-2's time stamp, SOC and FRACSEC / TIME_BASE: t = 0 of the stream it
+    describes (the frames' times, the ``--until`` end and the gaps are read from it).
+
+    Parameters
+    ----------
+    cfg2 : pyc37 ConfigFrame2
+        The configuration frame, as `read_config` reads it (its bytes' time stamp) or as
+        `config_frame` builds it.
+
+    Returns
+    -------
+    (int, float)
+        The SOC (s, UNIX) and the fraction of that second (s, below 1); apart, as a
+        fraction added to a SOC of today would be rounded to 0.24 us.
+    """
+    if (stamp := getattr(cfg2, "stabctl_stamp", None)) is not None:
+        return stamp
+    return int(cfg2.get_soc()), cfg2.get_frasec()[0] / cfg2.get_time_base()
 
 
 def replay(path, cfg: StreamConfig) -> list[Frame]:

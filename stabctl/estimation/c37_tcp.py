@@ -888,15 +888,16 @@ MAX_FRAMES = 2_600_000
 @dataclass(frozen=True)
 class End:
     """Where a received stream ends: after ``frames`` data frames, or at the first frame
-    stamped ``tf`` s or later after the CFG-2's time stamp (its SOC, t = 0 of the run);
-    both None: when the server closes the connection.
+    stamped ``tf`` s or later after the CFG-2's time stamp (SOC + FRACSEC / TIME_BASE,
+    t = 0 of the run: `c37.config_stamp`), read as the time elapsed across a leap second
+    (`c37.stamp_times`); both None: when the server closes the connection.
 
     Attributes
     ----------
     frames : int or None
         Data frames to receive.
     tf : float or None
-        Last time stamp to receive (s after the CFG-2's SOC).
+        Last time stamp to receive (s after the CFG-2's time stamp).
 
     Raises
     ------
@@ -1057,13 +1058,12 @@ def _interrupted_stream(cfg2, data: list, end: End) -> Stream | None:
         config = c37.read_config(cfg2, "its CFG-2")
     except InputError:
         return None
-    last = (
-        f", the last stamped {c37.frame_time(data[-1], config) - config.get_soc():.4f} s"
-        if data
-        else ""
-    )
+    data = list(data)  # as it stands (the receive's thread may append still)
+    soc, frac = c37.config_stamp(config)
+    at = c37.stamp_times(data, config)[-1] - soc - frac if data else None
+    last = f", the last stamped {at:.4f} s" if at is not None else ""
     said = f"interrupted after {len(data)} data frames{last}, before {end}"
-    return Stream(cfg2, list(data), said)
+    return Stream(cfg2, data, said)
 
 
 def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float) -> tuple[str, str]:
@@ -1076,8 +1076,12 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
     frame, whatever else comes meanwhile (a server sending header frames and no data
     frame is cut as a silent one is: a frame that begins within it has `budget` from its
     first byte to end, so a wait that runs out in the middle of a header frame is no
-    frame cut short); the connection's time-out is left at it."""
-    soc = cfg2.get_soc()
+    frame cut short); the connection's time-out is left at it.  The frames' times, and
+    the `End.tf` end, are the time elapsed since the CFG-2's time stamp
+    (`c37.config_stamp`), across a leap second too (`c37.stamp_times`, as a recording's)."""
+    soc, frac = c37.config_stamp(cfg2)
+    leaps = 0  # positive leap seconds in the stream up to its last data frame
+    last = ""  # ", the last stamped ... s" of the last data frame, for the messages
     since = time.monotonic()  # of 'start', then of the last data frame
     try:
         while end.frames is None or len(data) < end.frames:
@@ -1108,19 +1112,18 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
                         at = f"data frame {len(data) + 1}" if kind == "data frame" else kind
                         why = f"{at}: {exc}"
                     if why:
-                        last = (
-                            f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s"
-                            if data
-                            else ""
-                        )
                         return (
                             f"the server sent a {kind} that is refused ({why}); the stream is "
                             f"cut there: {len(data)} data frames before it{last}, before {end}",
                             why,
                         )
+                    if data:  # a leap second between the last frame and this one
+                        leaps += int(c37.leap_offsets([data[-1], frame], cfg2)[-1])
                     data.append(frame)
                     since = time.monotonic()
-                    if end.tf is not None and c37.frame_time(frame, cfg2) - soc >= end.tf - 0.5e-6:
+                    elapsed = float(c37.stamp_times([frame], cfg2, leaps)[0] - soc) - frac
+                    last = f", the last stamped {elapsed:.4f} s"
+                    if end.tf is not None and elapsed >= end.tf - 0.5e-6:
                         return "", ""
                     if not end.given and len(data) > MAX_FRAMES:
                         raise InputError(
@@ -1131,9 +1134,6 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
                 if not end.given:
                     return "", ""
                 cut = "closed the connection"
-            last = (
-                f", the last stamped {c37.frame_time(data[-1], cfg2) - soc:.4f} s" if data else ""
-            )
             return f"the server {cut} after {len(data)} data frames{last}, before {end}", ""
         return "", ""
     finally:

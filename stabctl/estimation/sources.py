@@ -290,9 +290,13 @@ def stream_gaps(data, cfg2) -> str:
     if not rate or len(data) < 2:
         return ""
     per_s = rate if rate > 0 else 1.0 / -rate
-    t = list(c37.stamp_times(data, cfg2) - cfg2.get_soc())
-    k = [round(x * per_s) for x in t]
-    gaps = [(t[j - 1], t[j], lost) for j in range(1, len(t)) if (lost := k[j] - k[j - 1] - 1) > 0]
+    soc, frac = c37.config_stamp(cfg2)
+    t = list(c37.stamp_times(data, cfg2) - soc - frac)
+    gaps = [
+        (t[j - 1], t[j], lost)
+        for j in range(1, len(t))
+        if (lost := round((t[j] - t[j - 1]) * per_s) - 1) > 0
+    ]
     if not gaps:
         return ""
     named = "; ".join(f"{n} after t = {a:.4f} s, to {b:.4f} s" for a, b, n in gaps[:5])
@@ -444,15 +448,15 @@ def unused_values(flagged: dict) -> str:
 
 def _recorded_to(end, cfg2, data, name: str) -> tuple:
     """(cfg2, the recording's data frames up to `end`, what is short of it or '')."""
-    soc = cfg2.get_soc()
+    soc, frac = c37.config_stamp(cfg2)  # t = 0
     if end.frames is not None:
         data = data[: end.frames]
     if end.tf is not None:
-        stamps = c37.stamp_times(data, cfg2) - soc
+        stamps = c37.stamp_times(data, cfg2) - soc - frac
         reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
         data = data[: reached[0] + 1] if reached else data
     # whichever end comes first, as a TCP stream's (`c37_tcp._data_frames`)
-    at = c37.stamp_times(data, cfg2)[-1] - soc if data else None
+    at = c37.stamp_times(data, cfg2)[-1] - soc - frac if data else None
     whole = (
         not end.given
         or (end.frames is not None and len(data) == end.frames)
@@ -500,9 +504,9 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
     owner: dict[str, int] = {}
     parsed = []
     flagged: collections.Counter = collections.Counter()
-    epoch = min((cfg2.get_soc() for cfg2, _ in streams), default=0)
+    # t = 0: the earliest CFG-2's time stamp; the frames read from its SOC, then its fraction
+    epoch, frac = min((c37.config_stamp(cfg2) for cfg2, _ in streams), default=(0, 0.0))
     for s, (cfg2, data) in enumerate(streams):
-        check_order(data, cfg2, f"stream {s + 1}")
         names = cfg2.get_station_name()
         names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
         for name in names:
@@ -518,14 +522,18 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
         except InputError as exc:
             raise InputError(f"stream {s + 1}: {exc}") from None
         frames = []
+        base = cfg2.get_time_base()
         for k, (d, leap) in enumerate(zip(data, c37.leap_offsets(data, cfg2))):
             try:
                 frame = c37.parse_frame(cfg, cfg2, d)
             except InputError as exc:
                 raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
             # a frame after a leap second is 1 s later than stamped (`c37.leap_offsets`)
-            frames.append(frame._replace(t=frame.t + int(leap)))
+            t = c37.reporting_instant(frame.t + int(leap) - frac, cfg.rate, base)
+            frames.append(frame._replace(t=t))
             flagged.update(why for why in c37.flags(cfg2, d) if why)
+        # after the frames' own checks (`c37.check_data_frame`), as a receiver makes them
+        check_order(data, cfg2, f"stream {s + 1}")
         parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
@@ -606,11 +614,14 @@ def _by_time_stamp(n: int, parsed, rate: float) -> Received:
     gaps, breaks = [], []
     fill = int(round(FILL_S * rate))
     for k, s in enumerate(stamps):
-        if k and (lost := round(at[s] * rate) - round(at[stamps[k - 1]] * rate) - 1) > 0:
+        # counted by the time between (t = 0, the CFG-2's stamp, need not be an instant)
+        if k and (lost := round((at[s] - at[stamps[k - 1]]) * rate) - 1) > 0:
             gaps.append(Gap(at[stamps[k - 1]], at[s], lost, lost <= fill))
             if lost <= fill:
-                first = round(at[stamps[k - 1]] * rate) + 1
-                out += [missing_frame((first + j) / rate, n) for j in range(lost)]
+                before = at[stamps[k - 1]]
+                first = round(before * rate) + 1
+                off = before - (first - 1) / rate  # the instants' offset from k / rate
+                out += [missing_frame((first + j) / rate + off, n) for j in range(lost)]
             else:
                 breaks.append(len(out))
         out.append(Frame(at[s], valid[k], v[k], i[k], freq[k], rocof[k]))

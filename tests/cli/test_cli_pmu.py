@@ -744,6 +744,55 @@ def test_record_refuses_time_stamps_replay_and_track_refuse(kundur_recording, tm
             out.unlink()
 
 
+@pytest.mark.parametrize(
+    "how,said",
+    [
+        ("backward", "data frame 21 goes back from the time stamp of frame 20 ("),
+        ("a second", "data frame 21: a data frame stamped with FRACSEC count 1000000, not "),
+    ],
+)
+def test_track_refuses_a_source_whose_frame_is_refused(kundur_recording, tmp_path, how, said):
+    """A stream over TCP with a frame refused (a time stamp going back, a FRACSEC count of a
+    whole second) is cut there; `pmu record` keeps the frames before it (above), and
+    `estimate track` refuses the source: exit status 2 naming the frame, nothing written
+    and an existing --out left as it was (a stream whose bytes or clock went wrong is no
+    ground for the speeds, the frames before included), not a partial track."""
+    from stabctl.estimation.c37_tcp import StreamServer
+
+    cfg2, data = c37.recorded_frames(kundur_recording)
+    soc = int.from_bytes(data[19][6:10], "big")
+    bad = {
+        "backward": data[18],
+        "a second": _restamped(
+            data[20][:6] + soc.to_bytes(4, "big") + data[20][10:], fracsec=10**6
+        ),
+    }[how]
+    out = tmp_path / "t.csv"
+    for existing in (False, True):
+        if existing:
+            out.write_text("kept")
+        with StreamServer(cfg2, data[:20] + [bad] + data[21:], speed=float("inf")) as server:
+            src = f"tcp://127.0.0.1:{server.address[1]}"
+            res = CliRunner().invoke(
+                main,
+                [
+                    "estimate",
+                    "track",
+                    "kundur",
+                    "--source",
+                    src,
+                    "--frames",
+                    "73",
+                    "--out",
+                    str(out),
+                ],
+            )
+        assert res.exit_code == 2 and res.stdout == "", res.output
+        assert res.stderr.startswith(f"error: --source {src}: 127.0.0.1:"), res.stderr
+        assert said in res.stderr and "Traceback" not in res.output
+        assert out.read_text() == "kept" if existing else not out.exists()
+
+
 def test_record_names_frames_of_a_failed_clock(kundur_recording, tmp_path):
     """Data frames whose FRACSEC time quality is 0xF (clock failure) were recorded without
     a word: named on the line as `estimate track` names them (the recording is what was

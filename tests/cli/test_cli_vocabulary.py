@@ -1,13 +1,14 @@
 """One vocabulary on the command line: an option name means one thing everywhere.
 
 Introspects the click commands (subcommands of `estimate` included): every option whose
-name appears on more than one command has the same type, default, flag-ness and unit (the
-first parenthesised unit of its help), except for the differences listed (and justified)
+name appears on more than one command has the same type, default, flag-ness, unit (the
+first parenthesised unit of its help) and metavar, except for the differences listed (and justified)
 in DIFFERENCES; --scheduler comes wherever --workers does; the deprecated aliases still
 work and are hidden.
 """
 
 import re
+from pathlib import Path
 
 import click
 import pytest
@@ -28,7 +29,7 @@ DIFFERENCES = {
     ("estimate track", "--frames"): "optional there: one of the two ends a TCP source needs "
     "(--until or --frames); pmu record's only end",
 }
-#: options whose default is each command's own (an output file name)
+#: options whose default and metavar are each command's own (an output file's name and kind)
 OWN_DEFAULT = {"--out"}
 
 
@@ -62,9 +63,11 @@ def _signature(name, p) -> dict:
         # enforce required=True beside default=None), as one left out means none
         "default": None if p.required else p.default,
         "unit": m and m.group(1),
+        # the name of its value in --help (``--seed S``): one name for one value
+        "metavar": None if p.is_flag else p.make_metavar(click.Context(click.Command(name))),
     }
     if name in OWN_DEFAULT:
-        del sig["default"]
+        del sig["default"], sig["metavar"]
     return sig
 
 
@@ -229,3 +232,30 @@ def test_help_keeps_acronyms_capitalised():
         assert not re.search(r"Output (file|directory): [a-z][A-Z]", out), (name, out)
     for name in ("sweep-cct", "screen"):
         assert "Output file: JSON lines" in CliRunner().invoke(main, [name, "--help"]).output
+
+
+def test_docs_synopses_show_the_defaults():
+    """A number after an option in a synopsis of docs/cli.md's command table (``[--speed
+    1]``) is that option's default in --help, as the synopses write it: a value shown
+    there that is not the default reads as one."""
+    text = (Path(__file__).parents[2] / "docs" / "cli.md").read_text()
+    rows = [line for line in text.splitlines() if line.startswith("| `stabctl ")]
+    assert rows
+    wrong, checked = [], 0
+    for row in rows:
+        for span in re.findall(r"`(stabctl [^`]+)`", row.split("` |")[0] + "`"):
+            words = span.split()
+            cname = next(
+                (" ".join(words[1:n]) for n in (3, 2) if " ".join(words[1:n]) in COMMANDS), None
+            )
+            if cname is None:
+                continue
+            opts = _options(COMMANDS[cname])
+            for oname, value in re.findall(r"(--[a-z-]+) (-?[0-9][0-9.]*)(?=[ \]])", span):
+                p = opts.get(oname)
+                if p is None or not isinstance(p.default, (int, float)) or p.is_flag:
+                    continue
+                checked += 1
+                if float(value) != float(p.default):
+                    wrong.append(f"{cname} {oname}: {value} in docs/cli.md, {p.default} in --help")
+    assert checked > 20 and not wrong, "\n".join(wrong)

@@ -245,3 +245,128 @@ def test_one_frame_tracked_is_said_in_the_singular(wire, tmp_path):
     assert res.exit_code == 0, res.output
     assert res.stdout.startswith("tracked 1 frame from "), res.stdout
     assert len((tmp_path / "t.csv").read_text().splitlines()) == 2
+
+
+def _stamped(frame: bytes, soc: int, count: int, quality: int | None = None) -> bytes:
+    """frame stamped (soc, FRACSEC count), its time quality byte kept or set, CRC valid."""
+    q = frame[10:11] if quality is None else bytes([quality])
+    return _crc(frame[:6] + soc.to_bytes(4, "big") + q + count.to_bytes(3, "big") + frame[14:])
+
+
+def _served(head: bytes, body: list):
+    """A PMU server on 127.0.0.1 that answers 'cfg2' with `head` and 'start' with `body`,
+    then waits for the client to close: (listening socket, port)."""
+    from pmu_streams import fake_server
+
+    def talk(conn):
+        conn.recv(1000)  # 'cfg2'
+        conn.sendall(head)
+        conn.recv(1000)  # 'start'
+        conn.sendall(b"".join(body))
+        while conn.recv(1000):  # 'stop', until the client closes
+            pass
+
+    return fake_server(talk)
+
+
+def _track_tcp(tmp_path, head, body, *end, out="tcp.csv"):
+    srv, port = _served(head, body)
+    with srv:
+        src = f"tcp://127.0.0.1:{port}"
+        args = ["estimate", "track", "kundur", "--source", src, "--out", str(tmp_path / out)]
+        return CliRunner().invoke(main, [*args, *end])
+
+
+def _leaped(body: list) -> list:
+    """body across a positive leap second after its frame 59: frames 0-59 flag it pending,
+    frames 60 on are stamped 1 s earlier (the repeated second) and flag it occurred."""
+    return [_quality(f, 0x10) for f in body[:60]] + [
+        _later(_quality(f, 0x20), -1_000_000) for f in body[60:]
+    ]
+
+
+def test_until_over_tcp_reads_the_time_elapsed_across_a_leap_second(wire, tmp_path):
+    """`estimate track --until 1.25` of a stream across a leap second over TCP read the
+    repeated second's stamps as 0 s again: it never reached 1.25 s, took the whole stream
+    (91 frames) and called it short (exit 2), where the same frames from a recording
+    ended at 1.25 s.  The TCP end reads the time elapsed as the recording does: 76 frames
+    (t = 0 .. 1.25 s), exit 0, the same rows as the recording's track."""
+    _, head, body = wire
+    leaped = _leaped(body)
+    res = _track(tmp_path, head, leaped)  # the recording whole, for the rows
+    path = tmp_path / "r.c37"
+    args = ["estimate", "track", "kundur", "--source", str(path), "--until", "1.25"]
+    res = CliRunner().invoke(main, [*args, "--out", str(tmp_path / "file.csv")])
+    assert res.exit_code == 0 and res.stdout.startswith("tracked 76 frames"), res.output
+    res = _track_tcp(tmp_path, head, leaped, "--until", "1.25")
+    assert res.exit_code == 0, res.output
+    assert res.stdout.startswith("tracked 76 frames from tcp://"), res.stdout
+    assert (tmp_path / "tcp.csv").read_text() == (tmp_path / "file.csv").read_text()
+    # cut short after the leap second: the last time stamp said is the time elapsed
+    res = _track_tcp(tmp_path, head, leaped[:70], "--until", "1.25", out="short.csv")
+    assert res.exit_code == 2, res.output
+    assert "70 data frames, the last stamped 1.1500 s, before t = 1.25 s" in res.stderr
+
+
+@pytest.mark.parametrize("count", [1_000_000, 1_016_667, 0xFFFFFF])
+def test_a_fracsec_count_of_a_second_or_more_is_refused(wire, tmp_path, count):
+    """A data frame stamped (SOC, 1 000 000) with TIME_BASE 1 000 000, the rollover to
+    the next second written in the wrong second, or with a count beyond a second, was
+    tracked without a word (exit 0): FRACSEC's count is a fraction of one second
+    (C37.118.2-2011 6.2.2).  Such a frame is refused as malformed, naming the frame and
+    its count, from a recording and over TCP alike, and by `pmu replay`; a CFG-2 so
+    stamped is refused too."""
+    _, head, body = wire
+    soc = int.from_bytes(body[59][6:10], "big")  # frame 60 is stamped 1 s, frame 61 1 s later
+    bad = body[:60] + [_stamped(body[60], soc, count)] + body[61:]
+    said = (
+        f"data frame 61: a data frame stamped with FRACSEC count {count}, not below its "
+        "CFG-2's TIME_BASE 1000000: the count is a fraction of one second (C37.118.2-2011 "
+        "6.2.2)"
+    )
+    res = _track(tmp_path, head, bad)
+    assert res.exit_code == 2 and f"stream 1, {said}" in res.stderr, res.output
+    assert not (tmp_path / "t.csv").exists()
+    res = _track_tcp(tmp_path, head, bad, "--frames", "91")
+    assert res.exit_code == 2 and f": {said}" in res.stderr, res.output
+    assert not (tmp_path / "tcp.csv").exists()
+    res = CliRunner().invoke(main, ["pmu", "replay", str(tmp_path / "r.c37"), "--port", "0"])
+    assert res.exit_code == 2 and said in res.stderr, res.output
+    cfg = _crc(head[:11] + count.to_bytes(3, "big") + head[14:])
+    res = _track(tmp_path, cfg, body)
+    assert res.exit_code == 2, res.output
+    assert (
+        f"first frame stamped with FRACSEC count {count}, not below its TIME_BASE 1000000"
+        in res.stderr
+    )
+
+
+def test_t_0_is_the_cfg2_s_whole_time_stamp(wire, tmp_path):
+    """A CFG-2 stamped 0.5 s into its second, its data frames from there on: the first row
+    was at t = 0.5 s and --until 0.5 took one frame, the CFG-2's FRACSEC left out.  t = 0
+    is its whole time stamp, from a recording and over TCP: the first row at 0, --until
+    0.5 to 31 frames.  A CFG-2 stamped between two reporting instants (0.01 s) puts the
+    frames at k / 60 - 0.01 s, and a gap among them is counted and filled at those
+    instants."""
+    _, head, body = wire
+    half = _crc(head[:11] + (500_000).to_bytes(3, "big") + head[14:])
+    res = _track(tmp_path, half, body[30:])
+    assert res.exit_code == 0, res.output
+    rows = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
+    assert rows.shape[0] == 61 and rows[0, 0] == 0.0 and rows[-1, 0] == 1.0
+    path = tmp_path / "r.c37"
+    args = ["estimate", "track", "kundur", "--source", str(path), "--until", "0.5"]
+    res = CliRunner().invoke(main, [*args, "--out", str(tmp_path / "file.csv")])
+    assert res.exit_code == 0 and res.stdout.startswith("tracked 31 frames"), res.output
+    res = _track_tcp(tmp_path, half, body[30:], "--until", "0.5")
+    assert res.exit_code == 0 and res.stdout.startswith("tracked 31 frames"), res.output
+    assert (tmp_path / "tcp.csv").read_text() == (tmp_path / "file.csv").read_text()
+    between = _crc(head[:11] + (10_000).to_bytes(3, "big") + head[14:])
+    res = _track(tmp_path, between, body[1:40] + body[45:])
+    assert res.exit_code == 0, res.output
+    assert (
+        "5 reporting instants missing (sent by no stream) in 1 gap(s): 5 after t = 0.6400 s, "
+        "to 0.7400 s (filled with missing values)" in res.stdout
+    )
+    rows = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
+    assert np.allclose(rows[:, 0], np.arange(1, 91) / 60 - 0.01, atol=1e-9)
