@@ -28,9 +28,13 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from stabctl.parallel import RunnerOptions
-from stabctl.stability.cct import SearchOptions
-from stabctl.stability.screening import screen
+# one BLAS thread a process, as the `stabctl` command sets (before numpy is imported)
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+from stabctl.parallel import RunnerOptions  # noqa: E402
+from stabctl.stability.cct import SearchOptions  # noqa: E402
+from stabctl.stability.screening import screen  # noqa: E402
 
 #: (case name or file stem, branch faults too): the target and what it is judged on
 TARGETS = {
