@@ -1498,6 +1498,27 @@ class Case:
                 f"({table_label('exc_con')}) for the PSS output",
             )
 
+    def none_can_swing(self) -> str:
+        """Why no machine of the case can swing, '' where one can: every machine is an
+        infinite bus (a classical machine of H = 0, its angle and speed held), so every
+        run stays stable and every CCT search ends above its limit.
+
+        Returns
+        -------
+        str
+            The infinite buses named (their machine numbers) and what follows, for a
+            warning; '' for a case with a machine of H > 0 or without machines.
+        """
+        m = self.machines
+        infinite = (m.H == 0) & (m.xd == 0)
+        if len(m) == 0 or not infinite.all():
+            return ""
+        return (
+            f"every machine is an infinite bus (H = 0: machine(s) {_listed(m.number)}): "
+            "none can swing, so every run stays stable and every CCT lies above its search "
+            "limit (give a machine H > 0 to study the case's stability)"
+        )
+
     @staticmethod
     def _check_buses(tab: Table, fld: str, known: np.ndarray):
         vals = getattr(tab, fld)

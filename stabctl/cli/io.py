@@ -223,7 +223,10 @@ def _leave_out_islands(case, asked: bool):
 
 def _check_dynamic(case, source: str, static: bool) -> None:
     """Refuse a case without machines unless --static asked for one, and --static for a
-    case with machines (it would change nothing)."""
+    case with machines (it would change nothing); warn of a case whose machines are all
+    infinite buses (`stabctl.case.Case.none_can_swing`)."""
+    import warnings
+
     from stabctl.errors import InputError
 
     if len(case.machines) == 0 and not static:
@@ -236,6 +239,9 @@ def _check_dynamic(case, source: str, static: bool) -> None:
             f"--static given for {source} with dynamic data ({len(case.machines)} "
             "machine(s)): it only lets a case without machines be written; leave it out"
         )
+    why = case.none_can_swing()
+    if why:
+        warnings.warn(f"{source}: {why}", UserWarning, stacklevel=2)
 
 
 def _imported(case, out) -> tuple[dict, str]:
@@ -479,8 +485,10 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
 @click.option(
     "--skip-unsupported",
     is_flag=True,
-    help="Leave out the ANDES models stabctl lacks and the columns ANDES ignores "
-    "(listed as warnings) instead of refusing the case.",
+    help="Leave out the ANDES models stabctl lacks and the columns ANDES ignores, and "
+    "keep the devices stabctl keeps only with a change (a converter taking less than all "
+    "of its generator's power, a value read otherwise), each listed as a warning, instead "
+    "of refusing the case: without it either stops the import.",
 )
 @click.option(
     "--dyr-conventions",
@@ -516,9 +524,11 @@ def import_andes(
     The case is read by ANDES's own parser (the optional `andes` extra: pip install
     "stabctl[andes]") and written in stabctl's JSON format, usable as CASE by simulate,
     cct, eig and screen (with --no-q-limits to solve ANDES's power flow). ANDES models
-    stabctl lacks are named with their device counts; without --skip-unsupported they
-    stop the import (exit status 2, nothing written), as does a case without machine
-    models unless --static asks for a power-flow-only case. DYR records ANDES's reader
+    stabctl lacks are named with their device counts, and devices stabctl keeps only
+    with a change (converters taking less than all of their generator's power) named
+    with the change; without --skip-unsupported either stops the import (exit status 2,
+    nothing written), as does a case without machine models unless --static asks for a
+    power-flow-only case. DYR records ANDES's reader
     skips are left out by name, values ANDES holds other than the DYR's are named as
     changes (PSS/E's infinite bus keeps H = 0). Values are read as the file gives them:
     one ANDES would replace by its default (an M of 0), a formula without a stored value,

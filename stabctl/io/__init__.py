@@ -6,6 +6,7 @@ PSS/E RAW and DYR, and ANDES's cases (cross-validation).
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 from stabctl.case import CASE_DIR, Case
@@ -54,6 +55,12 @@ def load_case(name_or_path: str | Path) -> Case:
         The name is neither a built-in nor an existing file, the path is not a regular
         file of bounded size (`stabctl.io.inputs.input_file`), or the file is malformed.
 
+    Warns
+    -----
+    UserWarning
+        Every machine of the case is an infinite bus (H = 0,
+        :meth:`~stabctl.case.Case.none_can_swing`): no run of it can lose stability.
+
     Examples
     --------
     >>> from stabctl.io import load_case
@@ -61,6 +68,15 @@ def load_case(name_or_path: str | Path) -> Case:
     >>> case.n_bus, len(case.machines), case.base_mva, case.freq_hz
     (13, 4, 100.0, 60.0)
     """
+    case = _read_case(name_or_path)
+    why = case.none_can_swing()
+    if why:
+        warnings.warn(f"case '{name_or_path}': {why}", UserWarning, stacklevel=2)
+    return case
+
+
+def _read_case(name_or_path: str | Path) -> Case:
+    """`load_case`'s case, read."""
     text = str(name_or_path)
     builtin = CASE_DIR / f"{text}.json"
     if "/" not in text and "\\" not in text and not text.endswith((".json", ".m")):

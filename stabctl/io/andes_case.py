@@ -434,20 +434,27 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
             + ([f"devices refused: {'; '.join(refused)}"] if refused else [])
         )
         kept = f"kept with a change: {'; '.join(changed)}" if changed else ""
+        bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if on_unsupported == "error":
+            skippable = len(left_out) > len(bare) or changed
             raise InputError(
                 f"{path.name}: "
                 + "; ".join(t for t in (listing, kept.replace("kept with", "to keep with")) if t)
                 + " ("
-                + advice("on_unsupported='skip' leaves", "--skip-unsupported leaves")
-                + " them out"
-                + (" or keeps them changed)" if changed else ")")
+                + "; ".join(
+                    ([_skip_advice(bool(bare), bool(changed))] if skippable else [])
+                    + (
+                        [f"a static generator cannot be left out: {_bare_advice(len(bare), path)}"]
+                        if bare
+                        else []
+                    )
+                )
+                + ")"
             )
-        bare = [r for r in refused if r.endswith(_NO_MACHINE)]
         if bare:
             raise CaseError(
                 f"{path.name}: a static generator cannot be left out without "
-                f"changing the power flow: {'; '.join(bare)}"
+                f"changing the power flow: {'; '.join(bare)} ({_bare_advice(len(bare), path)})"
             )
         text = "; ".join(t for t in ((f"left out {listing}" if listing else ""), kept) if t)
         warnings.warn(f"{path.name}: {text}", UserWarning, stacklevel=4)
@@ -1681,6 +1688,36 @@ def _electrical_controls(ss, regc) -> list[tuple[str, int]]:
         if m is not None and m.n:
             found += [(name, j) for j in _in_service(m) if m.reg.v[j] == regc]
     return found
+
+
+def _skip_advice(bare: bool, changed: bool) -> str:
+    """What leaving out does for the refused devices but the static generators without a
+    machine (``bare``: there are such): leaves them out, and keeps those ``changed``."""
+    return (
+        advice("on_unsupported='skip' leaves", "--skip-unsupported leaves")
+        + (" the others" if bare else " them")
+        + " out"
+        + (" or keeps them changed" if changed else "")
+    )
+
+
+def _bare_advice(count: int, path: Path) -> str:
+    """What imports ``count`` static generators without a synchronous machine: they cannot
+    be left out (their power would leave the power flow), so a machine model or a
+    converter for each in the case data, or, for a RAW file, PSS/E's reader netting them."""
+    each = "it" if count == 1 else "each"
+    text = (
+        f"give {each} a machine model ({', '.join(_MACHINES)}) or a converter "
+        f"({', '.join(CONVERTER_MODELS)}) in the data"
+    )
+    if path.suffix.lower() == ".raw":
+        text += advice(
+            ", or read the RAW + DYR with stabctl.io.psse.import_psse(..., unmodelled='net'), "
+            "which nets it as a negative load",
+            ", or import the RAW + DYR with import-psse --net-unmodelled, which nets it as a "
+            "negative load",
+        )
+    return text
 
 
 def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), by_device=None):

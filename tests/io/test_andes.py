@@ -1479,6 +1479,33 @@ def test_import_andes_refuses_models_stabctl_lacks_by_name(tmp_path):
         import_andes(path, on_unsupported="skip")
 
 
+def test_a_static_generator_without_machine_is_advised_what_imports_it(tmp_path):
+    """ieee14_pvd1.json without its PVD1 devices: PV 6 (bus 4) has neither machine nor
+    converter.  It cannot be left out, so neither refusal advises --skip-unsupported (which
+    refuses it too): both name a machine model or a converter in the data."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    data = json.loads(Path(andes.get_case("ieee14/ieee14_pvd1.json")).read_text())
+    data["PVD1"] = []
+    path = tmp_path / "ieee14_pv_bare.json"
+    path.write_text(json.dumps(data))
+    out = tmp_path / "bare.json"
+    fix = "give it a machine model (GENROU, GENCLS) or a converter (PVD1, ESD1, REGCA1"
+    for extra in ([], ["--skip-unsupported"], ["--static"]):
+        res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(out), *extra])
+        assert res.exit_code == 2 and not out.exists(), res.output
+        assert "PV 6 (bus 4): no synchronous machine" in res.stderr
+        assert fix in res.stderr and "--skip-unsupported" not in res.stderr
+        assert "Traceback" not in res.output
+    with pytest.raises(InputError, match="cannot be left out: give it a machine") as err:
+        import_andes(path)
+    assert "on_unsupported" not in str(err.value)
+    with pytest.raises(CaseError, match=r"cannot be left out .*give it a machine"):
+        import_andes(path, on_unsupported="skip")
+
+
 def test_import_andes_cli_writes_ieee39_and_refuses_what_it_lacks(tmp_path):
     from click.testing import CliRunner
 

@@ -271,6 +271,22 @@ def test_a_regca1_share_below_one_is_summarised_as_the_written_case_holds(tmp_pa
     Simulator(case)  # off_equilibrium="refuse": the rest netted, the case starts flat
 
 
+def test_a_change_stops_the_import_without_skip_unsupported_as_its_help_says(tmp_path):
+    """ieee14_solar with its REGCA1 taking gammap 0.5 of the bus-8 generator: kept with a
+    change only with --skip-unsupported; without it the import stops naming the change
+    (exit 2, nothing written), and the help of --skip-unsupported says both."""
+    path = edited(tmp_path, SOLAR, "REGCA1", gammap=0.5, gammaq=0.25)
+    out = tmp_path / "out.json"
+    res = CliRunner().invoke(main, ["import-andes", str(path), "-o", str(out)])
+    assert res.exit_code == 2 and not out.exists(), res.output
+    assert "to keep with a change: REGCA1 1" in res.stderr
+    assert "(--skip-unsupported leaves them out or keeps them changed)" in res.stderr
+    helped = " ".join(CliRunner().invoke(main, ["import-andes", "--help"]).output.split())
+    option = helped.split("Options:")[1].split("--skip-unsupported ")[1].split(" --")[0]
+    assert "keep the devices stabctl keeps only with a change" in option
+    assert "without it either stops the import" in option
+
+
 def test_machine_and_converter_shares_not_adding_to_one_are_refused(tmp_path):
     """ieee14_wt3n with the bus-1 turbine taking gammap 0.7 and its GENCLS 0.2 of the
     Slack (the finding: summarised as left out, written with both; the rest, lost at a

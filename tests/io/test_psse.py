@@ -4,6 +4,8 @@ WECC-179 RAW files against ANDES's own power flow, unsupported records and the
 `import-psse` command."""
 
 import json
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -523,6 +525,26 @@ def test_import_psse_without_dyr_is_refused_unless_static(tmp_path):
     res = run("import-psse", V34, "-o", out, "--static", "--json")
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["machines"] == 0 and out.exists()
+
+
+def test_a_case_whose_machines_are_all_infinite_buses_is_warned_of(tmp_path):
+    """The SMIB with its machine's H = 0 as well: both machines are infinite buses, so none
+    can swing and every CCT lies above its search limit.  The import warns naming them, and
+    so does loading the written case; the SMIB as given (H = 3 s) is not warned of."""
+    dyr = tmp_path / "smib_h0.dyr"
+    dyr.write_text((DATA / "smib.dyr").read_text().replace("   3.0  0.0 /", "   0.0  0.0 /"))
+    out = tmp_path / "smib_h0.json"
+    said = "every machine is an infinite bus (H = 0: machine(s) 1, 2): none can swing"
+    res = run("import-psse", DATA / "smib_v33.raw", dyr, "-o", out)
+    assert res.exit_code == 0 and out.exists(), res.output
+    assert f"warning: smib_v33.raw: {said}" in res.stderr
+    with pytest.warns(UserWarning, match=re.escape(said)):
+        load_case(out)
+    res = run("import-psse", DATA / "smib_v33.raw", DATA / "smib.dyr", "-o", out)
+    assert res.exit_code == 0 and "infinite bus" not in res.stderr, res.output
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_case(out)
 
 
 def test_imported_case_runs_flat_from_its_power_flow(tmp_path):
