@@ -160,6 +160,40 @@ def test_outputs_that_are_devices_and_write_failures_end_in_one_error_line(tmp_p
     ]
 
 
+def _disk_full(*args, **kwargs):
+    import errno
+
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))  # as write(2): no file named
+
+
+def test_a_full_disk_as_a_sweep_takes_its_lock_names_the_output(tmp_path, monkeypatch):
+    """screen --out on a full disk said only "error: No space left on device": the pid
+    written in the output's lock file failed first, naming no file."""
+    monkeypatch.setattr("stabctl.locking.os.pwrite", _disk_full)
+    out = tmp_path / "sc.jsonl"
+    res = CliRunner().invoke(main, ["screen", "kundur", "--workers", "1", "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    said = [x for x in res.stderr.splitlines() if not x.startswith(("stabctl: ", "  ("))]
+    assert said == [f"error: {out}: No space left on device"]  # (a compile notice aside)
+    assert not out.exists() and os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("where", ["lock", "figure"])
+def test_a_full_disk_in_paper_names_its_directory_and_leaves_none(tmp_path, monkeypatch, where):
+    """paper --out-dir NEW on a full disk said only "error: No space left on device" and
+    left NEW (with an empty work directory) behind; the directory is named, and those the
+    run created are removed again when they hold nothing."""
+    target = (
+        "stabctl.locking.os.pwrite" if where == "lock" else "stabctl.plotting.figures.save_figure"
+    )
+    monkeypatch.setattr(target, _disk_full)
+    out = tmp_path / "pap"
+    res = CliRunner().invoke(main, ["paper", "--only", "analytic", "--out-dir", str(out)])
+    assert res.exit_code == 2, res.output
+    assert res.stderr.strip().splitlines()[-1:] == [f"error: {out}: No space left on device"]
+    assert os.listdir(tmp_path) == []
+
+
 def test_a_plan_whose_file_cannot_be_written_is_still_shown(tmp_path, monkeypatch):
     """place --out on a full disk lost the whole run: the plan is printed first."""
     import errno
