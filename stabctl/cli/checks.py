@@ -308,6 +308,29 @@ def check_power_flow(case, model) -> None:
     solve_powerflow(case, q_limits=model.q_limits)
 
 
+def check_step_given(case, model) -> None:
+    """Check ``--step`` against the case before a batch dispatches any job, as `cct` and
+    `place` do when they build their simulator: a step too large for the case's fastest
+    time constant was recorded as every job's failure, the command exiting 0.
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+        The case the batch studies.
+    model : stabctl.dynamics.options.ModelOptions
+        Its settings (`model_settings`); without a step (the case's default) nothing is
+        checked.
+
+    Raises
+    ------
+    InputError
+        The step is not below twice the case's fastest time constant
+        (`stabctl.dynamics.grid.check_step`, as the jobs' simulators check it).
+    """
+    if model.h is not None:
+        model.simulator(case, background_compile=False)
+
+
 def check_method(method: str, conventions: str, storage: bool) -> None:
     """Refuse, before any work, an integration method with options it does not implement.
 

@@ -2236,3 +2236,33 @@ def test_a_case_whose_power_flow_does_not_converge_is_refused_before_any_job(
         run(*command[:1], path, *args, "--out", out), "power flow of case 'kundur' did not converge"
     )
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("sweep-cct", "kundur", "--faults", "FAULTS", "--workers", 1, "--out", "OUT"),
+        ("screen", "kundur", "--buses", "3,4", "--workers", 1, "--out", "OUT"),
+        ("estimate", "cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5)
+        + ("--runs", 1),
+    ],
+)
+def test_a_step_too_large_for_the_case_is_refused_before_any_job(tmp_path, monkeypatch, command):
+    """sweep-cct, screen and estimate cct with --step 0.05 on Kundur (fastest time
+    constant 0.01 s) exited 0 with every job recorded as failed on the same step error:
+    they refuse the step before any job, as cct and place do."""
+
+    def dispatched(*a, **k):
+        raise AssertionError("jobs dispatched before the step was checked")
+
+    monkeypatch.setattr("stabctl.parallel.run_sweep", dispatched)
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    out = tmp_path / "records.jsonl"
+    args = [faults if a == "FAULTS" else out if a == "OUT" else a for a in command]
+    assert_error(
+        run(*args, "--step", 0.05),
+        "step 0.05 s is too large: the fastest time constant is 0.01 s (exc_con T_R row 1); "
+        "the predictor-corrector needs h < 0.02 s",
+    )
+    assert not out.exists()
