@@ -262,10 +262,10 @@ def _imported(case, out) -> tuple[dict, str]:
         text += f", {counted(len(case.converters), 'converter')}"
     if len(case.shafts):  # likewise a case without torsional shafts
         summary["shafts"] = len(case.shafts)
-        text += f", {len(case.shafts)} torsional shafts"
+        text += f", {counted(len(case.shafts), 'torsional shaft')}"
     if len(case.svcs):  # likewise a case without static var compensators
         summary["svcs"] = len(case.svcs)
-        text += f", {len(case.svcs)} static var compensators"
+        text += f", {counted(len(case.svcs), 'static var compensator')}"
     if case.events:  # the case's own disturbance (simulate --case-events runs it)
         from stabctl.dynamics.events import from_case
 
