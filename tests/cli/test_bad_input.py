@@ -2266,3 +2266,22 @@ def test_a_step_too_large_for_the_case_is_refused_before_any_job(tmp_path, monke
         "the predictor-corrector needs h < 0.02 s",
     )
     assert not out.exists()
+
+
+def test_paper_refuses_a_part_given_twice(tmp_path):
+    """`paper --only analytic --only analytic` ran (exit 0) where a repeated item of a list
+    option is refused (`omib -c 6 -c 6`)."""
+    out = tmp_path / "rep"
+    assert_error(
+        run("paper", "--only", "analytic", "--only", "analytic", "--out-dir", out),
+        "--only: analytic given twice (each part once)",
+    )
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [("--fault-cycles", 0), ("-c", 6, "-c", 0), (6, 0)])
+def test_omib_refuses_a_fault_of_no_length(args):
+    """`omib --fault-cycles 0` tabled a fault of no length as stable (exit 0) where
+    simulate refuses one cleared as it starts."""
+    res = run("omib", *args)
+    assert_error(res, " 0: cleared as it starts: a fault of no length would do nothing: give ")
