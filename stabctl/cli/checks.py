@@ -36,8 +36,15 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         removed at once); ``path`` is a symbolic link that is broken or loops (writing
         would create the directories it points to, or fail after the work); a directory
         or another non-regular file (a file is wanted) or a file (a directory is wanted);
-        or it exists and is not writable.
+        or it exists and is not writable; an empty name (``Path("")`` is the current
+        directory: the outputs landed there).
     """
+    if not str(path):
+        kind = "directory" if directory else "file"
+        raise InputError(
+            f"{option} {str(path)!r}: an empty {kind} name; give a {kind}"
+            + (" (. for the current one)" if directory else "")
+        )
     p = Path(path)
     _leads_somewhere(p, option)
     if directory:

@@ -2285,3 +2285,15 @@ def test_omib_refuses_a_fault_of_no_length(args):
     simulate refuses one cleared as it starts."""
     res = run("omib", *args)
     assert_error(res, " 0: cleared as it starts: a fault of no length would do nothing: give ")
+
+
+@pytest.mark.parametrize("args", [("eig", "kundur", "--report"), ("paper", "--only", "analytic")])
+def test_an_empty_directory_name_is_refused(tmp_path, monkeypatch, args):
+    """`eig kundur --report --out-dir ''` wrote its report into the current directory
+    (Path('') is '.'), exit 0: an empty directory name is refused, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    assert_error(
+        run(*args, "--out-dir", ""),
+        "--out-dir '': an empty directory name; give a directory (. for the current one)",
+    )
+    assert list(tmp_path.iterdir()) == []
