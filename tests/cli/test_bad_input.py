@@ -2297,3 +2297,15 @@ def test_an_empty_directory_name_is_refused(tmp_path, monkeypatch, args):
         "--out-dir '': an empty directory name; give a directory (. for the current one)",
     )
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("levels,bad", [("1,1e9", "1e+09"), ("1e-9", "1e-09"), ("1,-1", "-1")])
+def test_place_load_levels_outside_their_range_are_refused_before_any_work(
+    no_simulation, levels, bad
+):
+    """`place --load-levels 1e9` (or 1e-9) was refused only when its power flow failed
+    about 11 s later, by a message not naming --load-levels."""
+    assert_error(
+        run(*PLACE, "--load-levels", levels),
+        f"--load-levels {levels}: {bad} is outside [0.1, 10] (fractions of the base load",
+    )
