@@ -10,8 +10,7 @@ from pathlib import Path
 
 import click
 
-from stabctl.errors import SimulationError, StabctlError
-from stabctl.text import counted
+from stabctl.errors import SimulationError, StabctlError, counted
 
 
 def one_line(exc) -> str:

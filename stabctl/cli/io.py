@@ -11,8 +11,7 @@ import click
 from stabctl.cli.checks import check_suffix
 from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
-from stabctl.errors import InputError, StabctlError
-from stabctl.text import counted
+from stabctl.errors import InputError, StabctlError, counted
 
 
 def _case_info(name: str) -> dict:

@@ -46,8 +46,7 @@ from stabctl.cli.pmu_options import (
     stream_controller,
     stream_idcodes,
 )
-from stabctl.errors import InputError
-from stabctl.text import counted
+from stabctl.errors import InputError, counted
 
 #: IEEE C37.118.2's well-known TCP port
 C37_PORT = 4712

@@ -44,9 +44,8 @@ from stabctl.cli.options import (
     subintervals_chosen,
     tf_option,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, counted
 from stabctl.io.inputs import plain_number
-from stabctl.text import counted
 
 
 def _bus_fault(spec: str, t_on: float, t_off: float):

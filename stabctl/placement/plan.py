@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError
+from stabctl.errors import InputError, counted
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
 from stabctl.placement.evaluation import TARGET_SLACK_S, VerifyOptions
@@ -57,7 +57,6 @@ from stabctl.placement.references import (
 )
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
 from stabctl.progress import Heartbeat
-from stabctl.text import counted
 
 logger = logging.getLogger(__name__)
 

@@ -17,12 +17,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from stabctl.errors import counted
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import energy_half_step, energy_note, energy_setters, size_energy
 from stabctl.placement.evaluation import VerifyOptions
 from stabctl.placement.loop import PlaceOptions, WarmStart, _rounded, evaluations, place
 from stabctl.placement.program import InfeasibleError
-from stabctl.text import counted
 
 #: Uniform fleet bisection: resolution (% of MVA).
 UNIFORM_RES_PCT = 0.1

@@ -31,6 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from stabctl.errors import counted
 from stabctl.io import load_case
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool
 from stabctl.placement.energy import MJ_PER_MWH
@@ -44,7 +45,6 @@ from stabctl.progress import Heartbeat
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
 from stabctl.storage.devices import hv_bus
 from stabctl.studies.cases import DEFAULT_FAULTS
-from stabctl.text import counted
 
 logger = logging.getLogger(__name__)
 

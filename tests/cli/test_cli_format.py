@@ -78,15 +78,15 @@ def test_the_sweep_and_screening_tables_print_cct_at_their_tolerance(capsys):
 
 def test_a_count_of_one_takes_the_singular():
     """Messages said "1 contingencies", "1 branches", "1 seeds": a count and its noun agree
-    wherever a count is printed (`stabctl.text.counted`)."""
+    wherever a count is printed (`stabctl.errors.counted`)."""
     from pathlib import Path
 
     from click.testing import CliRunner
 
     from stabctl.cli import main
     from stabctl.cli.format import estimator_cct_lines
+    from stabctl.errors import counted
     from stabctl.estimation.settings import PMUSettings
-    from stabctl.text import counted
 
     assert [counted(n, "contingency", "contingencies") for n in (0, 1, 2)] == [
         "0 contingencies",
