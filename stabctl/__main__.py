@@ -1,5 +1,5 @@
 """`python -m stabctl`, the `stabctl` command's entry point: signals handled from the
-first instant.
+moment it starts.
 
 Starting a command imports click, numpy, numba and the command's modules (about a second
 and more); the command's own handling of Ctrl-C, SIGTERM and SIGHUP (one ``interrupted:``
@@ -11,6 +11,12 @@ time before the command's handlers (or after them, while the process ends) ends 
 same way: one ``interrupted:`` line, nothing done, exit status 130 (SIGINT), 143
 (SIGTERM) or 129 (SIGHUP).  A signal the process was started with ignored
 (``nohup``, a background job's SIGINT) stays ignored.
+
+That moment is after the interpreter's own start-up (about a tenth of a second in which
+Python imports `site` and the installation's path hooks, before this module runs): a
+signal then is Python's to handle, and no code of stabctl can: SIGINT ends with Python's
+"Fatal Python error: init_import_site" or a KeyboardInterrupt traceback (exit status 1),
+SIGTERM and SIGHUP kill the process without a word.
 
 `main` is the console script (``stabctl = stabctl.__main__:main``), what ``python -m
 stabctl`` and ``python -m stabctl.cli`` run; `stabctl.cli.main` (the click group) is

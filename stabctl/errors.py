@@ -1,7 +1,8 @@
 """Exceptions raised by stabctl.
 
 Every error names what is wrong and where (bus, row, field, iteration, time) so that the
-CLI can print it and exit non-zero without a traceback.
+CLI can print it and exit non-zero without a traceback; `counted` puts a count and its
+noun in agreement in every message and report ("1 contingency", "2 contingencies").
 """
 
 from collections.abc import Iterator
@@ -11,6 +12,25 @@ from contextvars import ContextVar
 #: "cli" while a command of stabctl's command line runs (`on_command_line`), else
 #: "library": which of its words a message's advice takes (`advice`)
 _FRONT: ContextVar[str] = ContextVar("stabctl_front", default="library")
+
+
+def counted(n: int, noun: str, plural: str | None = None) -> str:
+    """A count and its noun, singular for one: ``"1 frame"``, ``"181 frames"``.
+
+    Parameters
+    ----------
+    n : int
+        The count.
+    noun : str
+        The noun for one.
+    plural : str, optional
+        The noun for any other count; default `noun` + "s".
+
+    Returns
+    -------
+    str
+    """
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
 
 
 def advice(library: str, cli: str = "") -> str:

@@ -58,7 +58,7 @@ import traceback
 import warnings
 from collections.abc import Callable, Generator, Iterable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from contextlib import closing, contextmanager
+from contextlib import ExitStack, closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeGuard
@@ -811,7 +811,9 @@ def run_sweep(
     if scheduler is not None:
         check_scheduler(scheduler)
     out = Path(out)
-    with exclusive(out):
+    with ExitStack() as held:
+        with naming(out):  # the pid written in the lock file on a full disk names `out`
+            held.enter_context(exclusive(out))
         return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool, stage)
 
 

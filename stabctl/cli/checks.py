@@ -36,8 +36,15 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         removed at once); ``path`` is a symbolic link that is broken or loops (writing
         would create the directories it points to, or fail after the work); a directory
         or another non-regular file (a file is wanted) or a file (a directory is wanted);
-        or it exists and is not writable.
+        or it exists and is not writable; an empty name (``Path("")`` is the current
+        directory: the outputs landed there).
     """
+    if not str(path):
+        kind = "directory" if directory else "file"
+        raise InputError(
+            f"{option} {str(path)!r}: an empty {kind} name; give a {kind}"
+            + (" (. for the current one)" if directory else "")
+        )
     p = Path(path)
     _leads_somewhere(p, option)
     if directory:
@@ -306,6 +313,29 @@ def check_power_flow(case, model) -> None:
     from stabctl.network.powerflow import solve_powerflow
 
     solve_powerflow(case, q_limits=model.q_limits)
+
+
+def check_step_given(case, model) -> None:
+    """Check ``--step`` against the case before a batch dispatches any job, as `cct` and
+    `place` do when they build their simulator: a step too large for the case's fastest
+    time constant was recorded as every job's failure, the command exiting 0.
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+        The case the batch studies.
+    model : stabctl.dynamics.options.ModelOptions
+        Its settings (`model_settings`); without a step (the case's default) nothing is
+        checked.
+
+    Raises
+    ------
+    InputError
+        The step is not below twice the case's fastest time constant
+        (`stabctl.dynamics.grid.check_step`, as the jobs' simulators check it).
+    """
+    if model.h is not None:
+        model.simulator(case, background_compile=False)
 
 
 def check_method(method: str, conventions: str, storage: bool) -> None:

@@ -12,7 +12,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from stabctl.cli.checks import check_suffix, model_settings
+from stabctl.cli.checks import check_step_given, check_suffix, model_settings
 from stabctl.cli.format import (
     closed_loop_lines,
     counted,
@@ -467,6 +467,8 @@ def cct(
     check_latency(
         settings, ev.t, t_end, f"the runs' end {t_end:g} s (the fault at {ev.t:g} s + 5 s)"
     )
+    model = model_settings(conventions, step)
+    check_step_given(case, model)  # before the searches: not one failure per run
     table = estimator_ccts(
         case.name,
         fault,
@@ -475,7 +477,7 @@ def cct(
         runs=runs,
         seed=seed,
         settings=settings,
-        model=model_settings(conventions, step),
+        model=model,
         esd_model=esd_model,
     )
     out = {

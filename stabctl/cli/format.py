@@ -10,26 +10,7 @@ from pathlib import Path
 
 import click
 
-from stabctl.errors import SimulationError, StabctlError
-
-
-def counted(n: int, noun: str, plural: str | None = None) -> str:
-    """A count and its noun, singular for one: ``"1 frame"``, ``"181 frames"``.
-
-    Parameters
-    ----------
-    n : int
-        The count.
-    noun : str
-        The noun for one.
-    plural : str, optional
-        The noun for any other count; default `noun` + "s".
-
-    Returns
-    -------
-    str
-    """
-    return f"{n} {noun if n == 1 else plural or noun + 's'}"
+from stabctl.errors import SimulationError, StabctlError, counted
 
 
 def one_line(exc) -> str:
@@ -156,8 +137,8 @@ def print_storage(esd: dict, result) -> None:
     active = [d for d in info if d["switchings"] > 0]
     click.echo(f"  {describe_esd(esd)}")
     click.echo(
-        f"  {sum(d['switchings'] for d in info)} switchings, {len(active)} of "
-        f"{len(info)} devices acted; absorbed "
+        f"  {counted(sum(d['switchings'] for d in info), 'switching')}, {len(active)} of "
+        f"{counted(len(info), 'device')} acted; absorbed "
         f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
         f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ"
     )
@@ -328,7 +309,8 @@ def print_cct(case, rating, d) -> None:
             f"synchronism when cleared at {d['t_unstable_s']:.{n}f} s"
         )
     click.echo(
-        f"{d['n_simulations']} simulations ({d['n_simulations_half_step']} at half the step, "
+        f"{counted(d['n_simulations'], 'simulation')} ({d['n_simulations_half_step']} at "
+        "half the step, "
         f"{d['early_stops']} ended at an early verdict; {d['search']} search), "
         f"wall {d['wall_time_s']:.2f} s"
     )
@@ -737,7 +719,8 @@ def print_plan(case_name, d) -> None:
             f"{r.get('delivered_mj', 0.0) / MJ_PER_MWH:14.3f}"
         )
     click.echo(
-        f"{d['n_met']} of {d['n_contingencies']} contingencies stable at their "
+        f"{d['n_met']} of {counted(d['n_contingencies'], 'contingency', 'contingencies')} "
+        "stable at their "
         f"required clearing time; solved for: {', '.join(d['active']) or 'none'}"
     )
     click.echo(f"{'contingency':<18} {'required s':>10} {'no ESD s':>9} {'with s':>8}  met")
@@ -762,7 +745,7 @@ def print_plan(case_name, d) -> None:
     for a in d.get("alone") or []:
         mw = "infeasible" if a["total_mw"] is None else f"{a['total_mw']:.1f} MW"
         click.echo(f"fault {a['fault']} alone: {mw}")
-    click.echo(f"{d['n_simulations']} runs simulated, wall {d['wall_time_s']:.1f} s")
+    click.echo(f"{counted(d['n_simulations'], 'run')} simulated, wall {d['wall_time_s']:.1f} s")
 
 
 def estimator_cct_lines(
@@ -798,9 +781,9 @@ def estimator_cct_lines(
     lines = [
         f"CCT of line {bus}-{far_bus}, {_ESD_NAMES[esd_model]} {esd_pct:g} %, {rate:g} "
         f"frames/s, latency "
-        f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, {runs} "
-        f"seeds from {seed} (cycles, each found on a {1000 * CCT_TOL_S:.2f} ms grid, 1/4 "
-        "cycle: coarser than stabctl cct's 1 ms):"
+        f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, "
+        f"{counted(runs, 'seed')} from {seed} (cycles, each found on a "
+        f"{1000 * CCT_TOL_S:.2f} ms grid, 1/4 cycle: coarser than stabctl cct's 1 ms):"
     ]
     lines += [
         f"  {e:5} "

@@ -11,7 +11,7 @@ import click
 from stabctl.cli.checks import check_suffix
 from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
-from stabctl.errors import InputError, StabctlError
+from stabctl.errors import InputError, StabctlError, counted
 
 
 def _case_info(name: str) -> dict:
@@ -257,19 +257,20 @@ def _imported(case, out) -> tuple[dict, str]:
         "governors": len(case.governors),
     }
     text = (
-        f"wrote {out}: {case.n_bus} buses, {len(case.branches)} branches, "
-        f"{len(case.machines)} machines, {len(case.exciters)} exciters, "
-        f"{len(case.pss)} PSS, {len(case.governors)} governors"
+        f"wrote {out}: {counted(case.n_bus, 'bus', 'buses')}, "
+        f"{counted(len(case.branches), 'branch', 'branches')}, "
+        f"{counted(len(case.machines), 'machine')}, {counted(len(case.exciters), 'exciter')}, "
+        f"{len(case.pss)} PSS, {counted(len(case.governors), 'governor')}"
     )
     if len(case.converters):  # a case without converters is summarised as before
         summary["converters"] = len(case.converters)
-        text += f", {len(case.converters)} converters"
+        text += f", {counted(len(case.converters), 'converter')}"
     if len(case.shafts):  # likewise a case without torsional shafts
         summary["shafts"] = len(case.shafts)
-        text += f", {len(case.shafts)} torsional shafts"
+        text += f", {counted(len(case.shafts), 'torsional shaft')}"
     if len(case.svcs):  # likewise a case without static var compensators
         summary["svcs"] = len(case.svcs)
-        text += f", {len(case.svcs)} static var compensators"
+        text += f", {counted(len(case.svcs), 'static var compensator')}"
     if case.events:  # the case's own disturbance (simulate --case-events runs it)
         from stabctl.dynamics.events import from_case
 

@@ -88,10 +88,16 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 
 
 def _check_before_end(given, f0: float) -> None:
-    """InputError naming the first of ``given`` ((option, cycles) pairs) whose fault lasts
-    until or past the end of each run (`stabctl.smib.omib.TABLE_T_END`): the option, the
-    duration in cycles and s at --f0, the end and the most cycles that fit."""
+    """InputError naming the first of ``given`` ((option, cycles) pairs) whose fault has no
+    length (0 cycles, as `simulate` refuses one) or lasts until or past the end of each run
+    (`stabctl.smib.omib.TABLE_T_END`): the option, the duration in cycles and s at --f0,
+    the end and the most cycles that fit."""
     for option, cyc in given:
+        if cyc == 0:  # as simulate refuses --clear-cycles 0
+            raise InputError(
+                f"{option} 0: cleared as it starts: a fault of no length would do nothing: "
+                f"give {option} > 0"
+            )
         if cyc / f0 >= TABLE_T_END:
             raise InputError(
                 f"{option} {cyc:g}: {cyc:g} cycles = {cyc / f0:g} s at --f0 {f0:g} Hz, not "

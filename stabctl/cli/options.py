@@ -927,7 +927,7 @@ def read_fault_list(case, case_name: str, src: str):
     if src == "DEFAULT":
         rows = [(f, f"--faults {src}") for f in default_faults(case_name)]
     else:  # each fault named with its file:line
-        rows = [(f, f"--faults {src}:{row.line}") for f, row in read_fault_rows(src)]
+        rows = [(f, f"--faults {src}:{line}") for f, line in read_fault_rows(src)]
     for f, where in rows:
         check_option_events(case, ((f"{where}: {f.describe()}", ev) for ev in f.events(0)))
     return [f for f, _ in rows]

@@ -8,6 +8,7 @@ import click
 
 from stabctl.cli.checks import check_writable
 from stabctl.cli.options import out_dir_option, reports_errors
+from stabctl.errors import InputError
 
 
 @click.command()
@@ -25,7 +26,7 @@ from stabctl.cli.options import out_dir_option, reports_errors
     type=click.Choice(
         ["analytic", "cases", "convergence", "table4", "wecc", "estimation", "placement"]
     ),
-    help="Build only these parts (repeatable; times on 2 cores): analytic = "
+    help="Build only these parts (repeatable, each part once; times on 2 cores): analytic = "
     "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
     "first compilation); table4 = CCT sweeps (15 s); wecc = Case 2 and Table 4 with "
     "WECC batteries beside ideal ESDs; estimation = "
@@ -50,6 +51,9 @@ def paper(out_dir, resume, only):
     """
     from stabctl.studies.paper import RUN_LOG, run_summary, write_paper_report
 
+    twice = [p for k, p in enumerate(only) if p in only[:k]]
+    if twice:  # as a repeated item of a list option
+        raise InputError(f"--only: {twice[0]} given twice (each part once)")
     check_writable(out_dir, "--out-dir", directory=True)
     path = write_paper_report(out_dir, resume=resume, only=only)
     click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text())))

@@ -63,7 +63,7 @@ from stabctl.errors import InputError
     show_default=True,
     metavar="LIST",
     help="Load levels, comma-separated fractions of the base load (e.g. "
-    "0.9,1.0,1.1): loads and dispatch scaled, power flow re-solved; every "
+    "0.9,1.0,1.1; each in [0.1, 10]): loads and dispatch scaled, power flow re-solved; every "
     "contingency is verified at each.",
 )
 @click.option(
@@ -316,11 +316,19 @@ def place(
         sys.exit(1)
 
 
+#: the load levels place takes, fractions of the base load: from a tenth of it to ten
+#: times it (1e9 or 1e-9 was refused only when its power flow failed, seconds later)
+LOAD_LEVELS = (0.1, 10.0)
+
+
 def _load_levels(text: str) -> tuple:
-    """The --load-levels list: numbers > 0.  Raises InputError."""
+    """The --load-levels list: numbers in LOAD_LEVELS.  Raises InputError."""
     levels = tuple(comma_list(text, "--load-levels", float, "a number"))
-    if not levels or any(not x > 0 for x in levels):
+    lo, hi = LOAD_LEVELS
+    bad = [x for x in levels if not lo <= x <= hi]
+    if bad:
         raise InputError(
-            f"--load-levels: need numbers > 0 (fractions of the base load), got {text!r}"
+            f"--load-levels {text}: {bad[0]:g} is outside [{lo:g}, {hi:g}] (fractions of the "
+            f"base load: from {lo:g} to {hi:g} times it)"
         )
     return levels

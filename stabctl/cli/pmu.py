@@ -12,7 +12,6 @@ import socket
 import click
 
 from stabctl.cli.checks import check_writable
-from stabctl.cli.format import counted
 from stabctl.cli.options import (
     FLOAT,
     INT,
@@ -47,7 +46,7 @@ from stabctl.cli.pmu_options import (
     stream_controller,
     stream_idcodes,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, counted
 
 #: IEEE C37.118.2's well-known TCP port
 C37_PORT = 4712

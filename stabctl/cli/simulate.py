@@ -44,7 +44,7 @@ from stabctl.cli.options import (
     subintervals_chosen,
     tf_option,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, counted
 from stabctl.io.inputs import plain_number
 
 
@@ -596,8 +596,9 @@ def simulate(
         )
         return
     click.echo(
-        f"case {case.name}: {len(case.machines)} machines, {case.n_bus} buses; "
-        f"0-{float(result.t[-1]):g} s, {summary['n_steps']} steps (h = {step_text(h)}, {method}"
+        f"case {case.name}: {counted(len(case.machines), 'machine')}, "
+        f"{counted(case.n_bus, 'bus', 'buses')}; 0-{float(result.t[-1]):g} s, "
+        f"{counted(summary['n_steps'], 'step')} (h = {step_text(h)}, {method}"
         + (f" with {sub} exciter(s) in sub-intervals" if sub else "")
         + f", {conventions} conventions), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"

@@ -10,6 +10,7 @@ from stabctl.cli.checks import (
     PLOT_SUFFIXES,
     check_power_flow,
     check_run_end,
+    check_step_given,
     check_suffix,
     model_settings,
     search_settings,
@@ -395,6 +396,7 @@ def sweep_cct(
     faults = read_fault_list(case, case_name, faults_src)
     check_run_end(faults, search)
     check_power_flow(case, model)  # before any job: not one failure per job
+    check_step_given(case, model)
     jobs = controlled_cct_jobs(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )
@@ -493,6 +495,7 @@ def screen(
     check_suffix(out_path, (".jsonl",), "--out")
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault
+    check_step_given(case, model)
     rows = run_screen(
         case_name,
         out_path,

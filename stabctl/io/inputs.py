@@ -8,9 +8,11 @@ A CSV table (:func:`read_csv`) is UTF-8 text (a byte-order mark allowed) with a 
 naming its columns: every column must be one the table knows (a misspelt column is an
 error, not ignored), none twice, the required ones present; every row must have exactly
 the header's number of fields (a row cut short is an error, not a row with missing
-values); blank lines are skipped, values stripped.  Errors name ``file:line`` and what is
-wrong; :func:`number` parses one field the same way (finite, in range, an integer where
-one is needed).
+values); blank lines are skipped, values stripped.  A table is read a row at a time
+(:func:`iter_csv`); a header of more columns than the table has is refused with its count,
+a line longer than a row of its columns can be by its length, before the line is split.
+Errors name ``file:line`` and what is wrong; :func:`number` parses one field the same way
+(finite, in range, an integer where one is needed).
 
 A JSON input (:func:`parse_json`) is refused when one object gives a key twice: Python's
 json module keeps the last value without a word.
@@ -21,6 +23,8 @@ from __future__ import annotations
 import csv
 import math
 import os
+from collections import Counter
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 from stabctl.errors import InputError
@@ -30,6 +34,7 @@ __all__ = [
     "MAX_INPUT_BYTES",
     "CsvRow",
     "input_file",
+    "iter_csv",
     "number",
     "parse_json",
     "plain_float",
@@ -78,7 +83,7 @@ class CsvRow:
 def read_csv(
     path: str | os.PathLike, what: str, required: tuple[str, ...], optional: tuple[str, ...] = ()
 ) -> list[CsvRow]:
-    """The data rows of a strict CSV table (module doc).
+    """The data rows of a strict CSV table (module doc), as a list (`iter_csv`).
 
     Parameters
     ----------
@@ -97,20 +102,54 @@ def read_csv(
     Raises
     ------
     InputError
+        As `iter_csv`.
+    """
+    return list(iter_csv(path, what, required, optional))
+
+
+def iter_csv(
+    path: str | os.PathLike, what: str, required: tuple[str, ...], optional: tuple[str, ...] = ()
+) -> Iterator[CsvRow]:
+    """The data rows of a strict CSV table (module doc), one at a time: a caller that stops
+    at its first error has read the file no further, and keeps no row it does not keep
+    itself.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What it is, for messages (``"fault list"``).
+    required, optional : tuple of str
+        The columns it must have, and the others it may have.
+
+    Yields
+    ------
+    CsvRow
+        In file order; at least one.
+
+    Raises
+    ------
+    InputError
         Not a regular file of bounded size, not UTF-8, a field beyond the csv module's
-        limit, a header with an unknown, duplicated or missing column, a row with another
-        number of fields than the header, or no data row; naming ``file:line``.
+        limit, a line longer than a row of the table's columns can be, a header with more
+        columns than the table has or with an unknown, duplicated or missing column, a row
+        with another number of fields than the header, or no data row; naming
+        ``file:line``.
     """
     path = input_file(path, what)
-    name, rows, header = path.name, [], None
+    name, header, found = path.name, None, False
     try:
         with path.open(newline="", encoding="utf-8-sig") as f:
-            reader = csv.reader(f)
+            lines = _Lines(f, what, name, required, optional)
+            reader = csv.reader(lines)
             for fields in reader:
                 if not any(s.strip() for s in fields):
                     continue
                 if header is None:
-                    header = _header(fields, f"{what} {name}:{reader.line_num}", required, optional)
+                    where = f"{what} {name}:{reader.line_num}"
+                    header = _header(fields, what, where, required, optional)
+                    lines.header_read = True
                     continue
                 if len(fields) != len(header):
                     raise InputError(
@@ -118,8 +157,12 @@ def read_csv(
                         f"has {len(header)} ({','.join(header)}): a row cut short or with "
                         "extra fields"
                     )
-                values = dict(zip(header, (s.strip() for s in fields), strict=True))
-                rows.append(CsvRow(name, reader.line_num, values))
+                found = True
+                yield CsvRow(
+                    name,
+                    reader.line_num,
+                    dict(zip(header, (s.strip() for s in fields), strict=True)),
+                )
     except UnicodeDecodeError as exc:
         raise InputError(
             f"{what} {path}: not UTF-8 text (byte {exc.start}: {exc.reason}); save it as UTF-8"
@@ -128,17 +171,83 @@ def read_csv(
         raise InputError(f"{what} {name}:{reader.line_num}: {exc}") from None
     except OSError as exc:
         raise InputError(f"{what} {path}: {exc.strerror or exc}") from None
-    if not rows:
-        columns = ",".join(required) + "".join(f"[,{c}]" for c in optional)
-        raise InputError(f"{what} {path}: needs a header ({columns}) and at least one row")
-    return rows
+    if not found:
+        raise InputError(
+            f"{what} {path}: needs a header ({_columns(required, optional)}) and at least one row"
+        )
 
 
-def _header(fields: list[str], where: str, required, optional) -> list[str]:
+def _columns(required, optional) -> str:
+    """A table's columns for messages: ``bus,far_bus[,t_fault]``."""
+    return ",".join(required) + "".join(f"[,{c}]" for c in optional)
+
+
+class _Lines:
+    """The lines of a CSV file for `csv.reader`, each read at most to the length a row of
+    the table can have: the csv module splits a whole line into a list of fields, so a line
+    of millions of fields took gigabytes.  Before the header, a line without quotes whose
+    commas give more columns than the table has is refused with its count (the rest of a
+    long line read in bounded pieces); any line longer than a row of the table's columns
+    can be (each at most the csv module's field limit, quoted) is refused by its length."""
+
+    def __init__(self, f, what: str, name: str, required, optional):
+        self.f, self.what, self.name = f, what, name
+        self.required, self.optional = required, optional
+        self.n, self.header_read = 0, False
+        self.cap = (len(required) + len(optional)) * (2 * csv.field_size_limit() + 3)
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> str:
+        line = self.f.readline(self.cap + 1)
+        if not line:
+            raise StopIteration
+        self.n += 1
+        long = len(line) > self.cap and line[-1] not in "\r\n"
+        if self.header_read and not long:
+            return line
+        n_chars, commas, quoted, text = len(line), line.count(","), '"' in line, _text(line)
+        while long and line[-1] not in "\r\n":  # the rest of the line, in bounded pieces
+            line = self.f.readline(1 << 20)
+            if not line:
+                break
+            n_chars += len(line)
+            commas += line.count(",")
+            quoted = quoted or '"' in line
+            text = text or _text(line)
+        where = f"{self.what} {self.name}:{self.n}"
+        if not self.header_read and text and not quoted:
+            _check_count(commas + 1, where, self.what, self.required, self.optional)
+        if long:
+            raise InputError(
+                f"{where}: a line of {n_chars} characters, longer than a row of "
+                f"{_columns(self.required, self.optional)} can be (at most {self.cap})"
+            )
+        return line
+
+
+def _text(line: str) -> bool:
+    """Whether a line has more than commas and blanks (else csv reads a blank row)."""
+    return bool(line.replace(",", "").strip())
+
+
+def _check_count(count: int, where: str, what: str, required, optional) -> None:
+    """Refuse a header of more columns than the table has."""
+    known = len(required) + len(optional)
+    if count > known:
+        raise InputError(
+            f"{where}: a header of {count} columns, more than the {known} a {what} has "
+            f"({_columns(required, optional)})"
+        )
+
+
+def _header(fields: list[str], what: str, where: str, required, optional) -> list[str]:
     """The stripped column names of a header line, checked against the table's columns."""
+    _check_count(len(fields), where, what, required, optional)
     names = [s.strip() for s in fields]
     known = (*required, *optional)
-    twice = sorted({n for n in names if names.count(n) > 1})
+    twice = sorted(n for n, k in Counter(names).items() if k > 1)
     unknown = [n for n in names if n not in known]
     missing = [n for n in required if n not in names]
     for bad, why in ((twice, "twice"), (unknown, "unknown"), (missing, "missing")):

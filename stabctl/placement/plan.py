@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError
+from stabctl.errors import InputError, counted
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
 from stabctl.placement.evaluation import TARGET_SLACK_S, VerifyOptions
@@ -329,7 +329,7 @@ def _contingencies(
     every contingency are simulated first (into pl.base)."""
     if requirement.needs_base or any(r.needs_base for r in (overrides or {}).values()):
         every = contingencies_of(faults, Requirement(cct_s=pl.t_max), freq_hz, pl.tol, levels)
-        pl.say(f"CCT without storage of {len(every)} contingencies")
+        pl.say(f"CCT without storage of {counted(len(every), 'contingency', 'contingencies')}")
         pl.add_base(every, pl.brackets, kw)
     cons = contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
     _check_search_limit(pl, cons, requirement, overrides)
@@ -364,9 +364,9 @@ def _without_storage(
     scope_stable_at_once)."""
     known = _stable_by_screening(cons, pl.brackets)
     pl.say(
-        f"{len(cons)} contingencies ({n_faults} faults x {n_levels} load "
-        f"level(s)): each cleared at its required time without storage ({len(known)} "
-        "known stable there from the screening)"
+        f"{counted(len(cons), 'contingency', 'contingencies')} ({counted(n_faults, 'fault')} "
+        f"x {counted(n_levels, 'load level')}): each cleared at its required time without "
+        f"storage ({len(known)} known stable there from the screening)"
     )
     checks = pl.check([c for c in cons if c.name not in known], np.zeros(len(pl.sites)))
     failing = [c for c in cons if c.name in checks and not checks[c.name]["stable_at_check"]]
@@ -522,7 +522,7 @@ def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw: Study) -> 
     pl.energy_rate = mwh_per_mw(len(pl.sites), st.checks)
     sites = pl.priced(pl.energy_rate)
     pl.say(
-        f"round {rnd}: solving for {len(st.active)} contingencies ("
+        f"round {rnd}: solving for {counted(len(st.active), 'contingency', 'contingencies')} ("
         + ", ".join(c.name for c in st.active)
         + ")"
     )
@@ -580,7 +580,8 @@ def _check_last_allocation(pl: PlanContext, st: _Rounds, rounds: int) -> None:
     fails = _check_all(pl, st)
     short = [c for c in st.active if _short_of_target(c, st.evs)]
     pl.say(
-        f"after round {rounds}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
+        f"after round {rounds}: {st.mw.sum():.1f} MW, checked "
+        f"{counted(len(st.cons), 'contingency', 'contingencies')}: "
         + (f"{len(fails)} fail" if fails else "all stable")
         + (f", {len(short)} of the active set short of its CCT target" if short else "")
     )
@@ -644,7 +645,8 @@ def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
         }
     )
     pl.say(
-        f"round {rnd}: {st.mw.sum():.1f} MW, checked {len(st.cons)} contingencies: "
+        f"round {rnd}: {st.mw.sum():.1f} MW, checked "
+        f"{counted(len(st.cons), 'contingency', 'contingencies')}: "
         + (
             f"{len(fails)} fail (" + ", ".join(c.name for c in fails[:8]) + ")"
             if fails

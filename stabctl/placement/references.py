@@ -17,6 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from stabctl.errors import counted
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import energy_half_step, energy_note, energy_setters, size_energy
 from stabctl.placement.evaluation import VerifyOptions
@@ -38,7 +39,8 @@ def margins(pl: PlanContext, cons, result, tol: float, cap_s: float, kw) -> None
     if not todo:
         return
     pl.say(
-        f"clearing margins of {len(todo)} contingencies (up to {1000 * cap_s:g} ms, "
+        f"clearing margins of {counted(len(todo), 'contingency', 'contingencies')} (up to "
+        f"{1000 * cap_s:g} ms, "
         f"{1000 * tol:g} ms)"
     )
     top = {c.name: round(min(c.target_cct_s + cap_s, pl.t_max), 12) for c in todo}

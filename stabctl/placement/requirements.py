@@ -121,11 +121,11 @@ def read_requirements(path) -> dict:
         What `read_faults` refuses, a requirement that is not a number > 0, or a fault
         listed twice with requirements; naming file:line.
     """
-    from stabctl.io.inputs import number, read_csv
+    from stabctl.io.inputs import iter_csv, number
     from stabctl.stability.cct import FAULT_COLUMNS, read_faults
 
     faults = read_faults(path)
-    rows = read_csv(path, "fault list", *FAULT_COLUMNS)
+    rows = iter_csv(path, "fault list", *FAULT_COLUMNS)
     out: dict = {}
     for fault, row in zip(faults, rows, strict=True):
         vals = {

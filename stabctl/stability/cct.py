@@ -122,7 +122,7 @@ from stabctl.errors import (
     SimulationError,
     Verdict,
 )
-from stabctl.io.inputs import CsvRow, number, read_csv
+from stabctl.io.inputs import CsvRow, iter_csv, number
 from stabctl.network.ybus import circuit_row
 from stabctl.stability.sime import EarlyVerdict, critical_machines, probe_margin
 
@@ -1657,7 +1657,7 @@ T_FAULT_MAX_S = 1000.0
 
 
 def read_faults(path: str | Path) -> list[LineFault]:
-    """Faults from a CSV file (a strict table, `stabctl.io.inputs.read_csv`, of
+    """Faults from a CSV file (a strict table, `stabctl.io.inputs.iter_csv`, of
     :data:`FAULT_COLUMNS`): bus, far_bus (empty: a bus fault cleared without a trip)
     [, t_fault (s, default 1, at most T_FAULT_MAX_S)][, circuit (default 1; empty in a
     bus fault's row)], one fault per row; an empty t_fault or circuit cell takes the
@@ -1672,9 +1672,10 @@ def read_faults(path: str | Path) -> list[LineFault]:
     return [fault for fault, _ in read_fault_rows(path)]
 
 
-def read_fault_rows(path: str | Path) -> list[tuple[LineFault, CsvRow]]:
-    """`read_faults` with the row of each fault, for messages about a fault that name
-    its ``file:line`` (a bus or line the case lacks).
+def read_fault_rows(path: str | Path) -> list[tuple[LineFault, int]]:
+    """`read_faults` with the line of each fault, for messages about a fault that name
+    its ``file:line`` (a bus or line the case lacks).  The file is read a row at a time,
+    up to its first error; only the faults are kept.
 
     Parameters
     ----------
@@ -1683,24 +1684,24 @@ def read_fault_rows(path: str | Path) -> list[tuple[LineFault, CsvRow]]:
 
     Returns
     -------
-    list of (LineFault, stabctl.io.inputs.CsvRow)
-        In file order.
+    list of (LineFault, int)
+        In file order: each fault and its line in the file (1-based).
 
     Raises
     ------
     InputError
         As `read_faults`.
     """
-    faults: dict[LineFault, CsvRow] = {}
-    for row in read_csv(path, "fault list", *FAULT_COLUMNS):
+    faults: dict[LineFault, int] = {}
+    for row in iter_csv(path, "fault list", *FAULT_COLUMNS):
         fault = _fault_row(row)
         if fault in faults:
             name = f"{fault.bus}" if fault.far_bus is None else f"{fault.bus}-{fault.far_bus}"
             raise InputError(
                 f"{row.where()}: fault {name} listed twice (first at line "
-                f"{faults[fault].line}; each fault once)"
+                f"{faults[fault]}; each fault once)"
             )
-        faults[fault] = row
+        faults[fault] = row.line
     return list(faults.items())
 
 

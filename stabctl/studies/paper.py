@@ -23,7 +23,8 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.locking import exclusive
-from stabctl.parallel import read_records, write_reproducible
+from stabctl.outdir import output_directory
+from stabctl.parallel import naming, read_records, write_reproducible
 from stabctl.plotting import figures as plotting
 from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
 from stabctl.smib.feedback import PAPER_LAWS, settling_time
@@ -352,7 +353,10 @@ def write_paper_report(
     INFO, `stabctl.progress`).
 
     One run per out_dir at a time: the run holds WORK_DIR's lock
-    (`stabctl.locking.exclusive`) throughout.
+    (`stabctl.locking.exclusive`) throughout.  A run that fails or is interrupted leaves
+    WORK_DIR only with records in it, and out_dir only if it existed or holds files
+    (`stabctl.outdir.output_directory`); an OSError naming no file (a full disk) names
+    out_dir.
 
     Raises:
         InputError: an unknown part in `only`; another run is writing out_dir (names its
@@ -362,10 +366,18 @@ def write_paper_report(
     bad = [k for k in keys if k not in PARTS]
     if bad:
         raise InputError(f"unknown report part(s) {bad}; choose from {list(PARTS)}")
+    # a write that names no file (a full disk) names the report directory; on an error,
+    # the directories created here and left empty are removed again
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    with exclusive(out / WORK_DIR):
-        return _write_locked(out, keys, progress, resume)
+    with naming(out), output_directory(out), exclusive(out / WORK_DIR):
+        try:
+            return _write_locked(out, keys, progress, resume)
+        except BaseException:
+            try:  # no records to resume from: no work directory either
+                (out / WORK_DIR).rmdir()
+            except OSError:  # records kept for --resume (or never created)
+                pass
+            raise
 
 
 def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:

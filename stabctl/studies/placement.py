@@ -31,6 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from stabctl.errors import counted
 from stabctl.io import load_case
 from stabctl.parallel import run_sweep, strip_run_dependent, worker_pool
 from stabctl.placement.energy import MJ_PER_MWH
@@ -204,7 +205,8 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
             records_dir / f"placement_{case_name}_screening.jsonl", case_name, case.digest()
         )
         say(
-            f"{case_name}: screened {len(rows)} faults in {time.perf_counter() - wall:.0f} s;"
+            f"{case_name}: screened {counted(len(rows), 'fault')} in "
+            f"{time.perf_counter() - wall:.0f} s;"
             f" {len(faults)} stable when cleared at once"
         )
         with worker_pool(workers) as pool_map:
@@ -492,7 +494,7 @@ def _markdown(d: dict, figs: dict, generated_by: str = "stabctl paper") -> list[
         )
         + "; "
         + ("verified on" if p["verified"] else "NOT verified on")
-        + f" {p['n_met']} of {p['n_contingencies']} contingencies"
+        + f" {p['n_met']} of {counted(p['n_contingencies'], 'contingency', 'contingencies')}"
         + (
             f", {len(p['set_aside'])} more set aside as infeasible ({', '.join(p['set_aside'])})"
             if p.get("set_aside")

@@ -2236,3 +2236,76 @@ def test_a_case_whose_power_flow_does_not_converge_is_refused_before_any_job(
         run(*command[:1], path, *args, "--out", out), "power flow of case 'kundur' did not converge"
     )
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("sweep-cct", "kundur", "--faults", "FAULTS", "--workers", 1, "--out", "OUT"),
+        ("screen", "kundur", "--buses", "3,4", "--workers", 1, "--out", "OUT"),
+        ("estimate", "cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5)
+        + ("--runs", 1),
+    ],
+)
+def test_a_step_too_large_for_the_case_is_refused_before_any_job(tmp_path, monkeypatch, command):
+    """sweep-cct, screen and estimate cct with --step 0.05 on Kundur (fastest time
+    constant 0.01 s) exited 0 with every job recorded as failed on the same step error:
+    they refuse the step before any job, as cct and place do."""
+
+    def dispatched(*a, **k):
+        raise AssertionError("jobs dispatched before the step was checked")
+
+    monkeypatch.setattr("stabctl.parallel.run_sweep", dispatched)
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    out = tmp_path / "records.jsonl"
+    args = [faults if a == "FAULTS" else out if a == "OUT" else a for a in command]
+    assert_error(
+        run(*args, "--step", 0.05),
+        "step 0.05 s is too large: the fastest time constant is 0.01 s (exc_con T_R row 1); "
+        "the predictor-corrector needs h < 0.02 s",
+    )
+    assert not out.exists()
+
+
+def test_paper_refuses_a_part_given_twice(tmp_path):
+    """`paper --only analytic --only analytic` ran (exit 0) where a repeated item of a list
+    option is refused (`omib -c 6 -c 6`)."""
+    out = tmp_path / "rep"
+    assert_error(
+        run("paper", "--only", "analytic", "--only", "analytic", "--out-dir", out),
+        "--only: analytic given twice (each part once)",
+    )
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [("--fault-cycles", 0), ("-c", 6, "-c", 0), (6, 0)])
+def test_omib_refuses_a_fault_of_no_length(args):
+    """`omib --fault-cycles 0` tabled a fault of no length as stable (exit 0) where
+    simulate refuses one cleared as it starts."""
+    res = run("omib", *args)
+    assert_error(res, " 0: cleared as it starts: a fault of no length would do nothing: give ")
+
+
+@pytest.mark.parametrize("args", [("eig", "kundur", "--report"), ("paper", "--only", "analytic")])
+def test_an_empty_directory_name_is_refused(tmp_path, monkeypatch, args):
+    """`eig kundur --report --out-dir ''` wrote its report into the current directory
+    (Path('') is '.'), exit 0: an empty directory name is refused, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    assert_error(
+        run(*args, "--out-dir", ""),
+        "--out-dir '': an empty directory name; give a directory (. for the current one)",
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("levels,bad", [("1,1e9", "1e+09"), ("1e-9", "1e-09"), ("1,-1", "-1")])
+def test_place_load_levels_outside_their_range_are_refused_before_any_work(
+    no_simulation, levels, bad
+):
+    """`place --load-levels 1e9` (or 1e-9) was refused only when its power flow failed
+    about 11 s later, by a message not naming --load-levels."""
+    assert_error(
+        run(*PLACE, "--load-levels", levels),
+        f"--load-levels {levels}: {bad} is outside [0.1, 10] (fractions of the base load",
+    )

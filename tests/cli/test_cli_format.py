@@ -74,3 +74,33 @@ def test_the_sweep_and_screening_tables_print_cct_at_their_tolerance(capsys):
     }
     print_screening(load_case("kundur"), [row], 1e-4)
     assert "bus 3 line to 101       0.1541   9.246    0.2  -" in capsys.readouterr().out
+
+
+def test_a_count_of_one_takes_the_singular():
+    """Messages said "1 contingencies", "1 branches", "1 seeds": a count and its noun agree
+    wherever a count is printed (`stabctl.errors.counted`)."""
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.cli.format import estimator_cct_lines
+    from stabctl.errors import counted
+    from stabctl.estimation.settings import PMUSettings
+
+    assert [counted(n, "contingency", "contingencies") for n in (0, 1, 2)] == [
+        "0 contingencies",
+        "1 contingency",
+        "2 contingencies",
+    ]
+    stats = {"mean": 9.0, "std": 0.0, "min": 9.0, "max": 9.0, "runs": 1, "failed": 0}
+    first = estimator_cct_lines({"kf": stats}, 3, 101, 5, PMUSettings(), 1, 0)[0]
+    assert ", 1 seed from 0 (cycles" in first, first
+    psse = Path(__file__).parents[1] / "data" / "psse"
+    with CliRunner().isolated_filesystem():
+        res = CliRunner().invoke(
+            main,
+            ["import-psse", str(psse / "smib_v33.raw"), str(psse / "smib.dyr"), "-o", "c.json"],
+        )
+    assert res.exit_code == 0, res.output
+    assert "wrote c.json: 2 buses, 1 branch, 2 machines, 0 exciters," in res.stdout

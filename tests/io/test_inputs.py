@@ -160,6 +160,40 @@ def test_outputs_that_are_devices_and_write_failures_end_in_one_error_line(tmp_p
     ]
 
 
+def _disk_full(*args, **kwargs):
+    import errno
+
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))  # as write(2): no file named
+
+
+def test_a_full_disk_as_a_sweep_takes_its_lock_names_the_output(tmp_path, monkeypatch):
+    """screen --out on a full disk said only "error: No space left on device": the pid
+    written in the output's lock file failed first, naming no file."""
+    monkeypatch.setattr("stabctl.locking.os.pwrite", _disk_full)
+    out = tmp_path / "sc.jsonl"
+    res = CliRunner().invoke(main, ["screen", "kundur", "--workers", "1", "--out", str(out)])
+    assert res.exit_code == 2, res.output
+    said = [x for x in res.stderr.splitlines() if not x.startswith(("stabctl: ", "  ("))]
+    assert said == [f"error: {out}: No space left on device"]  # (a compile notice aside)
+    assert not out.exists() and os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("where", ["lock", "figure"])
+def test_a_full_disk_in_paper_names_its_directory_and_leaves_none(tmp_path, monkeypatch, where):
+    """paper --out-dir NEW on a full disk said only "error: No space left on device" and
+    left NEW (with an empty work directory) behind; the directory is named, and those the
+    run created are removed again when they hold nothing."""
+    target = (
+        "stabctl.locking.os.pwrite" if where == "lock" else "stabctl.plotting.figures.save_figure"
+    )
+    monkeypatch.setattr(target, _disk_full)
+    out = tmp_path / "pap"
+    res = CliRunner().invoke(main, ["paper", "--only", "analytic", "--out-dir", str(out)])
+    assert res.exit_code == 2, res.output
+    assert res.stderr.strip().splitlines()[-1:] == [f"error: {out}: No space left on device"]
+    assert os.listdir(tmp_path) == []
+
+
 def test_a_plan_whose_file_cannot_be_written_is_still_shown(tmp_path, monkeypatch):
     """place --out on a full disk lost the whole run: the plan is printed first."""
     import errno
@@ -188,3 +222,58 @@ def test_plain_float_reads_ascii_numbers_only_and_minus_zero_as_zero():
     assert plain_float("1.5D0", fortran=True) == 1.5
     assert str(plain_float("-0")) == "0.0" and str(plain_float("-0.0e0")) == "0.0"
     assert plain_float("-2.5e-1") == -0.25
+
+
+def test_a_header_of_more_columns_than_the_table_has_is_refused_with_its_count(tmp_path):
+    """Finding twice-named columns was quadratic in the header's columns (200 000 took
+    most of a minute): a header of more columns than the table knows is refused first."""
+    path = _csv(tmp_path, "bus,far_bus" + ",x" * 5000 + "\n3,101\n", name="wide.csv")
+    with pytest.raises(
+        InputError, match=r"fault list wide\.csv:1: a header of 5002 columns, more than the 7"
+    ):
+        read_faults(path)
+    quoted = _csv(tmp_path, "bus,far_bus" + ',"x"' * 5000 + "\n3,101\n", name="q.csv")
+    with pytest.raises(InputError, match=r"q\.csv:1: a header of 5002 columns, more than the 7"):
+        read_faults(quoted)
+
+
+def test_a_line_longer_than_a_row_can_be_is_refused_by_its_length(tmp_path):
+    """The csv module split a whole line into fields, gigabytes for a line of millions of
+    quoted fields; a line longer than the table's columns at the csv field limit each is
+    refused before it is split."""
+    import csv
+
+    cap = 7 * (2 * csv.field_size_limit() + 3)
+    path = _csv(tmp_path, "bus,far_bus" + ',"xy"' * (cap // 5 + 1) + "\n3,101\n", name="l.csv")
+    with pytest.raises(InputError, match=rf"l\.csv:1: a line of \d+ characters.*at most {cap}"):
+        read_faults(path)
+    rows = _csv(tmp_path, 'bus,far_bus\n3,"' + "1" * (cap + 5) + '"\n', name="r.csv")
+    with pytest.raises(InputError, match=rf"r\.csv:2: a line of {cap + 10} characters"):
+        read_faults(rows)
+
+
+def test_a_fault_list_stops_at_its_first_error(tmp_path):
+    """The whole file was read into rows before the first was checked: a fault listed twice
+    on line 3 was reported only after the rest of the file (here, after 100 000 more
+    rows, a line that is not UTF-8)."""
+    path = tmp_path / "f.csv"
+    path.write_bytes(b"bus,far_bus\n3,101\n3,101\n" + b"13,\n" * 100_000 + b"13,\xe9\n")
+    with pytest.raises(InputError, match=r"f\.csv:3: fault 3-101 listed twice"):
+        read_faults(path)
+
+
+def test_a_fault_list_keeps_a_few_hundred_bytes_a_fault(tmp_path):
+    """Reading a fault list took about 70 times the file's size in memory (every row's
+    fields kept); now only the faults and their lines are kept."""
+    import tracemalloc
+
+    n = 20_000
+    path = _csv(tmp_path, "bus,far_bus\n" + "".join(f"{i + 1},{i + 2}\n" for i in range(n)))
+    tracemalloc.start()
+    try:
+        faults = read_faults(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(faults) == n
+    assert peak / n < 400, f"{peak / n:.0f} bytes a fault"

@@ -685,7 +685,7 @@ def test_csvgn1_generator_imports_as_a_compensator_and_round_trips(tmp_path):
     svc = RUNS / "CSVGN1"
     res = run("import-psse", svc / "3_BUS_System_SVC.raw", svc / "3_BUS_System_SVC.dyr", "-o", out)
     assert res.exit_code == 0, res.output
-    assert "1 machines" in res.output and "1 static var compensators" in res.output
+    assert "1 machine," in res.output and "1 static var compensator" in res.output
     case = load_case(out)
     assert case.svcs.equals(
         load_psse(svc / "3_BUS_System_SVC.raw", svc / "3_BUS_System_SVC.dyr").svcs
