@@ -19,7 +19,6 @@ Run: python benchmarks/bench_screening.py [--case miniwecc] [--lines] [--search 
 """
 
 import argparse
-import json
 import os
 import resource
 import statistics
@@ -32,7 +31,7 @@ from pathlib import Path
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from stabctl.parallel import RunnerOptions  # noqa: E402
+from stabctl.parallel import RunnerOptions, read_records  # noqa: E402
 from stabctl.stability.cct import SearchOptions  # noqa: E402
 from stabctl.stability.screening import screen  # noqa: E402
 
@@ -50,16 +49,6 @@ def _cpu_s() -> float:
         resource.getrusage(resource.RUSAGE_CHILDREN),
     )
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
-
-
-def _records(path: Path) -> dict:
-    """The records of a JSON-lines file by key (the last of each key)."""
-    recs = {}
-    for line in path.read_text().splitlines():
-        if line.strip():
-            rec = json.loads(line)
-            recs[rec["key"]] = rec
-    return recs
 
 
 def _outcome(rec: dict) -> tuple:
@@ -118,7 +107,7 @@ def main(argv=None):
             runner=RunnerOptions(args.workers, scheduler),
         )
         wall, cpu = time.perf_counter() - wall, _cpu_s() - cpu
-        recs = _records(out)
+        recs = read_records(out, whole="the screening's records")
     verdicts = Counter(r["verdict"] for r in rows)
     ok = [recs[r["key"]] for r in rows if r["status"] == "ok"]
     bus = [r for r in ok if r["inputs"]["far_bus"] is None]
@@ -143,7 +132,7 @@ def main(argv=None):
             f"{'met' if value <= limit else 'NOT met'}"
         )
     if args.compare:
-        before = _records(Path(args.compare))
+        before = read_records(args.compare, whole="--compare")
         keys = [r["key"] for r in rows if r["key"] in before]
         same = sum(_outcome(before[k]) == _outcome(recs[k]) for k in keys)
         print(
