@@ -434,7 +434,8 @@ def sweep_cct(
     default=True,
     show_default=True,
     help="With --lines, start each branch fault's search from its bus fault's CCT (fewer "
-    "runs where a trip moves the CCT little; --no-guess: every search from scratch).",
+    "runs where a trip moves the CCT little; none where the trip cuts machines off; "
+    "--no-guess: every search from scratch).",
 )
 @tol_options(0.5)
 @out_file_option(
@@ -480,7 +481,8 @@ def screen(
     run recorded as failed is shown as recorded, marked so, and not run again unless
     --retry-failed.  With --lines the bus faults run first, then each branch fault at a
     screened bus starts its search from that bus fault's CCT (its cell and neighbours;
-    a guess that finds no cell there leaves the search as without it): the same CCTs
+    a guess that finds no cell there leaves the search as without it; none where the
+    trip cuts machines off each other, which the bus fault kept): the same CCTs
     where the verdict is monotone in the clearing time, in fewer runs where a trip
     moves the CCT little (on ACTIVSg2000 half the runs of such a search; Kundur's trips
     move its CCTs up to 0.24 s and the guesses cost runs there: --no-guess).

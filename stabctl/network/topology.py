@@ -14,7 +14,14 @@ from scipy.sparse.csgraph import connected_components
 from stabctl.case import Case
 from stabctl.errors import CaseError
 
-__all__ = ["OPEN_X", "bus_islands", "dead_buses", "machine_islands", "without_dead_islands"]
+__all__ = [
+    "OPEN_X",
+    "bus_islands",
+    "dead_buses",
+    "machine_islands",
+    "splits_machines",
+    "without_dead_islands",
+]
 
 #: PST opens a branch by giving it this reactance (its charging stays); a branch at a
 #: tenth of it or more is open for the topology
@@ -65,6 +72,28 @@ def machine_islands(case: Case) -> np.ndarray:
     _, first, inverse = np.unique(label, return_index=True, return_inverse=True)
     rank = np.argsort(np.argsort(first))
     return rank[inverse].astype(np.int64)
+
+
+def splits_machines(case: Case, opened) -> bool:
+    """Whether opening branch rows `opened` cuts machines off each other: some machines
+    that share an island of the case's network (`machine_islands`) no longer do.
+
+    Parameters
+    ----------
+    case : Case
+        The network and its machines.
+    opened : sequence of int
+        0-based branch rows opened (e.g. a fault's cleared circuit and its further trips).
+
+    Returns
+    -------
+    bool
+    """
+    keep = case.branches.x < OPEN_X / 10
+    keep[np.asarray(opened, np.int64)] = False
+    before = bus_islands(case)[case.bus_indices(case.machines.bus)]
+    after = bus_islands(case, keep)[case.bus_indices(case.machines.bus)]
+    return np.unique(after).size > np.unique(before).size
 
 
 def dead_buses(case: Case, keep: np.ndarray | None = None) -> np.ndarray:

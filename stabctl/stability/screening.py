@@ -12,7 +12,8 @@ CCT then starts from that CCT (`SearchOptions.guess_s`, recorded in its job's in
 branch faults with a CCT, half in the bus fault's cell, 86 % within 5 ms), so the search
 closes its cell in a few runs instead of bracketing from 0.1 s.  A guess changes no cell
 where the verdict is monotone in the clearing time (`benchmarks/bench_cct.py
---activsg-guess`).
+--activsg-guess`).  A branch fault whose trip cuts machines off each other (a generator's
+step-up transformer, a radial tie) gets none: its bus fault kept those machines.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from stabctl.case import Case
 from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import AboveSearchLimit, InsecureContingency
 from stabctl.io import load_case
+from stabctl.network.topology import splits_machines
 from stabctl.parallel import RunnerOptions
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs, fault_of_inputs
 
@@ -74,6 +76,18 @@ def _guessed(job: parallel.Job, guess: float | None) -> parallel.Job:
     if guess is None:
         return job
     return dataclasses.replace(job, inputs={**job.inputs, "guess_s": guess})
+
+
+def _guess(case: Case, fault: LineFault, bus_cct: float | None) -> float | None:
+    """A branch fault's guess: its bus fault's CCT, None when its clearing cuts machines
+    off each other (`stabctl.network.topology.splits_machines`): the bus fault kept
+    them, the branch fault loses them, so its CCT says nothing of this one's (ACTIVSg2000:
+    237 such faults robust at t_max where their bus faults' CCTs were 0.04-0.35 s)."""
+    if bus_cct is None:
+        return None
+    opened = [case.circuit_row(fault.bus, fault.far_bus, fault.circuit)]
+    opened += [case.circuit_row(a, b) for a, b in fault.trips]
+    return None if splits_machines(case, opened) else bus_cct
 
 
 def screening_faults(
@@ -256,7 +270,11 @@ def screen(
                 for f, j in zip(faults, jobs)
                 if f.far_bus is None
             }
-            second = [_guessed(j, bus_cct[f.bus]) for f, j, x in zip(faults, jobs, later) if x]
+            second = [
+                _guessed(j, _guess(case, f, bus_cct[f.bus]))
+                for f, j, x in zip(faults, jobs, later)
+                if x
+            ]
             reports.append(sweep(second, f"2 of 2: {len(second)} branch faults"))
     records = {k: rec for r in reports for k, rec in r.records.items()}
     before = {k for r in reports for k in r.failed_before_keys}

@@ -22,7 +22,7 @@ from stabctl.estimation.models import machine_models
 from stabctl.estimation.pmu import machine_pmus
 from stabctl.io import load_case
 from stabctl.io.psse import load_psse
-from stabctl.network.topology import bus_islands, machine_islands
+from stabctl.network.topology import bus_islands, machine_islands, splits_machines
 from stabctl.storage.control import relative_speeds
 from stabctl.storage.devices import pack, uniform_fleet
 
@@ -55,6 +55,19 @@ def split_kundur(kundur):
 def test_opening_the_tie_lines_splits_kundur_into_its_two_areas(kundur):
     """Machines 1, 2 and 11, 12 form two islands."""
     assert list(machine_islands(split_kundur(kundur))) == [0, 0, 1, 1]
+
+
+def test_which_openings_cut_machines_off_each_other(kundur):
+    """Machine 1's only branch (1-10) cuts it off; both circuits of the tie 3-101 and
+    the two of 13-101 split the areas; one circuit of the tie, or 3-4, do not."""
+    row = kundur.circuit_row
+    assert splits_machines(kundur, [row(1, 10)])
+    assert splits_machines(kundur, [row(3, 101, 1), row(3, 101, 2)])
+    assert not splits_machines(kundur, [row(3, 101, 1)])
+    assert not splits_machines(kundur, [row(3, 4)])
+    assert not splits_machines(kundur, [])
+    split = split_kundur(kundur)  # already apart: opening more inside an area splits nothing
+    assert not splits_machines(split, [row(3, 4)])
 
 
 def test_speed_estimators_refuse_islands_and_infinite_buses(kundur):
