@@ -278,9 +278,28 @@ def relative_to_islands(values, t, inertia, island, partitions) -> np.ndarray:
     return out
 
 
-def judged_deviation(angle, t, inertia, island, partitions) -> np.ndarray:
-    """abs(delta_i - delta_COI) of each machine the loss-of-synchronism criterion judges
-    at each time, 0 for the others (module docstring).
+def judged_at(t: np.ndarray, partitions) -> np.ndarray:
+    """Whether the loss-of-synchronism criterion judges each machine at each time
+    (`Partition.judged` of the stage at that time).
+
+    Parameters
+    ----------
+    t : ndarray, shape (n_t,)
+        Times, s.
+    partitions : sequence of Partition
+        A run's partitions (not empty).
+
+    Returns
+    -------
+    ndarray of bool, shape (n_t, n_mac)
+    """
+    return np.stack([p.judged for p in partitions])[stage_at(t, partitions)]
+
+
+def judged_relative(angle, t, inertia, island, partitions) -> np.ndarray:
+    """delta_i - delta_COI of each machine the loss-of-synchronism criterion judges at
+    each time, against the COI of the judged machines of its island, 0 for the others
+    (module docstring).
 
     Parameters
     ----------
@@ -300,12 +319,35 @@ def judged_deviation(angle, t, inertia, island, partitions) -> np.ndarray:
         rad.
     """
     if not partitions:
-        return np.abs(relative_to_islands(angle, t, inertia, island, partitions))
+        return relative_to_islands(angle, t, inertia, island, partitions)
     judging = [
         replace(p, inertia=criterion_inertia(p.inertia, p.island, p.judged)) for p in partitions
     ]
-    dev = np.abs(relative_to_islands(angle, t, inertia, island, judging))
-    return dev * np.stack([p.judged for p in partitions])[stage_at(t, partitions)]
+    return relative_to_islands(angle, t, inertia, island, judging) * judged_at(t, partitions)
+
+
+def judged_deviation(angle, t, inertia, island, partitions) -> np.ndarray:
+    """abs(delta_i - delta_COI) of each machine the loss-of-synchronism criterion judges
+    at each time, 0 for the others (`judged_relative`).
+
+    Parameters
+    ----------
+    angle : ndarray, shape (n_t, n_mac)
+        Rotor angles, rad.
+    t : ndarray, shape (n_t,)
+        Their times, s.
+    inertia, island : ndarray, shape (n_mac,)
+        COI weights and islands before the disturbance.
+    partitions : sequence of Partition
+        The run's partitions; empty: every machine judged against its island before the
+        disturbance.
+
+    Returns
+    -------
+    ndarray, shape (n_t, n_mac)
+        rad.
+    """
+    return np.abs(judged_relative(angle, t, inertia, island, partitions))
 
 
 def machine_islands_log(

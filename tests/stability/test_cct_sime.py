@@ -202,9 +202,9 @@ def counting_runs(sim):
 def test_a_gentle_run_at_t_max_makes_a_fault_robust_in_one_run(bus, far_bus, t_max):
     """Kundur's bus-3 fault (CCT 0.238 s) and line 3-101 (0.154 s) under a t_max below
     their CCTs: the bisection's check at 0 and its doubling take 3 runs to the verdict;
-    sime's first run, at t_max, is stable with no machine swung 1 rad from its angle to
+    sime's first run, at t_max, is stable with no machine swung 1.5 rad from its angle to
     the COI before the fault (0.45-0.71 rad), which settles it."""
-    from stabctl.stability.cct import GENTLE_SWING, largest_swing
+    from stabctl.stability.cct import ROBUST_SWING, largest_swing
 
     sim = counting_runs(Simulator(load_case("kundur")))
     fault = LineFault(bus, far_bus)
@@ -215,7 +215,52 @@ def test_a_gentle_run_at_t_max_makes_a_fault_robust_in_one_run(bus, far_bus, t_m
         )
         assert sim.runs[0] == runs
     res = sim.run(fault.events(t_max), fault.t_fault + 5.0)
-    assert 0.3 < largest_swing(res) < GENTLE_SWING
+    assert 0.3 < largest_swing(res) < ROBUST_SWING
+
+
+def test_the_swing_of_a_run_that_cuts_a_machine_off_is_that_of_the_machines_judged():
+    """Kundur's fault at bus 1 on line 1-10, machine 1's only branch: the machine is lost
+    from the fault's start (not judged), so the swing is the largest move of machines 2,
+    11 and 12 against their own centre of inertia (H*MVA weights) from their angles to
+    the four machines' before the fault."""
+    from stabctl.stability.cct import largest_swing
+
+    sim = Simulator(load_case("kundur"))
+    fault = LineFault(1, 10)
+    res = sim.run(fault.events(0.3), 3.0)
+    assert res.partitions and not res.judged[0] and res.judged[1:].all()
+    w, a = res.inertia, res.angle
+    rel0 = a[0] - a[0] @ w / w.sum()
+    kept = a[:, 1:] - (a[:, 1:] @ w[1:] / w[1:].sum())[:, None]
+    moved = np.abs(kept - rel0[1:])[res.t >= fault.t_fault]
+    before = np.abs(a - (a @ w / w.sum())[:, None] - rel0)[res.t < fault.t_fault]
+    assert largest_swing(res) == pytest.approx(max(moved.max(), before.max()), abs=1e-12)
+
+
+def test_a_lost_machine_s_slip_while_the_fault_is_on_is_no_swing():
+    """Three machines of equal weight, machine 0 cut off by the clearing at 1 s and so
+    not judged from the fault's start (0.5 s): it races 3 rad ahead while the fault is
+    on, the others swing 0.3 rad about their own centre of inertia; the swing is 0.3
+    rad (machine 0 against all three would be 2 rad)."""
+    from types import SimpleNamespace
+
+    from stabctl.dynamics.partition import Partition
+    from stabctl.stability.cct import largest_swing
+
+    one, everyone = np.ones(3), np.ones(3, bool)
+    lost = np.array([False, True, True])
+
+    def stage(t_s, island, judged):
+        return Partition(t_s, np.array(island), one, judged, np.zeros(3, bool))
+
+    parts = (stage(0.0, [0, 0, 0], everyone), stage(0.5, [0, 0, 0], lost))
+    parts += (stage(1.0, [1, 0, 0], lost),)
+    t = np.array([0.0, 0.25, 0.75, 1.25, 1.75])
+    angle = np.array([[0, 0, 0], [0, 0, 0], [3, 0.3, -0.3], [6, -0.3, 0.3], [9, 0.2, -0.2]])
+    res = SimpleNamespace(
+        t=t, angle=angle.astype(float), inertia=one, island=np.zeros(3, int), partitions=parts
+    )
+    assert largest_swing(res) == pytest.approx(0.3, abs=1e-12)
 
 
 def test_a_wide_swing_at_t_max_leaves_the_verdict_to_the_doubling(monkeypatch):
@@ -225,7 +270,7 @@ def test_a_wide_swing_at_t_max_leaves_the_verdict_to_the_doubling(monkeypatch):
     the bisection's cell (line 3-101)."""
     import stabctl.stability.cct as cct
 
-    monkeypatch.setattr(cct, "GENTLE_SWING", 0.0)
+    monkeypatch.setattr(cct, "ROBUST_SWING", 0.0)
     sim = counting_runs(Simulator(load_case("kundur")))
     opts = SearchOptions(method="sime", t_max=0.2)
     assert search_outcome(sim, LineFault(3, None), opts) == "AboveSearchLimit"
