@@ -506,7 +506,9 @@ def _resume(kn, grid, sa, ds, opts, w, rec, x_a, at):
     sw.targets(sa, ds.mode, w.a.r, w.a.v, w.a.acc, ds.target)
     sw.powers_now(sa, ds)
     sw.inject(sa, ds.P, kn.kept.S_extra, x_a)
-    dx_a = np.empty_like(x_a)
+    # slots no kernel writes (the converters' memory, a model's unused slots) must stay 0:
+    # uninitialised, they fed whatever the memory held into x_b, xp and the error test
+    dx_a = np.zeros_like(x_a)
     ok = _evaluate(kn, x_a, grid.interval[k], NO_BUS_VOLTAGES, dx_a) >= 0
     sw.delivered(sa, ds.P, kn.kept, w.P_a)
     return ok, dx_a
@@ -521,8 +523,7 @@ def _heun(kn, sa, ds, w, x_a, dx_a, hh, stage, want, dx_j):
     was at x_a), the devices' powers advanced (their energy left as it is), the exciters
     of `stabctl.dynamics.subinterval` in sub-steps: (network solved, corrected state);
     dx_j is written with the derivatives at the predictor (network of `stage`)."""
-    xp = x_a + hh * dx_a  # (a new array: a workspace buffer here made commanded WECC
-    # batteries' runs differ from process to process)
+    xp = x_a + hh * dx_a
     if w.sub:
         sub.sub_heun_start(kn.p, x_a, kn.out.exc_in, w.u_a, w.phi_a, hh, xp)
     if sa.pmax.size > 0:  # (a call passing the devices' arrays costs even without devices)

@@ -5,6 +5,7 @@ response of the plant's chain of four first-order lags, the converter's current 
 P <= v Imax, and the REECA1 freeze below Vdip."""
 
 import math
+import platform
 
 import numpy as np
 import pytest
@@ -175,3 +176,56 @@ def test_state_of_charge_stops_a_battery_empty_or_full(kundur, command):
     step = lambda t: np.where(t >= 1.0, command, 0.0) * np.ones(4)  # noqa: E731
     unlimited = commanded(sim, uniform_fleet(case, 5, model="wecc"), step, 4.0)
     assert np.all(np.abs(unlimited.pesd[-1]) > 0.9 * rating)  # without En: at its rating
+
+
+#: a commanded run whose commands fall between grid points (5 ms step, frames every 1/60 s,
+#: 12.3 ms latency: every command splits a step), its results saved to the file argv[1]
+_SPLIT_RUN = """
+import sys
+import numpy as np
+from stabctl.dynamics.driver import CommandFrames, Simulator
+from stabctl.io import load_case
+from stabctl.storage.control import ExternalCommands
+from stabctl.storage.devices import StorageFleet, uniform_fleet
+
+case = load_case("kundur")
+ext = StorageFleet(uniform_fleet(case, 5, model="wecc").devices, ExternalCommands(), model="wecc")
+modes = lambda t, part: np.where(t >= 0.3, 1.0, -0.5) * np.ones(4)
+frames = CommandFrames(np.arange(0.0, 1.0, 1 / 60), modes, latency=0.0123)
+res = Simulator(case).run_commanded([], 1.0, ext, frames)
+np.savez(sys.argv[1], speed=res.speed, angle=res.angle, pesd=res.pesd, vmag=res.vmag)
+"""
+
+
+@pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="MALLOC_PERTURB_ is glibc's")
+def test_commanded_batteries_read_no_uninitialised_memory(tmp_path):
+    """A command between grid points splits the step, and the model is evaluated again
+    there: the derivatives of the slots no model writes (the converters' memory such as
+    REECA1's held PI states, REECD1's slots of a REECA1) must be 0, not whatever the
+    memory held.  glibc's MALLOC_PERTURB_ fills each allocation with a byte of its
+    choosing (0x7f, 0xfe): the runs are bit for bit those of an ordinary process, and
+    finite (with the derivatives left unwritten, 0x7f7f... = 1.4e306 per slot changed
+    them)."""
+    import os
+    import subprocess
+    import sys
+
+    runs = []
+    for perturb in (None, "128", "1"):
+        env = {k: v for k, v in os.environ.items() if k != "MALLOC_PERTURB_"}
+        if perturb is not None:
+            env["MALLOC_PERTURB_"] = perturb
+        out = tmp_path / f"run{perturb}.npz"
+        done = subprocess.run(
+            [sys.executable, "-c", _SPLIT_RUN, str(out)],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=900,
+        )
+        assert done.returncode == 0, done.stderr
+        runs.append(dict(np.load(out)))
+    for name, ref in runs[0].items():
+        assert np.all(np.isfinite(ref)), name
+        for other in runs[1:]:
+            np.testing.assert_array_equal(other[name], ref, err_msg=name)
