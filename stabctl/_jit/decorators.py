@@ -2,7 +2,8 @@
 only from other kernels).
 
 Importing this module checks the on-disk cache first (`stabctl._jit.cache.
-ensure_fresh_cache`), so that no kernel is declared, let alone loaded, against a stale one.
+ensure_fresh_cache`), so that no kernel is declared, let alone loaded, against a stale one,
+and refuses numba's compiler turned off (ImportError, `stabctl._jit.environment.JIT_OFF`).
 """
 
 from __future__ import annotations
@@ -11,7 +12,10 @@ import numba
 from numba.core.registry import CPUDispatcher
 
 from stabctl._jit.cache import ensure_fresh_cache, guard
+from stabctl._jit.environment import JIT_OFF, jit_disabled
 
+if numba.config.DISABLE_JIT:  # compiled-only kernels cannot be plain Python functions
+    raise ImportError(JIT_OFF.format(value=jit_disabled() or "1"))
 ensure_fresh_cache()
 
 #: numba's error model of every kernel: "numpy", a float division by zero gives inf or nan

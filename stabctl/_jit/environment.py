@@ -5,8 +5,10 @@ numba reads its ``NUMBA_*`` variables once, as it is imported.  A value it canno
 (``NUMBA_OPT=x``) is ignored after a warning that prints a whole traceback;
 ``NUMBA_NUM_THREADS=0`` stops the import with a ValueError that does not name the
 variable; a ``NUMBA_CACHE_DIR`` that is not a directory is passed over without a word, the
-kernels then cached elsewhere.  `environment_problem` says each of these in one line
-naming the variable, and the command refuses to run (`stabctl.cli`).
+kernels then cached elsewhere; ``NUMBA_DISABLE_JIT`` on leaves the kernels Python
+functions, which stabctl's compiled-only kernels cannot be (`JIT_OFF`).
+`environment_problem` says each of these in one line naming the variable, and the
+command refuses to run (`stabctl.cli`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,34 @@ _UNPARSED = re.compile(
 )
 
 
+#: why stabctl does not run with numba's compiler off (`environment_problem`; importing a
+#: kernel module then raises ImportError, `stabctl._jit.decorators`)
+JIT_OFF = (
+    "NUMBA_DISABLE_JIT={value!r} in the environment: stabctl's kernels run only compiled "
+    "(some have no Python entry point, and a run in pure Python would take hours); unset it"
+)
+
+
+def jit_disabled(environ: Mapping[str, str] | None = None) -> str:
+    """The value of ``NUMBA_DISABLE_JIT`` when it turns numba's compiler off (a whole
+    number other than 0, as numba reads it), else ''.
+
+    Parameters
+    ----------
+    environ : mapping, optional
+        The environment (default ``os.environ``).
+
+    Returns
+    -------
+    str
+    """
+    value = (os.environ if environ is None else environ).get("NUMBA_DISABLE_JIT")
+    try:
+        return value if value is not None and int(value) != 0 else ""
+    except ValueError:  # numba warns and leaves the compiler on: environment_problem
+        return ""
+
+
 def _not_a_directory(value: str) -> str:
     """The existing file that stops `value` from being (or becoming) a directory, or ''."""
     path = Path(value)
@@ -38,7 +68,8 @@ def _not_a_directory(value: str) -> str:
 def environment_problem(environ: Mapping[str, str] | None = None) -> str:
     """What is wrong with numba's settings in the environment, in one line ('' if nothing).
 
-    Checked: ``NUMBA_NUM_THREADS`` a whole number >= 1; ``NUMBA_CACHE_DIR`` a directory,
+    Checked: ``NUMBA_DISABLE_JIT`` not on (`JIT_OFF`); ``NUMBA_NUM_THREADS`` a whole
+    number >= 1; ``NUMBA_CACHE_DIR`` a directory,
     or a path where one can be made; then numba is imported (if it is not yet), and a
     variable it could not parse is named with numba's reason.
 
@@ -54,6 +85,8 @@ def environment_problem(environ: Mapping[str, str] | None = None) -> str:
         threads >= 1 (unset it for one per core)"``, or ''.
     """
     env = os.environ if environ is None else environ
+    if jit_disabled(env):
+        return JIT_OFF.format(value=env["NUMBA_DISABLE_JIT"])
     threads = env.get("NUMBA_NUM_THREADS")
     if threads is not None:
         try:

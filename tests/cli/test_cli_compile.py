@@ -161,6 +161,7 @@ def _with_env(*args, **env):
         ("NUMBA_NUM_THREADS", "0", "numba needs a whole number of threads >= 1"),
         ("NUMBA_OPT", "x", "supported values are 0, 1, 2, 3, and 'max'"),
         ("NUMBA_CACHE_DIR", "FILE", "is not a directory"),
+        ("NUMBA_DISABLE_JIT", "1", "stabctl's kernels run only compiled"),
     ],
 )
 @pytest.mark.parametrize("args", [["cases"], ["compile", "--check"]])
@@ -169,7 +170,8 @@ def test_a_numba_setting_numba_cannot_use_is_one_error_line(tmp_path, name, valu
     a traceback (numba's ValueError, not naming the variable); NUMBA_OPT=x printed numba's
     warning with a whole traceback and ran; a NUMBA_CACHE_DIR that is a file was passed
     over by numba (the kernels cached in __pycache__) while `compile --check` called the
-    file the cache.  Each is one error line naming the variable, exit status 2."""
+    file the cache; NUMBA_DISABLE_JIT=1 stopped every command with a TypeError from a
+    kernel's declaration.  Each is one error line naming the variable, exit status 2."""
     if value == "FILE":
         value = str(tmp_path / "keep.csv")
         (tmp_path / "keep.csv").write_text("keep\n")
@@ -178,6 +180,30 @@ def test_a_numba_setting_numba_cannot_use_is_one_error_line(tmp_path, name, valu
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"error: {name}="), run.stderr
     assert needle in lines[0] and run.stdout == ""
+
+
+def test_the_library_refuses_numba_s_compiler_off_by_name():
+    """`import stabctl` and a simulator with NUMBA_DISABLE_JIT=1: an ImportError naming
+    the variable (it was a TypeError from a kernel's declaration); NUMBA_DISABLE_JIT=0
+    runs."""
+    code = "import stabctl; stabctl.Simulator"
+    off = subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "NUMBA_DISABLE_JIT": "1"},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert off.returncode == 1
+    assert "ImportError: NUMBA_DISABLE_JIT='1' in the environment" in off.stderr
+    on = subprocess.run(
+        [sys.executable, "-c", code],
+        env={**os.environ, "NUMBA_DISABLE_JIT": "0"},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert on.returncode == 0, on.stderr
 
 
 def test_compile_check_names_the_cache_numba_really_uses(tmp_path):
