@@ -263,14 +263,15 @@ def screening_brackets(path, case: str, digest: str) -> dict:
     ------
     InputError
         A file that is not a regular file, not sweep records, a line that is not a whole
-        record (a damaged or cut line: the file must be whole), a record of another case or
+        record (a damaged or cut line: the file must be whole) or one no CCT search can
+        have written (`stabctl.stability.cct.cct_record_problem`), a record of another case or
         of other content of the case (its line named,
         `stabctl.parallel.check_records_case`), a malformed screening record, or records
         that bracket no fault.
     """
     from stabctl.io.inputs import input_file
     from stabctl.parallel import check_records_case, read_records
-    from stabctl.stability.cct import LineFault
+    from stabctl.stability.cct import LineFault, cct_record_problem
     from stabctl.stability.screening import ABOVE, verdict
 
     try:
@@ -278,7 +279,7 @@ def screening_brackets(path, case: str, digest: str) -> dict:
         check_records_case(
             path, {case: digest}, f"give the records of a screening of {case} as it is now"
         )
-        records = read_records(path, whole="screening records")
+        records = read_records(path, whole="screening records", check=cct_record_problem)
     except InputError:  # it names the file
         raise
     except (OSError, ValueError) as exc:

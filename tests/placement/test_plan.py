@@ -349,8 +349,12 @@ def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(
         "inputs": {"esd_pct": None},
         "result": {
             "fault": {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []},
+            "cct_s": 0.155,
+            "cct_cycles": 9.3,
             "t_stable_s": 0.155,
             "t_unstable_s": 0.16,
+            "n_simulations": 12,
+            "separated_machines": [1],
         },
     }
     bus = {
@@ -366,6 +370,12 @@ def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(
     failed = {"key": "k4", "status": "failed", "inputs": {"esd_pct": None}, "error": "x"}
     rec.write_text("\n".join(json.dumps(r) for r in (ok, bus, stored, failed)) + "\n")
     assert screening_brackets(rec, "kundur", "any") == {"3-101": (0.155, 0.16), "1": (0.155, 0.16)}
+    # a record no search can have written (a CCT NaN): the file is refused, as sweep-cct
+    # sets such a line aside as damaged
+    damaged = {**ok, "key": "k5", "result": {**ok["result"], "cct_s": float("nan")}}
+    rec.write_text("\n".join(json.dumps(r) for r in (ok, damaged)) + "\n")
+    with pytest.raises(InputError, match=r"s\.jsonl.*2.*result\.cct_s NaN is not a clearing"):
+        screening_brackets(rec, "kundur", "any")
     csv = tmp_path / "f.csv"
     csv.write_text(
         "bus,far_bus,required_clearing_cycles,target_cct_s\n3,101,6,\n1,,,0.3\n13,101,,\n"
