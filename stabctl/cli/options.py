@@ -1096,18 +1096,26 @@ def given_options(*names: str) -> list[str]:
     -------
     list of str
         Those given, by their first long option name (``--far-bus``; ``--out`` for
-        ``out_path``), in the order of `names`; empty outside a command.
+        ``out_path``; an on/off flag as given, ``--no-guess``), in the order of `names`;
+        empty outside a command.
     """
     ctx = click.get_current_context(silent=True)
     if ctx is None:
         return []
     params = {p.name: p for p in ctx.command.params}
     return [
-        _option_name(params[name])
+        _given_name(params[name], ctx.params[name])
         for name in names
         if name in ctx.params
         and ctx.get_parameter_source(name) is click.core.ParameterSource.COMMANDLINE
     ]
+
+
+def _given_name(param: click.Parameter, value) -> str:
+    """How a message names an option given on the command line: an on/off flag's off
+    form when that was given (``--no-guess``), else `_option_name`."""
+    off = [o for o in getattr(param, "secondary_opts", ()) if o.startswith("--")]
+    return off[0] if off and value is False else _option_name(param)
 
 
 def refuse_given(names: tuple[str, ...], reason: str) -> None:

@@ -491,6 +491,8 @@ def screen(
     from stabctl.parallel import RunnerOptions
     from stabctl.stability.screening import screen as run_screen
 
+    if not lines:
+        refuse_given(("guess",), "without --lines (only branch faults start from a guess)")
     case = load_case(case_name)
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")

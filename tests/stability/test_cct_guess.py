@@ -141,3 +141,21 @@ def test_cli_screen_without_guesses_and_with_each_circuit_named(tmp_path):
     table = CliRunner().invoke(main, args)  # read back: nothing run again
     assert table.exit_code == 0 and "0 run now" in table.output
     assert "bus 3 line to 101 #2" in table.output and "bus 3 line to 101 " in table.output
+
+
+@pytest.mark.parametrize("flag", ["--guess", "--no-guess"])
+def test_cli_screen_refuses_a_guess_setting_without_branch_faults(tmp_path, flag):
+    """`stabctl screen` without --lines has no branch fault to start from a guess: either
+    form of the flag is refused by name (it ran, the flag dropped), nothing written."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    out = tmp_path / "s.jsonl"
+    res = CliRunner().invoke(main, ["screen", "kundur", "--buses", "3", flag, "--out", str(out)])
+    assert res.exit_code == 2
+    assert (
+        res.output
+        == f"error: {flag} given without --lines (only branch faults start from a guess)\n"
+    )
+    assert not out.exists()
