@@ -52,6 +52,7 @@ import socket
 import stat
 import sys
 import tempfile
+import textwrap
 import threading
 import time
 import traceback
@@ -1529,6 +1530,7 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
 
     digest = package_digest()
     lost: list[str] = []
+    address = client.scheduler.address  # (named when the cluster is gone)
     try:
         futures = {
             client.submit(
@@ -1556,23 +1558,24 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             except InputError:  # a worker running another stabctl: no loss of the cluster
                 raise
             except Exception as exc:  # noqa: BLE001 - the cluster lost the job: not a result
-                lost.append(f"{type(exc).__name__}: {' '.join(str(exc).split())[:120]}")
+                said = textwrap.shorten(" ".join(str(exc).split()), 160, placeholder=" ...")
+                lost.append(f"{type(exc).__name__}: {said}")
                 continue
             finally:
                 fut.release()  # the scheduler forgets it: never run again
             yield rec
         if lost:
             raise SweepIncomplete(
-                f"{len(lost)} of {len(jobs)} jobs not run: the Dask cluster lost them "
-                f"({lost[0]}); the finished records are kept, and the same command runs "
-                "the rest"
+                f"{len(lost)} of {len(jobs)} jobs not run: the Dask cluster at {address} "
+                f"lost them ({lost[0]}); the finished records are kept, and the same "
+                "command runs the rest"
             )
     except _NoWorker:
         left = [j.key for j in futures.values()]
         more = f" and {len(left) - 3} more" if len(left) > 3 else ""
         raise SweepIncomplete(
             f"{len(left) + len(lost)} of {len(jobs)} jobs not run: the Dask cluster at "
-            f"{client.scheduler.address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
+            f"{address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
             f"last one died or left; not run: {', '.join(left[:3])}{more}); the finished "
             "records are kept, and the same command, once workers are back, runs the rest"
         ) from None
