@@ -501,7 +501,7 @@ class StreamServer:
                 peer,
                 f"{_asked(asked)}, then no command for {self.guard.timeout:g} s"
                 if asked
-                else f"silent for {self.guard.timeout:g} s",
+                else f"{_ignored(me.ignored, 'silent')} for {self.guard.timeout:g} s",
             )
         except OSError:  # the peer vanished mid-session
             dropped = False
@@ -519,6 +519,8 @@ class StreamServer:
             )
         elif ended is None and asked and not dropped:
             self._refuse(peer, f"{_asked(asked)}, then closed the connection")
+        elif ended is None and not dropped and not me.commanded:  # a port scan, a stranger
+            self._refuse(peer, _ignored(me.ignored, "closed the connection"))
         if ended is not None:
             why, shown = ended
             session = Session(
@@ -552,6 +554,7 @@ class StreamServer:
                 return _paused_end(exc, self.guard.timeout), shown
             if command is None:
                 return None if shown is None else (_PAUSED, shown)
+            me.ignored += not command
             me.commanded = me.commanded or bool(command)
             if command == "start":
                 if shown is None:
@@ -723,12 +726,15 @@ def _accept_failed(exc: OSError) -> str:
 @dataclass(eq=False)
 class _Peer:
     """A connected peer: its connection, when it connected (`time.monotonic()`), whether
-    it has sent a valid command, and whether its place was given to a new peer."""
+    it has sent a valid command, whether its place was given to a new peer, and how many
+    frames it sent that the server ignores (not a command, a CRC that fails, a command
+    word this server does not know)."""
 
     conn: socket.socket
     since: float
     commanded: bool = False
     evicted: bool = False
+    ignored: int = 0
 
 
 @dataclass
@@ -835,6 +841,16 @@ def command_word(frame: bytes, idcode: int | None = None) -> int:
     if idcode is not None and (to := int.from_bytes(frame[4:6], "big")) != idcode:
         raise ForeignCommand(f"a command for IDCODE {to}, not this stream's {idcode}")
     return int.from_bytes(frame[14:16], "big")
+
+
+def _ignored(n: int, then: str) -> str:
+    """How a peer without a valid command is named as it is dropped: what it did
+    (``then``: 'closed the connection', 'silent'), after the frames it sent that the
+    server ignores, if any."""
+    if not n:
+        return then if then == "silent" else f"connected and {then}"
+    frames = "1 frame" if n == 1 else f"{n} frames"
+    return f"sent {frames} this server ignores (no command, or its CRC fails), then {then}"
 
 
 class FrameTimeout(TimeoutError):

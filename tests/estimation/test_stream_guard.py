@@ -110,9 +110,10 @@ def test_a_stream_without_an_end_stops_at_the_frame_cap(kundur_stream, monkeypat
 
 
 def test_server_drops_scans_silent_peers_bad_crc_and_strangers(kundur_stream):
-    """A port scan (connect, close) does not end the server's session; a silent peer is
-    dropped after the time-out while a PDC beside it gets the whole stream; a 'start' whose
-    CRC fails is not obeyed; a peer not allowed is closed at once."""
+    """A port scan (connect, close) does not end the server's session and is named; a
+    silent peer is dropped after the time-out while a PDC beside it gets the whole stream;
+    a 'start' whose CRC fails is not obeyed, and its peer named with it as it is dropped
+    (silent after it, or closing); a peer not allowed is closed at once."""
     from pyc37.frame import CommandFrame
 
     _case, _pmus, cfg, cfg2, frames = kundur_stream
@@ -126,17 +127,26 @@ def test_server_drops_scans_silent_peers_bad_crc_and_strangers(kundur_stream):
         assert len(got.data) == 61 and server.finished.wait(5)
         server.finished.clear()
         time.sleep(0.6)
-        assert any("silent for 0.5 s" in r for r in server.refused)
+        assert any(r.endswith(": silent for 0.5 s") for r in server.refused)
+        assert any(r.endswith(": connected and closed the connection") for r in server.refused)
         silent.close()
         bad = bytearray(CommandFrame(1, "start").convert2bytes())
         bad[-1] ^= 0xFF
+        ignored = "sent 1 frame this server ignores (no command, or its CRC fails), then "
         with socket.create_connection(server.address, timeout=2) as peer:
             peer.sendall(bytes(bad))
-            peer.settimeout(0.3)
+            peer.settimeout(2)
             try:
                 assert peer.recv(100) == b""  # dropped when silent, nothing streamed
-            except (TimeoutError, ConnectionError):
+            except ConnectionError:
                 pass  # nothing streamed
+        assert any(r.endswith(ignored + "silent for 0.5 s") for r in server.refused)
+        with socket.create_connection(server.address, timeout=2) as peer:
+            peer.sendall(bytes(bad))
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline and not server.refused[-1].endswith("connection"):
+            time.sleep(0.01)
+        assert server.refused[-1].endswith(ignored + "closed the connection")
     assert server.n_sent == 61  # from the PDC's session only
     with StreamServer(cfg2, data, speed=float("inf"), guard=Guard(allow=("10.9.9.9",))) as s:
         with socket.create_connection(s.address, timeout=2) as peer:
