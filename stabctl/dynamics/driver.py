@@ -58,7 +58,7 @@ from stabctl.dynamics.model import (
 )
 from stabctl.dynamics.partition import (
     Partition,
-    judged_deviation,
+    judged_relative,
     machine_islands_log,
     stage_at,
     stage_partitions,
@@ -852,7 +852,7 @@ class Simulator:
         c = self.case
         angle = rec.angle[:n]
         if partitions:
-            dev = judged_deviation(angle, t[:n], self.inertia, self.island, partitions)
+            dev = np.abs(judged_relative(angle, t[:n], self.inertia, self.island, partitions))
         else:
             dev = np.abs(angle - coi_of_islands(angle, self.inertia, self.island))
         lost = np.nonzero(dev.max(axis=1) > limit)[0]

@@ -197,7 +197,7 @@ class RunOptions(NamedTuple):
     point or a step is evaluated with (`stabctl.dynamics.switching.observe`), the check
     judges a grid point against the stage that starts at or before its time, the later
     of a zero-length interval's (`_judged_stage`, as
-    `stabctl.dynamics.partition.judged_deviation`).
+    `stabctl.dynamics.partition.judged_relative`).
     """
 
     pst: bool

@@ -68,7 +68,8 @@ __all__ = [
     "stage_partitions",
     "stage_at",
     "relative_to_islands",
-    "judged_deviation",
+    "judged_at",
+    "judged_relative",
     "criterion_inertia",
     "machine_islands_log",
     "tripped_log",
@@ -324,30 +325,6 @@ def judged_relative(angle, t, inertia, island, partitions) -> np.ndarray:
         replace(p, inertia=criterion_inertia(p.inertia, p.island, p.judged)) for p in partitions
     ]
     return relative_to_islands(angle, t, inertia, island, judging) * judged_at(t, partitions)
-
-
-def judged_deviation(angle, t, inertia, island, partitions) -> np.ndarray:
-    """abs(delta_i - delta_COI) of each machine the loss-of-synchronism criterion judges
-    at each time, 0 for the others (`judged_relative`).
-
-    Parameters
-    ----------
-    angle : ndarray, shape (n_t, n_mac)
-        Rotor angles, rad.
-    t : ndarray, shape (n_t,)
-        Their times, s.
-    inertia, island : ndarray, shape (n_mac,)
-        COI weights and islands before the disturbance.
-    partitions : sequence of Partition
-        The run's partitions; empty: every machine judged against its island before the
-        disturbance.
-
-    Returns
-    -------
-    ndarray, shape (n_t, n_mac)
-        rad.
-    """
-    return np.abs(judged_relative(angle, t, inertia, island, partitions))
 
 
 def machine_islands_log(

@@ -19,7 +19,7 @@ import numpy as np
 from stabctl.dynamics.coi import coi_angle, coi_speed
 from stabctl.dynamics.partition import (
     Partition,
-    judged_deviation,
+    judged_relative,
     relative_to_islands,
     stage_at,
 )
@@ -249,8 +249,9 @@ class SimulationResult:
     def judged_angle(self) -> np.ndarray:
         """abs(delta_i - delta_COI) of the machines the loss-of-synchronism criterion
         judges (rad), shape (n_t, n_mac), 0 for the others (tripped, or islanded apart from
-        the main grid: `stabctl.dynamics.partition.judged_deviation`)."""
-        return judged_deviation(self.angle, self.t, self.inertia, self.island, self.partitions)
+        the main grid: `stabctl.dynamics.partition.judged_relative`)."""
+        args = (self.angle, self.t, self.inertia, self.island, self.partitions)
+        return np.abs(judged_relative(*args))
 
     @property
     def judged(self) -> np.ndarray:

@@ -97,7 +97,7 @@ from stabctl.dynamics.model import (
     kernel_network,
     kernel_outputs,
 )
-from stabctl.dynamics.partition import judged_deviation, stage_at
+from stabctl.dynamics.partition import judged_relative, stage_at
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import NumericalInstabilityError, SimulationError
 from stabctl.network.solution import V_RELEASE, L
@@ -570,7 +570,9 @@ def _separated(sim, x, nm, limit, partitions=(), t=0.0) -> bool:
     (with partitions, among the machines judged then)."""
     angle = x[:nm]
     if partitions:
-        dev = judged_deviation(angle[None], np.array([t]), sim.inertia, sim.island, partitions)
+        dev = np.abs(
+            judged_relative(angle[None], np.array([t]), sim.inertia, sim.island, partitions)
+        )
         return bool(np.max(dev) > limit)
     return bool(np.max(np.abs(angle - coi_of_islands(angle, sim.inertia, sim.island))) > limit)
 

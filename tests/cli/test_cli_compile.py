@@ -186,23 +186,20 @@ def test_the_library_refuses_numba_s_compiler_off_by_name():
     """`import stabctl` and a simulator with NUMBA_DISABLE_JIT=1: an ImportError naming
     the variable (it was a TypeError from a kernel's declaration); NUMBA_DISABLE_JIT=0
     runs."""
-    code = "import stabctl; stabctl.Simulator"
-    off = subprocess.run(
-        [sys.executable, "-c", code],
-        env={**os.environ, "NUMBA_DISABLE_JIT": "1"},
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+
+    def simulator_with(value: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-c", "import stabctl; stabctl.Simulator"],
+            env={**os.environ, "NUMBA_DISABLE_JIT": value},
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+
+    off = simulator_with("1")
     assert off.returncode == 1
     assert "ImportError: NUMBA_DISABLE_JIT='1' in the environment" in off.stderr
-    on = subprocess.run(
-        [sys.executable, "-c", code],
-        env={**os.environ, "NUMBA_DISABLE_JIT": "0"},
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    on = simulator_with("0")
     assert on.returncode == 0, on.stderr
 
 
