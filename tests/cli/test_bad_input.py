@@ -1119,7 +1119,8 @@ def test_screening_records_of_another_case_or_content_are_refused(tmp_path, no_s
 
 
 def _screening_record(fault, digest):
-    result = {"fault": fault, "t_stable_s": 0.155, "t_unstable_s": 0.16}
+    result = {"fault": fault, "t_stable_s": 0.155, "t_unstable_s": 0.16, "cct_s": 0.155}
+    result.update(cct_cycles=9.3, n_simulations=12, separated_machines=[1])  # a search's
     rec = {"key": "kundur/3-101/t1/esd-none", "status": "ok", "result": result}
     rec["inputs"] = {"case": "kundur", "case_digest": digest, **fault, "esd_pct": None}
     return json.dumps(rec)

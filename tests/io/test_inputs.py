@@ -2,6 +2,7 @@
 strict CSV tables, on the fault list (`read_faults`, `read_requirements`) and the site
 costs (`read_site_costs`); each refusal names file:line and the field."""
 
+import json
 import os
 
 import pytest
@@ -123,12 +124,18 @@ def test_read_csv_rows_carry_their_file_lines(tmp_path):
 def test_screening_records_must_bracket_a_fault(tmp_path):
     from stabctl.placement.requirements import screening_brackets
 
-    other = tmp_path / "other.jsonl"
+    other = tmp_path / "other.jsonl"  # a record of another kind of job: no CCT search's
     other.write_text('{"key": "k", "status": "ok", "inputs": {}, "result": {"y": 1}}\n')
+    with pytest.raises(InputError, match=r"line 1: not a whole sweep record \(result\.cct_s"):
+        screening_brackets(other, "kundur", "any")
+    cct = {"cct_s": 0.1, "t_stable_s": 0.1, "t_unstable_s": 0.101, "cct_cycles": 6.0}
+    cct.update(n_simulations=9, separated_machines=[1])
+    stored = {"key": "k", "status": "ok", "inputs": {"esd_pct": 5.0}, "result": cct}
+    other.write_text(json.dumps(stored) + "\n")  # a search's, with storage
     with pytest.raises(InputError, match="no fault bracketed without storage"):
         screening_brackets(other, "kundur", "any")
-    bad = tmp_path / "bad.jsonl"
-    bad.write_text('{"key": "k", "status": "ok", "inputs": {}, "result": {"t_stable_s": 1}}\n')
+    bad = tmp_path / "bad.jsonl"  # a search's record without its fault
+    bad.write_text(json.dumps({"key": "k", "status": "ok", "inputs": {}, "result": cct}) + "\n")
     with pytest.raises(InputError, match=r"record 'k' is not a screening record \(KeyError"):
         screening_brackets(bad, "kundur", "any")
     with pytest.raises(InputError, match="not a regular file"):
