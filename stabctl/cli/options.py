@@ -53,15 +53,39 @@ class AliasedOption(click.Option):
             self.opts = shown
 
 
-class Terminated(KeyboardInterrupt):
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) while a command runs: a KeyboardInterrupt that carries its signal's
+    number.  A subclass and not Python's own KeyboardInterrupt because the interpreter
+    run as ``python -m stabctl`` remembers a bare KeyboardInterrupt that went through Python
+    code C ran as a string (``PyRun_String``: Cython's module start-ups, imported inside a
+    command) and, once the command had printed its ``interrupted:`` line and exited 130,
+    killed itself with SIGINT (status -2) on its way out; it compares the type exactly.
+
+    Parameters
+    ----------
+    signum : int
+        The signal's number (SIGINT unless a subclass says otherwise).
+    """
+
+    def __init__(self, signum: int = signal.SIGINT):
+        super().__init__(signum)
+        self.signum = int(signum)
+
+
+class Terminated(Interrupted):
     """SIGTERM (``kill``, a batch system's time limit) or SIGHUP (the terminal or the ssh
     session closed) raised as an interrupt, so that a command ends as on Ctrl-C (its
     pools shut down, finished records kept, its lock released) with exit status 128 + the
-    signal's number (143, 129)."""
+    signal's number (143, 129).
+
+    Parameters
+    ----------
+    signum : int
+        The signal's number.
+    """
 
     def __init__(self, signum: int = signal.SIGTERM):
         super().__init__(signum)
-        self.signum = int(signum)
 
 
 #: the signal that ended the running command (`_interrupt`), None while none came
@@ -83,16 +107,17 @@ def _raise_terminated(signum, frame):
 
 
 def _raise_interrupt(signum, frame):
-    """SIGINT as Python's own handler (KeyboardInterrupt), remembered (`_received`)."""
+    """SIGINT as `Interrupted` (Python's handler raises a bare KeyboardInterrupt),
+    remembered (`_received`)."""
     _received.append(signum)
     _dropped.clear()
-    raise KeyboardInterrupt
+    raise Interrupted(signum)
 
 
-def _as_interrupt(signum: int) -> KeyboardInterrupt:
-    """The interrupt a signal ends a command with: KeyboardInterrupt for SIGINT, else
+def _as_interrupt(signum: int) -> Interrupted:
+    """The interrupt a signal ends a command with: `Interrupted` for SIGINT, else
     `Terminated`."""
-    return KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+    return Interrupted(signum) if signum == signal.SIGINT else Terminated(signum)
 
 
 def _unraisable(previous):
@@ -143,7 +168,8 @@ _ENDING_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 def _sigterm_as_interrupt():
     """SIGTERM and SIGHUP raise :class:`Terminated` while the block runs (main thread
     only, where Python delivers signals), the previous handlers restored after; SIGINT
-    raises KeyboardInterrupt as Python's handler does (when the process has that handler or
+    raises :class:`Interrupted`, a KeyboardInterrupt, as Python's handler would (when the
+    process has that handler or
     the entry point's, `stabctl.__main__`: an ignored SIGINT, of a background job, stays
     ignored).  A signal the process was
     started with ignored stays ignored: ``nohup stabctl screen ...`` goes on when its
@@ -245,7 +271,7 @@ def reports_errors(func):
             return _reported(func, args, kwargs)
         except KeyboardInterrupt as exc:  # a signal as the handling below began or ended
             click.echo(_interrupted(kwargs, exc), err=True)  # (click said "Aborted!", 1)
-            sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
+            sys.exit(_status(exc))
 
     return wrapper
 
@@ -284,12 +310,18 @@ def _reported(func, args, kwargs):
             sys.exit(2)
         except KeyboardInterrupt as exc:
             click.echo(_interrupted(kwargs, exc), err=True)
-            sys.exit(128 + exc.signum if isinstance(exc, Terminated) else 130)
+            sys.exit(_status(exc))
         except SystemExit:  # the command's own status (`compile --check`'s 1)
             _say(caught)
             raise
     _say(caught)
     return out
+
+
+def _status(exc: KeyboardInterrupt) -> int:
+    """The exit status of a command an interrupt ended: 128 + its signal's number (130
+    for a KeyboardInterrupt that carries none)."""
+    return 128 + (exc.signum if isinstance(exc, Interrupted) else signal.SIGINT)
 
 
 def _say(caught) -> None:

@@ -460,6 +460,51 @@ def test_an_interrupt_dropped_by_a_callback_from_c_still_ends_the_command(sig, s
     assert ("went on" in res.stdout) is not goes_on
 
 
+_RUN_AS_STRING = """
+import ctypes, signal, sys
+
+import click
+
+from stabctl.cli.options import reports_errors
+
+
+@click.command()
+@reports_errors
+def start_up():
+    run = ctypes.pythonapi.PyRun_String
+    run.restype = ctypes.py_object
+    run.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.py_object, ctypes.py_object]
+    names = {"signal": signal}
+    run(b"signal.raise_signal(signal.SIGINT)", 257, names, names)  # 257: Py_file_input
+
+
+start_up()
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a process's signal status")
+def test_ctrl_c_inside_python_code_c_runs_as_a_string_ends_with_status_130(tmp_path):
+    """Ctrl-C while an extension module imported inside a command started (Cython's
+    module start-ups run Python code as a string, ``PyRun_String``), under ``python -m``:
+    the command printed its `interrupted:` line and exited 130, and then the interpreter,
+    which remembers a bare KeyboardInterrupt that went through such code, killed itself
+    with SIGINT (status -2 instead of 130; one start-up in ten under load)."""
+    (tmp_path / "string_start_up.py").write_text(_RUN_AS_STRING)
+    paths = [str(tmp_path), *filter(None, [os.environ.get("PYTHONPATH")])]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
+    proc = subprocess.run(
+        [sys.executable, "-m", "string_start_up"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_default_sigint,
+    )
+    assert proc.returncode == 130, (proc.returncode, proc.stderr)
+    assert proc.stderr.startswith("interrupted: ") and "Traceback" not in proc.stderr
+
+
 def _catches(pid: int, sig: int) -> bool:
     """Whether process pid has a handler for sig (its SigCgt mask in /proc)."""
     try:
