@@ -434,8 +434,12 @@ def test_silent_peers_give_their_places_to_a_pdc(kundur_stream):
         assert any(r.startswith(f"{me}: sent no command in ") for r in server.refused)
         for peer in silent:
             peer.close()
-        busy = [socket.create_connection(server.address, timeout=5) for _ in range(2)]
-        for peer in busy:
+        # each sends its command before the next connects: a peer that has sent none yet
+        # may give its place to the next (when the closed peers' are not freed yet)
+        busy = []
+        for _ in range(2):
+            peer = socket.create_connection(server.address, timeout=5)
+            busy.append(peer)
             peer.sendall(CommandFrame(1, "cfg2").convert2bytes())
             assert _frames_until_close(peer, 0) == [] and peer.recv(1000)  # the CFG-2
         with pytest.raises(InputError, match="serves no more peers at once, does not allow"):
