@@ -177,7 +177,8 @@ def _sigterm_as_interrupt():
     (`_received`), so that an error the interrupt caused in code that does not let it
     through ends the command as the interrupt does (`_interrupt`), and an interrupt that
     code called from C dropped is delivered again (`_unraisable`), or raised when the block
-    ends if it has not come again by then."""
+    ends if it has not come again by then.  After the block, a signal the entry point
+    handled is ignored: the process ends with the command's status."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -201,7 +202,11 @@ def _sigterm_as_interrupt():
         _dropped.clear()
         sys.unraisablehook = hook
         for sig, handler in previous.items():
-            signal.signal(sig, handler)
+            # the entry point's handler said "nothing is kept" and exit 130 to a signal
+            # that came after the command had ended (its outputs written, its status
+            # given): the process only ends now, and such a signal is ignored
+            ending = getattr(handler, "stabctl_early", False)
+            signal.signal(sig, signal.SIG_IGN if ending else handler)
 
 
 def _interrupt(exc: BaseException) -> KeyboardInterrupt | None:

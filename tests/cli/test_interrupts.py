@@ -505,6 +505,49 @@ def test_ctrl_c_inside_python_code_c_runs_as_a_string_ends_with_status_130(tmp_p
     assert proc.stderr.startswith("interrupted: ") and "Traceback" not in proc.stderr
 
 
+_SIGNALS_AFTER_THE_COMMAND = """
+import signal
+
+import click
+
+from stabctl.__main__ import install
+from stabctl.cli.options import reports_errors
+
+install()
+
+
+@click.command()
+@reports_errors
+def done():
+    click.echo("written")
+
+
+done.main([], standalone_mode=False)
+for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+    signal.raise_signal(sig)
+print("ended", flush=True)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="SIGHUP")
+def test_a_signal_after_the_command_ended_leaves_its_status(tmp_path):
+    """A signal in the moment between a command's end (its outputs written) and the
+    process's went to the entry point's handler, which said "interrupted: nothing is
+    kept" and exit 130 (or 143, 129): a finished command reported as not run.  Once the
+    command has ended such signals are ignored."""
+    script = tmp_path / "after.py"
+    script.write_text(_SIGNALS_AFTER_THE_COMMAND)
+    proc = subprocess.run(
+        [sys.executable, str(script)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_default_sigint,
+    )
+    assert (proc.returncode, proc.stdout, proc.stderr) == (0, "written\nended\n", "")
+
+
 def _catches(pid: int, sig: int) -> bool:
     """Whether process pid has a handler for sig (its SigCgt mask in /proc)."""
     try:
