@@ -182,8 +182,9 @@ def _register() -> None:
 
 def _one_value_each(cmd: click.Command) -> None:
     """Make `cmd` (each command of a group) refuse an option of one value given twice: click
-    keeps the last without a word (`cct --fault 3 --fault 13` searched bus 13's fault).
-    A usage error (`UsageLine`); flags and repeatable options may come more than once."""
+    keeps the last without a word (`cct --fault 3 --fault 13` searched bus 13's fault), and
+    an on/off flag given both ways (`--q-limits --no-q-limits`).  A usage error
+    (`UsageLine`); a flag in one form and repeatable options may come more than once."""
     if isinstance(cmd, click.Group):
         for sub in cmd.commands.values():
             _one_value_each(sub)
@@ -193,6 +194,12 @@ def _one_value_each(cmd: click.Command) -> None:
         for param in cmd.params
         if isinstance(param, click.Option) and not (param.multiple or param.count or param.is_flag)
         for name in param.opts
+    }
+    paired = {
+        name: param
+        for param in cmd.params
+        if isinstance(param, click.Option) and param.is_flag and param.secondary_opts
+        for name in (*param.opts, *param.secondary_opts)
     }
     parse = cmd.parse_args
 
@@ -207,8 +214,12 @@ def _one_value_each(cmd: click.Command) -> None:
                 first = seen[str(param.name)]
                 again = "twice" if first == name else f"after {first}, the same option"
                 raise click.UsageError(f"{name} given {again}: it takes one value", ctx=ctx)
-            if param is not None:
-                seen[str(param.name)] = name
+            flag = paired.get(name)
+            if flag is not None and seen.get(str(flag.name), name) != name:
+                first = seen[str(flag.name)]
+                raise click.UsageError(f"{name} given after {first}: one or the other", ctx=ctx)
+            if param is not None or flag is not None:
+                seen[str((param or flag).name)] = name
         return parse(ctx, args)
 
     cmd.parse_args = parse_args  # type: ignore[method-assign]

@@ -1280,13 +1280,29 @@ def test_an_append_only_output_is_refused_before_any_work(no_simulation, tmp_pat
         (("cct", "kundur", "--fault", "3", "--fault", "13"), "--fault given twice"),
         (("eig", "kundur", "--out-dir", "a", "--out", "b"), "--out given after --out-dir"),
         (("simulate", "kundur", "--tf", "1", "--tf=2"), "--tf given twice"),
+        (
+            ("simulate", "kundur", "--q-limits", "--no-q-limits"),
+            "--no-q-limits given after --q-limits: one or the other",
+        ),
+        (
+            ("screen", "kundur", "--lines", "--no-guess", "--guess"),
+            "--guess given after --no-guess",
+        ),
     ],
 )
 def test_an_option_of_one_value_given_twice_is_refused(no_simulation, args, needle):
     """`cct kundur --fault 3 --fault 13` searched bus 13's fault (click keeps the last value
-    without a word); an option of one value given twice is a usage error (exit 2), under
-    either of its names; repeatable options and flags may still come more than once."""
+    without a word), and so did an on/off flag given both ways (`--q-limits
+    --no-q-limits`: the last); an option of one value given twice is a usage error (exit
+    2), under either of its names; repeatable options and flags may still come more than
+    once."""
     assert_error(run(*args), needle)
+
+
+def test_a_flag_given_twice_the_same_way_is_taken():
+    """The same form of a flag twice says one thing: taken, as click takes it."""
+    res = run("simulate", "kundur", "--no-q-limits", "--no-q-limits", "--tf", "1.05")
+    assert res.exit_code == 0, (res.output, res.exception)
 
 
 # -- fifth round: options without effect, spellings of numbers, case keys, run ends --------
