@@ -218,8 +218,9 @@ def _one_value_each(cmd: click.Command) -> None:
             if flag is not None and seen.get(str(flag.name), name) != name:
                 first = seen[str(flag.name)]
                 raise click.UsageError(f"{name} given after {first}: one or the other", ctx=ctx)
-            if param is not None or flag is not None:
-                seen[str((param or flag).name)] = name
+            for given in (param, flag):
+                if given is not None:
+                    seen[str(given.name)] = name
         return parse(ctx, args)
 
     cmd.parse_args = parse_args  # type: ignore[method-assign]
