@@ -37,7 +37,8 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         would create the directories it points to, or fail after the work); a directory
         or another non-regular file (a file is wanted) or a file (a directory is wanted);
         or it exists and is not writable; an empty name (``Path("")`` is the current
-        directory: the outputs landed there).
+        directory: the outputs landed there), or a file name ending in ``/`` (Path drops
+        it: ``x.csv/`` wrote ``x.csv``).
     """
     if not str(path):
         kind = "directory" if directory else "file"
@@ -45,6 +46,8 @@ def check_writable(path, option: str, directory: bool = False) -> None:
             f"{option} {str(path)!r}: an empty {kind} name; give a {kind}"
             + (" (. for the current one)" if directory else "")
         )
+    if not directory and str(path).endswith((os.sep, "/")):  # Path("x.csv/") is x.csv
+        raise InputError(f"{option} {path}: a name ending in / is a directory's; give a file")
     p = Path(path)
     _leads_somewhere(p, option)
     if directory:
@@ -177,7 +180,7 @@ def check_suffix(path, allowed, option) -> Path | None:
         raise InputError(f"{option} {path}: the file name must end in {' or '.join(allowed)}")
     if p.exists() and p.is_dir():
         raise InputError(f"{option} {path} is a directory")
-    check_writable(p, option)
+    check_writable(path, option)
     return p
 
 

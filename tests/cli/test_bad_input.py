@@ -501,6 +501,11 @@ def test_island_is_named_not_blamed_on_another_bus(tmp_path):
         (("screen", "kundur", "--plot", "missing/m.png"), "--plot missing/m.png"),
         (("eig", "kundur", "--report", "--out-dir", "/proc/rep"), "--out-dir /proc/rep"),
         (("paper", "--out-dir", "missing/reports"), "--out-dir missing/reports: directory missing"),
+        # a file name ending in / (Path drops the slash: x.csv/ wrote x.csv)
+        (("simulate", "kundur", "--out", "x.csv/"), "--out x.csv/: a name ending in / is a dir"),
+        (("import-psse", PSSE / "five_bus_v33.raw", "-o", "x.json/"), "--out x.json/: a name"),
+        (("screen", "kundur", "--out", "s.jsonl/"), "--out s.jsonl/: a name ending in /"),
+        (("screen", "kundur", "--plot", "m.png/"), "--plot m.png/: a name ending in /"),
     ],
 )
 def test_unwritable_output_is_refused_before_any_work(
