@@ -361,7 +361,7 @@ _RANGES = {
     "--deadband-hz": (0, 10, True, True, "Hz"),
     "--v-gate": (0, 2, True, True, "pu"),
     "--hysteresis-hz": (0, 10, True, True, "Hz"),
-    "--tol-ms": (0, 1000, False, True, "ms"),
+    "--tol-ms": (0.001, 1000, True, True, "ms"),  # stability.cct.MIN_TOL
     "--t-max": (0, 100, False, True, "s"),
     "--workers": (1, 1024, True, True, ""),
     "--circuit": (1, 99, True, True, ""),

@@ -130,6 +130,9 @@ from stabctl.stability.sime import EarlyVerdict, critical_machines, probe_margin
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
 T_LO, T_HI, T_MAX, TOL, T_AFTER_FAULT = 0.0, 0.1, 1.0, 1e-3, 5.0
+#: the finest tolerance, s (1 us: a bisection from 1 s takes 20 runs; a finer one, far
+#: below any run's numerical error, took runs without end at 1e-300 s)
+MIN_TOL = 1e-6
 #: how long a probe runs after its clearing before it is judged provisionally stable, s
 #: (`SearchOptions.provisional_s`)
 PROVISIONAL_S = 2.0
@@ -360,7 +363,7 @@ class SearchOptions:
     Attributes
     ----------
     tol : float
-        Width of the final bracket, s (> 0); default 1e-3 s.
+        Width of the final bracket, s (>= `MIN_TOL`, 1e-6 s); default 1e-3 s.
     t_lo : float
         Clearing time that must be stable, s (>= 0; 0 = the line trip alone); default 0.
     t_hi : float or None
@@ -1096,8 +1099,8 @@ def _half_step_cct(stable_half, k_lo: int, k_hi: int, k_max: int) -> int:
 
 
 def _check_settings(fault: LineFault, o: SearchOptions, t_hi, t_end) -> None:
-    if not o.tol > 0:
-        raise InputError(f"CCT tolerance must be > 0 s, got {o.tol:g}")
+    if not o.tol >= MIN_TOL:
+        raise InputError(f"CCT tolerance must be >= {MIN_TOL:g} s (1 us), got {o.tol:g}")
     if not 0 <= o.t_lo < t_hi <= o.t_max:
         raise InputError(
             "CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "
@@ -1175,14 +1178,17 @@ def check_search_range(search: SearchOptions) -> None:
     Parameters
     ----------
     search : SearchOptions
-        The settings; ``tol`` > 0 and ``0 <= t_lo < t_hi <= t_max`` already checked.
+        The settings; ``0 <= t_lo < t_hi <= t_max`` already checked.
 
     Raises
     ------
     InputError
-        The range narrower than the tolerance (the search's own rule and message), the
-        tolerance not below t_max, or a t_max too close to the default run end.
+        A tolerance below `MIN_TOL`, the range narrower than the tolerance (the search's
+        own rule and message), the tolerance not below t_max, or a t_max too close to the
+        default run end.
     """
+    if not search.tol >= MIN_TOL:
+        raise InputError(f"CCT tolerance must be >= {MIN_TOL:g} s (1 us), got {search.tol:g}")
     _lattice_bounds(search.tol, search.t_lo, _first_upper(search), search.t_max)
     if not search.tol < search.t_max:
         raise InputError(

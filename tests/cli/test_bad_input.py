@@ -70,6 +70,10 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (FAULT + ("--deadband-hz", "inf"), "--deadband-hz inf"),
         (FAULT + ("--step", "nan"), "--step nan"),
         (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", "nan"), "--tol-ms nan"),
+        (
+            ("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", "1e-300"),
+            "--tol-ms 1e-300: must be in [0.001, 1000] ms",  # a search without end
+        ),
         (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", "1e6"), "--esd-pct 1e+06"),
         (
             ("estimate", "kundur", "--fault", 3, "--far-bus", 101, "--runs", 1, "--tve-pct", "nan"),

@@ -205,7 +205,8 @@ def test_cct_above_t_max_is_an_error(kundur):
 @pytest.mark.parametrize(
     "kw, msg",
     [
-        ({"tol": 0}, "tolerance must be > 0"),
+        ({"tol": 0}, r"tolerance must be >= 1e-06 s \(1 us\), got 0"),
+        ({"tol": 1e-300}, r"tolerance must be >= 1e-06 s"),  # ran without end
         ({"t_lo": 0.2, "t_hi": 0.1}, "0 <= t_lo < t_hi <= t_max"),
         ({"t_hi": 2.0}, "0 <= t_lo < t_hi <= t_max"),
         ({"t_end": 1.5}, r"run end 1.5 s \(t_end, --tf\) is 0.5 s before the latest clearing"),
@@ -215,6 +216,16 @@ def test_cct_above_t_max_is_an_error(kundur):
 def test_bad_settings(kundur, kw, msg):
     with pytest.raises(InputError, match=msg):
         critical_clearing_time(kundur, CASE1, SearchOptions(**kw))
+
+
+def test_a_sweep_s_settings_refuse_a_tolerance_below_a_microsecond():
+    """The sweeps check their settings once (`check_search_range`) before any job: a
+    tolerance of 1e-300 s made each search run without end."""
+    from stabctl.stability.cct import check_search_range
+
+    with pytest.raises(InputError, match=r"tolerance must be >= 1e-06 s \(1 us\), got 1e-300"):
+        check_search_range(SearchOptions(tol=1e-300))
+    check_search_range(SearchOptions(tol=1e-6))
 
 
 def test_unknown_bus_and_line(kundur):
