@@ -48,7 +48,7 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     Defaults are the paper's Section 2 case (H = 3 s, Pm = 0.5 pu, delta0 = 0.4950 rad,
     bolted fault at the generator bus, post-fault network = pre-fault).
     """
-    from stabctl.smib.omib import OMIB, clearing_table, eac_summary
+    from stabctl.smib.omib import BISECTION_T_MAX, OMIB, clearing_table, eac_summary
 
     if pmax is not None:
         refuse_given(("delta0",), "with --pmax (Pmax is given; delta0 follows from it)")
@@ -81,9 +81,16 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
             f"{'stable' if r['stable'] else 'unstable'}"
         )
     e = out["eac"]
+    bisection = (
+        f"bisection {e['t_cr_bisection_s']:.4f} s"
+        if e["t_cr_bisection_s"] is not None
+        else f"bisection not run (it tries clearings up to {BISECTION_T_MAX:g} s)"
+    )
+    long = e["t_cr_s"] >= 1e5  # a Pm near 0: the machine barely accelerates
     click.echo(
-        f"EAC: critical clearing angle {e['delta_cr_rad']:.4f} rad, CCT {e['t_cr_s']:.4f} s "
-        f"({e['t_cr_cycles']:.2f} cycles); bisection {e['t_cr_bisection_s']:.4f} s"
+        f"EAC: critical clearing angle {e['delta_cr_rad']:.4f} rad, CCT "
+        f"{e['t_cr_s']:{'.4g' if long else '.4f'}} s "
+        f"({e['t_cr_cycles']:{'.4g' if long else '.2f'}} cycles); {bisection}"
     )
 
 

@@ -15,6 +15,19 @@ def test_omib_json_reports_table1_and_eac():
     assert abs(out["eac"]["t_cr_s"] - out["eac"]["t_cr_bisection_s"]) < 1e-3
 
 
+def test_omib_with_a_small_pm_gives_its_cct_beyond_a_second():
+    """`omib --pm 0.01` (in range) was refused as "the CCT is not within [0, 1.0] s":
+    its EAC CCT, 1.72 s, is checked by a bisection reaching past it; with a Pm so small
+    that no bisection runs, the line says so."""
+    res = CliRunner().invoke(main, ["omib", "-c", "6", "--pm", "0.01", "--json"])
+    assert res.exit_code == 0, res.output
+    eac = json.loads(res.output)["eac"]
+    assert eac["t_cr_s"] > 1.0 and abs(eac["t_cr_s"] - eac["t_cr_bisection_s"]) < 1e-3
+    res = CliRunner().invoke(main, ["omib", "-c", "6", "--pm", "1e-300"])
+    assert res.exit_code == 0, res.output
+    assert "bisection not run (it tries clearings up to 10 s)" in res.output
+
+
 def test_omib_tables_the_durations_shortest_first():
     """Durations from -c and from the positional MORE_CYCLES, given in any order, are
     tabled shortest first, in the text and in the JSON."""

@@ -49,6 +49,30 @@ def test_eac_with_nonzero_fault_on_transfer_agrees_with_bisection():
     assert abs(sys_.critical_clearing_time() - t_bis) < 1e-3
 
 
+def test_a_slow_machine_s_cct_beyond_a_second_is_confirmed_by_bisection():
+    """A small Pm accelerates the machine slowly: at Pm = 0.01 pu the closed-form CCT is
+    1.72 s, and the bisection over a fixed [0, 1 s] refused the case ("the CCT is not
+    within [0, 1.0] s").  It searches up to twice the closed form's CCT; a CCT past
+    `BISECTION_T_MAX` / 2 is given in closed form only, said so."""
+    from stabctl.smib.omib import BISECTION_T_MAX, eac_summary
+
+    slow = OMIB.from_operating_point(H=3.0, Pm=0.01, delta0=0.4950)
+    eac = eac_summary(slow)
+    # the closed form: constant acceleration Pm/M while the fault is on (Pmax_fault = 0)
+    t_closed = np.sqrt(2 * slow.M * (eac["delta_cr_rad"] - 0.4950) / 0.01)
+    assert eac["t_cr_s"] == pytest.approx(t_closed, rel=1e-9)
+    assert eac["t_cr_s"] == pytest.approx(1.7235, abs=1e-4)
+    assert abs(eac["t_cr_bisection_s"] - eac["t_cr_s"]) < 1e-3
+    tiny = eac_summary(OMIB.from_operating_point(H=3.0, Pm=1e-6, delta0=0.4950))
+    assert 2 * tiny["t_cr_s"] > BISECTION_T_MAX
+    assert (tiny["t_cr_bisection_s"], tiny["bisection_runs"]) == (None, 0)
+
+
+def test_the_bisection_says_which_end_of_its_range_failed():
+    with pytest.raises(InputError, match=r"still stable when cleared at 0\.1 s: the CCT is above"):
+        critical_clearing_time_bisection(PAPER_OMIB, t_max=0.1)
+
+
 @pytest.mark.parametrize("cycles", [6, 12])
 def test_accelerating_area_equals_kinetic_energy_and_energy_is_conserved(cycles):
     run = simulate(PAPER_OMIB, cycles / 60, t_end=3.0)
