@@ -87,9 +87,22 @@ def _ignore_all() -> None:
             signal.signal(sig, signal.SIG_IGN)
 
 
+#: the exit statuses of a command a signal ended (`_end`, `stabctl.cli.options`)
+_SIGNAL_STATUSES = frozenset(128 + getattr(signal, n, 0) for n in _SIGNALS) - {128}
+
+
+def _quiet_finalisers() -> None:
+    """Drop what finalisers raise from now on: the process ends on a signal, which may
+    have cut an object's construction short (llvmlite's ``OutputString`` without its
+    ``_owned``), and its ``__del__`` at exit printed "Exception ignored ... Traceback"
+    under the ``interrupted:`` line."""
+    sys.unraisablehook = lambda unraisable: None
+
+
 def _end(signum: int) -> None:
     """Say that the command was interrupted before it started and exit 128 + signum."""
     _ignore_all()
+    _quiet_finalisers()
     argv = shlex.join(["stabctl", *sys.argv[1:]])
     line = f"interrupted: nothing is kept; the work starts again; resume with: {argv}\n"
     try:
@@ -116,6 +129,10 @@ def main() -> None:
         cli_main()
     except EarlyInterrupt as exc:
         _end(exc.signum)
+    except SystemExit as exc:  # the command's own status
+        if exc.code in _SIGNAL_STATUSES:  # it ended on a signal (`reports_errors`)
+            _quiet_finalisers()
+        raise
     finally:
         _ignore_all()  # done: a signal now leaves the command's status as it is
 

@@ -548,6 +548,53 @@ def test_a_signal_after_the_command_ended_leaves_its_status(tmp_path):
     assert (proc.returncode, proc.stdout, proc.stderr) == (0, "written\nended\n", "")
 
 
+_HALF_BUILT_AT_EXIT = """
+import os
+
+import click
+
+import stabctl.cli
+from stabctl.__main__ import main
+from stabctl.cli.options import Terminated, reports_errors
+
+
+class HalfBuilt:  # an object whose construction a signal cut short
+    def __del__(self):
+        self.closed = self._owned  # AttributeError, as llvmlite's OutputString
+
+
+@click.command()
+@reports_errors
+def cut_short():
+    stabctl.left = HalfBuilt()  # freed as the interpreter ends
+    raise Terminated(int(os.environ["SIGNUM"]))
+
+
+stabctl.cli.main = cut_short
+main()
+"""
+
+
+@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_objects_a_signal_left_half_built_say_nothing_as_the_process_ends(tmp_path, sig, status):
+    """A signal in the middle of a constructor (llvmlite's ``OutputString`` while numba
+    loaded its cache) left an object without its attributes, whose ``__del__`` printed
+    "Exception ignored in ... Traceback ... AttributeError" under the `interrupted:` line
+    as the process ended.  A process ending on a signal drops what finalisers raise."""
+    script = tmp_path / "half_built.py"
+    script.write_text(_HALF_BUILT_AT_EXIT)
+    proc = subprocess.run(
+        [sys.executable, str(script)],
+        cwd=tmp_path,
+        env=dict(os.environ, SIGNUM=str(int(sig))),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == status, proc.stderr
+    assert proc.stderr.startswith("interrupted: ") and len(proc.stderr.splitlines()) == 1
+
+
 def _catches(pid: int, sig: int) -> bool:
     """Whether process pid has a handler for sig (its SigCgt mask in /proc)."""
     try:
