@@ -165,6 +165,14 @@ def _fmt(x) -> str:
     return str(int(x)) if x.is_integer() else repr(x)
 
 
+def _whole(number) -> int:
+    """``int(number)``, refusing a number with a fraction (ValueError): ``int(3.5)`` is 3,
+    so a fault at bus 3.5 ran at bus 3."""
+    if isinstance(number, (float, np.floating)) and not float(number).is_integer():
+        raise ValueError(f"{number} is not a whole number")
+    return int(number)
+
+
 def _listed(numbers: np.ndarray) -> str:
     """Device numbers for a message, the first five of more than six."""
     shown = [_fmt(n) for n in numbers]
@@ -1545,7 +1553,8 @@ class Case:
         Parameters
         ----------
         number : int
-            Bus number (PST bus matrix column 1), a scalar; anything ``int()`` accepts.
+            Bus number (PST bus matrix column 1), a scalar; anything ``int()`` accepts
+            without dropping a fraction (3.5 is no bus).
 
         Returns
         -------
@@ -1559,7 +1568,7 @@ class Case:
             message names the bus.
         """
         try:
-            return self._bus_map[int(number)]
+            return self._bus_map[_whole(number)]
         except (KeyError, ValueError, TypeError):
             raise UnknownBusError(self._unknown_bus(number)) from None
 
@@ -1612,7 +1621,8 @@ class Case:
         Parameters
         ----------
         number : int
-            Machine number (PST ``mac_con`` column 1), a scalar; anything ``int()`` accepts.
+            Machine number (PST ``mac_con`` column 1), a scalar; anything ``int()`` accepts
+            without dropping a fraction.
 
         Returns
         -------
@@ -1625,7 +1635,7 @@ class Case:
             The machine is not in the case; the message names it.
         """
         try:
-            return self._mac_map[int(number)]
+            return self._mac_map[_whole(number)]
         except (KeyError, ValueError, TypeError):
             raise CaseError(f"machine {number} is not in case '{self.name}'") from None
 
@@ -1734,12 +1744,19 @@ class Case:
         rows = self.branch_rows(bus_a, bus_b)
         if rows.size == 0:
             raise CaseError(f"line: no branch between bus {bus_a} and bus {bus_b}")
+        try:
+            _whole(circuit)
+        except (TypeError, ValueError):
+            raise CaseError(
+                f"line: circuit {circuit!r} between bus {bus_a} and bus {bus_b}: not a "
+                "circuit number (1, 2, ...)"
+            ) from None
         if not 1 <= circuit <= rows.size:
             raise CaseError(
                 f"line: circuit {circuit} between bus {bus_a} and bus {bus_b} does not exist "
                 f"({rows.size} circuit(s))"
             )
-        return int(rows[circuit - 1])
+        return int(rows[int(circuit) - 1])
 
     @property
     def swing_index(self) -> np.ndarray:

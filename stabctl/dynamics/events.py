@@ -38,10 +38,10 @@ from stabctl.errors import CaseError, InputError
 
 
 def validate(case: Case, events, t_end: float) -> None:
-    """Check every event against the case (buses, lines, machines, times >= 0, the size of
-    each load, VREF and PREF step and their running sums: `stabctl.case.events.check_event`,
-    `check_totals`); raises UnknownBusError, CaseError, InputError.  Events after t_end are
-    allowed (not reached).
+    """Check every event against the case (buses, lines, machines, times finite and >= 0,
+    the size of each load, VREF and PREF step and their running sums:
+    `stabctl.case.events.check_event`, `check_totals`); raises UnknownBusError, CaseError,
+    InputError.  Events after t_end are allowed (not reached).
     A circuit opened twice (a line trip of the line a fault's clearing opens, two trips of
     one circuit without a `LineClose` between) or a machine tripped twice is an InputError:
     the second would do nothing; so is a `LineClose` of a circuit that is not open then
@@ -49,6 +49,9 @@ def validate(case: Case, events, t_end: float) -> None:
     opened: dict = {}
     switchings: dict = {}
     for ev in events:
+        odd = [t for t in ev.times() if not np.isfinite(t)]
+        if odd:  # a NaN time compares false with everything: such an event never came
+            raise InputError(f"event {ev} has a time that is not a finite number ({odd[0]} s)")
         check_event(case, ev)  # the one check of what it names and its size, at load too
         if isinstance(ev, Fault):
             if ev.clear_near is not None and ev.clear_near < ev.t:

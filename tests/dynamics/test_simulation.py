@@ -230,6 +230,31 @@ def test_unknown_fault_bus(kundur):
         kundur.run([fault_with_clearing(kundur.case, 3, 777, 0.1, 6)], t_end=1.0)
 
 
+def test_a_bus_number_with_a_fraction_names_no_bus(kundur):
+    """`Fault(3.5, ...)` ran bus 3's fault (the number's fraction dropped by int())."""
+    with pytest.raises(UnknownBusError, match=r"bus 3\.5 is not in case 'kundur'"):
+        kundur.run([Fault(bus=3.5, t=0.1, clear_near=0.2)], t_end=0.5)
+    with pytest.raises(CaseError, match=r"circuit 1\.5 between bus 3 and bus 101: not a circuit"):
+        kundur.run([Fault(bus=3, t=0.1, clear_near=0.2, far_bus=101, circuit=1.5)], t_end=0.5)
+    assert kundur.case.bus_index(3.0) == kundur.case.bus_index(3)  # a whole float is its bus
+
+
+@pytest.mark.parametrize(
+    "event",
+    [
+        Fault(bus=3, t=float("nan"), clear_near=1.1),
+        Fault(bus=3, t=1.0, clear_near=float("inf")),
+        Fault(bus=3, t=1.0, clear_near=1.1, far_bus=101, clear_far=float("nan")),
+        LineTrip(3, 101, float("nan")),
+    ],
+)
+def test_an_event_at_a_time_that_is_not_a_number_is_refused(kundur, event):
+    """A fault at time NaN compared false with every step's time: the run went on
+    undisturbed, a flat run reported for a fault."""
+    with pytest.raises(InputError, match="has a time that is not a finite number"):
+        kundur.run([event], t_end=2.0)
+
+
 @pytest.mark.parametrize(
     "event, what",
     [
