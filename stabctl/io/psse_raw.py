@@ -1602,14 +1602,22 @@ def _demote_idle_pv(b: _Builder):
             b.load_buses.append(Held("IDE 2 bus", str(num), said))
 
 
-def _check_netted_swing(b: _Builder):
-    """CaseError for a swing bus left without a generator by netting."""
+def _check_swing_generators(b: _Builder):
+    """CaseError for a swing bus without a generator in service (PSS/E's type 3 bus has
+    at least one, POM "Bus Data"), or left without one by netting."""
     with_gen = {g.bus for g in b.gens}
     for bus, src in b.netted:
         if b.buses[bus][9] == SWING and bus not in with_gen:
             raise CaseError(
                 f"{src}: swing bus {bus} has no generator left once netted (give its "
                 "generator a machine model in the DYR data)"
+            )
+    for num, row in b.buses.items():
+        if row[9] == SWING and num not in with_gen:
+            raise CaseError(
+                f"{b.bus_src[num]}: swing bus {num} (IDE 3) has no generator in service "
+                "(PSS/E's swing bus holds at least one: put one in service or make "
+                "another bus the swing bus)"
             )
 
 
@@ -1637,8 +1645,8 @@ def read_raw(
     Raises:
         CaseError: unreadable file, unsupported version, a malformed record (a field that
             is not a number, a bus number not in the bus data, a zero impedance, ...),
-            naming ``file:line`` and the record; no swing bus; a swing bus whose every
-            generator is netted.
+            naming ``file:line`` and the record; no swing bus; a swing bus without a
+            generator in service, or whose every generator is netted.
 
     Source: PSS/E POM v32-v34 "Power Flow Raw Data File Contents"; v35 and v36: PSS/E's
     own column headings in its RAW exports (see module doc).
@@ -1675,7 +1683,7 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
     _demote_idle_pv(b)
     vreg_con = _remote_regulation(b)
     _zero_q_limits(b)
-    _check_netted_swing(b)
+    _check_swing_generators(b)
     load_con = _load_con(b)
     bus = np.array(list(b.buses.values()), dtype=float)
     if not np.any(bus[:, 9] == SWING):

@@ -218,6 +218,22 @@ def test_netting_the_swing_generator_is_refused(tmp_path):
         load_psse(V33, dyr, unmodelled="net")
 
 
+def test_a_swing_bus_without_a_generator_in_service_is_refused(tmp_path):
+    """The swing bus's only generator out of service (STAT 0) was imported without a
+    word, its power flow injection then netted as a negative load: PSS/E's swing bus
+    holds at least one generator in service (POM, bus data: IDE 3)."""
+    lines = V33.read_text().splitlines()
+    k = next(i for i, x in enumerate(lines) if x.lstrip().startswith("1,'1 '") and "999.000" in x)
+    fields = lines[k].split(",")
+    fields[14] = "0"  # STAT
+    lines[k] = ",".join(fields)
+    raw = tmp_path / "swing_off.raw"
+    raw.write_text("\n".join(lines) + "\n")
+    said = r"swing_off.raw:4 bus 1: swing bus 1 \(IDE 3\) has no generator in service"
+    with pytest.raises(CaseError, match=said):  # named at its bus record
+        read_raw(raw)
+
+
 def test_records_of_generators_out_of_service_are_ignored(tmp_path):
     """Generator 3 '3' has STAT 0: its DYR records are ignored (PSS/E), not refused."""
     extra = f"3 'GENROU' 3 {_GENROU.format(H=2.0)}"
