@@ -25,6 +25,7 @@ from stabctl.case.system import (
     ShaftTable,
     SwitchedShuntTable,
     Table,
+    require_case,
 )
 
 __all__ = [
@@ -48,4 +49,5 @@ __all__ = [
     "ShaftTable",
     "SwitchedShuntTable",
     "Table",
+    "require_case",
 ]

@@ -81,6 +81,7 @@ __all__ = [
     "SvcTable",
     "RegulationTable",
     "Case",
+    "require_case",
     "SWING",
     "PV",
     "PQ",
@@ -1841,6 +1842,36 @@ class Case:
         )
         same_events = self.events == other.events
         return same_scalars and same_tables and same_sw and same_extra and same_events
+
+
+def require_case(case, where: str, also: str = "") -> Case:
+    """`case` itself if it is a `Case`, else a TypeError naming `where` and what came (a
+    case's name, ``'kundur'``, failed deep inside with "'str' object has no attribute
+    'branches'").
+
+    Parameters
+    ----------
+    case : object
+        What the caller passed as the case.
+    where : str
+        The function and argument, ``"Simulator(case)"``, named in the error.
+    also : str, optional
+        What else the argument may be, said after "a stabctl Case" (``" or Simulator"``;
+        the caller took that already).
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    TypeError
+        `case` is not a `Case`; a str is pointed to `stabctl.io.load_case`.
+    """
+    if isinstance(case, Case):
+        return case
+    hint = f" (load it first: stabctl.load_case({case!r}))" if isinstance(case, str) else ""
+    raise TypeError(f"{where}: a stabctl Case{also} is needed, got {type(case).__name__}{hint}")
 
 
 def _check_events(events) -> tuple:

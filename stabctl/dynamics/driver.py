@@ -32,7 +32,7 @@ import numpy as np
 
 from stabctl._jit.background import await_background, compile_in_background
 from stabctl._jit.cache import cached
-from stabctl.case import Case
+from stabctl.case import Case, require_case
 from stabctl.dynamics import events as ev_
 from stabctl.dynamics import integrator as ig
 from stabctl.dynamics import trapezoid
@@ -221,6 +221,8 @@ class Simulator:
         injection bus not in the case.
     PowerFlowError
         The power flow (when `op` is None) did not converge.
+    TypeError
+        `case` is not a `Case` (`stabctl.case.require_case`).
     """
 
     #: `run` takes a monitor that can end a run early and runs without bus voltages (the
@@ -240,6 +242,7 @@ class Simulator:
         suspect_starts: str = "refuse",
         subintervals: bool = True,
     ):
+        case = require_case(case, "Simulator(case)")
         if suspect_starts not in ("refuse", "run"):
             raise InputError(f"suspect_starts must be 'refuse' or 'run', got {suspect_starts!r}")
         self.suspect_starts = suspect_starts

@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from stabctl.case import PQ, PV, SWING, Case
+from stabctl.case import PQ, PV, SWING, Case, require_case
 from stabctl.errors import PowerFlowError, advice
 from stabctl.network import switched_shunts as sws
 from stabctl.network.topology import OPEN_X, bus_islands, dead_buses
@@ -594,6 +594,8 @@ def solve_powerflow(
         path to a swing bus (an island of the case data, or left by ``drop``).
     CaseError
         A dropped branch row does not exist.
+    TypeError
+        ``case`` is not a `Case` (`stabctl.case.require_case`).
 
     Warns
     -----
@@ -609,6 +611,7 @@ def solve_powerflow(
     Source: PSTess ``loadflow.m``, ``calc.m``, ``form_jac.m``, ``chq_lim.m``, ``lftap.m``;
     PST manual section 1.4.
     """
+    case = require_case(case, "solve_powerflow(case)")
     drop = tuple(int(d) for d in drop)
     _check_islands(case, drop)
     _note_shared_swing(case)

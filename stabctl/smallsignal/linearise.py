@@ -43,7 +43,7 @@ from numba import typeof
 from stabctl._jit.arrays import assign, max_abs
 from stabctl._jit.background import await_background, compile_in_background
 from stabctl._jit.decorators import njit
-from stabctl.case import Case
+from stabctl.case import Case, require_case
 from stabctl.dynamics.coi import coi_of_islands, coi_weights
 from stabctl.dynamics.model import (
     BUS_VOLTAGES,
@@ -197,6 +197,8 @@ def linearise(
         one active there with limits="refuse".
     CaseError, PowerFlowError
         As `Simulator` when `target` is a Case.
+    TypeError
+        `target` neither a Case nor a Simulator.
 
     Examples
     --------
@@ -210,6 +212,8 @@ def linearise(
     """
     from stabctl.dynamics.driver import Simulator
 
+    if not isinstance(target, Simulator):
+        target = require_case(target, "linearise(target)", " or Simulator")
     sim = (
         target
         if isinstance(target, Simulator)

@@ -521,6 +521,9 @@ def critical_clearing_time(
         raised.
     SimulationError
         The network fails while the fault is on.
+    TypeError
+        `sim` not a simulator (a `Simulator`, `cached_simulator`'s), `fault` not a
+        `LineFault`.
 
     Notes
     -----
@@ -543,6 +546,16 @@ def critical_clearing_time(
     >>> stabctl.critical_clearing_time(sim, fault, storage=fleet).cct_s
     0.199
     """
+    if not (hasattr(sim, "run") and hasattr(sim, "case")):
+        raise TypeError(
+            "critical_clearing_time(sim): a Simulator is needed (stabctl.Simulator(case)), "
+            f"got {type(sim).__name__}"
+        )
+    if not isinstance(fault, LineFault):
+        raise TypeError(
+            "critical_clearing_time(fault): a LineFault is needed (LineFault(bus=3, "
+            f"far_bus=101, t_fault=1.0)), got {type(fault).__name__}"
+        )
     o = SearchOptions() if search is None else search
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
     t_hi = _first_upper(o)

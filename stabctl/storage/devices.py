@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from numbers import Real
 from typing import NamedTuple
 
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.case import Case
+from stabctl.case import Case, require_case
 from stabctl.errors import CaseError, InputError
 from stabctl.models import converters as conv
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
@@ -283,6 +284,8 @@ def uniform_fleet(
     ------
     InputError
         `pct` not in (0, MAX_ESD_PCT], or an unknown model.
+    TypeError
+        `case` is not a `Case`, or `pct` not a number.
 
     Examples
     --------
@@ -294,6 +297,9 @@ def uniform_fleet(
     >>> [(d.bus, d.machine, float(d.pmax_mw)) for d in fleet.devices]
     [(10, 1, 45.0), (20, 2, 45.0), (110, 3, 45.0), (120, 4, 45.0)]
     """
+    case = require_case(case, "uniform_fleet(case)")
+    if not isinstance(pct, Real) or isinstance(pct, bool):
+        raise TypeError(f"uniform_fleet(pct): a number of % is needed, got {type(pct).__name__}")
     if not 0 < pct <= MAX_ESD_PCT:
         raise InputError(
             f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {pct}"

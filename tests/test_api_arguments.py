@@ -1,0 +1,45 @@
+"""The public API's entry points refuse an argument of the wrong kind with a TypeError
+naming the function and the argument: a case's name where a `Case` is needed failed deep
+inside ("'str' object has no attribute 'branches'")."""
+
+from __future__ import annotations
+
+import pytest
+
+import stabctl
+
+
+@pytest.fixture(scope="module")
+def kundur():
+    return stabctl.load_case("kundur")
+
+
+@pytest.mark.parametrize(
+    "call, said",
+    [
+        (lambda c: stabctl.Simulator("kundur"), r"Simulator\(case\): a stabctl Case is needed"),
+        (lambda c: stabctl.Simulator(None), r"Simulator\(case\): .* got NoneType$"),
+        (lambda c: stabctl.solve_powerflow("kundur"), r"solve_powerflow\(case\): .* got str"),
+        (lambda c: stabctl.linearise("kundur"), r"linearise\(target\): a stabctl Case or Sim"),
+        (lambda c: stabctl.uniform_fleet("kundur", 5), r"uniform_fleet\(case\)"),
+        (lambda c: stabctl.uniform_fleet(c, "5"), r"uniform_fleet\(pct\): a number of %"),
+        (
+            lambda c: stabctl.critical_clearing_time(c, stabctl.LineFault(3, 101)),
+            r"critical_clearing_time\(sim\): a Simulator is needed .* got Case",
+        ),
+    ],
+)
+def test_an_argument_of_the_wrong_kind_is_named(kundur, call, said):
+    with pytest.raises(TypeError, match=said):
+        call(kundur)
+
+
+def test_a_case_s_name_is_pointed_to_load_case():
+    with pytest.raises(TypeError, match=r"load it first: stabctl.load_case\('kundur'\)"):
+        stabctl.Simulator("kundur")
+
+
+def test_a_cct_search_names_a_fault_of_the_wrong_kind(kundur):
+    sim = stabctl.Simulator(kundur)
+    with pytest.raises(TypeError, match=r"critical_clearing_time\(fault\): a LineFault"):
+        stabctl.critical_clearing_time(sim, "3-101")
