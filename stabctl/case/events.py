@@ -596,12 +596,14 @@ MotorSwitch or Playback
     Raises
     ------
     InputError
-        A step of size 0 (it would do nothing), or one beyond `step_limit`: the message
-        names the event, its size, the bound and why.
+        A step that is not a finite number or of size 0 (it would do nothing), or one
+        beyond `step_limit`: the message names the event, its size, the bound and why.
     """
     if not isinstance(ev, (LoadStep, VrefStep, PrefStep)):
         return
     size, limit = abs(_amount(ev)), step_limit(case, ev)
+    if not math.isfinite(size):  # a NaN step ran on into a "voltage collapse"
+        raise InputError(f"{ev}: a step that is not a finite number")
     if size == 0:
         raise InputError(f"{ev}: a step of 0 would do nothing")
     if size > limit:

@@ -169,6 +169,9 @@ def test_step_sizes_are_bounded_where_the_events_are_checked():
         ([VrefStep(1, 1.0, 1e9)], r"1e\+09 pu is beyond 1 pu, the terminal voltage's"),
         ([LoadStep(4, 1.0, 1e6)], r"1e\+06 pu \(1e\+08 MVA\) is beyond 36 pu"),
         ([PrefStep(2, 1.0, 0.0)], "a step of 0 would do nothing"),
+        # NaN compared false with the bound: the run went on into a "voltage collapse"
+        ([LoadStep(4, 1.0, float("nan"))], "a step that is not a finite number"),
+        ([VrefStep(1, 1.0, float("inf"))], "a step that is not a finite number"),
         (
             [PrefStep(2, 1.0, 0.6), PrefStep(2, 1.0, 0.6)],
             r"the PREF steps of machine 2 add up to \+1.2 pu at 1 s, beyond 1 pu",
