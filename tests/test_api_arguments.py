@@ -43,3 +43,30 @@ def test_a_cct_search_names_a_fault_of_the_wrong_kind(kundur):
     sim = stabctl.Simulator(kundur)
     with pytest.raises(TypeError, match=r"critical_clearing_time\(fault\): a LineFault"):
         stabctl.critical_clearing_time(sim, "3-101")
+
+
+def test_coi_speed_is_the_inertia_weighted_mean_and_refuses_weights_that_are_none():
+    """Paper eq. 40; all-zero weights divided by zero, a negative one gave a COI speed
+    outside every machine's, a weight per wrong axis broadcast or failed in numpy."""
+    import numpy as np
+
+    speed = np.array([[1.0, 1.01], [0.99, 1.0]])
+    np.testing.assert_allclose(stabctl.coi_speed(speed, np.array([1.0, 3.0])), [1.0075, 0.9975])
+    for weights, said in (
+        ([0.0, 0.0], "not all 0"),
+        ([1.0, -1.0], ">= 0"),
+        ([1.0, np.nan], "finite"),
+        ([1.0, 1.0, 1.0], "one weight per machine"),
+    ):
+        with pytest.raises(ValueError, match=said):
+            stabctl.coi_speed(speed, np.array(weights))
+
+
+@pytest.mark.parametrize("field", ["H", "Pm", "Pmax_pre", "Pmax_post", "D", "f0"])
+def test_an_omib_parameter_that_is_not_a_number_is_refused(field):
+    """NaN compared false with every bound: an OMIB with Pm NaN was made, and failed
+    later, in its CCT."""
+    given = dict(H=3.0, Pm=0.5, Pmax_pre=1.0, Pmax_fault=0.0, Pmax_post=1.0)
+    given[field] = float("nan")
+    with pytest.raises(stabctl.errors.InputError, match=f"not a finite number: {field} = nan"):
+        stabctl.OMIB(**given)

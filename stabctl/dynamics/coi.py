@@ -132,7 +132,24 @@ def coi_speed(speed: np.ndarray, inertia: np.ndarray) -> np.ndarray:
     -------
     ndarray, shape (...)
         The COI speed (pu).
+
+    Raises
+    ------
+    ValueError
+        `inertia` not one finite weight >= 0 per machine of `speed`'s last axis, or all 0
+        (a zero total divided by zero; a negative weight gave a speed outside the
+        machines').
     """
+    speed, inertia = np.asarray(speed, float), np.asarray(inertia, float)
+    if inertia.ndim != 1 or speed.shape[-1:] != inertia.shape:
+        raise ValueError(
+            f"coi_speed: inertia of shape {inertia.shape} for speeds of shape {speed.shape}: "
+            "one weight per machine (the speeds' last axis) is needed"
+        )
+    if not (np.all(np.isfinite(inertia) & (inertia >= 0)) and inertia.sum() > 0):
+        raise ValueError(
+            f"coi_speed: the inertia weights must be finite, >= 0 and not all 0, got {inertia}"
+        )
     return coi_angle(speed, inertia)
 
 

@@ -50,8 +50,8 @@ class OMIB:
     Raises
     ------
     InputError
-        H or f0 not positive, Pm, D or a Pmax negative, or Pm >= Pmax of the pre- or
-        post-fault network (no equilibrium).
+        A parameter that is not a finite number, H or f0 not positive, Pm, D or a Pmax
+        negative, or Pm >= Pmax of the pre- or post-fault network (no equilibrium).
     """
 
     H: float
@@ -64,6 +64,11 @@ class OMIB:
     k_C: float = 1.0
 
     def __post_init__(self):
+        given = {k: getattr(self, k) for k in ("H", "Pm", "Pmax_pre", "Pmax_fault", "Pmax_post")}
+        given.update(f0=self.f0, D=self.D, k_C=self.k_C)
+        odd = [f"{k} = {v}" for k, v in given.items() if not np.isfinite(v)]
+        if odd:  # NaN compares false with every bound below
+            raise InputError(f"OMIB: not a finite number: {', '.join(odd)}")
         if not self.H > 0:
             raise InputError(f"inertia constant H must be positive, got H = {self.H} s")
         if not self.f0 > 0:
