@@ -59,8 +59,26 @@ def _early(signum, frame):
 
 
 #: read by `stabctl.cli.options` (which installs its own SIGINT handler only in place of
-#: Python's default or this one)
+#: Python's default or this one, and ends the command at once on a signal this one
+#: received but could not raise: `_unraisable`)
 _early.stabctl_early = True  # type: ignore[attr-defined]
+_early.received = _received  # type: ignore[attr-defined]
+
+
+def _unraisable(previous):
+    """The ``sys.unraisablehook`` from the start: an `EarlyInterrupt` raised where Python
+    cannot raise it (an import lock's weakref callback, a finaliser) printed "Exception
+    ignored in ... Traceback ... EarlyInterrupt: 1" and was dropped.  It is dropped
+    without a word, the signal remembered (`_received`): `main` ends on it after the
+    command's import, `stabctl.cli.options` when the command starts.  Anything else goes
+    to `previous`."""
+
+    def hook(unraisable):
+        if not isinstance(unraisable.exc_value, EarlyInterrupt):
+            previous(unraisable)
+
+    return hook
+
 
 #: the signals handled from the start: those a command ends on
 _SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
@@ -68,7 +86,9 @@ _SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
 
 def install() -> None:
     """Install `_early` for SIGINT (in place of Python's default handler), SIGTERM and
-    SIGHUP (in place of the default action); an ignored signal stays ignored."""
+    SIGHUP (in place of the default action); an ignored signal stays ignored; and the
+    hook that keeps an `EarlyInterrupt` Python could not raise quiet (`_unraisable`)."""
+    sys.unraisablehook = _unraisable(sys.unraisablehook)
     for name in _SIGNALS:
         sig = getattr(signal, name, None)
         if sig is None:  # pragma: no cover - SIGHUP on Windows

@@ -195,6 +195,8 @@ def _sigterm_as_interrupt():
         # Python's handler, or the entry point's until the command's (`stabctl.__main__`)
         previous[signal.SIGINT] = signal.signal(signal.SIGINT, _raise_interrupt)
     try:
+        if early := getattr(now, "received", None):  # a signal the entry point's handler
+            raise _as_interrupt(early[0])  # got but Python dropped: the command ends on it
         yield
         if _dropped:  # the block ended before the dropped interrupt came again
             raise _as_interrupt(_dropped[0])

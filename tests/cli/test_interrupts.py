@@ -595,6 +595,57 @@ def test_objects_a_signal_left_half_built_say_nothing_as_the_process_ends(tmp_pa
     assert proc.stderr.startswith("interrupted: ") and len(proc.stderr.splitlines()) == 1
 
 
+_DROPPED_EARLY = """
+import signal
+
+import click
+
+from stabctl.__main__ import install
+from stabctl.cli.options import reports_errors
+
+install()
+
+
+class Finaliser:  # Python runs __del__ where it cannot raise: what it raises is dropped
+    def __del__(self):
+        signal.raise_signal(signal.SIGHUP)
+
+
+Finaliser()  # freed at once: the signal's EarlyInterrupt dropped
+print("went on", flush=True)
+
+
+@click.command()
+@reports_errors
+def work():
+    click.echo("worked")
+
+
+work.main([], standalone_mode=False)
+"""
+
+
+def test_an_early_signal_python_could_not_raise_ends_the_command_without_a_traceback(tmp_path):
+    """A SIGHUP during the start-up's imports raised the entry point's `EarlyInterrupt`
+    inside an import lock's weakref callback, where Python cannot raise: it printed
+    "Exception ignored in ... Traceback ... EarlyInterrupt: 1" before the `interrupted:`
+    line, or was lost.  It is dropped quietly and remembered: the command ends on it as
+    it starts (exit 129, one line)."""
+    script = tmp_path / "dropped.py"
+    script.write_text(_DROPPED_EARLY)
+    proc = subprocess.run(
+        [sys.executable, str(script)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_default_sigint,
+    )
+    assert proc.returncode == 129, proc.stderr
+    assert proc.stdout == "went on\n"
+    assert proc.stderr.startswith("interrupted: ") and len(proc.stderr.splitlines()) == 1
+
+
 def _catches(pid: int, sig: int) -> bool:
     """Whether process pid has a handler for sig (its SigCgt mask in /proc)."""
     try:
