@@ -460,6 +460,22 @@ def test_an_interrupt_dropped_by_a_callback_from_c_still_ends_the_command(sig, s
     assert ("went on" in res.stdout) is not goes_on
 
 
+def _run_script(tmp_path, name: str, text: str, *, module: bool = False, **env):
+    """Run `text` as the Python script `name`.py in tmp_path (as ``python -m name`` with
+    `module`), SIGINT at its default, `env` added to the environment."""
+    (tmp_path / f"{name}.py").write_text(text)
+    paths = [str(tmp_path), *filter(None, [os.environ.get("PYTHONPATH")])]
+    return subprocess.run(
+        [sys.executable, *(["-m", name] if module else [str(tmp_path / f"{name}.py")])],
+        cwd=tmp_path,
+        env=dict(os.environ, PYTHONPATH=os.pathsep.join(paths), **env),
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=_default_sigint,
+    )
+
+
 _RUN_AS_STRING = """
 import ctypes, signal, sys
 
@@ -489,18 +505,7 @@ def test_ctrl_c_inside_python_code_c_runs_as_a_string_ends_with_status_130(tmp_p
     the command printed its `interrupted:` line and exited 130, and then the interpreter,
     which remembers a bare KeyboardInterrupt that went through such code, killed itself
     with SIGINT (status -2 instead of 130; one start-up in ten under load)."""
-    (tmp_path / "string_start_up.py").write_text(_RUN_AS_STRING)
-    paths = [str(tmp_path), *filter(None, [os.environ.get("PYTHONPATH")])]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
-    proc = subprocess.run(
-        [sys.executable, "-m", "string_start_up"],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        preexec_fn=_default_sigint,
-    )
+    proc = _run_script(tmp_path, "string_start_up", _RUN_AS_STRING, module=True)
     assert proc.returncode == 130, (proc.returncode, proc.stderr)
     assert proc.stderr.startswith("interrupted: ") and "Traceback" not in proc.stderr
 
@@ -535,16 +540,7 @@ def test_a_signal_after_the_command_ended_leaves_its_status(tmp_path):
     process's went to the entry point's handler, which said "interrupted: nothing is
     kept" and exit 130 (or 143, 129): a finished command reported as not run.  Once the
     command has ended such signals are ignored."""
-    script = tmp_path / "after.py"
-    script.write_text(_SIGNALS_AFTER_THE_COMMAND)
-    proc = subprocess.run(
-        [sys.executable, str(script)],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        preexec_fn=_default_sigint,
-    )
+    proc = _run_script(tmp_path, "after", _SIGNALS_AFTER_THE_COMMAND)
     assert (proc.returncode, proc.stdout, proc.stderr) == (0, "written\nended\n", "")
 
 
@@ -581,16 +577,7 @@ def test_objects_a_signal_left_half_built_say_nothing_as_the_process_ends(tmp_pa
     loaded its cache) left an object without its attributes, whose ``__del__`` printed
     "Exception ignored in ... Traceback ... AttributeError" under the `interrupted:` line
     as the process ended.  A process ending on a signal drops what finalisers raise."""
-    script = tmp_path / "half_built.py"
-    script.write_text(_HALF_BUILT_AT_EXIT)
-    proc = subprocess.run(
-        [sys.executable, str(script)],
-        cwd=tmp_path,
-        env=dict(os.environ, SIGNUM=str(int(sig))),
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    proc = _run_script(tmp_path, "half_built", _HALF_BUILT_AT_EXIT, SIGNUM=str(int(sig)))
     assert proc.returncode == status, proc.stderr
     assert proc.stderr.startswith("interrupted: ") and len(proc.stderr.splitlines()) == 1
 
@@ -631,16 +618,7 @@ def test_an_early_signal_python_could_not_raise_ends_the_command_without_a_trace
     "Exception ignored in ... Traceback ... EarlyInterrupt: 1" before the `interrupted:`
     line, or was lost.  It is dropped quietly and remembered: the command ends on it as
     it starts (exit 129, one line)."""
-    script = tmp_path / "dropped.py"
-    script.write_text(_DROPPED_EARLY)
-    proc = subprocess.run(
-        [sys.executable, str(script)],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        preexec_fn=_default_sigint,
-    )
+    proc = _run_script(tmp_path, "dropped", _DROPPED_EARLY)
     assert proc.returncode == 129, proc.stderr
     assert proc.stdout == "went on\n"
     assert proc.stderr.startswith("interrupted: ") and len(proc.stderr.splitlines()) == 1
