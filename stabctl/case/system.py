@@ -1746,18 +1746,18 @@ class Case:
         if rows.size == 0:
             raise CaseError(f"line: no branch between bus {bus_a} and bus {bus_b}")
         try:
-            _whole(circuit)
+            k = _whole(circuit)
         except (TypeError, ValueError):
             raise CaseError(
                 f"line: circuit {circuit!r} between bus {bus_a} and bus {bus_b}: not a "
                 "circuit number (1, 2, ...)"
             ) from None
-        if not 1 <= circuit <= rows.size:
+        if not 1 <= k <= rows.size:
             raise CaseError(
                 f"line: circuit {circuit} between bus {bus_a} and bus {bus_b} does not exist "
                 f"({rows.size} circuit(s))"
             )
-        return int(rows[int(circuit) - 1])
+        return int(rows[k - 1])
 
     @property
     def swing_index(self) -> np.ndarray:
