@@ -94,12 +94,12 @@ def verified_placement(case_name: str, workers: int = 2) -> None:
     )
 
 
-#: the ten contingencies of --activsg: (bus, far bus or None, circuit)
+#: the ten contingencies of --activsg: (bus, far bus or None, circuit or None)
 ACTIVSG_FAULTS = (
     (6030, 7274, 1),
     (2021, 2002, 1),
-    (8079, None, 1),
-    (1064, None, 1),
+    (8079, None, None),
+    (1064, None, None),
     (2101, 5083, 1),
     (5252, 5340, 1),
     (5480, 5048, 4),
@@ -124,7 +124,9 @@ def activsg_placement(workers: int = 2) -> None:
     with tempfile.TemporaryDirectory() as work:
         case_path, faults = Path(work) / "activsg.json", Path(work) / "faults.csv"
         write_case_json(_activsg2000(work), case_path)
-        rows = [f"{b},{'' if f is None else f},{c}" for b, f, c in ACTIVSG_FAULTS]
+        rows = [
+            ",".join("" if v is None else str(v) for v in fault) for fault in ACTIVSG_FAULTS
+        ]  # a bus fault names no circuit
         faults.write_text("bus,far_bus,circuit\n" + "\n".join(rows) + "\n")
         args = ["stabctl", "place", str(case_path), "--faults", str(faults)]
         args += ["--target-cct-gain", "5", "--set-aside-infeasible"]
