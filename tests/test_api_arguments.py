@@ -70,3 +70,10 @@ def test_an_omib_parameter_that_is_not_a_number_is_refused(field):
     given[field] = float("nan")
     with pytest.raises(stabctl.errors.InputError, match=f"not a finite number: {field} = nan"):
         stabctl.OMIB(**given)
+
+
+@pytest.mark.parametrize("kw", [{"max_iter": 0}, {"max_iter": 2.5}, {"tol": 0.0}, {"tol": 5.0}])
+def test_a_power_flow_s_settings_out_of_range_are_named(kundur, kw):
+    """`max_iter=0` was reported as a power flow that did not converge."""
+    with pytest.raises(stabctl.errors.InputError, match=r"tol must be in .* max_iter an int"):
+        stabctl.solve_powerflow(kundur, **kw)

@@ -39,13 +39,14 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from numbers import Integral
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from stabctl.case import PQ, PV, SWING, Case, require_case
-from stabctl.errors import PowerFlowError, advice
+from stabctl.errors import InputError, PowerFlowError, advice
 from stabctl.network import switched_shunts as sws
 from stabctl.network.topology import OPEN_X, bus_islands, dead_buses
 from stabctl.network.ybus import add_shunts, branch_flows, build_ybus
@@ -594,6 +595,8 @@ def solve_powerflow(
         path to a swing bus (an island of the case data, or left by ``drop``).
     CaseError
         A dropped branch row does not exist.
+    InputError
+        ``tol`` not in (0, 1) or ``max_iter`` not an int >= 1.
     TypeError
         ``case`` is not a `Case` (`stabctl.case.require_case`).
 
@@ -612,6 +615,11 @@ def solve_powerflow(
     PST manual section 1.4.
     """
     case = require_case(case, "solve_powerflow(case)")
+    if not (0 < tol < 1 and isinstance(max_iter, Integral) and max_iter >= 1):
+        raise InputError(  # max_iter 0 was "no convergence within 0 iterations"
+            f"solve_powerflow: tol must be in (0, 1) pu and max_iter an int >= 1, got tol "
+            f"{tol!r}, max_iter {max_iter!r}"
+        )
     drop = tuple(int(d) for d in drop)
     _check_islands(case, drop)
     _note_shared_swing(case)
