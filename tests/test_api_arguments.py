@@ -23,6 +23,7 @@ def kundur():
         (lambda c: stabctl.linearise("kundur"), r"linearise\(target\): a stabctl Case or Sim"),
         (lambda c: stabctl.uniform_fleet("kundur", 5), r"uniform_fleet\(case\)"),
         (lambda c: stabctl.uniform_fleet(c, "5"), r"uniform_fleet\(pct\): a number of %"),
+        (lambda c: stabctl.modal_analysis(c.branches.x), r"modal_analysis\(sys\): a control"),
         (
             lambda c: stabctl.critical_clearing_time(c, stabctl.LineFault(3, 101)),
             r"critical_clearing_time\(sim\): a Simulator is needed .* got Case",

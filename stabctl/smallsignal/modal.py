@@ -280,6 +280,8 @@ def modal_analysis(
     InputError
         A model without machine speed states, n_areas out of range, areas missing a
         machine.
+    TypeError
+        `sys` not a state-space model with state names (a bare A matrix).
 
     Examples
     --------
@@ -292,6 +294,11 @@ def modal_analysis(
     >>> round(float(ma.freq_hz[k]), 3), str(ma.kind[k])
     (0.612, 'inter-area')
     """
+    if not hasattr(sys, "state_labels"):  # a matrix: no state names to find machines by
+        raise TypeError(
+            "modal_analysis(sys): a control.StateSpace with named states is needed "
+            f"(stabctl.linearise's), got {type(sys).__name__}"
+        )
     states = np.array(sys.state_labels)
     speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")])
     angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")])
