@@ -333,7 +333,22 @@ def _contingencies(
         pl.add_base(every, pl.brackets, kw)
     cons = contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
     _check_search_limit(pl, cons, requirement, overrides)
+    held = [c.name for c in cons if _held_at_limit(pl, c, overrides, requirement)]
+    if held:
+        pl.say(
+            f"{counted(len(held), 'contingency', 'contingencies')} stable without storage "
+            f"when cleared at the search limit t_max = {pl.t_max:g} s (a CCT above it: no "
+            f"gain a search can show), held to stay stable cleared there: {', '.join(held)}"
+        )
     return cons
+
+
+def _held_at_limit(pl: PlanContext, c, overrides, requirement: Requirement) -> bool:
+    """Whether contingency `c`'s gain requirement holds it at the search limit: stable
+    without storage when cleared at t_max (`Requirement.target_s`)."""
+    req = (overrides or {}).get(c.fault_name, requirement)
+    robust = (pl.base.get(c.name) or {}).get("above_t_max", False)
+    return bool(req.needs_base and robust and c.target_cct_s <= pl.t_max + TARGET_SLACK_S)
 
 
 def _check_search_limit(pl: PlanContext, cons, requirement: Requirement, overrides) -> None:
@@ -343,6 +358,8 @@ def _check_search_limit(pl: PlanContext, cons, requirement: Requirement, overrid
     its bound (the search limit, not the storage, bounding it)."""
     for c in cons:
         if c.target_cct_s < pl.t_max - TARGET_SLACK_S:
+            continue
+        if _held_at_limit(pl, c, overrides, requirement):  # robust: verified at t_max
             continue
         req = (overrides or {}).get(c.fault_name, requirement)
         cct = (pl.base.get(c.name) or {}).get("cct_s") if req.needs_base else None
@@ -706,7 +723,8 @@ def _uniform_start(pl: PlanContext, st: _Rounds, rnd: int, kw: Study) -> bool:
 
 def _rows(cons, checks, evs, base) -> list:
     """One row per contingency: name, fault, load, required time, stable at it, CCT
-    without storage and with the allocation where simulated, margin (s)."""
+    without storage (and whether it is only known above t_max) and with the allocation
+    where simulated, margin (s)."""
     out = []
     for c in cons:
         cct = evs.get(c.name, {}).get("cct_s")
@@ -719,6 +737,8 @@ def _rows(cons, checks, evs, base) -> list:
                 "required_s": c.target_cct_s,
                 "met": bool(checks[c.name]["stable_at_check"]) and (cct is None or c.met_by(cct)),
                 "cct_no_storage_s": base.get(c.name, {}).get("cct_s"),
+                # stable without storage cleared at t_max: its CCT only known above it
+                "cct_no_storage_above_t_max": bool(base.get(c.name, {}).get("above_t_max")),
                 "cct_s": cct,
                 "margin_s": None if cct is None else cct - c.target_cct_s,
                 "margin_at_least": False,

@@ -67,7 +67,13 @@ class Requirement:
         """Whether the target depends on the CCT without storage (a gain)."""
         return self.gain_pct is not None
 
-    def target_s(self, freq_hz: float, tol: float, base_cct_s: float | None = None) -> float:
+    def target_s(
+        self,
+        freq_hz: float,
+        tol: float,
+        base_cct_s: float | None = None,
+        base_robust: bool = False,
+    ) -> float:
         """The required clearing time (s), rounded up to the tolerance lattice.
 
         Parameters
@@ -78,6 +84,11 @@ class Requirement:
             CCT tolerance, s.
         base_cct_s : float or None
             CCT without storage, s (needed with a gain).
+        base_robust : bool, optional
+            The fault is stable without storage when cleared at the search limit,
+            `base_cct_s`: its CCT is only known to lie above it, so a gain holds it to stay
+            stable cleared there (no search could show a clearing time beyond it met);
+            default False.
 
         Raises
         ------
@@ -92,7 +103,7 @@ class Requirement:
         if self.gain_pct is not None:
             if base_cct_s is None:
                 raise InputError("a CCT gain needs the CCT without storage")
-            t.append(base_cct_s * (1 + self.gain_pct / 100))
+            t.append(base_cct_s * (1 if base_robust else 1 + self.gain_pct / 100))
         return round(float(np.ceil(max(t) / tol - 1e-6)) * tol, 12)
 
     def describe(self) -> str:
@@ -344,7 +355,9 @@ def contingencies_of(
 ) -> tuple:
     """One `Contingency` per fault and load level with its required clearing time (s):
     the fault's override (by fault name) or `requirement`; base (name -> evaluation
-    without storage) for gain requirements.  Raises InputError (a gain without base)."""
+    without storage) for gain requirements (a gain on a fault robust at the search limit
+    holds it stable cleared there: `Requirement.target_s`).  Raises InputError (a gain
+    without base)."""
     overrides = overrides or {}
     out = []
     for f in faults:
@@ -352,8 +365,9 @@ def contingencies_of(
         req = overrides.get(name, requirement)
         for load in load_levels:
             c = Contingency(f, 1.0, float(load))
-            b = None if base is None or c.name not in base else base[c.name]["cct_s"]
-            out.append(replace(c, target_cct_s=req.target_s(freq_hz, tol, b)))
+            ev = None if base is None else base.get(c.name)
+            b, robust = (None, False) if ev is None else (ev["cct_s"], ev.get("above_t_max"))
+            out.append(replace(c, target_cct_s=req.target_s(freq_hz, tol, b, bool(robust))))
     return tuple(out)
 
 

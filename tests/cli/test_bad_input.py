@@ -1221,6 +1221,29 @@ def test_a_target_the_search_limit_bounds_is_refused_not_called_infeasible(
     )
 
 
+def test_a_gain_on_a_fault_robust_at_the_search_limit_holds_it_there(tmp_path):
+    """A CCT gain on a fault stable without storage when cleared at --t-max (its CCT only
+    known to lie above it: bus 3's 0.238 s against 0.2 s) was refused as a target above
+    the search limit, stopping the plan of every fault (ACTIVSg2000's lines at 97 % load).
+    Such a fault is held to stay stable cleared at --t-max, named, and the plan goes on
+    (its line fault 3-101, CCT 0.150 s at 5 ms, gets its +5 %)."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n3,\n")
+    args = ["place", "kundur", "--faults", faults, "--workers", "1", "--tol-ms", "5"]
+    res = run(*args, "--target-cct-gain", "5", "--t-max", "0.2")
+    assert res.exit_code == 0, (res.output, res.stderr)
+    assert (
+        "1 contingency stable without storage when cleared at the search limit t_max = 0.2 s"
+        " (a CCT above it: no gain a search can show), held to stay stable cleared there: 3"
+    ) in res.stderr
+    assert "VERIFIED" in res.stdout
+    out = json.loads(run(*args, "--target-cct-gain", "5", "--t-max", "0.2", "--json").stdout)
+    rows = {c["name"]: c for c in out["contingencies"]}
+    assert {k: r["required_s"] for k, r in rows.items()} == {"3-101": 0.16, "3": 0.2}
+    assert [rows[k]["cct_no_storage_above_t_max"] for k in ("3-101", "3")] == [False, True]
+    assert out["verified"] is True and rows["3"]["met"] is True
+
+
 PLACE = ("place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5")
 
 
