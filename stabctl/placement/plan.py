@@ -355,7 +355,8 @@ def _check_search_limit(pl: PlanContext, cons, requirement: Requirement, overrid
     """InputError naming the first contingency whose target reaches the CCT search limit
     t_max: every CCT searched is at most t_max, so no allocation could be shown to meet
     it, and the loop would call it infeasible, its CCT "only" t_max with every site at
-    its bound (the search limit, not the storage, bounding it)."""
+    its bound (the search limit, not the storage, bounding it).  A contingency a gain
+    holds at t_max (stable there without storage: `_held_at_limit`) is no such target."""
     for c in cons:
         if c.target_cct_s < pl.t_max - TARGET_SLACK_S:
             continue
