@@ -78,3 +78,18 @@ def test_a_power_flow_s_settings_out_of_range_are_named(kundur, kw):
     """`max_iter=0` was reported as a power flow that did not converge."""
     with pytest.raises(stabctl.errors.InputError, match=r"tol must be in .* max_iter an int"):
         stabctl.solve_powerflow(kundur, **kw)
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"events": "3"}, r"run\(events\): each event is a Fault, .* got str '3'"),
+        ({"events": [None]}, r"run\(events\): .* got NoneType None"),
+        ({"storage": "5%"}, r"run\(storage\): a StorageFleet is needed .* got str"),
+    ],
+)
+def test_a_run_names_events_and_storage_of_the_wrong_kind(kundur, kw, said):
+    """A str or None among the events failed on ``.times()``, a str for the storage on
+    ``.model``: AttributeErrors from inside the simulator."""
+    with pytest.raises(TypeError, match=said):
+        stabctl.Simulator(kundur).run(t_end=0.2, **kw)

@@ -480,6 +480,9 @@ class Simulator:
         SimulationError
             A singular network or non-convergent loads (voltage collapse).  Both carry
             the partial result as ``.result``.
+        TypeError
+            An event that is no event class (a str, None), `storage` not a
+            `StorageFleet`.
         """
         semantics = self._semantics(semantics)
         _check_method(method, semantics, storage)
@@ -603,6 +606,11 @@ class Simulator:
         operating point: the batteries start idle), built once per fleet layout (bus,
         rating, energy and initial charge of each device, the battery fields; the
         MODELS_KEPT most recently used kept)."""
+        if storage is not None and not isinstance(storage, st.StorageFleet):
+            raise TypeError(
+                "run(storage): a StorageFleet is needed (stabctl.uniform_fleet(case, 5)), got "
+                f"{type(storage).__name__}"
+            )
         if storage is None or storage.model != "wecc" or self.battery_rows is not None:
             return self
         key = (

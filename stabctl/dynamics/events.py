@@ -36,12 +36,16 @@ from stabctl.case.events import as_record as as_record
 from stabctl.dynamics.model import StageConfig
 from stabctl.errors import CaseError, InputError
 
+#: the classes an event of a run may be (a case's own records' and a playback source)
+EVENT_TYPES = (*EVENT_KINDS.values(), Playback)
+
 
 def validate(case: Case, events, t_end: float) -> None:
     """Check every event against the case (buses, lines, machines, times finite and >= 0,
     the size of each load, VREF and PREF step and their running sums:
     `stabctl.case.events.check_event`, `check_totals`); raises UnknownBusError, CaseError,
-    InputError.  Events after t_end are allowed (not reached).
+    InputError, and TypeError for an object that is no event.  Events after t_end are
+    allowed (not reached).
     A circuit opened twice (a line trip of the line a fault's clearing opens, two trips of
     one circuit without a `LineClose` between) or a machine tripped twice is an InputError:
     the second would do nothing; so is a `LineClose` of a circuit that is not open then
@@ -49,6 +53,11 @@ def validate(case: Case, events, t_end: float) -> None:
     opened: dict = {}
     switchings: dict = {}
     for ev in events:
+        if not isinstance(ev, EVENT_TYPES):  # a str, None: failed on .times()
+            raise TypeError(
+                f"run(events): each event is a Fault, LineTrip, ... (stabctl.case.events), "
+                f"got {type(ev).__name__} {ev!r}"
+            )
         odd = [t for t in ev.times() if not np.isfinite(t)]
         if odd:  # a NaN time compares false with everything: such an event never came
             raise InputError(f"event {ev} has a time that is not a finite number ({odd[0]} s)")
