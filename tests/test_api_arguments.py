@@ -93,3 +93,8 @@ def test_a_run_names_events_and_storage_of_the_wrong_kind(kundur, kw, said):
     ``.model``: AttributeErrors from inside the simulator."""
     with pytest.raises(TypeError, match=said):
         stabctl.Simulator(kundur).run(t_end=0.2, **kw)
+
+
+def test_an_omib_parameter_that_is_no_number_is_named():
+    with pytest.raises(TypeError, match="OMIB: not a number: H = '3'"):
+        stabctl.OMIB(H="3", Pm=0.5, Pmax_pre=1.0, Pmax_fault=0.0, Pmax_post=1.0)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -52,6 +53,8 @@ class OMIB:
     InputError
         A parameter that is not a finite number, H or f0 not positive, Pm, D or a Pmax
         negative, or Pm >= Pmax of the pre- or post-fault network (no equilibrium).
+    TypeError
+        A parameter that is no number (a str).
     """
 
     H: float
@@ -66,6 +69,9 @@ class OMIB:
     def __post_init__(self):
         given = {k: getattr(self, k) for k in ("H", "Pm", "Pmax_pre", "Pmax_fault", "Pmax_post")}
         given.update(f0=self.f0, D=self.D, k_C=self.k_C)
+        text = [f"{k} = {v!r}" for k, v in given.items() if not isinstance(v, Real)]
+        if text:
+            raise TypeError(f"OMIB: not a number: {', '.join(text)}")
         odd = [f"{k} = {v}" for k, v in given.items() if not np.isfinite(v)]
         if odd:  # NaN compares false with every bound below
             raise InputError(f"OMIB: not a finite number: {', '.join(odd)}")
