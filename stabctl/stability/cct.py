@@ -546,11 +546,6 @@ def critical_clearing_time(
     >>> stabctl.critical_clearing_time(sim, fault, storage=fleet).cct_s
     0.199
     """
-    if not (hasattr(sim, "run") and hasattr(sim, "case")):
-        raise TypeError(
-            "critical_clearing_time(sim): a Simulator is needed (stabctl.Simulator(case)), "
-            f"got {type(sim).__name__}"
-        )
     if not isinstance(fault, LineFault):
         raise TypeError(
             "critical_clearing_time(fault): a LineFault is needed (LineFault(bus=3, "
@@ -564,6 +559,11 @@ def critical_clearing_time(
         raise InputError(f"provisional_s must be > 0 s or None, got {o.provisional_s:g}")
     if o.guess_s is not None and not 0 <= o.guess_s < math.inf:
         raise InputError(f"guess_s must be a clearing time >= 0 s or None, got {o.guess_s:g}")
+    if not (hasattr(sim, "run") and hasattr(sim, "case")):  # the settings checked first
+        raise TypeError(
+            "critical_clearing_time(sim): a Simulator is needed (stabctl.Simulator(case)), "
+            f"got {type(sim).__name__}"
+        )
     check_trips(sim.case, fault)
     if hasattr(sim, "check_separation_limit"):  # a Simulator: before any run
         sim.check_separation_limit(o.separation_limit)
