@@ -93,6 +93,9 @@ class Verdict(StabctlError):
     #: buses cut from every generator, t_s, buses, load_shed_pu, and each island apart from
     #: the main grid, t_s, buses, machines), set by the search; empty: none
     islanded: tuple = ()
+    #: the simulations the search ran to reach the verdict (set by the search; None: not
+    #: counted)
+    n_simulations: int | None = None
 
 
 class AboveSearchLimit(InputError, Verdict):

@@ -16,12 +16,13 @@ completes, so an interrupted sweep (Ctrl-C, a killed job) keeps every finished j
      "worker": "host:pid"}          (one line in the file)
     {"key": ..., "inputs": {...}, "status": "failed", "error": "SimulationError: ...", ...}
     {"key": ..., "inputs": {...}, "status": "verdict", "verdict": "N-1 insecure",
-     "reason": "...", ...}
+     "reason": "...", "n_simulations": 3, ...}
 
 A job that raises a `stabctl.errors.Verdict` (a robust fault, an N-1 insecure one) is
-recorded as that verdict, not as a failure.  A job that raises anything else is recorded
-as failed with the exception's type and message (and the
-traceback for anything but a stabctl error), never dropped; so is a job whose worker
+recorded as that verdict, not as a failure, with the runs that reached it when the study
+counted them (``n_simulations``) and its islanding, if any.  A job that raises anything
+else is recorded as failed with the exception's type and message (and the traceback for
+anything but a stabctl error), never dropped; so is a job whose worker
 process died in a local pool.  On Dask a job whose worker died runs again on another
 worker (the scheduler's ``distributed.scheduler.allowed-failures``, default 3) and is
 recorded failed only when it killed a worker each time (KilledWorker); each job is
@@ -171,6 +172,8 @@ def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
         rec = {"status": "verdict", "verdict": exc.label, "reason": " ".join(str(exc).split())}
         if exc.islanded:
             rec["islanded"] = list(exc.islanded)
+        if exc.n_simulations is not None:
+            rec["n_simulations"] = exc.n_simulations
     except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
         rec = _failure_fields(exc)
     return {

@@ -122,7 +122,8 @@ def test_kundur_cct_sweep_in_processes_then_resume(tmp_path):
 def test_failures_are_recorded_with_their_reason(tmp_path):
     """Errors are recorded as failed with their reason; a CCT above the search limit is a
     verdict (status "verdict", stabctl.errors.Verdict), not counted as failed and not
-    rerun by retry_failed."""
+    rerun by retry_failed, with the runs that reached it (the bisection's check at 0 and
+    its first probe, at t_max)."""
     out = tmp_path / "mixed.jsonl"
     too_low = Job(
         "cct-above-limit", cct_job, {"case": "kundur", "bus": 3, "far_bus": 101, "t_max": 0.1}
@@ -140,6 +141,7 @@ def test_failures_are_recorded_with_their_reason(tmp_path):
     above = recs["cct-above-limit"]
     assert (above["status"], above["verdict"]) == ("verdict", "above t_max")
     assert "above the search limit t_max = 0.1 s" in above["reason"]
+    assert above["n_simulations"] == 2
     # failed jobs are finished: skipped on resume unless retried
     assert run_sweep(jobs, out, workers=1, progress=False).ran == 0
     retry = run_sweep(jobs, out, workers=1, progress=False, retry_failed=True)
@@ -1434,6 +1436,13 @@ def _cct_record(**result):
         (
             {"key": "k", "status": "verdict", "verdict": "robust"},
             r"verdict \"robust\" is none of a CCT search's",
+        ),
+        *(
+            (
+                {"key": "k", "status": "verdict", "verdict": "above t_max", "n_simulations": n},
+                rf"^n_simulations {w} is not a count >= 1",
+            )
+            for n, w in ((0, "0"), (2.5, "2.5"), (True, "true"), ("3", '"3"'))
         ),
         *(
             ({**_cct_record(), "inputs": {"t_max": 1.0, "guess_s": g}}, rf"inputs\.guess_s {w}")

@@ -210,6 +210,7 @@ def cct(
                     "cct_s": 0.0,
                     "verdict": exc.label,
                     "reason": str(exc),
+                    "n_simulations": exc.n_simulations,
                     "islanded": list(exc.islanded),
                 }
             )
@@ -226,6 +227,7 @@ def cct(
                     "cct_s": None,
                     "above_t_max_s": search.t_max,
                     "verdict": str(exc),
+                    "n_simulations": exc.n_simulations,
                     "islanded": list(exc.islanded),
                 }
             )

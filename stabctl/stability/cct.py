@@ -575,8 +575,9 @@ def critical_clearing_time(
     wall = time.perf_counter()
     try:
         k_lo, k_hi, start = _search(probe, bounds)
-    except Verdict as exc:  # robust or N-1 insecure: the islanding goes with the verdict
+    except Verdict as exc:  # robust or N-1 insecure: the islanding and runs go with it
         exc.islanded = tuple(probe.islanded)
+        exc.n_simulations = probe.n_runs()
         raise
     probe.held.clear()  # the bracket is confirmed: no run is continued any more
     half = None
@@ -592,7 +593,7 @@ def critical_clearing_time(
         t_max_s=o.t_max,
         step_s=h,
         freq_hz=sim.case.freq_hz,
-        n_simulations=len(probe.probes[h]) + len(probe.probes[h / 2]) + probe.reruns,
+        n_simulations=probe.n_runs(),
         wall_time_s=time.perf_counter() - wall,
         criterion=getattr(probe.crit, "__name__", repr(probe.crit)),
         probes=tuple(probe.probes[h]),
@@ -744,6 +745,11 @@ class _Probes:
             k: (ok, self.margins.pop(k, _ABSENT), self.swings.pop(k, _ABSENT))
             for k, ok in self.verdicts.items()
         }
+
+    def n_runs(self) -> int:
+        """The simulations run so far (at the step and at h/2; a provisional run continued
+        counts once, one run again whole twice)."""
+        return len(self.probes[self.h]) + len(self.probes[self.h / 2]) + self.reruns
 
     def stable_at(self, k: int, step: float | None = None) -> bool:
         """The verdict at clearing time k*tol (s) and step `step` (s; default h):
@@ -1495,10 +1501,10 @@ def cct_record_problem(rec: dict) -> str | None:
     record's inputs; `T_MAX` without one), the CCT in cycles, the numerical error (None or
     >= 0), the number of simulations (an integer >= 1) and the separated machines (a list of
     machine numbers); a verdict is one a search gives (`AboveSearchLimit`,
-    `InsecureContingency`); an islanding log (``islanded``, of a CCT or a verdict) is a list
-    of stages, each with its buses (and machines) as lists of numbers.  The kinds of the
-    fields of any record (an object as result, texts as verdict and error) are checked
-    before (`stabctl.parallel`).
+    `InsecureContingency`), its number of simulations, if any, an integer >= 1; an
+    islanding log (``islanded``, of a CCT or a verdict) is a list of stages, each with its
+    buses (and machines) as lists of numbers.  The kinds of the fields of any record (an
+    object as result, texts as verdict and error) are checked before (`stabctl.parallel`).
 
     Parameters
     ----------
@@ -1530,6 +1536,8 @@ def cct_record_problem(rec: dict) -> str | None:
             f"verdict {shown(rec['verdict'])} is none of a CCT search's "
             f"({AboveSearchLimit.label!r}, {InsecureContingency.label!r})"
         )
+    if status == "verdict" and "n_simulations" in rec and not _count(rec["n_simulations"]):
+        return f"n_simulations {shown(rec['n_simulations'])} is not a count >= 1"
     r: dict = rec["result"] if status == "ok" else {}
     if status == "ok":
         cct, t_u = r.get("cct_s"), r.get("t_unstable_s")
@@ -1546,7 +1554,7 @@ def cct_record_problem(rec: dict) -> str | None:
         if "cct_cycles" not in r:
             return "result without cct_cycles"
         n = r.get("n_simulations")
-        if not (isinstance(n, int) and not isinstance(n, bool) and n >= 1):
+        if not _count(n):
             return f"result.n_simulations {shown(n)} is not a count >= 1"
         if not _numbers(r.get("separated_machines")):
             return (
@@ -1566,6 +1574,11 @@ def cct_record_problem(rec: dict) -> str | None:
         field = "result.islanded" if status == "ok" else "islanded"
         return f"{field} {shown(islanded)} is not a list of islanding stages with their buses"
     return None
+
+
+def _count(n) -> bool:
+    """Whether a record's value is a count of runs (an integer >= 1)."""
+    return isinstance(n, int) and not isinstance(n, bool) and n >= 1
 
 
 def _numbers(v) -> bool:

@@ -434,7 +434,8 @@ def test_cli_cct_names_a_generator_it_islands():
     """`cct` on G1's step-up transformer 1-10: the CCT of the rest (0.44 s at 20 ms) with
     G1 and bus 1 named as islanded, in --json and the text; on G2's, 2-20, the rest loses
     synchronism even when cleared at once (as tripping G2 alone: checked here), a verdict
-    that names the islanding too."""
+    that names the islanding too, and the one run that reached it (the check at 0 comes
+    first)."""
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import GeneratorTrip
 
@@ -447,7 +448,7 @@ def test_cli_cct_names_a_generator_it_islands():
     assert "bus(es) [1] islanded with machine(s) G1 (bus 1) apart from the main grid" in text
     g2 = run("cct", "kundur", "--fault", 2, "--far-bus", 20, "--tol-ms", 20, "--json")
     d = json.loads(g2.stdout)
-    assert (d["cct_s"], d["verdict"]) == (0.0, "N-1 insecure")
+    assert (d["cct_s"], d["verdict"], d["n_simulations"]) == (0.0, "N-1 insecure", 1)
     assert d["islanded"] == [{"t_s": 1.0, "buses": [2], "machines": [2]}]
     trip = Simulator(load_case("kundur")).run([GeneratorTrip(2, 1.0)], 6.0)
     assert own_coi_deviation(trip, [0, 2, 3]).max() > np.pi and not trip.stable

@@ -203,17 +203,18 @@ def test_a_gentle_run_at_t_max_makes_a_fault_robust_in_one_run(bus, far_bus, t_m
     """Kundur's bus-3 fault (CCT 0.238 s) and line 3-101 (0.154 s) under a t_max below
     their CCTs: the bisection's check at 0 and its doubling take 3 runs to the verdict;
     sime's first run, at t_max, is stable with no machine swung 1.5 rad from its angle to
-    the COI before the fault (0.45-0.71 rad), which settles it."""
+    the COI before the fault (0.45-0.71 rad), which settles it.  The verdict carries the
+    runs that reached it, as counted at the simulator."""
+    from stabctl.errors import AboveSearchLimit
     from stabctl.stability.cct import ROBUST_SWING, largest_swing
 
     sim = counting_runs(Simulator(load_case("kundur")))
     fault = LineFault(bus, far_bus)
     for method, runs in (("bisection", 3), ("sime", 1)):
         sim.runs[0] = 0
-        assert search_outcome(sim, fault, SearchOptions(method=method, t_max=t_max)) == (
-            "AboveSearchLimit"
-        )
-        assert sim.runs[0] == runs
+        with pytest.raises(AboveSearchLimit) as verdict:
+            critical_clearing_time(sim, fault, SearchOptions(method=method, t_max=t_max))
+        assert sim.runs[0] == runs == verdict.value.n_simulations
     res = sim.run(fault.events(t_max), fault.t_fault + 5.0)
     assert 0.3 < largest_swing(res) < ROBUST_SWING
 
