@@ -166,6 +166,7 @@ def default_workers() -> int:
 def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
     """Run one job (in a worker) and return its output record; never raises an Exception."""
     wall = time.perf_counter()
+    rec: dict
     try:
         rec = {"status": "ok", "result": func(dict(inputs))}
     except Verdict as exc:  # an answer without a number (robust, N-1 insecure)
