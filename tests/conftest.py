@@ -105,3 +105,20 @@ def wecc(miniwecc_case):
 def wecc_pstess(miniwecc_case):
     """Simulator of the miniWECC under the PSTess 1.1 conventions."""
     return Simulator(miniwecc_case, conventions="pstess")
+
+
+@pytest.fixture(scope="session")
+def psse_omib(tmp_path_factory):
+    """PSS/E's OMIB run's case (tests/data/psse_runs/OMIB_GENCLS: a GENCLS machine, bus
+    102, against an infinite bus, a GENCLS of H = 0 at bus 101, over two lines) imported
+    as a user does (`stabctl import-psse RAW DYR`); its file name."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    d = os.path.join(os.path.dirname(__file__), "data", "psse_runs", "OMIB_GENCLS")
+    out = str(tmp_path_factory.mktemp("omib") / "omib.json")
+    args = ["import-psse", f"{d}/OMIB.raw", f"{d}/OMIB.dyr", "-o", out]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    return out

@@ -723,10 +723,10 @@ def print_plan(case_name, d) -> None:
         "stable at their "
         f"required clearing time; solved for: {', '.join(d['active']) or 'none'}"
     )
-    click.echo(f"{'contingency':<18} {'required s':>10} {'no ESD s':>9} {'with s':>8}  met")
-    for r in d["contingencies"]:
-        if r["cct_s"] is None and r["met"]:
-            continue
+    rows = [r for r in d["contingencies"] if not (r["cct_s"] is None and r["met"])]
+    if rows:  # none when every contingency is set aside (each said below)
+        click.echo(f"{'contingency':<18} {'required s':>10} {'no ESD s':>9} {'with s':>8}  met")
+    for r in rows:
         f = lambda x: "-" if x is None else f"{x:.3f}"  # noqa: E731
         click.echo(
             f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "

@@ -22,6 +22,7 @@ from stabctl.cli.options import (
     model_options,
     out_file_option,
     parallel_options,
+    q_limits_option,
     read_fault_list,
     refuse_given,
     reports_errors,
@@ -173,6 +174,7 @@ from stabctl.errors import InputError
 )
 @parallel_options
 @model_options
+@q_limits_option
 @out_file_option(metavar="FILE.json", help="The result as JSON (written when done).")
 @json_option()
 @reports_errors
@@ -208,6 +210,7 @@ def place(
     scheduler,
     conventions,
     step,
+    q_limits,
     out_path,
     as_json,
 ):
@@ -298,7 +301,7 @@ def place(
         sites=sites,
         controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
         search=search,
-        model=model_settings(conventions, step),
+        model=model_settings(conventions, step, q_limits),
         runner=RunnerOptions(n, scheduler),
         esd_model=esd_model,
     )

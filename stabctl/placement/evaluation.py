@@ -35,6 +35,7 @@ from stabctl.stability.sime import (
     clearing_energy_rate,
     critical_machines,
     device_modes,
+    machine_inertia,
     omib_equivalent,
     storage_integrals,
     unstable_margin,
@@ -548,7 +549,7 @@ def devices_of_pairs(sites, mw) -> list:
 
 def _margin(result, crit, t_clear_abs: float, case):
     """(SIME margin, OMIB equivalent, index of the unstable point) of one run."""
-    eq = omib_equivalent(result, crit, case.base_mva, case.freq_hz)
+    eq = omib_equivalent(result, crit, case.base_mva, case.freq_hz, machine_inertia(case))
     k_u = unstable_point(eq, t_clear_abs)
     return unstable_margin(eq, k_u), eq, k_u
 

@@ -454,13 +454,13 @@ def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
     without zeta_min from the ESD columns of B alone (`linearise.esd_columns`: no A)."""
     from stabctl.smallsignal.damping import DampingModel, relay_df
     from stabctl.smallsignal.linearise import esd_columns, linearise
-    from stabctl.stability.sime import distribution_factors
+    from stabctl.stability.sime import distribution_factors, machine_inertia
 
     case = sim.case
     buses = list(dict.fromkeys(s.bus for s in sites))
     sys = esd_columns(sim, buses) if zeta_min is None else linearise(sim, esd_buses=buses)
     beta = distribution_factors(
-        sys, [s.bus for s in sites], case.machines.number, sim.inertia, case.base_mva
+        sys, [s.bus for s in sites], case.machines.number, machine_inertia(case), case.base_mva
     )
     if zeta_min is None:
         return beta, None
@@ -865,14 +865,23 @@ def _raise_if_infeasible(setup: _Setup, cuts, also: dict | None = None) -> None:
         raise InfeasibleError(
             "infeasible: "
             + "; ".join(
-                _infeasible_text(c, tried[c.name]) + (also or {}).get(c.name, "") for c in failing
+                _infeasible_text(c, tried[c.name], _no_storage_cct(setup, c))
+                + (also or {}).get(c.name, "")
+                for c in failing
             ),
             [c.name for c in failing],
         )
 
 
-def _infeasible_text(c: Contingency, tried) -> str:
-    """One proven-infeasible contingency: its CCT at each bound allocation simulated."""
+def _no_storage_cct(setup: _Setup, c: Contingency) -> float | None:
+    """The contingency's CCT without storage (s), when the loop has it."""
+    return (setup.base or {}).get(c.name, {}).get("cct_s")
+
+
+def _infeasible_text(c: Contingency, tried, base_cct: float | None = None) -> str:
+    """One proven-infeasible contingency: its CCT at each bound allocation simulated, and
+    its CCT without storage (`base_cct`, s, when known), said when every allocation
+    lowers it."""
     at = [
         f"{cct:.3f} s with every candidate site at its bound ({mw.sum():.0f} MW)"
         if k == 0
@@ -880,9 +889,16 @@ def _infeasible_text(c: Contingency, tried) -> str:
         f"linearised CCT at their bound ({mw.sum():.0f} MW)"
         for k, (mw, cct) in enumerate(tried)
     ]
+    ccts = [cct for _, cct in tried if cct is not None]
+    without = ""
+    if base_cct is not None:
+        lower = bool(ccts) and max(ccts) < base_cct
+        without = f" ({base_cct:.3f} s without storage" + (
+            ": the devices lower it, docs/placement.md section 8)" if lower else ")"
+        )
     return (
         f"{c.describe()} reaches a CCT of only {' and '.join(at)} against its target "
-        f"{c.target_cct_s:.3f} s, simulated"
+        f"{c.target_cct_s:.3f} s, simulated{without}"
     )
 
 

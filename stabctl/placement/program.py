@@ -67,17 +67,31 @@ class Site:
 
 
 def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tuple[Site, ...]:
-    """One site per generator (default every one, or the numbers in `machines`) at its HV
-    bus (`stabctl.storage.devices.hv_bus`), bounded at max_pct % of the machine's MVA; cost: a
-    mapping machine number -> cost per MW (default 1 for all).
+    """One site per generator (default every one but infinite buses, or the numbers in
+    `machines`) at its HV bus (`stabctl.storage.devices.hv_bus`), bounded at max_pct % of
+    the machine's MVA; cost: a mapping machine number -> cost per MW (default 1 for all).
 
-    Raises InputError for max_pct <= 0; CaseError for an unknown machine.
+    An infinite bus (a machine of H = 0) is no site: its speed is the reference, so a
+    device driven by it would idle (`stabctl.storage.control.relative_speeds`).
+
+    Raises InputError for max_pct <= 0 or an infinite bus named in `machines`; CaseError
+    for an unknown machine.
     """
     from stabctl.storage.devices import hv_bus
 
     if not max_pct > 0:
         raise InputError(f"largest site rating must be > 0 % of machine MVA, got {max_pct:g}")
-    nums = [int(k) for k in (case.machines.number if machines is None else machines)]
+    fixed = {int(k) for k, h in zip(case.machines.number, case.machines.H) if h == 0}
+    if machines is None:
+        nums = [int(k) for k in case.machines.number if int(k) not in fixed]
+    else:
+        nums = [int(k) for k in machines]
+        named = [k for k in nums if k in fixed]
+        if named:
+            raise InputError(
+                f"machine(s) {named} are infinite buses (H = 0, their speed the reference): "
+                "a device there would idle, so they are no ESD site"
+            )
     cost = cost or {}
     return tuple(
         Site(

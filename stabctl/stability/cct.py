@@ -125,7 +125,12 @@ from stabctl.errors import (
 )
 from stabctl.io.inputs import CsvRow, iter_csv, number
 from stabctl.network.ybus import circuit_row
-from stabctl.stability.sime import EarlyVerdict, critical_machines, probe_margin
+from stabctl.stability.sime import (
+    EarlyVerdict,
+    critical_machines,
+    machine_inertia,
+    probe_margin,
+)
 
 #: Default search settings (s): lower bound, first upper bound (doubled until unstable, up
 #: to the limit), the limit, tolerance, and the run length after the fault.
@@ -876,7 +881,9 @@ class _Probes:
             self.separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
         if o.method == "sime" and not ok and not dead:
             t_cl = self.fault.t_fault + t_clear
-            self.margins[k] = probe_margin(res, t_cl, case.base_mva, case.freq_hz)
+            self.margins[k] = probe_margin(
+                res, t_cl, case.base_mva, case.freq_hz, machine_inertia(case)
+            )
         if o.method == "sime" and ok and not provisional:
             self.swings[k] = largest_swing(res)
         return ok

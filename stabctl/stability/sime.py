@@ -62,10 +62,15 @@ class OmibEquivalent:
 
     def group_weights(self, beta: np.ndarray) -> np.ndarray:
         """g (n_dev,): effect of 1 pu drawn by each ESD on the OMIB accelerating power
-        (dimensionless; beta (n_mac, n_dev) as `distribution_factors`)."""
+        (dimensionless; beta (n_mac, n_dev) as `distribution_factors`); a group that holds
+        an infinite bus does not accelerate: its term is 0."""
         C, Mk = self.in_critical, self.M_machine
         N = ~C if self.in_rest is None else self.in_rest
-        return self.M * (beta[C].sum(axis=0) / Mk[C].sum() - beta[N].sum(axis=0) / Mk[N].sum())
+
+        def accel(g: np.ndarray):
+            return 0.0 if (g & (Mk == 0)).any() else beta[g].sum(axis=0) / Mk[g].sum()
+
+        return self.M * (accel(C) - accel(N))
 
 
 def critical_machines(result: SimulationResult) -> list[int]:
@@ -86,15 +91,39 @@ def critical_machines(result: SimulationResult) -> list[int]:
     return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]
 
 
+def machine_inertia(case) -> np.ndarray:
+    """H * MVA of each machine of `case` (MW s, (n_mac,)): 0 for an infinite bus (H = 0).
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    ndarray, shape (n_mac,)
+        The machines' stored energies at rated speed, MW s (MJ).
+    """
+    return np.asarray(case.machines.H, float) * np.asarray(case.machines.mva, float)
+
+
 def omib_equivalent(
-    result: SimulationResult, critical, base_mva: float, freq_hz: float
+    result: SimulationResult, critical, base_mva: float, freq_hz: float, inertia=None
 ) -> OmibEquivalent:
     """The OMIB of `result` for the critical machines `critical` (numbers), against the
     rest of the machines the criterion judges at the end of the run
     (`SimulationResult.judged`: every machine, but those tripped or islanded apart from
     the main grid).
 
-    Raises InputError when the critical group is empty or holds every judged machine.
+    `inertia` (n_mac,) is each machine's H * MVA (MW s, `machine_inertia`); None: the
+    run's COI weights (`SimulationResult.inertia`), which are those unless an island holds
+    an infinite bus (then 1 for it and 0 for the island's other machines).  A group that
+    holds an infinite bus (a machine of H = 0, `stabctl.case.system.MachineTable`) has
+    infinite inertia: its centre of inertia is its infinite buses' (their mean), and the
+    OMIB's M is the other group's (the paper's Section 2 OMIB against an infinite bus).
+
+    Raises InputError when the critical group is empty or holds every judged machine, or
+    when both groups hold an infinite bus (no OMIB moves).
     """
     C = np.isin(result.machines, list(critical))
     judged = result.judged
@@ -104,22 +133,36 @@ def omib_equivalent(
             f"critical group {list(critical)} must be a proper, non-empty subset of the machines"
         )
     ws = 2 * np.pi * freq_hz
-    Mk = 2 * np.asarray(result.inertia, float) / (base_mva * ws)
-    MC, MN = Mk[C].sum(), Mk[N].sum()
-    delta = coi_angle(result.angle[:, C], Mk[C]) - coi_angle(result.angle[:, N], Mk[N])
-    omega = ws * (coi_speed(result.speed[:, C], Mk[C]) - coi_speed(result.speed[:, N], Mk[N]))
+    Mk = 2 * np.asarray(result.inertia if inertia is None else inertia, float) / (base_mva * ws)
+    (dC, wC, MC), (dN, wN, MN) = (_group_coi(result, Mk, g) for g in (C, N))
+    if MC == MN == np.inf:
+        raise InputError(
+            f"critical group {list(critical)} and the rest each hold an infinite bus: "
+            "no equivalent machine swings between them"
+        )
+    delta, omega = dC - dN, ws * (wC - wN)
     sigma = 1 if delta[-1] >= delta[0] else -1
     return OmibEquivalent(
         t=result.t,
         delta=sigma * delta,
         omega=sigma * omega,
-        M=MC * MN / (MC + MN),
+        M=MN if MC == np.inf else MC if MN == np.inf else MC * MN / (MC + MN),
         critical=tuple(int(k) for k in critical),
         sigma=sigma,
         in_critical=C,
         M_machine=Mk,
         in_rest=None if judged.all() else N,
     )
+
+
+def _group_coi(result: SimulationResult, Mk: np.ndarray, group: np.ndarray) -> tuple:
+    """(COI angle (n_t,) rad, COI speed (n_t,) pu, inertia M pu*s^2/rad) of the machines
+    `group` (bool, (n_mac,)); with an infinite bus (M_k = 0) among them, the mean of the
+    infinite buses' and M = inf."""
+    fixed = group & (Mk == 0)
+    sel, w = (fixed, np.ones(int(fixed.sum()))) if fixed.any() else (group, Mk[group])
+    M = np.inf if fixed.any() else float(Mk[group].sum())
+    return coi_angle(result.angle[:, sel], w), coi_speed(result.speed[:, sel], w), M
 
 
 def unstable_point(eq: OmibEquivalent, t_clear: float) -> int:
@@ -226,16 +269,22 @@ def distribution_factors(sys, buses, machines, inertia, base_mva: float) -> np.n
     numbers, in that order). Columns sum to ~1 (less the change of losses and voltage-dependent
     loads).
 
+    An infinite bus (inertia 0: its speed held, no state) gets a row of 0: what it
+    takes moves no machine's speed.
+
     Raises InputError when a bus has no ESD input in the model.
     """
     states, inputs = list(sys.state_labels), list(sys.input_labels)
-    rows = [states.index(f"mac_omega_G{int(k)}") for k in machines]
+    inertia = np.asarray(inertia, float)
+    held = inertia == 0
+    rows = [states.index(f"mac_omega_G{int(k)}") for k, h in zip(machines, held) if not h]
     missing = [int(b) for b in buses if f"P_esd_B{int(b)}" not in inputs]
     if missing:
         raise InputError(f"the linearised model has no ESD input at bus(es) {missing}")
     cols = [inputs.index(f"P_esd_B{int(b)}") for b in buses]
-    B = np.asarray(sys.B)[np.ix_(rows, cols)]
-    return -(2 * np.asarray(inertia, float) / base_mva)[:, None] * B
+    beta = np.zeros((inertia.size, len(cols)))
+    beta[~held] = -(2 * inertia[~held] / base_mva)[:, None] * np.asarray(sys.B)[np.ix_(rows, cols)]
+    return beta
 
 
 # -- early verdicts and the margin of a probe (the CCT search, `stabctl.stability.cct`) ------
@@ -398,7 +447,9 @@ def _swings_died_down(delta, omega, returns: int) -> bool:
     return abs(ext[-1] - ext[-2]) <= abs(ext[-2] - ext[-3])
 
 
-def probe_margin(result: SimulationResult, t_clear: float, base_mva, freq_hz) -> float | None:
+def probe_margin(
+    result: SimulationResult, t_clear: float, base_mva, freq_hz, inertia=None
+) -> float | None:
     """SIME's unstable margin of an unstable probe of a CCT search.
 
     Parameters
@@ -409,6 +460,8 @@ def probe_margin(result: SimulationResult, t_clear: float, base_mva, freq_hz) ->
         Clearing instant, s (absolute run time).
     base_mva, freq_hz : float
         The case's base (MVA) and frequency (Hz).
+    inertia : ndarray, shape (n_mac,), or None, optional
+        The machines' H * MVA, MW s (`machine_inertia`; `omib_equivalent`).
 
     Returns
     -------
@@ -420,7 +473,7 @@ def probe_margin(result: SimulationResult, t_clear: float, base_mva, freq_hz) ->
         extrapolate to it.
     """
     try:
-        eq = omib_equivalent(result, critical_machines(result), base_mva, freq_hz)
+        eq = omib_equivalent(result, critical_machines(result), base_mva, freq_hz, inertia)
     except InputError:
         return None
     return unstable_margin(eq, unstable_point(eq, t_clear))

@@ -57,7 +57,7 @@ def closed_form_setup(target_s):
     """A contingency whose CCT is the linear function 0.2 s + 1e-4 s/MW P_1 - 2e-4 s/MW
     P_2 of two sites' ratings (100 MW bounds): the device at site 2 lowers it, as the
     paper's law can (docs/placement.md section 8).  verify evaluates it exactly and
-    counts its calls."""
+    counts its calls; the CCT without storage is 0.2 s."""
     c = Contingency(LineFault(1, 2), target_s)
     calls = []
 
@@ -66,7 +66,11 @@ def closed_form_setup(target_s):
         return {c.name: {"cct_s": 0.2 + 1e-4 * mw[0] - 2e-4 * mw[1]} for c in which}
 
     setup = types.SimpleNamespace(
-        contingencies=(c,), upper=np.array([100.0, 100.0]), bound_ccts={}, verify=verify
+        contingencies=(c,),
+        upper=np.array([100.0, 100.0]),
+        bound_ccts={},
+        verify=verify,
+        base={c.name: {"cct_s": 0.2}},
     )
     cut = CCTCut(c.name, target_s, 0.2, np.array([1e-4, -2e-4]), np.zeros(2))
     return setup, cut, calls
@@ -76,7 +80,8 @@ def test_a_device_that_lowers_the_cct_is_not_forced_into_the_infeasibility_proof
     """Every site at its bound gives 0.19 s, site 1 alone 0.21 s: a target of 0.21 s is
     met, so no verdict (the proof used to simulate every site at its bound only and set
     such a contingency aside); 0.22 s is missed at both, and the verdict names both
-    CCTs.  Each bound allocation is simulated once."""
+    CCTs and the one without storage (which site 1 alone raises: no word of storage
+    lowering it).  Each bound allocation is simulated once."""
     setup, cut, calls = closed_form_setup(0.21)
     ub, helpful = bound_allocations(cut, setup.upper)
     assert list(ub) == [100.0, 100.0] and list(helpful) == [100.0, 0.0]
@@ -85,9 +90,66 @@ def test_a_device_that_lowers_the_cct_is_not_forced_into_the_infeasibility_proof
     setup, cut, calls = closed_form_setup(0.22)
     with pytest.raises(InfeasibleError, match=r"0\.190 s with every.* and 0\.210 s with only"):
         _raise_if_infeasible(setup, [cut])
+    with pytest.raises(InfeasibleError, match=r"simulated \(0\.200 s without storage\)$"):
+        _raise_if_infeasible(setup, [cut])
     with pytest.raises(InfeasibleError) as exc:
         _raise_if_infeasible(setup, [cut])
     assert exc.value.contingencies == ("1-2",) and len(calls) == 2  # memoised
     # a cut whose every site helps: one allocation, every site at its bound
     every = CCTCut("1-2", 0.22, 0.2, np.array([1e-4, 2e-4]), np.zeros(2))
     assert len(bound_allocations(every, setup.upper)) == 1
+
+
+def test_a_machine_against_an_infinite_bus_gets_a_site_the_infinite_bus_none(psse_omib, tmp_path):
+    """PSS/E's OMIB: the infinite bus (machine 1, H = 0, its speed the reference) is no
+    candidate site (named, it is refused) and takes no share of what a device draws
+    (its distribution factor 0; the machine's between 0 and 1); `place` plans without a
+    traceback, and a contingency set aside says its CCT without storage (the CCT search's)
+    and that the device lowers it: at bus 102 the 0.8 pu voltage gate idles it while
+    the machine still runs ahead (docs/placement.md section 8)."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.errors import InputError
+    from stabctl.placement.program import candidate_sites
+    from stabctl.smallsignal.linearise import esd_columns
+    from stabctl.stability.cct import critical_clearing_time
+    from stabctl.stability.sime import distribution_factors, machine_inertia
+
+    case = load_case(psse_omib)
+    assert [s.machine for s in candidate_sites(case)] == [2]
+    with pytest.raises(InputError, match=r"machine\(s\) \[1\] are infinite buses"):
+        candidate_sites(case, machines=[1, 2])
+    sim = Simulator(case)
+    beta = distribution_factors(
+        esd_columns(sim, [102]), [102], [1, 2], machine_inertia(case), case.base_mva
+    )
+    assert beta[0, 0] == 0 and 0 < beta[1, 0] < 1
+    base = critical_clearing_time(sim, LineFault(102, None)).cct_s
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n102,\n")
+    res = CliRunner().invoke(
+        main,
+        ["place", psse_omib, "--faults", str(faults), "--target-cct-gain", "10",
+         "--set-aside-infeasible", "--workers", "1"],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    assert f"({base:.3f} s without storage: the devices lower it" in res.output
+
+
+def test_place_takes_the_power_flow_without_q_limits_a_case_needs(tmp_path):
+    """ANDES's Kundur system with an induction motor converges only with the PV buses'
+    Q limits off (ANDES's own power flow): `place` refuses it with Q limits on, naming
+    the option, and with `--no-q-limits` (as `simulate`, `cct` and `screen` take it)
+    plans and verifies it."""
+    andes = pytest.importorskip("andes")
+    case = str(tmp_path / "kundur_motor.json")
+    src = andes.get_case("kundur/kundur_motor.xlsx")
+    res = CliRunner().invoke(main, ["import-andes", src, "-o", case])
+    assert res.exit_code == 0, res.output
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n6,7\n")
+    args = ["place", case, "--faults", str(faults), "--target-cct-gain", "10", "--workers", "1"]
+    refused = CliRunner().invoke(main, args)
+    assert refused.exit_code == 2 and "--no-q-limits" in refused.output
+    res = CliRunner().invoke(main, [*args, "--no-q-limits"])
+    assert res.exit_code == 0, res.output
+    assert "VERIFIED" in res.output

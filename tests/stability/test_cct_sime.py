@@ -300,3 +300,29 @@ def test_a_run_at_t_max_that_fails_while_the_fault_is_on_is_left_to_the_doubling
     opts = SearchOptions(method="sime", t_max=0.2)
     assert search_outcome(sim, LineFault(3, None), opts) == "AboveSearchLimit"
     assert sim.runs[0] == 3  # the failed run, 0.1 s, 0.2 s again
+
+
+def test_sime_against_an_infinite_bus_is_the_machine_s_own_omib(psse_omib):
+    """PSS/E's OMIB (machine 2 against the infinite bus, H = 0, of machine 1): SIME's
+    equivalent is the machine itself, M = 2 H S / (S_base w_s) and delta its angle from
+    the infinite bus's (the paper's Section 2 OMIB), and the sime search ends in the
+    bisection's cell of the fault at bus 102 on line 102-101 (it raised in the
+    centre of inertia of the infinite bus's group, which weighs nothing in the run's COI
+    weights)."""
+    from stabctl.stability.sime import machine_inertia, omib_equivalent
+
+    case = load_case(psse_omib)
+    sim = Simulator(case)
+    fault = LineFault(102, 101)
+    ref = critical_clearing_time(sim, fault, SearchOptions(method="bisection"))
+    res = critical_clearing_time(sim, fault, SearchOptions(method="sime"))
+    assert res.bracket == ref.bracket
+    run = sim.run(fault.events(ref.t_unstable), fault.t_fault + 5.0, stop_at_separation=True)
+    assert not run.stable and list(run.inertia) == [1.0, 0.0]  # the COI weights
+    h, mva = case.machines.H[1], case.machines.mva[1]
+    ws = 2 * np.pi * case.freq_hz
+    for critical in ([2], [1]):  # either group named critical: the same equivalent
+        eq = omib_equivalent(run, critical, case.base_mva, case.freq_hz, machine_inertia(case))
+        assert eq.M == pytest.approx(2 * h * mva / (case.base_mva * ws), rel=1e-12)
+        gap = run.angle[:, 1] - run.angle[:, 0]
+        assert np.allclose(eq.delta, gap if gap[-1] >= gap[0] else -gap, atol=1e-12)
