@@ -648,6 +648,12 @@ def _or_dash(value, spec: str = ".2f") -> str:
     return format(value, spec)
 
 
+def _buses_of_sites(d: dict) -> str:
+    """`` on 1 bus`` when a plan's sites (one per machine) share buses, else nothing."""
+    n = d.get("n_buses", d["n_sites"])
+    return "" if n == d["n_sites"] else f" on {counted(n, 'bus', 'buses')}"
+
+
 def print_placement(case_name, d) -> None:
     """Print the `place` result as text.
 
@@ -705,7 +711,8 @@ def print_plan(case_name, d) -> None:
         f"case {case_name} ({d['requirement']}; load levels "
         f"{', '.join(f'{x:g}' for x in d['load_levels'])}; "
         f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}): {d['total_mw']:.1f} MW, "
-        f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s), cost {c['total']:.1f} "
+        f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s){_buses_of_sites(d)}, "
+        f"cost {c['total']:.1f} "
         f"in the --cost-* options' unit (MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, "
         f"sites {c['site']:.1f}); {_plan_verdict(d)} ({d['message']})"
     )

@@ -124,6 +124,7 @@ class PlanResult:
             "total_mw": self.total_mw,
             "total_mwh": float(self.mwh.sum()),
             "n_sites": int(np.count_nonzero(self.mw)),
+            "n_buses": len({r["bus"] for r in self.allocation()}),
             "cost": self.cost,
             "n_contingencies": len(self.contingencies),
             "n_met": len(met),

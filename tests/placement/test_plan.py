@@ -591,3 +591,24 @@ def test_a_last_round_that_sets_aside_keeps_an_allocation_meeting_the_rest(monke
     assert [c["name"] for c in res.contingencies] == ["3-101"] and res.contingencies[0]["met"]
     assert independently_stable("kundur", faults[0], 0.2, res.allocation())
     assert not independently_stable("kundur", faults[0], 0.2, [])
+
+
+def test_sites_that_share_a_bus_are_counted_with_their_buses(capsys):
+    """One site per machine: two machines behind one HV bus (as Nordic 44's five units at
+    bus 6100) make two sites on one bus, and the plan's summary says so; a third site
+    left at 0 MW counts neither."""
+    from stabctl.cli.format import print_plan
+    from stabctl.placement.plan import PlanResult
+    from stabctl.placement.program import Site
+
+    sites = (Site(6100, 1, 100.0), Site(6100, 2, 100.0), Site(10, 3, 100.0))
+    res = PlanResult(
+        case="x", requirement="CCT +5 %", load_levels=(1.0,), sites=sites,
+        mw=np.array([10.0, 20.0, 0.0]), mwh=np.array([0.1, 0.2, 0.0]),
+        cost={"total": 30.0, "mw": 30.0, "mwh": 0.0, "site": 0.0}, verified=True,
+        contingencies=[], rounds=[], active=[], message="verified",
+    )  # fmt: skip
+    d = res.to_dict()
+    assert (d["n_sites"], d["n_buses"]) == (2, 1)
+    print_plan("x", d)
+    assert "0.30 MWh at 2 site(s) on 1 bus, cost 30.0" in capsys.readouterr().out
