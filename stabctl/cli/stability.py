@@ -424,7 +424,11 @@ def sweep_cct(
 @click.command()
 @click.argument("case_name", metavar="CASE")
 @click.option(
-    "--buses", default=None, metavar="B1,B2,...", help="Buses to fault (default: every bus)."
+    "--buses",
+    default=None,
+    metavar="B1,B2,...",
+    help="Buses to fault (default: every bus); --lines still faults every branch "
+    "(some branches only: `stabctl sweep-cct --faults FILE.csv`).",
 )
 @click.option(
     "--lines",
