@@ -308,7 +308,8 @@ def place(
     result = plan(
         case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
     )
-    out = {"case": case.name, "esd_model": esd_model, **result.to_dict()}
+    out = {"case": case.name, "esd_model": esd_model, "settings": _settings(study)}
+    out.update(result.to_dict())
     if as_json:
         print_json(out)
     else:
@@ -317,6 +318,26 @@ def place(
         atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if not result.verified:
         sys.exit(1)
+
+
+def _settings(study) -> dict:
+    """The plan's numerical and control settings, as its JSON records them: the model
+    (conventions, step h in s or None for the case's default, Q limits, multi-rate
+    exciters), the CCT search (tolerance, t_max, run end in s) and the devices' law."""
+    m, s, c = study.model, study.search, study.controller
+    return {
+        "conventions": m.conventions,
+        "h": m.h,
+        "q_limits": m.q_limits,
+        "subintervals": m.subintervals,
+        **s.to_inputs(),
+        "controller": {
+            "deadband_hz": c.deadband_hz,
+            "v_gate_pu": c.v_gate_pu,
+            "coi": c.coi,
+            "hysteresis_hz": c.hysteresis_hz,
+        },
+    }
 
 
 #: the load levels place takes, fractions of the base load: from a tenth of it to ten

@@ -4,6 +4,7 @@ checked against the definition of a verified plan by independent simulation, and
 infeasibility verdict that keeps a device which lowers a CCT out of its proof (checked
 against a closed-form CCT)."""
 
+import json
 import types
 
 import numpy as np
@@ -139,7 +140,7 @@ def test_place_takes_the_power_flow_without_q_limits_a_case_needs(tmp_path):
     """ANDES's Kundur system with an induction motor converges only with the PV buses'
     Q limits off (ANDES's own power flow): `place` refuses it with Q limits on, naming
     the option, and with `--no-q-limits` (as `simulate`, `cct` and `screen` take it)
-    plans and verifies it."""
+    plans and verifies it, its JSON recording the setting."""
     andes = pytest.importorskip("andes")
     case = str(tmp_path / "kundur_motor.json")
     src = andes.get_case("kundur/kundur_motor.xlsx")
@@ -150,6 +151,7 @@ def test_place_takes_the_power_flow_without_q_limits_a_case_needs(tmp_path):
     args = ["place", case, "--faults", str(faults), "--target-cct-gain", "10", "--workers", "1"]
     refused = CliRunner().invoke(main, args)
     assert refused.exit_code == 2 and "--no-q-limits" in refused.output
-    res = CliRunner().invoke(main, [*args, "--no-q-limits"])
+    res = CliRunner().invoke(main, [*args, "--no-q-limits", "--json"])
     assert res.exit_code == 0, res.output
-    assert "VERIFIED" in res.output
+    d = json.loads(res.stdout)
+    assert d["verified"] and d["settings"]["q_limits"] is False
