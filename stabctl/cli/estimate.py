@@ -34,6 +34,7 @@ from stabctl.cli.options import (
     json_option,
     model_options,
     out_file_option,
+    q_limits_option,
     refuse_given,
     reports_errors,
     storage_options,
@@ -184,6 +185,7 @@ def _runs_seed(func):
     "drawing --runs streams here; one run, no runs without fault.",
 )
 @model_options
+@q_limits_option
 @json_option("the figures")
 @reports_errors
 def rmse(
@@ -218,6 +220,7 @@ def rmse(
     source,
     conventions,
     step,
+    q_limits,
     as_json,
 ):
     """Errors of the speed estimators against the truth, and false ESD actions.
@@ -281,7 +284,7 @@ def rmse(
         esd_pct=esd_pct,
         settle_s=settle_ms / 1000,
         t_end=tf,
-        model=model_settings(conventions, step),
+        model=model_settings(conventions, step, q_limits),
         esd_model=esd_model,
         source=src,
     )
@@ -355,6 +358,7 @@ def _check_positive(**values) -> None:
     "(round trips measured).",
 )
 @model_options
+@q_limits_option
 @json_option("the verdicts")
 @reports_errors
 def closed_loop(
@@ -382,6 +386,7 @@ def closed_loop(
     transport,
     conventions,
     step,
+    q_limits,
     as_json,
 ):
     """The fault simulated with the ESDs commanded by each estimator in the loop.
@@ -409,7 +414,7 @@ def closed_loop(
         seed=seed,
         control=controller(deadband_hz, v_gate, coi, hysteresis_hz),
         deadband_hz=deadband_hz,
-        model=model_settings(conventions, step),
+        model=model_settings(conventions, step, q_limits),
         esd_model=esd_model,
         transport=transport,
     )
@@ -438,6 +443,7 @@ def closed_loop(
 @_runs_seed
 @esd_model_option
 @model_options
+@q_limits_option
 @json_option("the CCTs")
 @reports_errors
 def cct(
@@ -453,6 +459,7 @@ def cct(
     esd_model,
     conventions,
     step,
+    q_limits,
     as_json,
 ):
     """CCT of the fault line with each estimator in the loop, over --runs noise seeds.
@@ -467,10 +474,10 @@ def cct(
     check_latency(
         settings, ev.t, t_end, f"the runs' end {t_end:g} s (the fault at {ev.t:g} s + 5 s)"
     )
-    model = model_settings(conventions, step)
+    model = model_settings(conventions, step, q_limits)
     check_step_given(case, model)  # before the searches: not one failure per run
     table = estimator_ccts(
-        case.name,
+        case_name,  # the file given, not the case's name: an edited copy of a built-in
         fault,
         far_bus,
         esd_pct=esd_pct,

@@ -24,6 +24,7 @@ from stabctl.cli.options import (
     fault_options,
     json_option,
     model_options,
+    q_limits_option,
     refuse_given,
     reports_errors,
     storage_options,
@@ -214,6 +215,7 @@ def _listening(func):
     help="One stream per PMU, on consecutive ports from --port (read them with "
     "--source tcp://HOST:P1-P2).",
 )
+@q_limits_option
 @reports_errors
 def serve(
     case_name,
@@ -238,6 +240,7 @@ def serve(
     timeout,
     wait,
     each_pmu,
+    q_limits,
 ):
     """Simulate CASE through a line fault and serve one PMU per generator as one IEEE
     C37.118.2 stream on HOST:PORT, to one PDC: CFG-2 and header on request, then the data
@@ -262,7 +265,7 @@ def serve(
     Example:
       stabctl pmu serve miniwecc --fault 83 --far-bus 33 --tf 60 --port 4712
     """
-    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import c37
     from stabctl.estimation import pmu as pm
     from stabctl.estimation.c37_tcp import StreamServer
@@ -277,7 +280,7 @@ def serve(
             f"{port + len(pmus) - 1}, beyond 65535 (give --port <= {65536 - len(pmus)}, "
             "or 0 for any free ones)"
         )
-    res = Simulator(case).run([ev], t_end=tf)
+    res = ModelOptions(q_limits=q_limits).simulator(case).run([ev], t_end=tf)
     frames = list(pm.measure(pm.phasor_truth(case, res, pmus, window_cycles), settings, seed))
     # one stream of every PMU, or one per PMU: every stream IDCODE 1, the one a client's
     # commands address (`--idcode`), PMU k's block 2 + k either way
@@ -537,6 +540,7 @@ def _host_port(address: str) -> tuple[str, int]:
     help="Longest wait for the controller to connect, and for each whole answer (s).",
 )
 @model_options
+@q_limits_option
 @json_option("the verdict and the link's figures")
 @reports_errors
 def plant(
@@ -568,6 +572,7 @@ def plant(
     timeout,
     conventions,
     step,
+    q_limits,
     as_json,
 ):
     """Simulate CASE through a line fault with one ESD per generator commanded over the
@@ -604,7 +609,7 @@ def plant(
         f"plant: PMUs of {case.name} on {hostport(*a)} (C37.118.2); waiting for a controller",
         err=True,
     )
-    sim = model_settings(conventions, step).simulator(case)
+    sim = model_settings(conventions, step, q_limits).simulator(case)
     run = cl.run_closed_loop(
         sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout, speed or _INF, peers)
     )

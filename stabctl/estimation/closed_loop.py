@@ -704,7 +704,7 @@ def cct_study(
     Parameters
     ----------
     case : str
-        Built-in case name.
+        A built-in case's name or a case file (`stabctl.io.load_case`; each job loads it).
     fault : LineFault
         The faulted line (fault at ``fault.bus``, at ``fault.t_fault``).
     ratings : sequence of float

@@ -306,6 +306,8 @@ def estimator_ccts(
     Parameters
     ----------
     case_name : str
+        A built-in case's name or a case file (`stabctl.io.load_case`): the file given is
+        simulated, not the built-in case its ``name`` field may name.
     bus, far_bus : int
         The faulted line.
     esd_pct : float

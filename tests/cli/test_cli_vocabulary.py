@@ -259,3 +259,14 @@ def test_docs_synopses_show_the_defaults():
                 if float(value) != float(p.default):
                     wrong.append(f"{cname} {oname}: {value} in docs/cli.md, {p.default} in --help")
     assert checked > 20 and not wrong, "\n".join(wrong)
+
+
+def test_every_command_that_runs_the_case_takes_its_power_flow_without_q_limits():
+    """A case that converges only with the PV buses' Q limits off (ANDES's converter
+    cases) is refused with a hint to give --no-q-limits: every command that simulates the
+    case (its --step) takes it, as do eig and pmu serve (their runs at the case's own
+    step); place, estimate and pmu plant did not."""
+    runs = {c for c, cmd in COMMANDS.items() if "--step" in _options(cmd)}
+    runs |= {"eig", "pmu serve"}
+    assert {"place", "estimate rmse", "estimate closed-loop", "estimate cct", "pmu plant"} <= runs
+    assert [c for c in sorted(runs) if "--q-limits" not in _options(COMMANDS[c])] == []
