@@ -623,7 +623,7 @@ def track(
         )
         raise
     why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
-    kept = f"{counted(len(got.frames), 'frame')} tracked"
+    kept = f"{_instants(got)} tracked"
     if got.short:
         refuse_short_over(out_path, why, kept)
     try:
@@ -647,7 +647,7 @@ def track(
     _write_track(out_path, ctrl, d, esd_pct is not None)
     worst = np.unravel_index(np.argmax(np.abs(d.rel)), d.rel.shape) if d.rel.size else None
     click.echo(
-        f"tracked {counted(len(got.frames), 'frame')} from {src} with {estimator}"
+        f"tracked {_instants(got)} from {src} with {estimator}"
         + (
             ""
             if worst is None
@@ -662,6 +662,20 @@ def track(
     )
     if got.short:
         fail_short(out_path, why, kept)
+
+
+def _instants(got) -> str:
+    """What `estimate track` tracked: its frames, or, where gaps were filled with missing
+    values (`stabctl.estimation.sources.Gap`), the reporting instants, the received apart
+    from the filled."""
+    n = len(got.frames)
+    filled = sum(g.frames for g in got.gaps if g.filled)
+    if not filled:
+        return counted(n, "frame")
+    return (
+        f"{counted(n, 'reporting instant')} ({n - filled} received, {filled} of gaps "
+        "filled with missing values)"
+    )
 
 
 def _write_track(out_path, ctrl, d, with_modes: bool) -> None:
