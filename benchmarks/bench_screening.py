@@ -9,7 +9,8 @@ judged on the CPU time of the command and its workers divided by the workers (th
 time moves with other work on the machine).  Each run starts from an empty records file
 (nothing resumed); the times include starting the workers and loading their kernels.
 Printed: the settings, the verdicts, the simulations a CCT (bus and branch faults apart,
-the branch faults searched from their bus fault's CCT apart again) and, with --compare,
+the branch faults searched from their bus fault's CCT apart again), the simulations a
+search with the verdicts' runs counted too (a robust fault's one run) and, with --compare,
 how many faults have the same verdict, 1 ms cell and half-step CCT as an earlier records
 file (matched by key).
 
@@ -65,6 +66,18 @@ def _runs(recs: list) -> str:
     return f"{statistics.mean(n):.2f} ({len(n)} CCTs)" if n else "-"
 
 
+def _runs_a_search(recs: list) -> str:
+    """Simulations a search (mean), verdicts (robust, N-1 insecure) counted with the runs
+    that reached them, over the searches whose records count them."""
+    n = [
+        r["result"]["n_simulations"] if r["status"] == "ok" else r.get("n_simulations")
+        for r in recs
+        if r["status"] != "failed"
+    ]
+    n = [k for k in n if k is not None]
+    return f"{statistics.mean(n):.2f} ({len(n)} searches)" if n else "-"
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default="miniwecc", help="built-in case name or case file")
@@ -117,6 +130,11 @@ def main(argv=None):
     print(
         f"simulations a CCT: {_runs(ok)} in all; bus faults {_runs(bus)}; branch faults "
         f"from their bus fault's CCT {_runs(guessed)}, the others {_runs(other)}"
+    )
+    every = [recs[r["key"]] for r in rows]
+    print(
+        f"simulations a search, verdicts included: {_runs_a_search(every)}; bus faults "
+        f"{_runs_a_search([r for r in every if r['inputs']['far_bus'] is None])}"
     )
     on_cores = cpu / args.workers
     print(
