@@ -324,6 +324,8 @@ def _settings(study) -> dict:
     """The plan's numerical and control settings, as its JSON records them: the model
     (conventions, step h in s or None for the case's default, Q limits, multi-rate
     exciters), the CCT search (tolerance, t_max, run end in s) and the devices' law."""
+    from dataclasses import asdict
+
     m, s, c = study.model, study.search, study.controller
     return {
         "conventions": m.conventions,
@@ -331,12 +333,7 @@ def _settings(study) -> dict:
         "q_limits": m.q_limits,
         "subintervals": m.subintervals,
         **s.to_inputs(),
-        "controller": {
-            "deadband_hz": c.deadband_hz,
-            "v_gate_pu": c.v_gate_pu,
-            "coi": c.coi,
-            "hysteresis_hz": c.hysteresis_hz,
-        },
+        "controller": asdict(c),
     }
 
 
