@@ -48,7 +48,7 @@ from stabctl.cli.options import (
     tf_option,
     tol_options,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, counted
 
 
 def _trips(trip) -> tuple[tuple[int, int], ...]:
@@ -215,7 +215,7 @@ def cct(
                 }
             )
         else:
-            click.echo(f"CCT 0 s, N-1 insecure: {exc}")
+            click.echo(f"CCT 0 s, N-1 insecure: {exc}{_runs_said(exc)}")
             _echo_islanding(case, exc.islanded)
         return
     except AboveSearchLimit as exc:  # a verdict: the fault is robust up to --t-max
@@ -232,7 +232,7 @@ def cct(
                 }
             )
         else:
-            click.echo(f"CCT above the search limit: {exc}")
+            click.echo(f"CCT above the search limit: {exc}{_runs_said(exc)}")
             _echo_islanding(case, exc.islanded)
         return
     out = {"case": case.name, "esd_pct": esd_pct, "esd_model": esd_model}
@@ -251,6 +251,12 @@ def cct(
         print_json(out)
     else:
         print_cct(case, esd_pct, out)
+
+
+def _runs_said(verdict) -> str:
+    """`` (3 simulations)``: the runs a search's verdict took, when it counted them."""
+    n = verdict.n_simulations
+    return "" if n is None else f" ({counted(n, 'simulation')})"
 
 
 def _echo_islanding(case, islanded) -> None:

@@ -426,8 +426,9 @@ def test_cli_cct_above_its_search_limit_is_a_verdict_not_an_error():
     res = run(*args)
     assert res.exit_code == 0, res.output
     assert res.stdout.startswith("CCT above the search limit: ") and "t_max = 0.1 s" in res.stdout
+    assert "still stable when cleared there (2 simulations)" in res.stdout  # at 0 and 0.1 s
     d = json.loads(run(*args, "--json").stdout)
-    assert d["cct_s"] is None and d["above_t_max_s"] == 0.1
+    assert d["cct_s"] is None and d["above_t_max_s"] == 0.1 and d["n_simulations"] == 2
 
 
 def test_cli_cct_names_a_generator_it_islands():
