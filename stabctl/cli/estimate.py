@@ -476,6 +476,7 @@ def cct(
     )
     model = model_settings(conventions, step, q_limits)
     check_step_given(case, model)  # before the searches: not one failure per run
+    _check_estimable(case, model)
     table = estimator_ccts(
         case_name,  # the file given, not the case's name: an edited copy of a built-in
         fault,
@@ -487,6 +488,9 @@ def cct(
         model=model,
         esd_model=esd_model,
     )
+    if all(row["failed"] == row["runs"] for row in table.values()):
+        why = sorted({e for row in table.values() for e in row["errors"]})
+        raise InputError(f"every CCT search failed: {'; '.join(why) or 'no reason recorded'}")
     out = {
         "cct_cycles": table,
         "esd_model": esd_model,
@@ -495,6 +499,24 @@ def cct(
         ),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
+
+
+def _check_estimable(case, model) -> None:
+    """Before `estimate cct` dispatches its searches (each would fail alike, the command
+    exiting 0 with every estimator "failed"): the case's power flow, and the estimators'
+    machine models (`stabctl.estimation.models.machine_models`: PST tg governors only).
+
+    Raises
+    ------
+    PowerFlowError, CaseError
+        As `check_power_flow` and `machine_models`.
+    """
+    from stabctl.cli.checks import check_power_flow
+    from stabctl.estimation.models import machine_models
+    from stabctl.estimation.pmu import machine_pmus
+
+    check_power_flow(case, model)
+    machine_models(case, machine_pmus(case))
 
 
 @estimate.command("track")

@@ -648,6 +648,23 @@ def _or_dash(value, spec: str = ".2f") -> str:
     return format(value, spec)
 
 
+def machine_buses(case, numbers) -> list[int]:
+    """The buses of the given machines, in their order: the JSON's bus numbers beside the
+    machine numbers (the text names both, `Case.machine_name`).
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+    numbers : iterable of int
+        Machine numbers.
+
+    Returns
+    -------
+    list of int
+    """
+    return [int(case.machines.bus[case.machine_index(m)]) for m in numbers]
+
+
 def _buses_of_sites(d: dict) -> str:
     """`` on 1 bus`` when a plan's sites (one per machine) share buses, else nothing."""
     n = d.get("n_buses", d["n_sites"])
@@ -689,9 +706,9 @@ def print_placement(case_name, d) -> None:
 def _plan_verdict(d) -> str:
     """The plan's label: VERIFIED, NOT verified, or NOTHING TO PLACE when every
     contingency was set aside as infeasible (a verdict on the contingencies, not a plan
-    verified on them)."""
+    verified on them; the plan's message, printed after it, says so)."""
     if d["verified"] and d["set_aside"] and not d["n_met"]:
-        return "NOTHING TO PLACE: every contingency set aside as infeasible"
+        return "NOTHING TO PLACE"
     return "VERIFIED" if d["verified"] else "NOT verified"
 
 
@@ -802,6 +819,7 @@ def estimator_cct_lines(
             + f" ({s['min']:.2f}..{s['max']:.2f})"
         )
         + f"  runs {s['runs']}, failed {s['failed']}"
+        + "".join(f"\n        failed: {why}" for why in s.get("errors", ()))
         for e, s in table.items()
     ]
     return lines

@@ -12,6 +12,7 @@ from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_method, check_
 from stabctl.cli.format import (
     describe_esd,
     islanding_lines,
+    machine_buses,
     machine_list,
     print_json,
     print_storage,
@@ -576,6 +577,7 @@ def simulate(
             result.to_csv(out_p)
         written.insert(0, str(out_p))
     summary = result.summary()
+    summary["separated_buses"] = machine_buses(case, summary["separated_machines"])
     if esd is not None:
         summary["switchings"] = result.switching_records()
     if as_json:

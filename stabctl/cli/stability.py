@@ -17,6 +17,7 @@ from stabctl.cli.checks import (
 )
 from stabctl.cli.format import (
     islanding_lines,
+    machine_buses,
     print_cct,
     print_json,
     print_screening,
@@ -239,12 +240,12 @@ def cct(
     for key, value in res.to_dict().items():
         out[key] = value
         if key == "separated_machines":  # their buses beside them
-            out["separated_buses"] = _machine_buses(case, value)
+            out["separated_buses"] = machine_buses(case, value)
     out["q_limits"] = q_limits
     if base is not None:
         out["critical_group"] = {
             "machines": list(base.separated),
-            "buses": _machine_buses(case, base.separated),
+            "buses": machine_buses(case, base.separated),
             "cct_without_storage_s": base.cct_s,
         }
     if as_json:
@@ -265,19 +266,13 @@ def _echo_islanding(case, islanded) -> None:
         click.echo(f"the contingency's trip: {line}")
 
 
-def _machine_buses(case, numbers) -> list[int]:
-    """The buses of the given machines, in their order: the JSON's bus numbers beside the
-    machine numbers (the text names both, `Case.machine_name`)."""
-    return [int(case.machines.bus[case.machine_index(m)]) for m in numbers]
-
-
 def _with_buses(case, row: dict) -> dict:
     """A screening row with ``separated_buses`` beside its ``separated`` machines (if any)."""
     out = {}
     for key, value in row.items():
         out[key] = value
         if key == "separated":
-            out["separated_buses"] = _machine_buses(case, value)
+            out["separated_buses"] = machine_buses(case, value)
     return out
 
 

@@ -735,7 +735,8 @@ def cct_study(
     -------
     dict
         {rating: {estimator: {"mean", "std", "min", "max", "runs", "failed", "values",
-        "half_width"}}}: the CCT in cycles; half_width is the `SeedRule` half-width of the
+        "errors", "half_width"}}}: the CCT in cycles (a failed run's value None); errors:
+        the failed runs' errors, each once; half_width is the `SeedRule` half-width of the
         mean (cycles; None for a fixed count).
 
     Raises
@@ -820,6 +821,10 @@ def cct_study(
                 ]
                 for pe, row in jobs.items()
             }
+            errors = {
+                pe: sorted({rep.records[j.key].get("error", "") for j in row} - {""})
+                for pe, row in jobs.items()
+            }
             more = (
                 {}
                 if rule is None
@@ -838,6 +843,7 @@ def cct_study(
         p: {
             e: {
                 **_spread(values[p, e]),
+                "errors": errors[p, e],
                 "half_width": None
                 if rule is None or e == "ideal"
                 else rule.half_width(values[p, e], tol_cycles),
@@ -850,7 +856,7 @@ def cct_study(
 
 def _spread(values) -> dict:
     """Mean, standard deviation (None from fewer than two: no spread), range of finite
-    values (failed runs: NaN, counted)."""
+    values (failed runs: NaN, counted; None among the values, as JSON has no NaN)."""
     v = np.asarray(values, float)
     ok = v[np.isfinite(v)]
     std = float(ok.std()) if ok.size > 1 else None
@@ -859,5 +865,5 @@ def _spread(values) -> dict:
         **dict(zip(("mean", "std", "min", "max"), stats)),
         "runs": int(v.size),
         "failed": int(v.size - ok.size),
-        "values": [float(x) for x in v],
+        "values": [float(x) if np.isfinite(x) else None for x in v],
     }

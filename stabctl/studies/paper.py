@@ -291,13 +291,14 @@ def section_convergence(fig_dir: Path, progress=None) -> str:
         ]
     lines += [
         "Under ieee the CCT moves by at most one 1 ms lattice cell between halvings "
-        "(resolved to 0.1 ms on Kundur: 156.8, 157.7, 157.9, 157.9, 158.0, 158.0 ms at "
-        "10, 5, 2.5, 1.25, 0.625, 0.3125 ms: differences shrinking about fourfold per "
-        "halving, second order). Kundur's default ieee step is half its fastest time "
-        "constant (T_R = 10 ms), so the default CCT is within the tolerance of the "
-        "converged one; so is miniWECC's (a governor's T_5 = 10 ms: 5 ms, 2.4 times its "
-        "data-file step 1/480 s, the pstess default; ST3 exciters, whose PSTess limiter "
-        "already zeroes the derivative, so both conventions converge).",
+        "(resolved to 0.1 ms on Kundur: 153.3, 154.1, 154.3, 154.3, 154.4, 154.4 ms at "
+        "10, 5, 2.5, 1.25, 0.625, 0.3125 ms, docs/conventions.md: differences shrinking "
+        "about fourfold per halving, second order). Kundur's default ieee step is half "
+        "its fastest time constant (T_R = 10 ms), so the default CCT is within the "
+        "tolerance of the converged one; so is miniWECC's (a governor's T_5 = 10 ms: 5 "
+        "ms, 2.4 times its data-file step 1/480 s, the pstess default; ST3 exciters, "
+        "whose PSTess limiter already zeroes the derivative, so both conventions "
+        "converge).",
         "",
     ]
     return "\n".join(lines)

@@ -142,3 +142,16 @@ def test_simulate_plot_legend_of_a_large_case_says_what_the_others_are(tmp_path,
             "loss of synchronism",
         ]
         assert set(named) <= {a.get_text() for a in ax.texts}  # at the traces' ends
+
+
+def test_simulate_json_gives_the_buses_of_the_machines_that_separate():
+    """`stabctl simulate --json` of miniWECC's line 83-33 cleared after 12 cycles (beyond
+    its 4.6-cycle CCT): ``separated_machines`` keeps the numbers and ``separated_buses``
+    (missing before) gives their buses, the table's, as `cct --json` does."""
+    case = load_case("miniwecc")
+    args = ("simulate", "miniwecc", "--fault", 83, "--far-bus", 33, "--clear-cycles", 12)
+    res = run(*args, "--tf", 3, "--json")
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    lost = d["separated_machines"]
+    assert lost and d["separated_buses"] == [table_bus(case, m) for m in lost]

@@ -532,3 +532,34 @@ def test_estimate_cct_simulates_the_case_file_given(tmp_path):
     assert ref.exit_code == 0, ref.output
     assert abs(ideal - json.loads(ref.stdout)["cct_cycles"]) <= 0.25 + 1e-6
     assert ideal < 10
+
+
+def test_estimate_cct_refuses_a_case_its_estimators_cannot_model(tmp_path):
+    """ANDES's IEEE 14 (TGOV1 governors): every search of `estimate cct` failed alike and
+    the command printed "failed" for each estimator with no reason, exit 0 (--json with
+    NaN).  It is refused before any search, naming the governor, as `estimate rmse`
+    refuses it."""
+    andes = pytest.importorskip("andes")
+    case = str(tmp_path / "ieee14.json")
+    src = andes.get_case("ieee14/ieee14_full.xlsx")
+    assert CliRunner().invoke(main, ["import-andes", src, "-o", case]).exit_code == 0
+    line = ["--fault", "4", "--far-bus", "5", "--esd-pct", "5", "--runs", "1"]
+    for cmd in (["estimate", "cct", case], ["estimate", "rmse", case, "--clear-cycles", "6"]):
+        res = CliRunner().invoke(main, [*cmd, *line, "--no-q-limits"])
+        assert res.exit_code == 2 and res.stdout == "", res.output
+        assert "the estimator's governor model is PST tg (type 1) only" in res.stderr
+
+
+def test_estimator_cct_statistics_keep_failed_runs_as_json_null_with_their_errors():
+    """A failed run's CCT is NaN in the study and None (JSON null, not NaN) in its
+    statistics, counted, with its error printed under its estimator's line."""
+    from stabctl.cli.format import estimator_cct_lines
+    from stabctl.estimation.closed_loop import _spread
+    from stabctl.estimation.settings import PMUSettings
+
+    s = _spread([12.0, float("nan"), 11.5])
+    assert s["values"] == [12.0, None, 11.5] and (s["failed"], s["runs"]) == (1, 3)
+    assert s["mean"] == pytest.approx(11.75) and json.loads(json.dumps(s)) == s
+    table = {"ekf": {**s, "errors": ["SimulationError: network singular"]}}
+    lines = estimator_cct_lines(table, 3, 101, 5, PMUSettings(), 3, 0)
+    assert lines[1].endswith("runs 3, failed 1\n        failed: SimulationError: network singular")
