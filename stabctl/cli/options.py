@@ -443,9 +443,16 @@ def interval(spec) -> str:
     str
     """
     lo, hi, lo_in, hi_in, unit = spec
-    return f"{'[' if lo_in else '('}{lo:g}, {hi:g}{']' if hi_in else ')'}" + (
+    return f"{'[' if lo_in else '('}{_shown(lo)}, {_shown(hi)}{']' if hi_in else ')'}" + (
         f" {unit}" if unit else ""
     )
+
+
+def _shown(value) -> str:
+    """A value as a refusal names it: short (``1e+06``), but never rounded to another
+    value (``100.0000001``, which ``:g`` shows as the allowed 100)."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
 
 
 def check_number(label: str, value) -> None:
@@ -472,13 +479,13 @@ def check_number(label: str, value) -> None:
     if spec is None:
         if abs(value) > ANY_NUMBER_MAX:
             raise InputError(
-                f"{label} {value:g}: beyond any value it can take (at most "
+                f"{label} {_shown(value)}: beyond any value it can take (at most "
                 f"{ANY_NUMBER_MAX:g} in magnitude)"
             )
         return
     lo, hi, lo_in, hi_in, _ = spec
     if not ((value >= lo if lo_in else value > lo) and (value <= hi if hi_in else value < hi)):
-        raise InputError(f"{label} {value:g}: must be{allowed}")
+        raise InputError(f"{label} {_shown(value)}: must be{allowed}")
 
 
 def _check_numbers(kwargs) -> None:

@@ -63,6 +63,11 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (FAULT + ("--t-fault", "inf"), "--t-fault inf"),
         (FAULT + ("--tf", "-inf"), "--tf -inf"),
         (FAULT + ("--esd-pct", "1e6"), "--esd-pct 1e+06: must be in (0, 100] % of machine MVA"),
+        # a value just outside the range is named as given, not rounded into the range
+        (
+            FAULT + ("--esd-pct", "100.0000001"),
+            "--esd-pct 100.0000001: must be in (0, 100] % of machine MVA",
+        ),
         (
             FAULT + ("--esd-pct", 5, "--v-gate", "nan"),
             "--v-gate nan: must be a finite number in [0, 2] pu",
@@ -127,8 +132,11 @@ def test_every_range_accepts_inside_and_refuses_outside_and_non_finite():
             if (v == lo and lo_in) or (v == hi and hi_in):
                 check_number(label, v)
             else:
-                with pytest.raises(InputError, match=re.escape(f"{label} {v:g}: must be in")):
+                with pytest.raises(InputError, match=re.escape(f"{label} ")) as refused:
                     check_number(label, v)
+                # the value named as given, never rounded to another (1.5708 for pi / 2)
+                shown = re.match(rf"{re.escape(label)} (\S+): must be in", str(refused.value))
+                assert shown and float(shown.group(1)) == v, str(refused.value)
         for v in (lo - abs(lo) * 1e-9 - 1e-9, hi + abs(hi) * 1e-9 + 1e-9):
             with pytest.raises(InputError, match=re.escape(label)):
                 check_number(label, v)
