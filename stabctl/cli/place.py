@@ -321,18 +321,21 @@ def place(
 
 
 def _settings(study) -> dict:
-    """The plan's numerical and control settings, as its JSON records them: the model
-    (conventions, step h in s or None for the case's default, Q limits, multi-rate
-    exciters), the CCT search (tolerance, t_max, run end in s) and the devices' law."""
+    """The plan's numerical and control settings, as its JSON records them (names with
+    their units, as `cct --json`'s): the model (conventions, step in s or None for the
+    case's default, Q limits, multi-rate exciters), the CCT search (tolerance, t_max and
+    run end in s, None: the fault start + 5 s) and the devices' law."""
     from dataclasses import asdict
 
     m, s, c = study.model, study.search, study.controller
     return {
         "conventions": m.conventions,
-        "h": m.h,
+        "step_s": m.h,
         "q_limits": m.q_limits,
         "subintervals": m.subintervals,
-        **s.to_inputs(),
+        "tol_s": s.tol,
+        "t_max_s": s.t_max,
+        "t_end_s": s.t_end,
         "controller": asdict(c),
     }
 
