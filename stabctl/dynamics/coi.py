@@ -19,6 +19,7 @@ from stabctl.storage.control import coi_value, island_coi
 
 __all__ = [
     "coi_inertia",
+    "machine_inertia",
     "coi_weights",
     "coi_angle",
     "coi_speed",
@@ -27,6 +28,23 @@ __all__ = [
     "coi_value",
     "island_coi",
 ]
+
+
+def machine_inertia(case) -> np.ndarray:
+    """H * MVA of each machine of `case` (MW s, (n_mac,)): 0 for an infinite bus (H = 0),
+    where `coi_inertia`'s weights are 1 for it and 0 for the island's other machines.
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+
+    Returns
+    -------
+    ndarray, shape (n_mac,)
+        The machines' stored energies at rated speed, MW s (MJ).
+    """
+    return np.asarray(case.machines.H, float) * np.asarray(case.machines.mva, float)
 
 
 def coi_inertia(H: np.ndarray, mva: np.ndarray, island: np.ndarray | None = None) -> np.ndarray:

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from stabctl.dynamics.coi import machine_inertia
 from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import AboveSearchLimit, InputError, SimulationError
 from stabctl.placement.program import CCTCut
@@ -35,7 +36,6 @@ from stabctl.stability.sime import (
     clearing_energy_rate,
     critical_machines,
     device_modes,
-    machine_inertia,
     omib_equivalent,
     storage_integrals,
     unstable_margin,

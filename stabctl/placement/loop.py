@@ -452,9 +452,10 @@ def _linear_models(sim, sites, controller, zeta_min, amplitude_hz):
     """Distribution factors (`sime.distribution_factors`) and, with zeta_min, the
     `damping.DampingModel`, both from one linearisation with an ESD input at every site;
     without zeta_min from the ESD columns of B alone (`linearise.esd_columns`: no A)."""
+    from stabctl.dynamics.coi import machine_inertia
     from stabctl.smallsignal.damping import DampingModel, relay_df
     from stabctl.smallsignal.linearise import esd_columns, linearise
-    from stabctl.stability.sime import distribution_factors, machine_inertia
+    from stabctl.stability.sime import distribution_factors
 
     case = sim.case
     buses = list(dict.fromkeys(s.bus for s in sites))

@@ -110,6 +110,7 @@ from typing import Protocol
 
 import numpy as np
 
+from stabctl.dynamics.coi import machine_inertia
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault, LineTrip
 from stabctl.dynamics.options import ModelOptions
@@ -128,7 +129,6 @@ from stabctl.network.ybus import circuit_row
 from stabctl.stability.sime import (
     EarlyVerdict,
     critical_machines,
-    machine_inertia,
     probe_margin,
 )
 

@@ -35,7 +35,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stabctl.dynamics.coi import coi_angle, coi_of_islands, coi_of_rest, coi_speed
+from stabctl.dynamics.coi import (
+    coi_angle,
+    coi_of_islands,
+    coi_of_rest,
+    coi_speed,
+)
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
 from stabctl.storage.control import group_reference
@@ -89,22 +94,6 @@ def critical_machines(result: SimulationResult) -> list[int]:
     if last is not None:
         return [int(k) for k in result.machines[judged_group(result.angle[-1], last)]]
     return [int(k) for k in result.machines[separated_group(result.angle[-1], result.inertia)]]
-
-
-def machine_inertia(case) -> np.ndarray:
-    """H * MVA of each machine of `case` (MW s, (n_mac,)): 0 for an infinite bus (H = 0).
-
-    Parameters
-    ----------
-    case : Case
-        The case.
-
-    Returns
-    -------
-    ndarray, shape (n_mac,)
-        The machines' stored energies at rated speed, MW s (MJ).
-    """
-    return np.asarray(case.machines.H, float) * np.asarray(case.machines.mva, float)
 
 
 def omib_equivalent(

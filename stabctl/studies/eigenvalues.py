@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.case import Case, PssTable
+from stabctl.dynamics.coi import machine_inertia
 from stabctl.outdir import output_directory
 from stabctl.parallel import naming
 from stabctl.smallsignal.linearise import linearise
@@ -64,8 +65,7 @@ def eig_study(
     t0 = time.perf_counter()
     sys = linearise(case, conventions=conventions, q_limits=q_limits, limits=limits)
     t1 = time.perf_counter()
-    H, mva = case.machines.H, case.machines.mva
-    ma = modal_analysis(sys, inertia=(H * mva)[H > 0], n_areas=n_areas)
+    ma = modal_analysis(sys, inertia=machine_inertia(case)[case.machines.H > 0], n_areas=n_areas)
     sens = mode_sensitivity(sys, ma)
     return EigStudy(case, no_pss, sys, ma, sens, t1 - t0, time.perf_counter() - t1)
 

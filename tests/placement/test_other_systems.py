@@ -108,12 +108,13 @@ def test_a_machine_against_an_infinite_bus_gets_a_site_the_infinite_bus_none(pss
     traceback, and a contingency set aside says its CCT without storage (the CCT search's)
     and that the device lowers it: at bus 102 the 0.8 pu voltage gate idles it while
     the machine still runs ahead (docs/placement.md section 8)."""
+    from stabctl.dynamics.coi import machine_inertia
     from stabctl.dynamics.driver import Simulator
     from stabctl.errors import InputError
     from stabctl.placement.program import candidate_sites
     from stabctl.smallsignal.linearise import esd_columns
     from stabctl.stability.cct import critical_clearing_time
-    from stabctl.stability.sime import distribution_factors, machine_inertia
+    from stabctl.stability.sime import distribution_factors
 
     case = load_case(psse_omib)
     assert [s.machine for s in candidate_sites(case)] == [2]

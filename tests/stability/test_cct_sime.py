@@ -309,7 +309,8 @@ def test_sime_against_an_infinite_bus_is_the_machine_s_own_omib(psse_omib):
     bisection's cell of the fault at bus 102 on line 102-101 (it raised in the
     centre of inertia of the infinite bus's group, which weighs nothing in the run's COI
     weights)."""
-    from stabctl.stability.sime import machine_inertia, omib_equivalent
+    from stabctl.dynamics.coi import machine_inertia
+    from stabctl.stability.sime import omib_equivalent
 
     case = load_case(psse_omib)
     sim = Simulator(case)
