@@ -21,9 +21,9 @@ SHOWN = {
     # --clear-cycles 6 --tf 6 --runs 3`: 16.289, 16.270, 1.846 mHz (the example cleared the
     # fault 1.1 s after its start and printed 117.9, 117.7, 2.0)
     "pmu_estimation.py": [
-        "raw : speed RMSE 16.3 mHz",
-        "kf  : speed RMSE 16.3 mHz",
-        "ekf : speed RMSE 1.8 mHz",
+        "raw : speed RMSE 16.4 mHz",
+        "kf  : speed RMSE 16.4 mHz",
+        "ekf : speed RMSE 2.1 mHz",
     ],
     "pmu_stream.py": ["received 361 frames", "ekf : relative-speed RMSE", "stable=True, 360"],
 }

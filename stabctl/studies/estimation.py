@@ -107,6 +107,31 @@ def _raw_track(stream: FrameStream, models: MachineModels) -> Track:
     return Track(speed, var, speed, var, np.full_like(speed, np.nan), dof=0)
 
 
+#: time stamps this close to a window's end count inside it (s): a stamp k / rate and an
+#: end computed as clearing + settling differ by float round-off (1.1 + 0.1 s against
+#: the frame 72 / 60 s) and must not move a frame in or out of the window
+WINDOW_SLACK_S = 1e-9
+
+
+def in_window(t: np.ndarray, window: tuple[float, float]) -> np.ndarray:
+    """Which time stamps lie in a window, its ends included.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Time stamps, s, shape (n,).
+    window : (float, float)
+        (start, end), s.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean mask, shape (n,): ``start - WINDOW_SLACK_S <= t <= end + WINDOW_SLACK_S``,
+        so a stamp on a window end is inside however the end was computed.
+    """
+    return (t >= window[0] - WINDOW_SLACK_S) & (t <= window[1] + WINDOW_SLACK_S)
+
+
 def errors(
     track: Track,
     result: SimulationResult,
@@ -117,7 +142,7 @@ def errors(
     """Error figures of one track (module docstring), mHz; nis_inside NaN for a track
     without NIS.  window: (start, end) s of the time stamps evaluated."""
     f0 = stream.true.f0
-    sel = (stream.t >= window[0]) & (stream.t <= window[1])
+    sel = in_window(stream.t, window)
     if not sel.any():
         raise InputError(f"no PMU frame in the window {window} s")
     M = result.inertia

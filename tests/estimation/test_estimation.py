@@ -563,3 +563,20 @@ def test_estimator_cct_statistics_keep_failed_runs_as_json_null_with_their_error
     table = {"ekf": {**s, "errors": ["SimulationError: network singular"]}}
     lines = estimator_cct_lines(table, 3, 101, 5, PMUSettings(), 3, 0)
     assert lines[1].endswith("runs 3, failed 1\n        failed: SimulationError: network singular")
+
+
+@pytest.mark.parametrize("cycles", [4, 5, 6, 7, 8])
+def test_the_error_window_starts_on_its_frame_whatever_the_clearing(cycles):
+    """A fault at 1 s cleared after `cycles` cycles, errors from 100 ms after the clearing
+    to 6 s: the frame on the window's start (k / 60 s, k = 66 + cycles) is evaluated for
+    every clearing, so the window holds 60 (6 - start) + 1 frames.  The start is
+    computed as 1 + cycles / 60 + 0.1 s, which for 6 cycles is 1.2000000000000002 and
+    would otherwise leave out the frame 72 / 60 = 1.2 s."""
+    from stabctl.studies.estimate import error_window
+
+    fault = fault_with_clearing(load_case("kundur"), 3, 101, 1.0, cycles)
+    window = error_window(fault, 0.1, 6.0)
+    t = pmu.frame_times(6.0, 60)
+    sel = study.in_window(t, window)
+    assert np.flatnonzero(sel)[0] == 66 + cycles
+    assert sel.sum() == 60 * 6 - (66 + cycles) + 1

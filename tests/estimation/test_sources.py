@@ -240,7 +240,7 @@ def test_tracking_frames_runs_the_estimator_the_study_evaluates(kundur_run):
     ctrl = cl.LoopController(case, uniform_fleet(case, 10).devices, "ekf", SETTINGS, 0, 1.0)
     d = cl.track(ctrl, list(drawn))
     assert d.t.size == len(drawn) and d.freq.shape == (len(drawn), 4)
-    sel = (d.t >= WINDOW[0]) & (d.t <= WINDOW[1])
+    sel = study.in_window(d.t, WINDOW)
     late = res.speed_at(d.t[sel] + SETTINGS.latency_s)
     true_rel = relative_speeds(late, late, res.inertia, "system")[0] * case.freq_hz
     rms = 1e3 * np.sqrt(np.mean((d.rel[sel] - true_rel) ** 2))
