@@ -712,6 +712,19 @@ def _plan_verdict(d) -> str:
     return "VERIFIED" if d["verified"] else "NOT verified"
 
 
+#: how a plan's header names a law other than the paper's (`place --coi`)
+_LAWS = {
+    "rest": ", each device on the COI of the other machines (--coi rest)",
+    "critical": ", each device on the COI of the other group, the group each contingency's "
+    "critical machines without storage (--coi critical)",
+}
+
+
+def _law_named(d: dict) -> str:
+    """The plan header's words for its law: none for the paper's (the system's COI)."""
+    return _LAWS.get(d.get("settings", {}).get("controller", {}).get("coi", "system"), "")
+
+
 def print_plan(case_name, d) -> None:
     """Print the `place` result as text.
 
@@ -727,7 +740,7 @@ def print_plan(case_name, d) -> None:
     click.echo(
         f"case {case_name} ({d['requirement']}; load levels "
         f"{', '.join(f'{x:g}' for x in d['load_levels'])}; "
-        f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}): {d['total_mw']:.1f} MW, "
+        f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}{_law_named(d)}): {d['total_mw']:.1f} MW, "
         f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s){_buses_of_sites(d)}, "
         f"cost {c['total']:.1f} "
         f"in the --cost-* options' unit (MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, "

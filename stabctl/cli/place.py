@@ -151,7 +151,7 @@ from stabctl.errors import InputError
     "requirement (proven by simulation with every site at its bound) is "
     "listed and the others are planned for (default: error, exit 2).",
 )
-@storage_options(with_rating=False)
+@storage_options(with_rating=False, critical=True)
 @esd_model_option
 @tol_options(
     t_max_help="a fault still stable there is a verdict: CCT above it, robust; a CCT "
@@ -225,6 +225,9 @@ def place(
     contingency is then simulated cleared at its required time, those that fail are
     added, and so on. Each device's energy (MWh) is sized from the state of charge
     along the verifying runs and checked by simulation (docs/placement.md).
+    --coi critical (not the paper's law): the law armed per contingency, each device on
+    the COI of the other group, the group the machines that contingency's fault
+    separates without storage (docs/placement.md section 8).
 
     \b
     Examples:
@@ -297,9 +300,11 @@ def place(
             zeta_min=zeta_min, amplitude_hz=amplitude_hz, max_sites=max_sites, max_iter=max_iter
         ),
     )
+    armed = coi == "critical"  # the law armed per contingency: its group found by the workers
     study = Study(
         sites=sites,
-        controller=controller(deadband_hz, v_gate, coi, hysteresis_hz),
+        controller=controller(deadband_hz, v_gate, "system" if armed else coi, hysteresis_hz),
+        critical_reference=armed,
         search=search,
         model=model_settings(conventions, step, q_limits),
         runner=RunnerOptions(n, scheduler),
@@ -324,10 +329,14 @@ def _settings(study) -> dict:
     """The plan's numerical and control settings, as its JSON records them (names with
     their units, as `cct --json`'s): the model (conventions, step in s or None for the
     case's default, Q limits, multi-rate exciters), the CCT search (tolerance, t_max and
-    run end in s, None: the fault start + 5 s) and the devices' law."""
+    run end in s, None: the fault start + 5 s) and the devices' law (``coi`` "critical"
+    with ``critical`` None: each contingency's group, found without storage)."""
     from dataclasses import asdict
 
     m, s, c = study.model, study.search, study.controller
+    law = asdict(c)
+    if study.critical_reference:
+        law.update(coi="critical", critical=None)
     return {
         "conventions": m.conventions,
         "step_s": m.h,
@@ -336,7 +345,7 @@ def _settings(study) -> dict:
         "tol_s": s.tol,
         "t_max_s": s.t_max,
         "t_end_s": s.t_end,
-        "controller": asdict(c),
+        "controller": law,
     }
 
 

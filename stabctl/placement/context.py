@@ -41,7 +41,8 @@ class PlanContext:
     `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
     infeasible, set_aside: what was set aside; place: the `PlaceOptions` of every
     round's `place` (damping, sparsity, iterations); esd_model: the devices' model
-    (`Study.esd_model`).
+    (`Study.esd_model`); critical_reference: the law armed per contingency
+    (`Study.critical_reference`).
     """
 
     case: str
@@ -62,6 +63,7 @@ class PlanContext:
     set_aside: list = field(default_factory=list)
     place: PlaceOptions = PlaceOptions()
     esd_model: str = "ideal"
+    critical_reference: bool = False
     lock: Any = field(default_factory=threading.Lock)
 
     def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
@@ -72,7 +74,10 @@ class PlanContext:
         if energy_mj is not None:
             used = [j for j, p in enumerate(mw) if p > 0]
             devs = [d + [float(energy_mj[j])] for d, j in zip(devs, used)]
-        ctrl = controller_dict(self.controller)
+        ctrl = controller_dict(
+            self.controller,
+            {"tol": self.tol, "t_max": self.t_max} if self.critical_reference else None,
+        )
         sites = [[s.bus, s.machine] for s in self.sites]
         jobs = [
             {

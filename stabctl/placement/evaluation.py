@@ -22,7 +22,7 @@ import numpy as np
 
 from stabctl.dynamics.coi import machine_inertia
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import AboveSearchLimit, InputError, SimulationError
+from stabctl.errors import AboveSearchLimit, InputError, InsecureContingency, SimulationError
 from stabctl.placement.program import CCTCut
 from stabctl.stability.cct import (
     LineFault,
@@ -138,7 +138,7 @@ def evaluate(job: dict) -> dict:
         [site[0] for site in job["sites"]],
     )
     f, sites, tol, t_max = fault_of_inputs(job["fault"]), job["sites"], job["tol"], job["t_max"]
-    ctrl = BangBangCOI(**job["controller"])
+    ctrl = _law(job, sim, f)
     fleet = _fleet(job, ctrl)
     check_s = job.get("check_s")
     checked = {} if check_s is None else _check_run(sim, f, fleet, float(check_s), sites, ctrl)
@@ -239,12 +239,42 @@ def check(job: dict) -> dict:
         cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0)),
         [site[0] for site in job["sites"]],
     )
-    ctrl = BangBangCOI(**job["controller"])
+    fault = fault_of_inputs(job["fault"])
+    ctrl = _law(job, sim, fault)
     fleet = _fleet(job, ctrl)
-    out = _check_run(
-        sim, fault_of_inputs(job["fault"]), fleet, float(job["t_clear"]), job["sites"], ctrl
-    )
+    out = _check_run(sim, fault, fleet, float(job["t_clear"]), job["sites"], ctrl)
     return {**out, "n_simulations": sim.n_runs}
+
+
+#: the critical groups a worker has found (`_law`), by case, model, load, fault and search
+_GROUPS: dict[str, tuple[int, ...]] = {}
+
+
+def _law(job: dict, sim, fault: LineFault) -> BangBangCOI:
+    """The ESDs' law of a job (`controller_dict`).  Armed per contingency (coi
+    "critical" with a ``critical_search`` instead of machines): the machines the fault
+    separates when cleared just after its CCT without storage (the search of
+    `critical_clearing_time` with the job's tol and t_max, on ``sim``, once per worker;
+    as `stabctl cct --coi critical` finds them).  Raises InputError for a fault with no
+    such group (N-1 insecure or stable up to t_max without storage)."""
+    law = dict(job["controller"])
+    search = law.pop("critical_search", None)
+    if search is not None:
+        key = repr(
+            (job["case"], ModelOptions.from_inputs(job), job.get("load", 1.0), job["fault"], search)
+        )
+        if key not in _GROUPS:
+            o = SearchOptions(tol=search["tol"], t_max=search["t_max"], error_check=False)
+            try:
+                _GROUPS[key] = tuple(critical_clearing_time(sim, fault, o).separated)
+            except (InsecureContingency, AboveSearchLimit) as exc:
+                raise InputError(
+                    f"--coi critical: {fault.describe()} has no critical group without "
+                    f"storage ({exc}); the law needs the machines that separate when the "
+                    "fault is cleared just too late"
+                ) from None
+        law["critical"] = _GROUPS[key]
+    return BangBangCOI(**law)
 
 
 def _fleet(job: dict, ctrl) -> StorageFleet | None:
@@ -638,6 +668,8 @@ class Evaluator:
         Clearing-time grid of the first-unstable scan (s).
     esd_model : {"ideal", "wecc"}
         The devices' model (`Study.esd_model`).
+    critical_reference : bool
+        The law armed per contingency (`Study.critical_reference`).
     """
 
     run_map: Any
@@ -649,6 +681,7 @@ class Evaluator:
     model: ModelOptions = ModelOptions()
     scan_s: float = SCAN_S
     esd_model: str = "ideal"
+    critical_reference: bool = False
 
 
 def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions()) -> dict:
@@ -677,7 +710,9 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
         "devices": devices,
         "sites": [[s.bus, s.machine] for s in ev.sites],
         "beta": np.asarray(ev.beta).tolist(),
-        "controller": controller_dict(ev.controller),
+        "controller": controller_dict(
+            ev.controller, {"tol": ev.search.tol, "t_max": t_max} if ev.critical_reference else None
+        ),
         "tol": ev.search.tol,
         "t_max": t_max,
         "scan_s": ev.scan_s,
@@ -709,14 +744,33 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
     return {c.name: done[i] for i, c in enumerate(contingencies)}
 
 
-def controller_dict(controller: BangBangCOI) -> dict:
-    """The fields of a bang-bang law as a JSON-able dict (a worker job's `controller`)."""
-    return {
+def controller_dict(controller: BangBangCOI, critical_search: dict | None = None) -> dict:
+    """The fields of a bang-bang law as a JSON-able dict (a worker job's `controller`).
+
+    Parameters
+    ----------
+    controller : BangBangCOI
+        The law (its ``critical`` machines are not carried: a law on a critical group
+        is armed per contingency).
+    critical_search : dict or None, optional
+        {"tol", "t_max"} (s): the law armed per contingency (``place --coi critical``):
+        each job's devices take the COI of the other group, the group being the
+        machines its fault separates without storage, found by the worker (`_law`).
+
+    Returns
+    -------
+    dict
+        deadband_hz, v_gate_pu, coi, hysteresis_hz (and critical_search).
+    """
+    out = {
         "deadband_hz": controller.deadband_hz,
         "v_gate_pu": controller.v_gate_pu,
         "coi": controller.coi,
         "hysteresis_hz": controller.hysteresis_hz,
     }
+    if critical_search is not None:
+        out.update(coi="critical", critical_search=dict(critical_search))
+    return out
 
 
 def cuts_from(contingencies, evaluations: dict, mw) -> list[CCTCut]:

@@ -157,6 +157,12 @@ class Study:
     esd_model : {"ideal", "wecc"}
         The devices' model (`stabctl.storage.devices.StorageFleet.model`): ideal power
         sources or WECC batteries taking the law's power as their plant reference.
+    critical_reference : bool
+        The law armed per contingency (``place --coi critical``, not the paper's): in
+        the runs of each contingency every device takes as reference the COI of the
+        other group, the group being the machines the fault separates without storage
+        (`stabctl.placement.evaluation.controller_dict`); the controller's own ``coi``
+        is then not used.  Default False: the controller as given.
     """
 
     sites: tuple | None = None
@@ -166,6 +172,7 @@ class Study:
     runner: RunnerOptions = RunnerOptions(workers=1)
     run_map: Any = None
     esd_model: str = "ideal"
+    critical_reference: bool = False
 
     @property
     def law(self) -> BangBangCOI:
@@ -343,6 +350,7 @@ def place(
                 study.search,
                 study.model,
                 esd_model=study.esd_model,
+                critical_reference=study.critical_reference,
             ),
             contingencies,
             damping,
@@ -404,7 +412,15 @@ def evaluations(
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
     with _pool(study) as rm:
         ev = Evaluator(
-            rm, case, sites, beta, study.law, study.search, study.model, esd_model=study.esd_model
+            rm,
+            case,
+            sites,
+            beta,
+            study.law,
+            study.search,
+            study.model,
+            esd_model=study.esd_model,
+            critical_reference=study.critical_reference,
         )
         return verify(ev, contingencies, mw, opts)
 

@@ -276,6 +276,7 @@ def plan(
             drop_infeasible=o.drop_infeasible,
             brackets=o.brackets,
             esd_model=study.esd_model,
+            critical_reference=study.critical_reference,
         )
         pl.run_map = pl.counting(pool_map, say)
         kw = replace(study, sites=sites, run_map=pl.run_map, controller=pl.controller)

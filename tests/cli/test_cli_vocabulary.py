@@ -23,6 +23,8 @@ DIFFERENCES = {
     ("screen", "--t-max"): "bus faults cleared without loss of a line: CCTs above 0.5 s "
     "are recorded as robust, not searched",
     ("cct", "--coi"): "critical too: only cct finds the fault's critical machines",
+    ("place", "--coi"): "critical too: the law armed per contingency, each contingency's "
+    "critical machines found by the workers",
     ("sweep-cct", "--esd-pct"): "a list of ratings (repeatable, comma-separated, 'none')",
     ("import-andes", "--dyr-conventions"): "an ANDES case is read as ANDES solves it (a "
     "RAW + DYR pair as PSS/E states it, as import-psse) unless told otherwise",
@@ -193,15 +195,15 @@ def test_examples_in_help_keep_their_lines():
 
 def test_coi_offers_critical_only_where_it_is_taken():
     """`simulate`, `estimate *` and `pmu plant/control` offered --coi critical and then
-    refused it ("cct only"): only `cct`, which finds the critical machines, lists it;
-    elsewhere it is click's invalid choice (exit 2)."""
+    refused it ("cct only"): only `cct` and `place`, which find the critical machines
+    (`place` per contingency), list it; elsewhere it is click's invalid choice (exit 2)."""
     choices = {
         c: _options(cmd)["--coi"].type.choices
         for c, cmd in COMMANDS.items()
         if "--coi" in _options(cmd)
     }
     assert {"simulate", "estimate rmse", "pmu plant", "pmu control", "place"} <= set(choices)
-    assert {c for c, offered in choices.items() if "critical" in offered} == {"cct"}
+    assert {c for c, offered in choices.items() if "critical" in offered} == {"cct", "place"}
     assert "[system|rest|critical]" in CliRunner().invoke(main, ["cct", "--help"]).output
     help_ = CliRunner().invoke(main, ["simulate", "--help"]).output
     assert "[system|rest]" in help_ and "critical" not in help_.split("--coi")[1].split("--")[0]

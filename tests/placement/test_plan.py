@@ -25,6 +25,7 @@ from stabctl.placement.energy import ENERGY_MARGIN
 from stabctl.placement.evaluation import (
     Contingency,
     Evaluator,
+    VerifyOptions,
     _fleet,
     check,
     controller_dict,
@@ -612,3 +613,92 @@ def test_sites_that_share_a_bus_are_counted_with_their_buses(capsys):
     assert (d["n_sites"], d["n_buses"]) == (2, 1)
     print_plan("x", d)
     assert "0.30 MWh at 2 site(s) on 1 bus, cost 30.0" in capsys.readouterr().out
+
+
+def test_a_law_armed_per_contingency_is_the_cct_command_s_critical_reference():
+    """`Study(critical_reference=True)` (``place --coi critical``): each contingency's
+    devices take the other group's COI, the group the machines its fault separates
+    without storage.  Kundur 3-101 with 10 % of every machine's MVA at its HV bus: the
+    CCT of the placement's evaluation equals `stabctl cct kundur --fault 3 --far-bus
+    101 --esd-pct 10 --coi critical` (0.251 s, group machines 1 and 2), as without it the
+    paper's law equals the command's (0.235 s); the check run at the CCT is stable, 1 ms
+    later not."""
+    from stabctl.placement.loop import evaluations
+
+    case = load_case("kundur")
+    sites = candidate_sites(case)
+    mw = [0.2 * s.max_mw for s in sites]  # 10 % of MVA: the sites' bound is 50 %
+    con = Contingency(LineFault(3, 101, 1.0), 0.3)
+    study = Study(critical_reference=True)
+    ev = evaluations("kundur", [con], mw, study, VerifyOptions(gradient=False))[con.name]
+
+    def cct_command(*law):
+        argv = ["cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "10"]
+        return json.loads(CliRunner().invoke(main, [*argv, *law, "--json"]).output)
+
+    d = cct_command("--coi", "critical")
+    assert d["critical_group"]["machines"] == [1, 2]
+    assert ev["cct_s"] == pytest.approx(d["cct_s"], abs=1e-12) == pytest.approx(0.251)
+    paper = evaluations("kundur", [con], mw, Study(), VerifyOptions(gradient=False))
+    assert paper[con.name]["cct_s"] == pytest.approx(cct_command()["cct_s"], abs=1e-12)
+    assert paper[con.name]["cct_s"] == pytest.approx(0.235)
+    ctx = PlanContext(
+        "kundur", sites, CostModel(), BangBangCOI(), ModelOptions(), None, 1e-3, 1.0, print
+    )
+    ctx = replace(ctx, critical_reference=True, run_map=lambda f, jobs: [f(j) for j in jobs])
+    for t, stable in ((0.251, True), (0.252, False)):
+        c = Contingency(con.fault, t)
+        assert ctx.check([c], mw)[c.name]["stable_at_check"] is stable
+
+
+def test_a_law_armed_per_contingency_needs_a_critical_group():
+    """A contingency still stable at the search limit without storage has no critical
+    group: the armed law is refused naming the fault, as `cct --coi critical` refuses it."""
+    job = {
+        "case": "kundur",
+        "fault": fault_inputs(LineFault(3, 101, 1.0)),
+        "devices": [[10, 1, 90.0]],
+        "sites": [[10, 1]],
+        "controller": controller_dict(BangBangCOI(), {"tol": 1e-3, "t_max": 0.1}),
+        "t_clear": 0.1,
+    }
+    with pytest.raises(
+        InputError,
+        match=r"--coi critical: fault at bus 3 on line 3-101 .*"
+        r"no critical group without storage",
+    ):
+        check(job)
+    cli = CliRunner().invoke(
+        main,
+        [
+            "place",
+            "kundur",
+            "--faults",
+            "DEFAULT",
+            "--target-cct-gain",
+            "5",
+            "--coi",
+            "critical",
+            "--t-max",
+            "0.1",
+        ],
+    )
+    assert cli.exit_code == 2 and "no critical group without storage" in cli.output
+
+
+def test_place_coi_critical_names_its_law_in_its_header_and_json(tmp_path):
+    """`place kundur --coi critical` for fault 3-101 at +20 % (0.154 s without storage,
+    target 0.185 s on the 1 ms lattice): the plan is verified, its header names the law,
+    its JSON records it (coi "critical"; the group, found per contingency: null)."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    argv = ["place", "kundur", "--faults", str(faults), "--target-cct-gain", "20"]
+    argv += ["--coi", "critical", "--workers", "1"]
+    d = json.loads(CliRunner().invoke(main, [*argv, "--json"]).output)
+    assert d["settings"]["controller"]["coi"] == "critical"
+    assert d["settings"]["controller"]["critical"] is None
+    (row,) = d["contingencies"]
+    assert row["cct_no_storage_s"] == pytest.approx(0.154) and row["met"]
+    assert row["cct_s"] >= row["required_s"] == pytest.approx(0.185)
+    text = CliRunner().invoke(main, argv).output
+    assert "each contingency's critical machines without storage (--coi critical)" in text
