@@ -104,7 +104,9 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
         raise InputError(f"--areas {n_areas}: {exc}") from None
     written = [str(write_report(st, out_dir))] if report else []
     if as_json:
-        print_json({**study_json(st), "files": written})
+        print_json(
+            {**study_json(st), "conventions": conventions, "q_limits": q_limits, "files": written}
+        )
         return
     print_modes(st, no_pss)
     for w in written:

@@ -755,10 +755,12 @@ def print_plan(case_name, d) -> None:
             f"{r.get('absorbed_mj', 0.0) / MJ_PER_MWH:13.3f} "
             f"{r.get('delivered_mj', 0.0) / MJ_PER_MWH:14.3f}"
         )
+    aside = len(d.get("set_aside") or [])
     click.echo(
         f"{d['n_met']} of {counted(d['n_contingencies'], 'contingency', 'contingencies')} "
-        "stable at their "
-        f"required clearing time; solved for: {', '.join(d['active']) or 'none'}"
+        "stable at their required clearing time"
+        + (f" ({aside} more set aside as infeasible, below)" if aside else "")
+        + f"; solved for: {', '.join(d['active']) or 'none'}"
     )
     rows = [r for r in d["contingencies"] if not (r["cct_s"] is None and r["met"])]
     if rows:  # none when every contingency is set aside (each said below)

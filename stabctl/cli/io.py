@@ -86,7 +86,8 @@ def cases(case_name, buses, lines, as_json):
             f"{r['governors']} governors, {r['nonconforming_loads']} non-conforming load "
             f"buses, {r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz"
         )
-        click.echo(f"    {r['description']}")
+        if r["description"].strip():  # a case without one (an import's own) prints none
+            click.echo(f"    {r['description']}")
         if r["sw_con"]:
             click.echo(f"    data file disturbance: {r['sw_con']}")
     for name, table in tables.items():

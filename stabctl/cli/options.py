@@ -23,6 +23,7 @@ import _thread
 import functools
 import math
 import os
+import re
 import shlex
 import signal
 import sys
@@ -415,11 +416,15 @@ class PlainInt(_Plain, click.types.IntParamType):
 
 class PlainFloat(_Plain, click.types.FloatParamType):
     """click's float type, `plain_number` spellings only, -0 read as 0 (``--t-fault -0``
-    was printed as a fault at -0 s)."""
+    was printed as a fault at -0 s), a number below the smallest float refused (``--tf
+    1e-400`` was read as 0 and refused as ``--tf 0``)."""
 
     def convert(self, value, param, ctx):
         """The value as a float, -0 as 0 (click's `ParamType.convert`)."""
-        return super().convert(value, param, ctx) + 0.0
+        out = super().convert(value, param, ctx) + 0.0
+        if out == 0 and isinstance(value, str) and re.search(r"[1-9]", re.split("[eE]", value)[0]):
+            self.fail(f"{value}: too small for a float (it would be read as 0)", param, ctx)
+        return out
 
 
 class PlainIntRange(_Plain, click.IntRange):

@@ -242,7 +242,7 @@ def place(
     from stabctl.parallel import RunnerOptions, atomic_write, default_workers
     from stabctl.placement.loop import PlaceOptions, Study
     from stabctl.placement.plan import PlanOptions, plan
-    from stabctl.placement.program import candidate_sites
+    from stabctl.placement.program import candidate_sites, infinite_buses
     from stabctl.placement.requirements import (
         CostModel,
         Requirement,
@@ -279,7 +279,10 @@ def place(
     case = load_case(case_name)
     n_mac = len(case.machines.bus)
     cost = CostModel(
-        cost_mw, cost_mwh, cost_site, read_site_costs(site_costs, n_mac) if site_costs else {}
+        cost_mw,
+        cost_mwh,
+        cost_site,
+        read_site_costs(site_costs, n_mac, infinite_buses(case)) if site_costs else {},
     )
     brackets = screening_brackets(screening, case_name, case.digest()) if screening else None
     faults = read_fault_list(case, case_name, faults_src)
@@ -313,7 +316,7 @@ def place(
     result = plan(
         case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
     )
-    out = {"case": case.name, "esd_model": esd_model, "settings": _settings(study)}
+    out = {"case": case.name, "esd_model": esd_model, "settings": _settings(study, case_name)}
     out.update(result.to_dict())
     if as_json:
         print_json(out)
@@ -325,21 +328,25 @@ def place(
         sys.exit(1)
 
 
-def _settings(study) -> dict:
+def _settings(study, case_name: str) -> dict:
     """The plan's numerical and control settings, as its JSON records them (names with
-    their units, as `cct --json`'s): the model (conventions, step in s or None for the
-    case's default, Q limits, multi-rate exciters), the CCT search (tolerance, t_max and
-    run end in s, None: the fault start + 5 s) and the devices' law (``coi`` "critical"
-    with ``critical`` None: each contingency's group, found without storage)."""
+    their units, as `cct --json`'s): the model (conventions, the step of the runs in s,
+    the case's default when none is given, Q limits, multi-rate exciters), the CCT search
+    (tolerance, t_max and run end in s, None: the fault start + 5 s) and the devices' law
+    (``coi`` "critical" with ``critical`` None: each contingency's group, found without
+    storage)."""
     from dataclasses import asdict
 
+    from stabctl.stability.cct import cached_simulator
+
     m, s, c = study.model, study.search, study.controller
+    step = cached_simulator(case_name, m).default_h if m.h is None else m.h
     law = asdict(c)
     if study.critical_reference:
         law.update(coi="critical", critical=None)
     return {
         "conventions": m.conventions,
-        "step_s": m.h,
+        "step_s": step,
         "q_limits": m.q_limits,
         "subintervals": m.subintervals,
         "tol_s": s.tol,

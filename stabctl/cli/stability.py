@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import click
 
@@ -157,10 +157,11 @@ def cct(
       stabctl cct miniwecc --fault 83 --far-bus 33 --json
 
     A fault still stable when cleared at --t-max is a verdict (the CCT is above it: exit
-    0, ``"cct_s": null`` and ``"above_t_max_s"`` in --json); so is one unstable even
-    when cleared at once (N-1 insecure: exit 0, ``"cct_s": 0`` and ``"verdict": "N-1
-    insecure"``).  Bad input (unknown bus or line, storage not available) exits with
-    status 2 and one `error:` line.
+    0, ``"cct_s": null``, ``"above_t_max_s"`` and ``"verdict": "above t_max"`` in
+    --json); so is one unstable even when cleared at once (N-1 insecure: exit 0,
+    ``"cct_s": 0`` and ``"verdict": "N-1 insecure"``); the JSON gives the reason, the
+    fault and the settings as a CCT's does.  Bad input (unknown bus or line, storage
+    not available) exits with status 2 and one `error:` line.
     """
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.errors import AboveSearchLimit, InsecureContingency
@@ -202,38 +203,34 @@ def cct(
     )
     try:
         res = critical_clearing_time(sim, line_fault, search, storage=storage, h=step)
-    except InsecureContingency as exc:  # a verdict: N-1 insecure, CCT 0
+    except (InsecureContingency, AboveSearchLimit) as exc:  # a verdict, not a failure
+        insecure = isinstance(exc, InsecureContingency)
         if as_json:
+            fault_d = asdict(line_fault)
+            fault_d["t_fault_s"] = fault_d.pop("t_fault")
             print_json(
                 {
                     "case": case.name,
                     "esd_pct": esd_pct,
-                    "cct_s": 0.0,
+                    "esd_model": esd_model,
+                    "fault": fault_d,
+                    "cct_s": 0.0 if insecure else None,
+                    **({} if insecure else {"above_t_max_s": search.t_max}),
                     "verdict": exc.label,
                     "reason": str(exc),
                     "n_simulations": exc.n_simulations,
                     "islanded": list(exc.islanded),
+                    "conventions": model.conventions,
+                    "tol_s": search.tol,
+                    "t_max_s": search.t_max,
+                    "step_s": sim.default_h if step is None else step,
+                    "search": search.method,
+                    "q_limits": q_limits,
                 }
             )
         else:
-            click.echo(f"CCT 0 s, N-1 insecure: {exc}{_runs_said(exc)}")
-            _echo_islanding(case, exc.islanded)
-        return
-    except AboveSearchLimit as exc:  # a verdict: the fault is robust up to --t-max
-        if as_json:
-            print_json(
-                {
-                    "case": case.name,
-                    "esd_pct": esd_pct,
-                    "cct_s": None,
-                    "above_t_max_s": search.t_max,
-                    "verdict": str(exc),
-                    "n_simulations": exc.n_simulations,
-                    "islanded": list(exc.islanded),
-                }
-            )
-        else:
-            click.echo(f"CCT above the search limit: {exc}{_runs_said(exc)}")
+            said = "CCT 0 s, N-1 insecure" if insecure else "CCT above the search limit"
+            click.echo(f"{said}: {exc}{_runs_said(exc)}")
             _echo_islanding(case, exc.islanded)
         return
     out = {"case": case.name, "esd_pct": esd_pct, "esd_model": esd_model}

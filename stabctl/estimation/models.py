@@ -220,9 +220,11 @@ def machine_models(case: Case, pmus) -> MachineModels:
     mp = machine_params(case)
     infinite = case.machines.number[mp.H == 0].astype(int).tolist()
     if infinite:
+        named = ", ".join(case.machine_name(k) for k in infinite)
+        verb = "is an infinite bus" if len(infinite) == 1 else "are infinite buses"
         raise InputError(
-            f"machine(s) {infinite} are infinite buses (H = 0): the speed estimators filter "
-            "each machine's swing equation and need H > 0"
+            f"case '{case.name}': {named} {verb} (H = 0): the speed estimators filter each "
+            "machine's swing equation and need H > 0"
         )
     island = machine_islands(case)
     if island.max() > 0:

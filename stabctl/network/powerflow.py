@@ -681,7 +681,7 @@ def _without_limits_hint(case: Case, q_limits: bool, drop) -> str:
         return ""
     return (
         "; with the PV buses' Q limits off it converges ("
-        + advice("q_limits=False", "--no-q-limits")
+        + advice("q_limits=False", "--no-q-limits of the commands that run a case")
         + ": ANDES's default, pv2pq = 0)"
     )
 

@@ -66,6 +66,21 @@ class Site:
             )
 
 
+def infinite_buses(case) -> set[int]:
+    """The machines of a case that are infinite buses (H = 0), by number: no ESD site.
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+
+    Returns
+    -------
+    set of int
+        Machine numbers.
+    """
+    return {int(k) for k, h in zip(case.machines.number, case.machines.H) if h == 0}
+
+
 def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tuple[Site, ...]:
     """One site per generator (default every one but infinite buses, or the numbers in
     `machines`) at its HV bus (`stabctl.storage.devices.hv_bus`), bounded at max_pct % of
@@ -81,7 +96,7 @@ def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tu
 
     if not max_pct > 0:
         raise InputError(f"largest site rating must be > 0 % of machine MVA, got {max_pct:g}")
-    fixed = {int(k) for k, h in zip(case.machines.number, case.machines.H) if h == 0}
+    fixed = infinite_buses(case)
     if machines is None:
         nums = [int(k) for k in case.machines.number if int(k) not in fixed]
     else:
@@ -89,8 +104,9 @@ def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tu
         named = [k for k in nums if k in fixed]
         if named:
             raise InputError(
-                f"machine(s) {named} are infinite buses (H = 0, their speed the reference): "
-                "a device there would idle, so they are no ESD site"
+                f"{', '.join(case.machine_name(k) for k in named)} "
+                f"{'is an infinite bus' if len(named) == 1 else 'are infinite buses'} (H = 0, "
+                "its speed the reference): a device there would idle, so it is no ESD site"
             )
     cost = cost or {}
     return tuple(

@@ -218,16 +218,18 @@ class CostModel:
 SITE_COST_COLUMNS = (("machine",), ("cost_mw", "cost_mwh", "cost_site"))
 
 
-def read_site_costs(path, n_machines: int) -> dict:
+def read_site_costs(path, n_machines: int, no_site=()) -> dict:
     """Per-site cost overrides from a CSV (a strict table, `stabctl.io.inputs.read_csv`,
     of :data:`SITE_COST_COLUMNS`): machine -> {"per_mw", "per_mwh", "per_site"} (the
-    costs given, each >= 0).
+    costs given, each >= 0).  no_site: machines that are no candidate site (infinite
+    buses, `stabctl.placement.program.candidate_sites`), whose row would be ignored.
 
     Raises
     ------
     InputError
-        A row or header the table refuses, no cost column, a machine not in 1..n_machines
-        or listed twice, a cost that is not a finite number >= 0; naming file:line.
+        A row or header the table refuses, no cost column, a machine not in 1..n_machines,
+        in no_site or listed twice, a cost that is not a finite number >= 0; naming
+        file:line.
     """
     from stabctl.io.inputs import number, read_csv
 
@@ -241,6 +243,11 @@ def read_site_costs(path, n_machines: int) -> dict:
         m = int(number(row, "machine", 1, n_machines, integer=True))
         if m in out:
             raise InputError(f"{row.where()}: machine {m} listed twice")
+        if m in no_site:
+            raise InputError(
+                f"{row.where()}: machine {m} is an infinite bus (H = 0), no ESD site, so it "
+                "takes no site cost"
+            )
         out[m] = {
             k: number(row, c, 0.0)
             for k, c in (("per_mw", "cost_mw"), ("per_mwh", "cost_mwh"), ("per_site", "cost_site"))

@@ -73,6 +73,10 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
             "--v-gate nan: must be a finite number in [0, 2] pu",
         ),
         (FAULT + ("--deadband-hz", "inf"), "--deadband-hz inf"),
+        # a number below the smallest float is named as given, not as the 0 it parses to
+        (FAULT + ("--tf", "1e-400"), "'--tf': 1e-400: too small for a float"),
+        (FAULT + ("--clear-cycles", "3E-999"), "'--clear-cycles': 3E-999: too small for a float"),
+        (("omib", "--H", "-1.5e-400"), "'--H': -1.5e-400: too small for a float"),
         (FAULT + ("--step", "nan"), "--step nan"),
         (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", "nan"), "--tol-ms nan"),
         (

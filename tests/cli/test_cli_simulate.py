@@ -70,6 +70,15 @@ def test_cases_text():
     assert "66 non-conforming load buses" in res.stdout  # all its help promises
 
 
+def test_cases_text_of_a_case_without_description_has_no_blank_line(psse_omib):
+    """An imported PSS/E case has no description: its summary line stands alone (it was
+    followed by a line of four blanks)."""
+    res = run("cases", psse_omib)
+    assert res.exit_code == 0
+    lines = res.stdout.splitlines()
+    assert len(lines) == 1 and lines[0].endswith("100 MVA base, 60 Hz"), lines
+
+
 def test_cases_lists_one_cases_buses_and_lines_to_choose_a_fault():
     """`cases CASE --bus-table --line-table`: the numbers --fault, --far-bus and --circuit take,
     from the data file (Kundur's line 3-101 has two circuits)."""

@@ -817,6 +817,33 @@ def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
     assert "--keep-unsolved" in help_text
 
 
+def test_an_unsolved_power_flow_s_advice_names_whose_option_solves_it(tmp_path):
+    """PSS/E's three-bus GENROU system with bus 102's Q limits at +-20 Mvar, bus 103's
+    load at 150 Mvar and the lines from bus 101 five times longer converges only with
+    the Q limits off: the import
+    refuses it and says so, naming --no-q-limits as the option of the commands that run
+    the case (import-psse has none)."""
+    runs = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU"
+    text = (runs / "ThreeBusMulti.raw").read_text()
+    for old, new in (
+        ("250.000,    30.000,", "250.000,   150.000,"),
+        ("-3.247,   100.000,  -100.000,", "-3.247,   20.000,  -20.000,"),
+        ("101,   102,'1 ', 1.00000E-2, 1.20000E-1,", "101,   102,'1 ', 1.00000E-2, 6.00000E-1,"),
+        ("101,   103,'1 ', 1.00000E-2, 1.20000E-1,", "101,   103,'1 ', 1.00000E-2, 6.00000E-1,"),
+    ):
+        assert old in text, old
+        text = text.replace(old, new)
+    raw = tmp_path / "ql.raw"
+    raw.write_text(text)
+    out = tmp_path / "ql.json"
+    res = CliRunner().invoke(
+        main, ["import-psse", str(raw), str(runs / "ThreeBus_GENROU.dyr"), "-o", str(out)]
+    )
+    line = error_line(res)
+    assert "with the PV buses' Q limits off it converges (--no-q-limits of the commands " in line
+    assert not out.exists()
+
+
 @pytest.mark.parametrize(
     "machine, expected",
     [

@@ -118,7 +118,7 @@ def test_a_machine_against_an_infinite_bus_gets_a_site_the_infinite_bus_none(pss
 
     case = load_case(psse_omib)
     assert [s.machine for s in candidate_sites(case)] == [2]
-    with pytest.raises(InputError, match=r"machine\(s\) \[1\] are infinite buses"):
+    with pytest.raises(InputError, match=r"G1 \(bus 101\) is an infinite bus"):
         candidate_sites(case, machines=[1, 2])
     sim = Simulator(case)
     beta = distribution_factors(
@@ -135,6 +135,18 @@ def test_a_machine_against_an_infinite_bus_gets_a_site_the_infinite_bus_none(pss
     )  # fmt: skip
     assert res.exit_code == 0, res.output
     assert f"({base:.3f} s without storage: the devices lower it" in res.output
+    assert "0 of 0 contingencies stable at their required clearing time (1 more set aside" in (
+        res.output
+    )
+    costs = tmp_path / "costs.csv"
+    costs.write_text("machine,cost_mw\n2,1\n1,0.5\n")  # the infinite bus's row: no site
+    res = CliRunner().invoke(
+        main,
+        ["place", psse_omib, "--faults", str(faults), "--target-cct-gain", "10",
+         "--site-costs", str(costs)],
+    )  # fmt: skip
+    assert res.exit_code == 2
+    assert "costs.csv:3: machine 1 is an infinite bus (H = 0), no ESD site" in res.output
 
 
 def test_place_takes_the_power_flow_without_q_limits_a_case_needs(tmp_path):

@@ -697,6 +697,7 @@ def test_place_coi_critical_names_its_law_in_its_header_and_json(tmp_path):
     d = json.loads(CliRunner().invoke(main, [*argv, "--json"]).output)
     assert d["settings"]["controller"]["coi"] == "critical"
     assert d["settings"]["controller"]["critical"] is None
+    assert d["settings"]["step_s"] == 0.005  # the case's default step, as cct --json says
     (row,) = d["contingencies"]
     assert row["cct_no_storage_s"] == pytest.approx(0.154) and row["met"]
     assert row["cct_s"] >= row["required_s"] == pytest.approx(0.185)

@@ -176,6 +176,7 @@ def test_eig_json_lists_every_mode():
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["n_states"] == 44 and out["pss"] is False and out["files"] == []
+    assert (out["conventions"], out["q_limits"]) == ("ieee", True)  # the settings linearised
     modes = out["modes"]
     assert len(modes) > 25 and [m["mode"] for m in modes] == list(range(len(modes)))
     keys = {"real_per_s", "imag_rad_per_s", "freq_hz", "damping_ratio", "kind"}

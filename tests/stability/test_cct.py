@@ -421,7 +421,9 @@ def test_cli_cct_bad_input(args, needle):
 
 def test_cli_cct_above_its_search_limit_is_a_verdict_not_an_error():
     """A fault still stable when cleared at --t-max is robust: exit 0 and the verdict (it
-    was an `error:` line with exit 2), ``cct_s`` null with the limit in --json."""
+    was an `error:` line with exit 2), ``cct_s`` null with the limit in --json, the
+    verdict's label (as `screen` records it) and the reason apart, and the fault and the
+    settings as a CCT's JSON names them."""
     args = ("cct", "kundur", "--fault", 3, "--far-bus", 101, "--t-max", 0.1)
     res = run(*args)
     assert res.exit_code == 0, res.output
@@ -429,6 +431,11 @@ def test_cli_cct_above_its_search_limit_is_a_verdict_not_an_error():
     assert "still stable when cleared there (2 simulations)" in res.stdout  # at 0 and 0.1 s
     d = json.loads(run(*args, "--json").stdout)
     assert d["cct_s"] is None and d["above_t_max_s"] == 0.1 and d["n_simulations"] == 2
+    assert d["verdict"] == "above t_max" and "still stable when cleared there" in d["reason"]
+    cct = json.loads(run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--json").stdout)
+    for key in ("fault", "esd_model", "conventions", "tol_s", "step_s", "search", "q_limits"):
+        assert d[key] == cct[key], key
+    assert d["t_max_s"] == 0.1
 
 
 def test_cli_cct_names_a_generator_it_islands():
