@@ -246,7 +246,8 @@ def check(job: dict) -> dict:
     return {**out, "n_simulations": sim.n_runs}
 
 
-#: the critical groups a worker has found (`_law`), by case, model, load, fault and search
+#: the critical groups a worker has found (`_law`), by case content (at its load level),
+#: model, fault and search
 _GROUPS: dict[str, tuple[int, ...]] = {}
 
 
@@ -260,8 +261,8 @@ def _law(job: dict, sim, fault: LineFault) -> BangBangCOI:
     law = dict(job["controller"])
     search = law.pop("critical_search", None)
     if search is not None:
-        key = repr(
-            (job["case"], ModelOptions.from_inputs(job), job.get("load", 1.0), job["fault"], search)
+        key = repr(  # the case by content: a worker outlives an edit of its file
+            (sim.case.digest(), ModelOptions.from_inputs(job), job["fault"], search)
         )
         if key not in _GROUPS:
             o = SearchOptions(tol=search["tol"], t_max=search["t_max"], error_check=False)
