@@ -422,9 +422,30 @@ class PlainFloat(_Plain, click.types.FloatParamType):
     def convert(self, value, param, ctx):
         """The value as a float, -0 as 0 (click's `ParamType.convert`)."""
         out = super().convert(value, param, ctx) + 0.0
-        if out == 0 and isinstance(value, str) and re.search(r"[1-9]", re.split("[eE]", value)[0]):
-            self.fail(f"{value}: too small for a float (it would be read as 0)", param, ctx)
+        if isinstance(value, str) and underflows(value, out):
+            self.fail(f"{value}: {UNDERFLOW}", param, ctx)
         return out
+
+
+#: why a number below the smallest float is refused
+UNDERFLOW = "too small for a float (it would be read as 0)"
+
+
+def underflows(text: str, value) -> bool:
+    """Whether a number written as ``text`` was read as 0 though it is not (``1e-400``).
+
+    Parameters
+    ----------
+    text : str
+        The number as given.
+    value : float
+        What it was read as.
+
+    Returns
+    -------
+    bool
+    """
+    return value == 0 and re.search(r"[1-9]", re.split("[eE]", text)[0]) is not None
 
 
 class PlainIntRange(_Plain, click.IntRange):
@@ -571,6 +592,8 @@ def _list_item(item: str, option: str, convert, what: str):
         raise InputError(f"{option} {item!r}: not {what}") from None
     if isinstance(value, float) and not math.isfinite(value):
         raise InputError(f"{option} {item}: must be a finite number")
+    if isinstance(value, float) and underflows(item, value):
+        raise InputError(f"{option} {item}: {UNDERFLOW}")
     return value
 
 

@@ -77,6 +77,10 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (FAULT + ("--tf", "1e-400"), "'--tf': 1e-400: too small for a float"),
         (FAULT + ("--clear-cycles", "3E-999"), "'--clear-cycles': 3E-999: too small for a float"),
         (("omib", "--H", "-1.5e-400"), "'--H': -1.5e-400: too small for a float"),
+        (
+            ("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "5,1e-400"),
+            "--esd-pct 1e-400: too small for a float",
+        ),
         (FAULT + ("--step", "nan"), "--step nan"),
         (("cct", "kundur", "--fault", 3, "--far-bus", 101, "--tol-ms", "nan"), "--tol-ms nan"),
         (
