@@ -294,13 +294,7 @@ def print_cct(case, rating, d) -> None:
             f"half the step {d['cct_half_step_s']:.{n}f} s)"
         )
     if "critical_group" in d:
-        g = d["critical_group"]
-        click.echo(
-            f"storage on the critical group's COI: machines {machine_list(case, g['machines'])} "
-            "separate without "
-            f"storage (CCT {g['cct_without_storage_s']:.{n}f} s); their devices brake them "
-            "against the other machines' COI, the other devices drive theirs after them"
-        )
+        click.echo(critical_group_line(case, d["critical_group"], n))
     for line in islanding_lines(case, d.get("islanded", []), timed=False):
         click.echo(f"the contingency's trip: {line}")
     if d["separated_machines"]:
@@ -723,6 +717,29 @@ _LAWS = {
 def _law_named(d: dict) -> str:
     """The plan header's words for its law: none for the paper's (the system's COI)."""
     return _LAWS.get(d.get("settings", {}).get("controller", {}).get("coi", "system"), "")
+
+
+def critical_group_line(case, group: dict, decimals: int = 3) -> str:
+    """The text of `cct --coi critical`'s group (its JSON ``critical_group``).
+
+    Parameters
+    ----------
+    case : stabctl.case.Case
+    group : dict
+        ``machines``, ``cct_without_storage_s``.
+    decimals : int, optional
+        Decimals of the CCT in s.
+
+    Returns
+    -------
+    str
+    """
+    return (
+        f"storage on the critical group's COI: machines {machine_list(case, group['machines'])} "
+        f"separate without storage (CCT {group['cct_without_storage_s']:.{decimals}f} s); their "
+        "devices brake them against the other machines' COI, the other devices drive theirs "
+        "after them"
+    )
 
 
 def print_plan(case_name, d) -> None:

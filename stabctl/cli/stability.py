@@ -16,6 +16,7 @@ from stabctl.cli.checks import (
     search_settings,
 )
 from stabctl.cli.format import (
+    critical_group_line,
     islanding_lines,
     machine_buses,
     print_cct,
@@ -201,6 +202,17 @@ def cct(
             model=esd_model,
         )
     )
+    group = (
+        {}
+        if base is None
+        else {
+            "critical_group": {
+                "machines": list(base.separated),
+                "buses": machine_buses(case, base.separated),
+                "cct_without_storage_s": base.cct_s,
+            }
+        }
+    )
     try:
         res = critical_clearing_time(sim, line_fault, search, storage=storage, h=step)
     except (InsecureContingency, AboveSearchLimit) as exc:  # a verdict, not a failure
@@ -208,6 +220,7 @@ def cct(
         if as_json:
             fault_d = asdict(line_fault)
             fault_d["t_fault_s"] = fault_d.pop("t_fault")
+            h = sim.default_h if step is None else step
             print_json(
                 {
                     "case": case.name,
@@ -223,14 +236,19 @@ def cct(
                     "conventions": model.conventions,
                     "tol_s": search.tol,
                     "t_max_s": search.t_max,
-                    "step_s": sim.default_h if step is None else step,
+                    "step_s": h,
+                    "sub_stepped_exciters": sim.sub_stepped(h),
                     "search": search.method,
+                    "criterion": "no_separation",
                     "q_limits": q_limits,
+                    **group,
                 }
             )
         else:
             said = "CCT 0 s, N-1 insecure" if insecure else "CCT above the search limit"
             click.echo(f"{said}: {exc}{_runs_said(exc)}")
+            if group:
+                click.echo(critical_group_line(case, group["critical_group"]))
             _echo_islanding(case, exc.islanded)
         return
     out = {"case": case.name, "esd_pct": esd_pct, "esd_model": esd_model}
@@ -239,12 +257,7 @@ def cct(
         if key == "separated_machines":  # their buses beside them
             out["separated_buses"] = machine_buses(case, value)
     out["q_limits"] = q_limits
-    if base is not None:
-        out["critical_group"] = {
-            "machines": list(base.separated),
-            "buses": machine_buses(case, base.separated),
-            "cct_without_storage_s": base.cct_s,
-        }
+    out.update(group)
     if as_json:
         print_json(out)
     else:

@@ -216,8 +216,10 @@ def screen(
         reason), the buses it islands from every generator (``islanded``) and the
         machines it cuts off the main grid with their islands' buses
         (``islanded_machines``, ``islanded_machine_buses``: `islanded_machines`), CCT (s
-        and cycles) with its numerical error (s), separated machines, simulations, or the
-        error and whether an earlier run recorded it (``failed_before``, not run again).
+        and cycles) with its numerical error (s), separated machines, simulations
+        (``n_simulations``, a verdict's too: None in a record written before verdicts
+        counted them), or the error and whether an earlier run recorded it
+        (``failed_before``, not run again).
 
     Raises
     ------
@@ -307,6 +309,7 @@ def screen(
             )
         elif rec["status"] == "verdict":
             row["reason"] = rec.get("reason", "")
+            row["n_simulations"] = rec.get("n_simulations")  # None in a record from before
         else:
             row["error"] = rec.get("error", "")
             row["failed_before"] = rec["key"] in before  # recorded by an earlier run

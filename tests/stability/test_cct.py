@@ -433,7 +433,8 @@ def test_cli_cct_above_its_search_limit_is_a_verdict_not_an_error():
     assert d["cct_s"] is None and d["above_t_max_s"] == 0.1 and d["n_simulations"] == 2
     assert d["verdict"] == "above t_max" and "still stable when cleared there" in d["reason"]
     cct = json.loads(run("cct", "kundur", "--fault", 3, "--far-bus", 101, "--json").stdout)
-    for key in ("fault", "esd_model", "conventions", "tol_s", "step_s", "search", "q_limits"):
+    for key in ("fault", "esd_model", "conventions", "tol_s", "step_s", "search", "q_limits",
+                "criterion", "sub_stepped_exciters"):  # fmt: skip
         assert d[key] == cct[key], key
     assert d["t_max_s"] == 0.1
 

@@ -127,6 +127,11 @@ def test_n1_insecure_is_a_verdict_not_a_failure(tmp_path):
     assert res.exit_code == 0, res.output
     got = json.loads(res.stdout)
     assert (got["cct_s"], got["verdict"]) == (0.0, "N-1 insecure")
+    # screen --json gives a verdict's simulations, as its record and cct --json do
+    scr = ["screen", "kundur", "--buses", "3", "--t-max", "0.2", "--workers", "1", "--json"]
+    (row,) = json.loads(CliRunner().invoke(main, [*scr, "--out", str(tmp_path / "s.jsonl")]).stdout)
+    (rec,) = map(json.loads, (tmp_path / "s.jsonl").read_text().splitlines())
+    assert row["verdict"] == "above t_max" and row["n_simulations"] == rec["n_simulations"] == 3
 
 
 def test_a_contingency_that_islands_a_load_bus_names_it_in_its_verdict(tmp_path, capsys):

@@ -89,6 +89,14 @@ def test_cct_cli_finds_the_group_and_other_commands_refuse_it(kundur):
     assert out["cct_s"] > 0.154
     text = CliRunner().invoke(main, [*args, "--coi", "critical"])
     assert "machines G1 (bus 1), G2 (bus 2) separate without storage (CCT 0.154 s)" in text.stdout
+    # a verdict with the law (still stable at a --t-max below its CCT) names the group too
+    robust = [*args, "--coi", "critical", "--t-max", "0.16"]
+    verdict = json.loads(CliRunner().invoke(main, [*robust, "--json"]).stdout)
+    assert verdict["verdict"] == "above t_max"
+    assert verdict["critical_group"] == out["critical_group"]
+    text = CliRunner().invoke(main, robust).stdout
+    assert text.startswith("CCT above the search limit")
+    assert "machines G1 (bus 1), G2 (bus 2) separate without storage (CCT 0.154 s)" in text
     res = CliRunner().invoke(
         main, ["simulate", "kundur", "--fault", "3", "--esd-pct", "5", "--coi", "critical"]
     )
