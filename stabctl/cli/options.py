@@ -23,7 +23,6 @@ import _thread
 import functools
 import math
 import os
-import re
 import shlex
 import signal
 import sys
@@ -36,7 +35,7 @@ import click
 from stabctl.cli.format import one_line
 from stabctl.cli.stdout import StdoutError, cannot_write
 from stabctl.errors import InputError, StabctlError, on_command_line
-from stabctl.io.inputs import plain_number
+from stabctl.io.inputs import UNDERFLOW, plain_number, underflows
 
 #: seconds a run continues after the fault start when --tf is not given
 TF_AFTER_FAULT_S = 5.0
@@ -425,27 +424,6 @@ class PlainFloat(_Plain, click.types.FloatParamType):
         if isinstance(value, str) and underflows(value, out):
             self.fail(f"{value}: {UNDERFLOW}", param, ctx)
         return out
-
-
-#: why a number below the smallest float is refused
-UNDERFLOW = "too small for a float (it would be read as 0)"
-
-
-def underflows(text: str, value) -> bool:
-    """Whether a number written as ``text`` was read as 0 though it is not (``1e-400``).
-
-    Parameters
-    ----------
-    text : str
-        The number as given.
-    value : float
-        What it was read as.
-
-    Returns
-    -------
-    bool
-    """
-    return value == 0 and re.search(r"[1-9]", re.split("[eE]", text)[0]) is not None
 
 
 class PlainIntRange(_Plain, click.IntRange):

@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -275,6 +276,27 @@ def plain_number(text: str) -> bool:
     return text.isascii() and "_" not in text
 
 
+#: why a number below the smallest float is refused (`underflows`)
+UNDERFLOW = "too small for a float (it would be read as 0)"
+
+
+def underflows(text: str, value) -> bool:
+    """Whether a number written as ``text`` was read as 0 though it is not (``1e-400``).
+
+    Parameters
+    ----------
+    text : str
+        The number as given.
+    value : float
+        What it was read as.
+
+    Returns
+    -------
+    bool
+    """
+    return value == 0 and re.search(r"[1-9]", re.split("[eEdD]", text)[0]) is not None
+
+
 def plain_float(text: str, fortran: bool = False) -> float:
     """``float(text)`` for a `plain_number` spelling, -0 read as 0 (a time of -0 s is
     printed as 0 s).
@@ -333,6 +355,8 @@ def number(
         raise InputError(
             f"{row.where()}: {column} '{text}' is not a number (ASCII digits, no '_')"
         ) from None
+    if underflows(text, v):
+        raise InputError(f"{row.where()}: {column} {text} is {UNDERFLOW}")
     if not math.isfinite(v) or not lo <= v <= hi:
         raise InputError(f"{row.where()}: {column} {text} is outside [{lo:g}, {hi:g}]")
     if integer and not text.lstrip("+-").isdigit():  # 3.0, 3e0: a measured value, not a label

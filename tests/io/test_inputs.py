@@ -231,6 +231,17 @@ def test_plain_float_reads_ascii_numbers_only_and_minus_zero_as_zero():
     assert plain_float("-2.5e-1") == -0.25
 
 
+def test_a_table_number_below_the_smallest_float_is_refused_as_written(tmp_path):
+    """A fault list's 1e-400 was read as 0 and refused as 'gain=0.0 %' (a t_fault of
+    1e-400 ran at 0 s): it is refused as written, naming file:line and column."""
+    path = _csv(tmp_path, "bus,far_bus,target_cct_gain\n3,101,1e-400\n", name="g.csv")
+    with pytest.raises(InputError, match=r"g\.csv:2: target_cct_gain 1e-400 is too small"):
+        read_requirements(path)
+    path = _csv(tmp_path, "bus,far_bus,t_fault\n3,101,-2E-999\n", name="t.csv")
+    with pytest.raises(InputError, match=r"t\.csv:2: t_fault -2E-999 is too small"):
+        read_faults(path)
+
+
 def test_a_header_of_more_columns_than_the_table_has_is_refused_with_its_count(tmp_path):
     """Finding twice-named columns was quadratic in the header's columns (200 000 took
     most of a minute): a header of more columns than the table knows is refused first."""
