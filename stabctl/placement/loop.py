@@ -179,6 +179,36 @@ class Study:
         """The ESDs' law (`DEFAULT_CONTROLLER` when none is given)."""
         return self.controller or DEFAULT_CONTROLLER
 
+    def evaluator(self, run_map, case: str, sites, beta) -> Evaluator:
+        """The `Evaluator` of this study's runs.
+
+        Parameters
+        ----------
+        run_map : callable
+            ``run_map(func, jobs) -> results``.
+        case : str
+            Case name or file.
+        sites : tuple of Site
+            Candidate sites.
+        beta : numpy.ndarray
+            Distribution factors, shape (n_mac, n_sites).
+
+        Returns
+        -------
+        Evaluator
+        """
+        return Evaluator(
+            run_map,
+            case,
+            sites,
+            beta,
+            self.law,
+            self.search,
+            self.model,
+            esd_model=self.esd_model,
+            critical_reference=self.critical_reference,
+        )
+
 
 @dataclass(frozen=True)
 class PlaceOptions:
@@ -341,17 +371,7 @@ def place(
     say = progress or logger.info
     with _pool(study) as rm:
         setup = _Setup(
-            Evaluator(
-                rm,
-                case,
-                sites,
-                beta,
-                study.law,
-                study.search,
-                study.model,
-                esd_model=study.esd_model,
-                critical_reference=study.critical_reference,
-            ),
+            study.evaluator(rm, case, sites, beta),
             contingencies,
             damping,
             o.zeta_min,
@@ -411,18 +431,7 @@ def evaluations(
         beta, _ = _linear_models(sim, sites, study.law, None, 0.0)
     mw = np.zeros(len(sites)) if mw is None else np.asarray(mw, float)
     with _pool(study) as rm:
-        ev = Evaluator(
-            rm,
-            case,
-            sites,
-            beta,
-            study.law,
-            study.search,
-            study.model,
-            esd_model=study.esd_model,
-            critical_reference=study.critical_reference,
-        )
-        return verify(ev, contingencies, mw, opts)
+        return verify(study.evaluator(rm, case, sites, beta), contingencies, mw, opts)
 
 
 def baseline(

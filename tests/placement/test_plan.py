@@ -668,21 +668,8 @@ def test_a_law_armed_per_contingency_needs_a_critical_group():
         r"no critical group without storage",
     ):
         check(job)
-    cli = CliRunner().invoke(
-        main,
-        [
-            "place",
-            "kundur",
-            "--faults",
-            "DEFAULT",
-            "--target-cct-gain",
-            "5",
-            "--coi",
-            "critical",
-            "--t-max",
-            "0.1",
-        ],
-    )
+    argv = ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "5"]
+    cli = CliRunner().invoke(main, [*argv, "--coi", "critical", "--t-max", "0.1"])
     assert cli.exit_code == 2 and "no critical group without storage" in cli.output
 
 
