@@ -302,7 +302,8 @@ def andes_sweep_run(path, bus, x):
 
 def sweep_case(ref, name, buses=None):
     """The sweep at each bus of ANDES's case ``name`` (or at ``buses``): per bus a dict of
-    ``bus``, ``stabctl`` (None where it ran to `T_END`, else the time it stopped, s),
+    ``bus``, ``stabctl`` (None where it ran to `T_END`, else the time it stopped, s, and
+    ``why`` its message),
     ``andes`` (None or where it stopped), and, where both have values past the
     clearing, ``dw``, ``dP``, ``dQ``: the largest speed (GENROU) and converter P, Q gaps
     (pu) on ANDES's stored grid up to the earlier stop.  ANDES's runs through ``ref``
@@ -319,6 +320,7 @@ def sweep_case(ref, name, buses=None):
         except SimulationError as exc:
             part = exc.result
             row["stabctl"] = float(part.t[-1]) if part is not None else float("nan")
+            row["why"] = str(exc)
             rows.append(row)
             continue
         a = dict(a)

@@ -78,6 +78,7 @@ from stabctl.errors import (
 )
 from stabctl.models import converters as conv
 from stabctl.network import switched_shunts as sws
+from stabctl.network.solution import no_solution_hint
 from stabctl.progress import run_progress
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
@@ -1294,11 +1295,12 @@ class _Run:
                 result=res,
             )
         if self.status < 0:
+            stage = g.interval[min(k_end + 1, g.t.size - 1)]
             raise SimulationError(
                 f"case '{sim.case.name}': the network/load equations did "
                 f"not converge (voltage collapse) in the step ending at "
                 f"t = {t_fail:.4f} s (trajectory kept up to "
-                f"{g.t[k_end]:.4f} s)",
+                f"{g.t[k_end]:.4f} s){no_solution_hint(sim.case, self.nets_list[stage])}",
                 result=res,
             )
         return res

@@ -100,7 +100,7 @@ from stabctl.dynamics.model import (
 from stabctl.dynamics.partition import judged_relative, stage_at
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import NumericalInstabilityError, SimulationError
-from stabctl.network.solution import V_RELEASE, L
+from stabctl.network.solution import V_RELEASE, L, no_solution_hint
 
 #: Newton's convergence: the largest correction of a state below TOL (pu, rad)
 TOL = 1e-10
@@ -477,7 +477,7 @@ def run(
         try:
             f_x = f(x, s, BUS_VOLTAGES)
         except SimulationError as e:
-            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions)
+            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions, nets)
         _record(rec, k, x, f.out, nm)
         h = float(grid.t[k + 1] - grid.t[k]) if k + 1 < n_t else 0.0
         if k + 1 == n_t or (stop and _separated(sim, x, nm, limit, partitions, grid.t[k])):
@@ -489,12 +489,12 @@ def run(
             x, bad = step.halving(x, f_x, s, h, step.start(f_x) if s == s_step else None)
             s_step = s
         except SimulationError as e:
-            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions)
+            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions, nets)
         finally:
             f.lock(False)
         if bad == NO_NETWORK:
             why = "the network/load equations did not converge"
-            _fail(sim, grid, rec, k, wall, limit, why, SimulationError, partitions)
+            _fail(sim, grid, rec, k, wall, limit, why, SimulationError, partitions, nets)
         why = "Newton's iteration did not converge"
         if bad < 0:
             bad = _unhealthy_state(x, nm, _judged_now(partitions, grid.t[k + 1], nm))
@@ -596,12 +596,13 @@ def _judged_now(partitions, t: float, nm: int) -> np.ndarray:
     return partitions[int(stage_at(np.array([t]), partitions)[0])].judged
 
 
-def _fail(sim, grid, rec, k, wall, limit, why, error, partitions=()) -> None:
+def _fail(sim, grid, rec, k, wall, limit, why, error, partitions=(), nets=()) -> None:
     res = sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions)
     if error is SimulationError:
+        k_end = min(k + 1, grid.t.size - 1)
         why = (
             f"case '{sim.case.name}': {why} in the step ending at t = "
-            f"{grid.t[min(k + 1, grid.t.size - 1)]:.4f} s (trajectory kept up to "
-            f"{grid.t[k]:.4f} s)"
+            f"{grid.t[k_end]:.4f} s (trajectory kept up to {grid.t[k]:.4f} s)"
+            + no_solution_hint(sim.case, nets[grid.interval[k_end]])
         )
     raise error(why, result=res)

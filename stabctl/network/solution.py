@@ -294,6 +294,38 @@ def kept_loads(nc: NonConformingLoads) -> np.ndarray:
     return loads
 
 
+def no_solution_hint(case: Case, stage: ReducedNetwork) -> str:
+    """Why the network/load equations (`solve_nc`) can lose their solution while a fault is
+    on in a case with converters, for the message of a run stopped there; empty otherwise.
+
+    Each converter is a current source whose angle follows its terminal voltage's
+    (`kept_loads`' I_dev rows); facing a fault of almost no impedance near it, no terminal
+    voltage is in phase with the current it drives through the network, so the equations
+    have no solution (ANDES's TDS stops at the same faults: kundur_wtdta1 at buses 4, 9
+    and 10).
+
+    Parameters
+    ----------
+    case : Case
+        The case run.
+    stage : ReducedNetwork
+        The network of the step that failed.
+
+    Returns
+    -------
+    str
+        ``"; ..."`` to append to the message, or ``""``.
+    """
+    if not len(case.converters) or not stage.faulted:
+        return ""
+    return (
+        "; the case's converters are current sources turning with their terminal voltage, "
+        "and facing a fault of almost no impedance near them the network equations can "
+        "have no solution (ANDES stops there too): a fault through an impedance (simulate "
+        "--bus-fault BUS:R:X T_ON T_OFF) can be run"
+    )
+
+
 @kernel
 def constant_power_on(V, held):
     """Whether a kept bus's constant-power and constant-current rows (S_P, S_extra, I0 of
