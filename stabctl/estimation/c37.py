@@ -1077,7 +1077,9 @@ def next_frame_fault(data, frame: bytes, cfg2) -> str | None:
         The message naming the frame (by its number in the stream) and its fault, or None
         if its time stamp follows the one before on the DATA_RATE grid.
     """
-    window = [*data[:1], *data[1:][-1:], frame]  # the first (the grid), the last, the new
+    # the first (the grid), the last, the new; no slice of `data` past its ends, which
+    # would copy every frame received at each frame
+    window = [*data[:1], *(data[-1:] if len(data) > 1 else ()), frame]
     numbers = [1, len(data), len(data) + 1][-len(window) :]
     faults = order_faults(window, cfg2, "", numbers)
     return next((why for k, why in faults if k == len(window) - 1), None)

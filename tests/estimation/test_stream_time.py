@@ -374,3 +374,31 @@ def test_t_0_is_the_cfg2_s_whole_time_stamp(wire, tmp_path):
     )
     rows = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
     assert np.allclose(rows[:, 0], np.arange(1, 91) / 60 - 0.01, atol=1e-9)
+
+
+class _OnlyEnds(list):
+    """Frames received so far, refusing any read but the first and the last frame (a slice
+    past them copies every frame received)."""
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            start, stop, _ = k.indices(len(self))
+            if stop - start > 1:
+                raise AssertionError(f"read frames {start}-{stop - 1} of {len(self)}")
+        return super().__getitem__(k)
+
+
+def test_a_receiver_checks_each_frame_against_the_first_and_last_only(wire):
+    """A receiver checks each data frame's stamp as it comes (`c37.next_frame_fault`),
+    against the first frame (the DATA_RATE grid) and the last: reading nothing else, so
+    the check's cost stays the same however long the stream has run (it copied every
+    frame received, 17 ms a frame after a million frames, beyond a 60 fps stream's
+    16.7 ms).  The verdicts are those of the whole stream's check (`c37.order_faults`)."""
+    cfg2, _, body = wire
+    assert all(
+        c37.next_frame_fault(_OnlyEnds(body[:k]), body[k], cfg2) is None for k in range(len(body))
+    )
+    back = _later(body[40], -round(2e6 / 60))  # two reporting instants back
+    why = c37.next_frame_fault(_OnlyEnds(body[:41]), back, cfg2)
+    whole = c37.order_faults([*body[:41], back], cfg2, "")
+    assert why is not None and "data frame 42" in why and whole and "data frame 42" in whole[0][1]
