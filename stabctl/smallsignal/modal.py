@@ -60,6 +60,10 @@ class AreaCountError(InputError):
     the machines (`coherent_areas`)."""
 
 
+#: the least-damped modes `ModalAnalysis.table` lists when there is no electromechanical one
+LEAST_DAMPED_SHOWN = 5
+
+
 @dataclass(frozen=True, eq=False)
 class ModalAnalysis:
     """Modes of a linearised model.
@@ -140,11 +144,15 @@ class ModalAnalysis:
         Returns
         -------
         str
-            A header line and one line per electromechanical mode.
+            A header line and one line per electromechanical mode; without any, a line
+            saying so (and why, for a model without machines) and the least-damped
+            LEAST_DAMPED_SHOWN modes with their dominant state.
         """
         named = name or (lambda k: f"G{k}")
-        lines = [f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  {'kind':<10} machines"]
         em = self.electromechanical
+        if not em.size:
+            return self._no_electromechanical()
+        lines = [f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  {'kind':<10} machines"]
         for i in em[np.argsort(self.freq_hz[em])]:
             g1, g2 = self.groups(i)
             against = " ".join(named(k) for k in g2[:6]) or "others (each < 0.2)"
@@ -153,6 +161,23 @@ class ModalAnalysis:
                 f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {self.kind[i]:<10} "
                 f"{' '.join(named(k) for k in g1[:6])} vs {against}{areas}"
             )
+        return "\n".join(lines)
+
+    def _no_electromechanical(self) -> str:
+        why = (
+            ": the model has no machine with a rotor (converters against infinite buses)"
+            if not self.machines.size
+            else ""
+        )
+        lines = [
+            f"no electromechanical mode ({F_MIN_HZ:g}-{F_MAX_HZ:g} Hz, dominated by rotor "
+            f"angle and speed states){why}; the least-damped of its {self.eigenvalues.size} "
+            "modes (--json lists them all):",
+            f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  dominant state",
+        ]
+        for i in np.argsort(self.damping, kind="stable")[:LEAST_DAMPED_SHOWN]:
+            top = self.states[int(np.argmax(self.participation[:, i]))]
+            lines.append(f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {top}")
         return "\n".join(lines)
 
     def __str__(self) -> str:
@@ -300,10 +325,8 @@ def modal_analysis(
             f"(stabctl.linearise's), got {type(sys).__name__}"
         )
     states = np.array(sys.state_labels)
-    speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")])
-    angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")])
-    if speed.size == 0:
-        raise InputError("the model has no machine speed states ('mac_omega_G<k>')")
+    speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")], int)
+    angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")], int)
     machines = np.array([int(states[i].rsplit("_G", 1)[1]) for i in speed])
     if inertia is None:
         inertia = sys.C[sys.output_labels.index("omega_coi"), speed]
@@ -319,7 +342,9 @@ def modal_analysis(
     f, mag = np.abs(lam.imag) / (2 * np.pi), np.abs(lam)
     zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)  # lambda = 0: 1
     em = electromechanical_modes(f, P, states)
-    if areas is None:
+    if speed.size == 0:  # converters against infinite buses: no rotor, no area
+        area_of = _no_machines(n_areas, areas)
+    elif areas is None:
         area_of = coherent_areas(shape, f, em, n_areas)
     else:
         area_of = _given_areas(areas, machines)
@@ -407,9 +432,22 @@ def participation_factors(right: np.ndarray, left: np.ndarray) -> np.ndarray:
 
 def _normalised(shape: np.ndarray) -> np.ndarray:
     """Columns scaled so that the largest component is 1 + 0j (zero columns stay zero)."""
+    if shape.shape[0] == 0:  # no machine
+        return shape
     k = np.argmax(np.abs(shape), axis=0)
     top = shape[k, np.arange(shape.shape[1])]
     return shape / np.where(top == 0, 1.0, top)
+
+
+def _no_machines(n_areas: int | None, areas: dict | None) -> np.ndarray:
+    """The areas of a model without machine speed states (converters against infinite
+    buses): none; an area count or a planner's areas given for it are refused."""
+    if n_areas is not None or areas:
+        raise AreaCountError(
+            "the model has no machine with a rotor (no 'mac_omega_G<k>' state: converters "
+            "against infinite buses), so no areas: give no number of areas or areas"
+        )
+    return np.zeros(0, int)
 
 
 def coherent_areas(

@@ -3,6 +3,7 @@ angle-reference mode, Kundur's local and inter-area modes, residues against the 
 function, areas, reports and bad input."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -315,3 +316,34 @@ def test_eig_of_a_converter_case_reports_machines_and_converters_apart(tmp_path)
         assert machines + shares["converter"] + shares["motor"] == pytest.approx(
             sum(shares.values()), abs=1e-12
         )
+
+
+def test_a_model_without_machines_lists_its_converter_modes(tmp_path):
+    """PSS/E's renewable plant against its infinite bus (REGCA1 + REECA1 + REPCA1, the
+    GENCLS of H = 0 holding the angles): no rotor, so no electromechanical mode and no
+    area; `stabctl eig` said "the model has no machine speed states" and exited 2.  The
+    modes are those of the linear model's A (scipy's eigenvalues), the text names the
+    least damped with their dominant states, and an area count is refused by name."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.io.psse import load_psse
+    from stabctl.io.pst import write_case_json
+
+    d = Path(__file__).parents[1] / "data" / "psse_runs" / "RENA_DEFAULT"
+    case = load_psse(d / "ThreeBusRenewable.raw", d / "ThreeBus_REN_A_DEFAULT_FLAG.dyr")
+    sys = linearise(Simulator(case))
+    ma = modal_analysis(sys)
+    assert ma.machines.size == 0 and ma.electromechanical.size == 0 and ma.areas.size == 0
+    lam = scipy.linalg.eigvals(np.asarray(sys.A))
+    ours = np.concatenate([ma.eigenvalues, ma.eigenvalues[ma.eigenvalues.imag > 0].conj()])
+    assert np.allclose(np.sort_complex(ours), np.sort_complex(lam), atol=1e-9)
+    with pytest.raises(InputError, match="no machine with a rotor"):
+        modal_analysis(sys, n_areas=1)
+    path = write_case_json(case, tmp_path / "rena.json")
+    res = run("eig", path)
+    assert res.exit_code == 0, res.output
+    assert "no electromechanical mode (0.1-2.5 Hz" in res.stdout
+    assert "the model has no machine with a rotor" in res.stdout
+    least = int(np.argmin(ma.damping))
+    assert f"{least:5d} {ma.freq_hz[least]:7.3f} {ma.damping[least]:8.4f}  ibr_" in res.stdout
+    res = run("eig", path, "--json")
+    assert res.exit_code == 0 and len(json.loads(res.stdout)["modes"]) == ma.eigenvalues.size
