@@ -2333,6 +2333,24 @@ def test_a_step_too_large_for_the_case_is_refused_before_any_job(tmp_path, monke
     assert not out.exists()
 
 
+def test_a_step_above_the_fastest_time_constant_runs_with_a_warning():
+    """Kundur's bus-3 fault cleared in 8.8 cycles at --step 0.0185 s, under twice T_R =
+    0.01 s (the refusal's bound), ended in "loss of synchronism" with exit 0: its exciters'
+    E_fd swung at the step's own period, and at 1 ms the run is stable.  Above the
+    fastest time constant the predictor-corrector runs with a warning naming it."""
+    args = ("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 8.8)
+    res = run(*args, "--tf", 8, "--step", 0.0185)
+    assert res.exit_code == 0 and "loss of synchronism" in res.stdout
+    assert (
+        "warning: step 0.0185 s is above the fastest time constant 0.01 s (exc_con T_R row "
+        "1): the predictor-corrector is near its stability limit" in res.stderr
+    )
+    fine = run(*args, "--tf", 8, "--step", 0.001)
+    assert fine.exit_code == 0 and "stable: largest angle" in fine.stdout
+    assert "warning" not in fine.stderr
+    assert "warning" not in run(*args, "--tf", 2, "--step", 0.01).stderr  # h = T_R
+
+
 def test_paper_refuses_a_part_given_twice(tmp_path):
     """`paper --only analytic --only analytic` ran (exit 0) where a repeated item of a list
     option is refused (`omib -c 6 -c 6`)."""
