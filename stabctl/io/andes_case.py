@@ -362,7 +362,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     ss = _load(path, dyr, said)
     given = _file_inputs(path, ss)
     _corrections(path.name, ss)
-    _set_up(ss, path, said)
+    _set_up(ss, path, said, dyr)
     counts = {name: m.n for name, m in ss.models.items() if m.n}
     lacking = [
         f"{name} ({n})"
@@ -1048,23 +1048,60 @@ def _load(path: Path, dyr, said: list):
             warnings.simplefilter("ignore")
             ss = andes.load(str(path), setup=False, no_output=True, default_config=True, **kw)
     except Exception as exc:  # noqa: BLE001 - ANDES raises many kinds for a file it cannot parse
-        raise _unreadable(path, said, exc) from None
+        raise _dyr_unmatched(path, dyr) or _unreadable(path, said, exc) from None
     if ss is None:
-        raise _unreadable(path, said)
+        raise _dyr_unmatched(path, dyr) or _unreadable(path, said)
     return ss
 
 
-def _set_up(ss, path: Path, said: list) -> None:
+def _dyr_unmatched(path: Path, dyr) -> InputError | None:
+    """Why ANDES cannot read a RAW file with its DYR file when a DYR record names a
+    generator the RAW file lacks (ANDES says only "references to unsupported models") or
+    is a second model of one kind for a generator (ANDES: "Your input data may be
+    inconsistent"): the records, by file:line, with the ids at their buses
+    (`stabctl.io.dyr`'s reading of both files); None if no record is such, the files
+    are not RAW + DYR, or either cannot be read so (ANDES's message is then the better
+    one)."""
+    from stabctl.io.dyr import _KIND, _no_generator, machine_id, read_dyr
+    from stabctl.io.psse_raw import read_raw
+
+    if dyr is None or path.suffix.lower() != ".raw":
+        return None
+    try:
+        gens = {(g.bus, machine_id(g.id)): g for g in read_raw(path).generators}
+        records = read_dyr(dyr)
+    except (InputError, CaseError):
+        return None
+    first: dict = {}
+    for r in records:
+        kind = _KIND.get(r.model)
+        if kind is not None and (r.bus, r.id, kind) in first:
+            was = first[r.bus, r.id, kind]
+            return InputError(
+                f"{path.name}: ANDES cannot read the case: {r.label()}: second {kind} model "
+                f"for this generator (first at {was.where()}, {was.model})"
+            )
+        first.setdefault((r.bus, r.id, kind), r)
+    unmatched = [r for r in records if (r.bus, r.id) not in gens and r.bus != 0]
+    if not unmatched:
+        return None
+    more = f" and {len(unmatched) - 3} more" if len(unmatched) > 3 else ""
+    named = "; ".join(f"{r.label()}: {_no_generator(r, gens)}" for r in unmatched[:3])
+    return InputError(f"{path.name}: ANDES cannot read the case: {named}{more}")
+
+
+def _set_up(ss, path: Path, said: list, dyr=None) -> None:
     """ANDES's set-up of the parsed ``ss`` (its devices linked: a device naming one that
-    does not exist fails here); InputError with what ANDES said if it fails."""
+    does not exist fails here); InputError with what ANDES said if it fails (with a DYR
+    file, the records `_dyr_unmatched` names first)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             ss.setup()
     except Exception as exc:  # noqa: BLE001 - as _load
-        raise _unreadable(path, said, exc) from None
+        raise _dyr_unmatched(path, dyr) or _unreadable(path, said, exc) from None
     if not ss.is_setup:
-        raise _unreadable(path, said)
+        raise _dyr_unmatched(path, dyr) or _unreadable(path, said)
 
 
 def _unreadable(path: Path, said: list, exc: BaseException | None = None) -> InputError:
@@ -1871,7 +1908,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
                         "not checked: " + why,
                     )
                 )
-            records.append(DyrRecord(file, k + 1, gen["bus"], psse, gen["id"].upper(), params))
+            at = (file, k + 1) if rec is None else (rec.file, rec.line)  # the DYR's own
+            records.append(DyrRecord(*at, gen["bus"], psse, gen["id"].upper(), params))
             where = _device_where(ss, file, name, k)
             origins[records[-1]] = dyr_origin(records[-1], names, where)
     return gens, records, refused, _grouped(changed), unlike, origins
@@ -1898,10 +1936,12 @@ def _dyr_against_andes(ss, dyr) -> tuple[list[str], dict, list[str]]:
     from andes.io.psse import sort_psse_models
 
     from stabctl.io.dyr import read_dyr
+    from stabctl.io.dyr_converters import converter_plants
 
     spec = _psse_yaml()
     order = [m for m in sort_psse_models(spec, ss) if m in spec]
     records = read_dyr(dyr)  # its model names upper case; ANDES's Toggle, Fault are not
+    converter_plants(records)  # a second record of a model for one plant: refused
     known = {m.upper() for m in order}
     dropped = [
         f"{r.label()}: model {r.model} is not read by ANDES's DYR reader (not in its "

@@ -137,22 +137,7 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
         parameters, a flag (ICON) not among its choices, two records of one model for a
         generator.
     """
-    plants: dict[tuple[int, str], dict[str, DyrRecord]] = {}
-    for rec in records:
-        if rec.model not in CONVERTER_DYR:
-            continue
-        want = len(CONVERTER_DYR[rec.model].fields)
-        if len(rec.params) != want:
-            raise CaseError(
-                f"{rec.label()}: needs {want} parameters after the id, got {len(rec.params)}"
-            )
-        plant = plants.setdefault((rec.bus, rec.id), {})
-        if rec.model in plant:
-            raise CaseError(
-                f"{rec.label()}: second {rec.model} record for this generator (first at "
-                f"{plant[rec.model].where()})"
-            )
-        plant[rec.model] = rec
+    plants = converter_plants(records)
     gens = {(int(g["bus"]), machine_id(g["id"])): g for g in generators}
     rows: list[list[float]] = []
     origins: list[Origin] = []
@@ -187,6 +172,46 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
         replaced.add(key)
     skipped.sort(key=lambda item: (item[0].file, item[0].line))
     return ConverterRows(rows, frozenset(replaced), tuple(skipped), tuple(origins))
+
+
+def converter_plants(records) -> dict[tuple[int, str], dict[str, DyrRecord]]:
+    """The converter records of a DYR file (:data:`stabctl.io.dyr.CONVERTER_DYR`'s models)
+    by generator: (bus, id) -> model -> record.
+
+    Parameters
+    ----------
+    records : sequence of DyrRecord
+        The DYR file's records (:func:`stabctl.io.dyr.read_dyr`); records of other
+        models are ignored.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    CaseError
+        Naming file:line, model and (bus, id): a record with the wrong number of
+        parameters, or a second record of one model for a generator (PSS/E takes one of
+        each; which one a reader keeps decides the plant).
+    """
+    plants: dict[tuple[int, str], dict[str, DyrRecord]] = {}
+    for rec in records:
+        if rec.model not in CONVERTER_DYR:
+            continue
+        want = len(CONVERTER_DYR[rec.model].fields)
+        if len(rec.params) != want:
+            raise CaseError(
+                f"{rec.label()}: needs {want} parameters after the id, got {len(rec.params)}"
+            )
+        plant = plants.setdefault((rec.bus, rec.id), {})
+        if rec.model in plant:
+            raise CaseError(
+                f"{rec.label()}: second {rec.model} record for this generator (first at "
+                f"{plant[rec.model].where()})"
+            )
+        plant[rec.model] = rec
+    return plants
 
 
 def _plant_origin(plant: dict[str, DyrRecord]) -> Origin:

@@ -1971,6 +1971,67 @@ def test_import_andes_n44_keeps_its_machines_and_says_what_changed():
     assert len(imported.case.machines) == 80
 
 
+def _dyr_with(tmp_path, lines: str, after: int) -> Path:
+    """ANDES's ieee14.dyr with ``lines`` inserted after its line ``after``."""
+    text = (CASES / "ieee14" / "ieee14.dyr").read_text().splitlines(keepends=True)
+    path = tmp_path / "edited.dyr"
+    path.write_text("".join(text[:after]) + lines + "".join(text[after:]))
+    return path
+
+
+def test_import_andes_names_the_dyr_record_andes_cannot_read(tmp_path):
+    """A DYR record of a generator the RAW file lacks, or a second governor of one
+    generator: ANDES said only "Data file likely contains references to unsupported
+    models" or "Your input data may be inconsistent", naming no record.  Each is named by
+    its DYR file:line as import-psse names it.  A second exciter of one generator named
+    the RAW file's line of the ANDES device (ieee14.raw:5) for both records."""
+    raw = CASES / "ieee14" / "ieee14.raw"
+    genrou = (
+        "     99 'GENROU' 1     6.5000      0.60000E-01  0.20000      0.50000E-01\n"
+        "          4.0000       0.0000       1.8000       1.7500      0.60000\n"
+        "         0.80000      0.23000      0.15000      0.90000E-01  0.38000      /\n"
+    )
+    with pytest.raises(InputError, match=r"edited.dyr:1 GENROU \(bus 99, id 1\): matches no "):
+        read_andes_case(raw, dyr=_dyr_with(tmp_path, genrou, 0))
+    tgov1 = "      1 'TGOV1'  1    0.5E-01  0.5E-01   1.05  0.3  1.0  2.1  0.0  /\n"
+    dyr = _dyr_with(tmp_path, tgov1, 0)
+    first = next(k for k, t in enumerate(dyr.read_text().splitlines()[1:], 2) if "'TGOV1'" in t)
+    with pytest.raises(
+        InputError,
+        match=rf"edited.dyr:{first} TGOV1 \(bus 1, id 1\): second governor model for this "
+        r"generator \(first at edited.dyr:1, TGOV1\)",
+    ):
+        read_andes_case(raw, dyr=dyr)
+    esst3a = "".join((CASES / "ieee14" / "ieee14.dyr").read_text().splitlines(True)[8:13])
+    with pytest.raises(
+        CaseError,
+        match=r"edited.dyr:14 ESST3A \(bus 1, id GENROU_1\): second exciter model for this "
+        r"generator \(first at edited.dyr:1\)",
+    ):
+        read_andes_case(raw, dyr=_dyr_with(tmp_path, esst3a, 0), on_unsupported="skip")
+
+
+def test_import_andes_refuses_a_second_converter_record_of_one_plant(tmp_path):
+    """PSS/E's renewable plant with its REGCA1 record repeated: with on_unsupported="skip"
+    the import kept the stray second REGCA1 as a bare converter and left out the first
+    with its REECB1 and REPCA1, exit 0.  Refused as import-psse refuses it."""
+    d = Path(__file__).parents[1] / "data" / "psse_runs" / "RENA_DEFAULT"
+    text = (d / "ThreeBus_REN_A_DEFAULT_FLAG.dyr").read_text()
+    lines = text.splitlines(keepends=True)
+    start = next(k for k, t in enumerate(lines) if "'REGCA1'" in t)
+    end = next(k for k in range(start, len(lines)) if lines[k].rstrip().endswith("/"))
+    dyr = tmp_path / "dup.dyr"
+    dyr.write_text(text + "".join(lines[start : end + 1]))
+    with pytest.raises(
+        CaseError,
+        match=rf"dup.dyr:{len(lines) + 1} REGCA1 \(bus 103, id 1\): second REGCA1 record for "
+        rf"this generator \(first at dup.dyr:{start + 1}\)",
+    ):
+        read_andes_case(d / "ThreeBusRenewable.raw", dyr=dyr, on_unsupported="skip")
+    with pytest.raises(CaseError, match="second REGCA1 record for this generator"):
+        load_psse(d / "ThreeBusRenewable.raw", dyr)
+
+
 def test_import_andes_ignores_the_summary_notes():
     """ANDES's SMIB case carries three ``Summary`` rows (notes, no equations:
     ``andes/models/info.py``) and its own Fault: the notes are ignored by name, the Fault
