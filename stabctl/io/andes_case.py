@@ -1908,8 +1908,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
                         "not checked: " + why,
                     )
                 )
-            at = (file, k + 1) if rec is None else (rec.file, rec.line)  # the DYR's own
-            records.append(DyrRecord(*at, gen["bus"], psse, gen["id"].upper(), params))
+            src, line = (file, k + 1) if rec is None else (rec.file, rec.line)  # the DYR's
+            records.append(DyrRecord(src, line, gen["bus"], psse, gen["id"].upper(), params))
             where = _device_where(ss, file, name, k)
             origins[records[-1]] = dyr_origin(records[-1], names, where)
     return gens, records, refused, _grouped(changed), unlike, origins
