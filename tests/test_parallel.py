@@ -1067,7 +1067,7 @@ def test_a_sweep_resumed_with_the_default_run_end_given_or_left_out_reruns_nothi
     faults.write_text("bus,far_bus\n3,101\n")
     args = ("sweep-cct", "kundur", "--faults", faults, "--workers", 1, "--out", out)
     res = run(*args, *(() if given is None else ("--tf", given)))
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 1, res.output  # the record it keeps is a failure
     assert "1 job(s): 0 run now, 1 already in" in res.stdout
     res = run(*args, "--tf", 7)
     assert res.exit_code == 2, res.output
@@ -1517,7 +1517,8 @@ def test_a_records_file_above_the_input_cap_is_refused_before_it_is_read(tmp_pat
 def test_failures_recorded_before_and_not_rerun_are_counted_and_told(tmp_path):
     """A failed record resumed without --retry-failed was shown as failed with no word
     that it had not been run again: the report counts them, and sweep-cct says that
-    --retry-failed reruns them (exit status 0, as a fresh sweep with a failed job)."""
+    --retry-failed reruns them (exit status 1, as a fresh sweep with a failed job: a
+    failure is no verdict, and a script checking the status sees it)."""
     out = tmp_path / "f.jsonl"
     run_sweep(jobs_of(boom, 1) + jobs_of(square, 2), out, workers=1, progress=False)
     rep = run_sweep(jobs_of(boom, 1) + jobs_of(square, 2), out, workers=1, progress=False)
@@ -1535,9 +1536,13 @@ def test_failures_recorded_before_and_not_rerun_are_counted_and_told(tmp_path):
     rec.update(status="failed", error="worker failed: BrokenProcessPool")
     cct.write_text(json.dumps(rec) + "\n")
     res = run(*args, "--out", cct)
-    assert res.exit_code == 0
-    assert res.output.splitlines()[-1] == (
+    assert res.exit_code == 1
+    assert res.stdout.splitlines()[-1] == (
         "1 job(s) recorded as failed before were not run again; --retry-failed reruns them"
+    )
+    assert res.stderr == (
+        f"1 job failed (listed above with the reasons, recorded in {cct}; --retry-failed "
+        "reruns them): exit status 1\n"
     )
     res = run(*args, "--out", cct, "--retry-failed")
     assert res.exit_code == 0 and "--retry-failed" not in res.output
@@ -1598,7 +1603,7 @@ def test_screen_says_a_failure_is_an_earlier_run_s_and_retry_failed_reruns_it(tm
     rec.pop("verdict", None)
     out.write_text(json.dumps(rec) + "\n")
     res = CliRunner().invoke(main, [*args, "--out", str(out)])
-    assert res.exit_code == 0, res.output
+    assert res.exit_code == 1, res.output
     assert "SimulationError: diverged (recorded before)" in res.stdout
     assert res.stdout.endswith(
         "1 search(es) recorded as failed before were not run again; --retry-failed reruns them\n"

@@ -332,9 +332,11 @@ def _status(exc: KeyboardInterrupt) -> int:
 
 
 def _say(caught) -> None:
-    """The warnings held back while a command ran, one ``warning:`` line each."""
-    for w in caught:
-        click.echo(f"warning: {' '.join(str(w.message).split())}", err=True)
+    """The warnings held back while a command ran, one ``warning:`` line each, a warning
+    given again from another place (a setting checked by the command, then by each of
+    its runs) once."""
+    for text in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
+        click.echo(f"warning: {text}", err=True)
 
 
 # -- numeric options checked at the edge -------------------------------------------------

@@ -389,6 +389,9 @@ def sweep_cct(
     Examples:
       stabctl sweep-cct kundur --faults DEFAULT --esd-pct none,5,10 --out kundur.jsonl
       stabctl sweep-cct miniwecc --faults faults.csv --scheduler tcp://10.0.0.5:8786
+
+    Exit status: 0 every job reached a verdict (a CCT, robust, N-1 insecure); 1 a job
+    failed (listed and recorded with its reason); 2 bad input.
     """
     from stabctl.io import load_case
     from stabctl.parallel import run_sweep
@@ -428,8 +431,12 @@ def sweep_cct(
                 "records": list(rep.records.values()),
             }
         )
-        return
-    print_sweep(rep, len(jobs))
+    else:
+        print_sweep(rep, len(jobs))
+    from stabctl.stability.screening import verdict
+
+    failed = [r for r in rep.records.values() if verdict(r) == "failed"]
+    _exit_on_failures(failed, rep.out, ("job", "jobs"))
 
 
 @click.command()
@@ -503,6 +510,10 @@ def screen(
     where the verdict is monotone in the clearing time, in fewer runs where a trip
     moves the CCT little (on ACTIVSg2000 half the runs of such a search; Kundur's trips
     move its CCTs up to 0.24 s and the guesses cost runs there: --no-guess).
+
+    Exit status: 0 every search reached a verdict (a CCT, robust, N-1 insecure, with
+    islanding or not); 1 a search failed (listed and recorded with its reason); 2 bad
+    input.
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
@@ -536,8 +547,23 @@ def screen(
     rows = [_with_buses(case, r) for r in rows]
     if as_json:
         print_json(rows)
-        return
-    print_screening(case, rows, tol_ms / 1000, out_path)
+    else:
+        print_screening(case, rows, tol_ms / 1000, out_path)
+    failed = [r for r in rows if r["verdict"] == "failed"]
+    _exit_on_failures(failed, out_path, ("search", "searches"))
+
+
+def _exit_on_failures(failed: list, out, what: tuple[str, str]) -> None:
+    """Exit with status 1, saying so on stderr, when a job failed (a numerical or input
+    failure, not a verdict: robust, N-1 insecure and islanding are results), after the
+    results are printed and recorded: a script checking the status sees it."""
+    if failed:
+        click.echo(
+            f"{counted(len(failed), *what)} failed (listed above with the reasons, recorded in "
+            f"{out}; --retry-failed reruns them): exit status 1",
+            err=True,
+        )
+        raise SystemExit(1)
 
 
 def _bus_list(text: str) -> list[int]:

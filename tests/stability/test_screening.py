@@ -90,6 +90,27 @@ def test_cli_screen_writes_map_and_reports_failures(tmp_path):
     assert [r["run_now"] for r in rows] == [False, False]
 
 
+def test_a_screening_with_a_failed_search_exits_1_after_its_results(tmp_path):
+    """Every search of a screening failed (Kundur at --step 0.0185 s: its exciters swing at
+    the step's period, a numerical instability) and it exited 0, which a script checking
+    the status took for a success.  Its results are printed, recorded and JSON as before,
+    then exit status 1 with a line saying why; a screening whose searches all reach a
+    verdict (robust, a CCT) exits 0 (above), and so does one with an N-1 insecure fault
+    (`test_n1_insecure_is_a_verdict_not_a_failure`)."""
+    out = tmp_path / "f.jsonl"
+    args = ["screen", "kundur", "--buses", "3", "--step", "0.0185", "--workers", "1"]
+    res = CliRunner().invoke(main, [*args, "--tol-ms", "20", "--out", str(out), "--json"])
+    assert res.exit_code == 1, res.output
+    (row,) = json.loads(res.stdout)
+    assert row["verdict"] == "failed" and row["error"].startswith("NumericalInstabilityError")
+    assert json.loads(out.read_text())["status"] == "failed"
+    assert (
+        f"\n1 search failed (listed above with the reasons, recorded in {out}; --retry-failed "
+        "reruns them): exit status 1\n" in res.stderr
+    )
+    assert res.stderr.count("warning: step 0.0185 s is above the fastest time constant") == 1
+
+
 def test_spectral_layout_is_finite_and_distinct():
     xy = spectral_layout(load_case("miniwecc"))
     assert xy.shape == (122, 2) and (abs(xy) < 1e6).all()
