@@ -999,6 +999,12 @@ def check_records_case(path: str | Path, cases: Mapping, remedy: str) -> None:
         where = f"{path} line {n}: job {rec['key']} was run on case {case!r}"
         if case not in cases:
             mine = ", ".join(sorted(map(str, cases)))
+            same = next((c for c in cases if _same_file(case, c)), None)
+            if same is not None:
+                raise InputError(
+                    f"{where}, this run's {same!r} is the same file named otherwise: records "
+                    f"are keyed by the case as the command gives it; give it as {case!r}"
+                )
             raise InputError(
                 f"{where}, not on this run's ({mine}): the file holds another case's "
                 f"records; {remedy}"
@@ -1013,6 +1019,15 @@ def check_records_case(path: str | Path, cases: Mapping, remedy: str) -> None:
                 f"{cases[case]} now)"
             )
             raise InputError(f"{where} {why}; {remedy}")
+
+
+def _same_file(a, b) -> bool:
+    """Whether two case inputs name one existing file (``./x.json`` and ``x.json``, a
+    relative and an absolute path)."""
+    try:
+        return os.path.samefile(str(a), str(b))
+    except (OSError, ValueError):  # a built-in case's name, a missing file
+        return False
 
 
 def other_records(path: str | Path, keys: Iterable[str], whose: Callable[[dict], str]) -> list[str]:

@@ -1280,6 +1280,29 @@ def test_a_record_of_another_case_is_refused_naming_its_line(tmp_path):
     assert out.read_text() == before
 
 
+def test_records_of_the_same_case_file_named_otherwise_say_so(tmp_path, monkeypatch):
+    """A screening of ./case.json resumed (or read by place --screening) as case.json was
+    refused as "another case's records" though the file is the same: records are keyed by
+    the case as given, and the message now says it is the same file and how to name it."""
+    from stabctl.io import load_case
+    from stabctl.io.pst import write_case_json
+
+    monkeypatch.chdir(tmp_path)
+    write_case_json(load_case("kundur"), tmp_path / "case.json")
+    args = ["screen", "--buses", "3", "--workers", "1", "--tol-ms", "20", "--out", "s.jsonl"]
+    assert run(args[0], "./case.json", *args[1:]).exit_code == 0
+    before = (tmp_path / "s.jsonl").read_text()
+    for other in ("case.json", str(tmp_path / "case.json")):
+        res = run(args[0], other, *args[1:])
+        assert res.exit_code == 2
+        assert (
+            f"was run on case './case.json', this run's {other!r} is the same file named "
+            "otherwise: records are keyed by the case as the command gives it; give it as "
+            "'./case.json'" in res.stderr
+        )
+    assert (tmp_path / "s.jsonl").read_text() == before
+
+
 @pytest.mark.parametrize(
     "command",
     [
