@@ -1207,16 +1207,31 @@ class ConverterTable(Table):
         lag below 1e-3 s, a control on a device it cannot drive, ...).
     """
 
+    def _check_declared(self):
+        _converters.check_lags(self)  # first: a negative lag is told its bound, 1e-3 s
+        super()._check_declared()
+
     def _check(self):
         self._require(self.number > 0, "number", "converter number must be a positive integer")
         self._unique("number", "converter number")
         self._require(self.mva > 0, "mva", "device base must be > 0")
         self._require(self.Twm > 0, "Twm", "washout time constant must be > 0 s")
         self._require(self.dqdv < 0, "dqdv", "Q-V droop must be < 0")
-        for a, b in (("vt0", "vt1"), ("vt2", "vt3"), ("ft0", "ft1"), ("ft2", "ft3")):
-            self._require(getattr(self, b) > getattr(self, a), b, f"must be > {a}")
-        self._require(self.vt2 >= self.vt1, "vt2", "must be >= vt1")
-        self._require(self.ft2 >= self.ft1, "ft2", "must be >= ft1")
+        for a, b, op in (
+            ("vt0", "vt1", ">"),
+            ("vt2", "vt3", ">"),
+            ("ft0", "ft1", ">"),
+            ("ft2", "ft3", ">"),
+            ("vt1", "vt2", ">="),
+            ("ft1", "ft2", ">="),
+        ):
+            lo, hi = getattr(self, a), getattr(self, b)
+            self._require_row(
+                hi > lo if op == ">" else hi >= lo,
+                b,
+                lambda r, a=a, op=op, lo=lo: f"must be {op} {a} = {_fmt(lo[r])}",
+                fields=(b, a),
+            )
         values = {c: getattr(self, c) for c in self.columns()}
         for model, has, rules in COMPONENTS:  # the limits import-andes checks, as it does
             rows = has(self)

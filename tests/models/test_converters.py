@@ -133,9 +133,11 @@ def test_soc_derivative_is_the_discharge_over_the_energy():
     [
         ("type", 5, r"converter type must be 1, 2, 3 or 4"),
         ("dqdv", 0.5, r"Q-V droop must be < 0"),
-        ("ft1", 59.0, r"field 'ft1': must be > ft0"),
+        ("ft1", 59.0, r"field 'ft1': must be > ft0 = 59.5, got 59"),
         ("Twm", 0.0, r"washout time constant must be > 0"),
         ("SOCinit", 2.0, r"field 'SOCinit': ESD1: SOCinit = 2, .*SOCmin <= SOCinit <= SOCmax"),
+        # a negative base was told "must be >= 0", and 0 then "must be > 0"
+        ("mva", -1.0, r"field 'mva': device base must be > 0, got -1"),
     ],
 )
 def test_converter_table_refuses_bad_values_naming_the_field(field, value, message):
@@ -241,6 +243,12 @@ def test_regca1_start_with_a_limit_active_is_refused():
         ("Brkpt", 0.4, r"field 'Brkpt': REGCA1: .*it must be Brkpt > Zerox"),
         # a negative voltage magnitude was taken as written
         ("Volim", -1.2, r"field 'Volim': REGCA1: Volim = -1.2: it must be Volim > 0"),
+        # an LVPL recovery rate of 0 left the active current below its pre-fault value
+        # for good (0.324 against 0.350 pu), a negative LVPL limit ran
+        ("Rrpwr", 0.0, r"field 'Rrpwr': REGCA1: Rrpwr = 0: it must be Rrpwr > 0"),
+        ("Lvpl1", -1.0, r"field 'Lvpl1': REGCA1: Lvpl1 = -1: it must be Lvpl1 >= 0"),
+        # a negative lag was told "must be >= 0", and 0 then "must be >= 0.001 s"
+        ("Tg", -0.02, r"field 'Tg': must be >= 0.001 s \(a lag of the converter\)"),
     ],
 )
 def test_regca1_piecewise_points_are_checked(field, value, message):
@@ -305,6 +313,11 @@ def test_regca1_piecewise_points_are_checked(field, value, message):
         ),
         (REG_ROW, dict(reec=1, repc=1, pc_emax=-1000.0), r"field 'pc_emax': REPCA1"),
         (REG_ROW, dict(reec=1, repc=1, pc_femax=-0.1), r"field 'pc_femax': REPCA1"),
+        (  # a negative droop ran, feeding frequency deviations
+            REG_ROW,
+            dict(reec=1, repc=1, pc_Ddn=-10.0),
+            r"field 'pc_Ddn': REPCA1: pc_Ddn = -10: it must be pc_Ddn >= 0",
+        ),
         (REG_ROW, dict(reec=1, repc=1, pc_Pmax=-1000.0), r"field 'pc_Pmax': REPCA1"),
         (REG_ROW, dict(reec=1, repc=1, pc_Kc=-1.0), r"field 'pc_Kc': .*pc_Kc >= 0"),
         (REG_ROW, dict(reec=1, repc=1, pc_Vfrz=-0.8), r"field 'pc_Vfrz': .*pc_Vfrz >= 0"),

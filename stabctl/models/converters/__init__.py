@@ -420,19 +420,38 @@ def check_table(t) -> None:
     bad = np.flatnonzero((t.relay != NO_RELAY) & reg)
     if bad.size:
         t._fail(bad[0], "relay", "a DG protection trips a PVD1 or ESD1 (types 1, 2) only")
-    pvd = (t.type == PVD1) | (t.type == ESD1)
+    dera1.check(t)
+    bad = np.flatnonzero((t.repc == REPCA1) & ~ree)
+    if bad.size:
+        t._fail(bad[0], "repc", "a plant control drives an electrical control (reec 1, 2) only")
+    wind.check(t, t.reec == REECA1)
+    check_lags(t)
+
+
+def check_lags(t) -> None:
+    """Refuse a lag time constant below LBND (1e-3 s) in a row whose models use it: a
+    PVD1/ESD1's tip, tiq; a REGCA1's Tg, Tfltr; its controls' lags (REECA1_LAGS,
+    REPCA1_LAGS, the filters that 0 switches off when not 0, the lags their flags switch
+    on); a DERA1's.  Run before the table's declared bounds (>= 0), so that a negative
+    lag is told the bound it has.
+
+    Parameters
+    ----------
+    t : ConverterTable
+
+    Raises
+    ------
+    CaseError
+        For the first such row, naming the field and the bound.
+    """
+    reg, ree = t.type == REGCA1, t.reec != NO_REEC
+    pvd, pc = (t.type == PVD1) | (t.type == ESD1), (t.repc == REPCA1) & ree
     lags = [("tip", pvd), ("tiq", pvd), ("Tg", reg), ("Tfltr", reg)]
     lags += [(name, t.type == DERA1) for name in dera1.LAGS]
     lags += [(name, dera1.switched_on(t, flags)) for name, flags in dera1.SWITCHED_LAGS]
-    dera1.check(t)
-    pc = t.repc == REPCA1
-    bad = np.flatnonzero(pc & ~ree)
-    if bad.size:
-        t._fail(bad[0], "repc", "a plant control drives an electrical control (reec 1, 2) only")
     lags += [(name, ree) for name in REECA1_LAGS] + [(name, pc) for name in REPCA1_LAGS]
     lags += [("Tp", ree & (t.Tp != 0))]  # REECA1's Pe filter: 0 none
     lags += [("rd_Tr1", (t.reec == REECD1) & (t.rd_Tr1 != 0))]  # REECD1's: 0 none
-    wind.check(t, t.reec == REECA1)
     lags += [(n, getattr(t, flag) == 1) for flag, names in SWITCHED_LAGS for n in names]
     for name, sel in lags:
         lag = f"must be >= {LBND:g} s (a lag of the converter)"

@@ -223,6 +223,8 @@ _REPC = (
     _ordered("Pmax", "Pmin", "the P PI's output"),
     _nonnegative("Kc", "a reactive droop gain"),
     _nonnegative("Vfrz", "a voltage magnitude"),
+    _nonnegative("Ddn", "a droop gain: P down per pu frequency above the deadband"),
+    _nonnegative("Dup", "a droop gain: P up per pu frequency below the deadband"),
 )
 #: the drive train's damping (a negative one feeds energy in), its shaft's torsional
 #: frequency (Kshaft = 2 Ht Hg Freq1^2 / H: 0 is no shaft between the masses) and the
@@ -277,6 +279,8 @@ _PVD_FILE = (
 _REGC = (
     Rule(("Lvpnt1", "Lvpnt0"), lambda hi, lo: hi > lo, "Lvpnt1 > Lvpnt0"),
     _positive("Volim", "a voltage magnitude: the high-voltage management acts above it"),
+    _positive("Rrpwr", "the LVPL's recovery rate of the active current: at 0 it never recovers"),
+    _nonnegative("Lvpl1", "the LVPL's current limit at Brkpt"),
     Rule(
         ("Brkpt", "Zerox", "Lvplsw"),
         lambda b, z, on: (on == 0) | (b > z),

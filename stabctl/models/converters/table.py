@@ -452,7 +452,7 @@ PARAMS = (
         "3 REGCA1 (WECC renewable generator/converter, constant current commands), "
         "4 DERA1 (WECC aggregated distributed energy resources, PSS/E's DER_A)",
     ),
-    Param("mva", "MVA", 4, default=100.0, lo=0.0, doc="device base Sn"),
+    Param("mva", "MVA", 4, default=100.0, doc="device base Sn (> 0)"),
     Param("pfrac", "", 5, default=1.0, doc="fraction of the bus generation P (ANDES gammap)"),
     Param("qfrac", "", 6, default=1.0, doc="fraction of the bus generation Q (ANDES gammaq)"),
     Param(
