@@ -29,9 +29,10 @@ PID_READS = 100
 
 
 def lock_path(path: str | os.PathLike) -> Path:
-    """The lock file of output ``path``: ``.<name>.lock`` beside it (``<name>.lock`` for a
-    name that is already hidden)."""
-    path = Path(path)
+    """The lock file of output ``path``: ``.<name>.lock`` beside the file it names, its
+    symbolic links followed (``<name>.lock`` for a name that is already hidden), so that
+    two names of one file (a link to it, ``./x`` and an absolute path) take one lock."""
+    path = Path(os.path.realpath(path))
     return path.with_name(("" if path.name.startswith(".") else ".") + path.name + ".lock")
 
 

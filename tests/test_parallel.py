@@ -313,6 +313,27 @@ def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_pat
     assert not lock_path(out).exists()  # removed by the writer that ends
 
 
+def test_a_second_writer_through_a_link_to_the_sweep_file_is_refused(tmp_path, monkeypatch):
+    """Two sweeps on one file named twice (a symbolic link to it, ./x against x): each
+    took the lock beside the name it was given, both ran, and the file held 97 records
+    of 51 jobs.  The lock is taken beside the file the name leads to."""
+    out = tmp_path / "one.jsonl"
+    run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
+    link = tmp_path / "link.jsonl"
+    link.symlink_to(out.name)
+    monkeypatch.chdir(tmp_path)
+    assert lock_path(link) == lock_path("./one.jsonl") == lock_path(out)
+    holder = _holder(out)
+    try:
+        for other in (link, "./one.jsonl"):
+            with pytest.raises(InputError, match=rf"another stabctl process \(pid {holder.pid}\)"):
+                run_sweep(jobs_of(square, 1, 2), other, workers=1, progress=False)
+    finally:
+        holder.kill()
+        holder.wait()
+    assert len(out.read_text().splitlines()) == 1
+
+
 _WRITER = """
 import sys, time
 from stabctl.errors import InputError

@@ -121,6 +121,11 @@ def describe_esd(esd: dict, short: bool = False) -> str:
         f"deadband {esd['deadband_hz']:g} Hz, "
         f"{'gate' if short else 'voltage gate'} {esd['v_gate_pu']:g} pu, {esd['coi']} COI"
         + (f", hysteresis {esd['hysteresis_hz']:g} Hz" if esd["hysteresis_hz"] else "")
+        + (
+            f"; none at the infinite bus(es) {', '.join(esd['none_at'])} (H = 0)"
+            if esd.get("none_at") and not short
+            else ""
+        )
     )
 
 

@@ -258,12 +258,14 @@ def uniform_fleet(
     case: Case, pct: float, controller=None, at: str = "hv", model: str = "ideal"
 ) -> StorageFleet:
     """One ideal ESD per generator, rated pct % of the generator's MVA, at its HV
-    bus or its terminal bus.
+    bus or its terminal bus; none for an infinite bus (H = 0: PSS/E's GENCLS holding the
+    rest of the system, no site, as `stabctl.placement.program.candidate_sites`).
 
     Parameters
     ----------
     case : Case
-        The case; one device per row of its machine table, in that order.
+        The case; one device per row of its machine table, in that order, but its
+        infinite buses.
     pct : float
         Rating of each device, % of its generator's MVA rating, in (0, MAX_ESD_PCT] (100).
     controller : ControlLaw or None, optional
@@ -305,7 +307,10 @@ def uniform_fleet(
             f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {pct}"
         )
     devs = []
-    for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
+    m = case.machines
+    for num, bus, mva, H in zip(m.number, m.bus, m.mva, m.H):
+        if H == 0:  # an infinite bus: the rest of the system, no site
+            continue
         b = hv_bus(case, int(num)) if at == "hv" else int(bus)
         devs.append(StorageDevice(bus=b, machine=int(num), pmax_mw=pct / 100.0 * mva))
     return StorageFleet(tuple(devs), controller or BangBangCOI(), model=model)

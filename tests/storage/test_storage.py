@@ -330,3 +330,29 @@ def test_boundary_chattering_is_bounded_measured_and_removed_by_hysteresis(kundu
         fault, t_end=10.0, storage=uniform_fleet(case, 20, BangBangCOI(hysteresis_hz=0.02))
     )
     assert hyst.stable and all(d["chattering"] == 0 for d in hyst.meta["storage"])
+
+
+def test_a_uniform_fleet_has_no_device_at_an_infinite_bus(tmp_path):
+    """PSS/E's GENROU run (a GENROU against PSS/E's infinite bus, a GENCLS of H = 0 at bus
+    101): `simulate --esd-pct 5` put a device at the infinite bus, which stands for the
+    rest of the system (`place` takes it for no site).  The fleet has the GENROU's device
+    only, and the storage line names the infinite bus left without one."""
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.io.psse import load_psse
+    from stabctl.io.pst import write_case_json
+
+    d = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU"
+    case = load_psse(d / "ThreeBusMulti.raw", d / "ThreeBus_GENROU.dyr")
+    assert sorted(zip(case.machines.bus, case.machines.H))[0] == (101, 0.0)
+    fleet = uniform_fleet(case, 5)
+    assert [(d.machine, d.bus) for d in fleet.devices] == [(2, 102)]
+    path = write_case_json(case, tmp_path / "g.json")
+    args = ["simulate", str(path), "--fault", "102", "--far-bus", "103", "--esd-pct", "5"]
+    res = CliRunner().invoke(main, [*args, "--tf", "2"])
+    assert res.exit_code == 0, res.output
+    assert "storage: 1 ESDs of 5 % of machine MVA" in res.stdout
+    assert "; none at the infinite bus(es) G1 (bus 101) (H = 0)" in res.stdout
