@@ -13,6 +13,33 @@ from stabctl.cli.format import describe_sw_con, print_json
 from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
 from stabctl.errors import InputError, StabctlError, counted
 
+#: the tables a case may hold beside its machines and controls, as summaries count them
+#: (only where the case has any): key, noun, plural
+_OTHER_TABLES = (
+    ("converters", "converter", "converters"),
+    ("shafts", "torsional shaft", "torsional shafts"),
+    ("svcs", "static var compensator", "static var compensators"),
+    ("motors", "induction motor", "induction motors"),
+    ("switched_shunts", "switched shunt", "switched shunts"),
+    ("injections", "fixed injection", "fixed injections"),
+)
+
+
+def other_tables(case) -> dict[str, int]:
+    """The numbers of the case's converters, torsional shafts, static var compensators,
+    induction motors, switched shunts and fixed injections, those it has any of (the
+    summaries of `cases` and of an import)."""
+    return {key: len(getattr(case, key)) for key, *_ in _OTHER_TABLES if len(getattr(case, key))}
+
+
+def other_tables_text(counts: dict[str, int]) -> str:
+    """``", 10 converters, 2 fixed injections"`` for `other_tables`' counts."""
+    return "".join(
+        f", {counted(counts[key], noun, plural)}"
+        for key, noun, plural in _OTHER_TABLES
+        if key in counts
+    )
+
 
 def _case_info(name: str) -> dict:
     from stabctl.io import load_case
@@ -27,6 +54,7 @@ def _case_info(name: str) -> dict:
         "exciters": len(case.exciters),
         "pss": len(case.pss),
         "governors": len(case.governors),
+        **other_tables(case),
         "nonconforming_loads": len(case.loads),
         "base_mva": case.base_mva,
         "freq_hz": case.freq_hz,
@@ -51,7 +79,9 @@ def cases(case_name, buses, lines, as_json):
     """List the built-in cases (usable as CASE in `stabctl simulate`), or one case.
 
     For each: name, description, numbers of buses, branches (every circuit counted),
-    machines, exciters, PSS, governors and non-conforming load buses, the base (MVA) and
+    machines, exciters, PSS, governors, the converters, torsional shafts, static var
+    compensators, induction motors, switched shunts and fixed injections it has, and
+    non-conforming load buses, the base (MVA) and
     frequency (Hz), and the data file's own disturbance (PST sw_con, run by
     `simulate --pstess-default`).  With CASE (a built-in or a case file): that case, and
     with --bus-table / --line-table its buses and branches, to choose --fault, --far-bus
@@ -83,7 +113,8 @@ def cases(case_name, buses, lines, as_json):
         click.echo(
             f"{r['name']}: {r['buses']} buses, {r['branches']} branches, "
             f"{r['machines']} machines, {r['exciters']} exciters, {r['pss']} PSS, "
-            f"{r['governors']} governors, {r['nonconforming_loads']} non-conforming load "
+            f"{r['governors']} governors{other_tables_text(r)}, "
+            f"{r['nonconforming_loads']} non-conforming load "
             f"buses, {r['base_mva']:g} MVA base, {r['freq_hz']:g} Hz"
         )
         if r["description"].strip():  # a case without one (an import's own) prints none
@@ -263,15 +294,9 @@ def _imported(case, out) -> tuple[dict, str]:
         f"{counted(len(case.machines), 'machine')}, {counted(len(case.exciters), 'exciter')}, "
         f"{len(case.pss)} PSS, {counted(len(case.governors), 'governor')}"
     )
-    if len(case.converters):  # a case without converters is summarised as before
-        summary["converters"] = len(case.converters)
-        text += f", {counted(len(case.converters), 'converter')}"
-    if len(case.shafts):  # likewise a case without torsional shafts
-        summary["shafts"] = len(case.shafts)
-        text += f", {counted(len(case.shafts), 'torsional shaft')}"
-    if len(case.svcs):  # likewise a case without static var compensators
-        summary["svcs"] = len(case.svcs)
-        text += f", {counted(len(case.svcs), 'static var compensator')}"
+    others = other_tables(case)  # a case without any is summarised as before
+    summary.update(others)
+    text += other_tables_text(others)
     if case.events:  # the case's own disturbance (simulate --case-events runs it)
         from stabctl.dynamics.events import from_case
 

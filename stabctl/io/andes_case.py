@@ -391,7 +391,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
         ss, path.name, numbers, with_converter, by_device
     )
     origins: dict[str, list] = {"ibr_con": ibr_origins}
-    changed += unchecked
+    changed += unchecked + _grouped(_dc_changes(ss))
     refused = dropped + refused
     changed += _grouped(zip_changed + given.changed)
     refused += ibr_refused
@@ -2039,6 +2039,38 @@ def _dc_links(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:
             continue
         rows.append([numbers[m.bus.v[k]], float(m.psh.v[k]), float(m.qsh.v[k])])
     return rows, refused
+
+
+def _dc_changes(ss) -> list[tuple[str, str, str]]:
+    """The changes `_dc_links` makes to the AC/DC converters it keeps, (model, idx, why):
+    one controlling its DC voltage (control 2) is held at its power-flow P, which ANDES's
+    run varies with the DC network's losses; and the DC network's devices (Node, Ground,
+    R), read only through those injections."""
+    m = ss.models.get("VSCShunt")
+    if m is None or not m.n:
+        return []
+    kept = [k for k in _in_service(m) if m.control.v[k] not in (1, 3)]
+    out = [
+        (
+            "VSCShunt",
+            str(m.idx.v[k]),
+            "control 2 (DC voltage and Q) held at its power-flow P + j Q as a fixed "
+            "injection: ANDES's run varies its P with the DC network's losses",
+        )
+        for k in kept
+        if m.control.v[k] == 2
+    ]
+    for name in ("Node", "Ground", "R") if kept else ():
+        d = ss.models.get(name)
+        out += [
+            (
+                name,
+                str(d.idx.v[j]),
+                "the DC network: read only through its converters' power-flow injections",
+            )
+            for j in (range(d.n) if d is not None else ())
+        ]
+    return out
 
 
 def _switched_shunts(ss, numbers: dict) -> tuple[list[list[float]], list[str]]:

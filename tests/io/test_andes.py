@@ -1191,7 +1191,7 @@ def test_ieee14_switched_shunts_step_as_andes_in_the_power_flow_and_the_run(name
         assert np.max(np.abs(v - va)[t > 2.0]) < 1e-3  # the same levels at the end
 
 
-def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections(ref):
+def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections(ref, tmp_path):
     """ANDES's kundur_vsc.xlsx: two VSCShunt on a DC line (Node, Ground, R), the bus-6
     converter holding P = -0.1 pu and Q = 0, the bus-1 one its DC voltage and Q = 0.01 pu:
     read as fixed injections at their power-flow point (0.1009 + j0.01, -0.1 pu).  The
@@ -1204,6 +1204,23 @@ def test_kundur_vsc_hvdc_link_is_its_converters_fixed_injections(ref):
     path = andes.get_case("kundur/kundur_vsc.xlsx")
     imported = read_andes_case(path, on_unsupported="skip")
     case = imported.case
+    # the held P and the DC network read only through the injections are said (they
+    # were named nowhere), and `cases` counts the injections
+    assert imported.changed[:2] == (
+        "VSCShunt (1: 1): control 2 (DC voltage and Q) held at its power-flow P + j Q as a "
+        "fixed injection: ANDES's run varies its P with the DC network's losses",
+        "Node (3: 0, 1, 2): the DC network: read only through its converters' power-flow "
+        "injections",
+    )
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.cli.io import other_tables
+    from stabctl.io.pst import write_case_json
+
+    assert other_tables(case) == {"injections": 2}
+    listed = CliRunner().invoke(main, ["cases", str(write_case_json(case, tmp_path / "v.json"))])
+    assert "4 governors, 2 fixed injections, 0 non-conforming load buses" in listed.stdout
     np.testing.assert_allclose(
         case.injections.matrix(), [[1, 0.10088354, 0.01], [6, -0.1, 0]], atol=1e-8
     )
@@ -1798,7 +1815,7 @@ def test_import_andes_gives_the_reason_of_a_refused_device(tmp_path):
     with pytest.warns(UserWarning, match=r"IEEEST \(bus 3, id GENROU_3\): no input \(ICS 0\)"):
         imported = read_andes_case(CASES / "ieee14" / "ieee14.raw", dyr=dyr, on_unsupported="skip")
     assert [r for r in imported.left_out if "IEEEST" in r] == [
-        "ieee14.raw:1 IEEEST (bus 3, id GENROU_3): no input (ICS 0)"
+        "ieee14.dyr:35 IEEEST (bus 3, id GENROU_3): no input (ICS 0)"
     ]
 
 
