@@ -96,9 +96,16 @@ class Governors:
         for a governor other than PST tg (type 1), which this linear model does not hold."""
         other = np.nonzero(case.governors.type != 1)[0]
         if other.size:
+            from stabctl.models.governors import TYPES
+
+            r, g = int(other[0]), case.governors
+            kind = int(g.type[r])
+            model = "/".join(m.name for m in getattr(TYPES.get(kind), "DYR", ())) or "?"
             raise CaseError(
-                f"tg_con row {other[0] + 1}: the estimator's governor model is PST "
-                f"tg (type 1) only, got type {int(case.governors.type[other[0]])}"
+                f"the governor of {case.machine_name(int(g.machine[r]))} (tg_con row {r + 1}) "
+                f"is a {model} (type {kind}): the estimators' linear model holds PST's "
+                "simplified turbine-governor (tg, type 1) only; estimate on a case without "
+                "governors or with that model"
             )
         n = len(case.machines)
         A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))

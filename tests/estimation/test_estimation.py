@@ -547,7 +547,11 @@ def test_estimate_cct_refuses_a_case_its_estimators_cannot_model(tmp_path):
     for cmd in (["estimate", "cct", case], ["estimate", "rmse", case, "--clear-cycles", "6"]):
         res = CliRunner().invoke(main, [*cmd, *line, "--no-q-limits"])
         assert res.exit_code == 2 and res.stdout == "", res.output
-        assert "the estimator's governor model is PST tg (type 1) only" in res.stderr
+        assert (
+            "error: the governor of G1 (bus 2) (tg_con row 1) is a TGOV1 (type 2): the "
+            "estimators' linear model holds PST's simplified turbine-governor (tg, type 1) "
+            "only" in res.stderr
+        )
 
 
 def test_estimator_cct_statistics_keep_failed_runs_as_json_null_with_their_errors():
