@@ -1291,7 +1291,7 @@ class _Run:
                 f"{t_fail:.4f} s: state {self.m.state_name(q)} = {x[q]:.6g} "
                 f"({ig.symptom(x[q], q, self.m.mp.n)}); the step h = "
                 f"{g.h[g.interval[k_end]]:.6g} s is too large for this model: use a smaller "
-                f"step (trajectory kept up to {g.t[k_end]:.4f} s)",
+                f"step (the run reached {g.t[k_end]:.4f} s)",
                 result=res,
             )
         if self.status < 0:
@@ -1299,7 +1299,7 @@ class _Run:
             raise SimulationError(
                 f"case '{sim.case.name}': the network/load equations did "
                 f"not converge (voltage collapse) in the step ending at "
-                f"t = {t_fail:.4f} s (trajectory kept up to "
+                f"t = {t_fail:.4f} s (the run reached "
                 f"{g.t[k_end]:.4f} s){no_solution_hint(sim.case, self.nets_list[stage])}",
                 result=res,
             )

@@ -503,7 +503,7 @@ def run(
             msg = (
                 f"case '{sim.case.name}': trapezoidal step ending at t = {grid.t[k + 1]:.4f} s:"
                 f" state {m.state_name(bad)} = {x[bad]:.6g} ({why}); use a smaller step"
-                f" (trajectory kept up to {grid.t[k]:.4f} s)"
+                f" (the run reached {grid.t[k]:.4f} s)"
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError, partitions)
     return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions)
@@ -602,7 +602,7 @@ def _fail(sim, grid, rec, k, wall, limit, why, error, partitions=(), nets=()) ->
         k_end = min(k + 1, grid.t.size - 1)
         why = (
             f"case '{sim.case.name}': {why} in the step ending at t = "
-            f"{grid.t[k_end]:.4f} s (trajectory kept up to {grid.t[k]:.4f} s)"
+            f"{grid.t[k_end]:.4f} s (the run reached {grid.t[k]:.4f} s)"
             + no_solution_hint(sim.case, nets[grid.interval[k_end]])
         )
     raise error(why, result=res)
