@@ -554,8 +554,14 @@ def _check_run_end(t_end: float, last: float | None, n: int, rate: int, where: s
     plant's last reporting instant at or before the end of run it announced (`t_end` s):
     within one frame interval (1 / `rate` s) before it, to the time stamps' microsecond.
     The frame at t = 0 is decided in the plant (no run has two points yet) and never
-    sent, so a run that ends within one interval of it answers none."""
-    t_last = 0.0 if last is None else last
+    sent; a run that answers none is no run (a plant's run ends after its fault, `pmu
+    plant` refuses an end at or before it), and refused as such."""
+    if last is None:
+        raise PlantStopped(
+            f"the plant at {where} announced the end of its run at t = {t_end:.4f} s "
+            "before any frame was answered: no run was controlled"
+        )
+    t_last = last
     count = 1.0 / c37.TIME_BASE
     if t_end - 1.0 / rate + count < t_last <= t_end + count:
         return

@@ -579,6 +579,21 @@ def test_a_controller_takes_no_damaged_end_of_run_header(wire):
     )
 
 
+def test_a_controller_takes_no_run_of_no_frame(wire):
+    """A plant that answered 'start' with its end of run at t = 0 and closed: `pmu
+    control` printed "answered 0 frames ..., 0 ESD starts", exit 0.  A stabctl plant's
+    run always has frames (it refuses an end before its first frame arrives), so a run
+    of none is refused, naming the plant."""
+    cfg, _, head, _ = wire
+    srv, port = _server(head, c37_loop.end_of_run_frame(1, 0.0))
+    with srv, pytest.raises(InputError) as err:
+        c37_loop.serve_controller(None, cfg, "127.0.0.1", port, timeout=5)
+    assert str(err.value) == (
+        f"the plant at 127.0.0.1:{port} announced the end of its run at t = 0.0000 s "
+        "before any frame was answered: no run was controlled"
+    )
+
+
 # -- commands addressed to another IDCODE ---------------------------------------------------
 
 
