@@ -507,8 +507,8 @@ def _host_port(address: str) -> tuple[str, int]:
     port, or a port outside 1-65535 (`c37_tcp.port_number`)."""
     from stabctl.estimation.c37_tcp import port_number, split_hostport
 
-    host, port = split_hostport(address)
     try:
+        host, port = split_hostport(address)
         if not host:
             raise InputError("expected HOST:PORT")
         return host, port_number(port)

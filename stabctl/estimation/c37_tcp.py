@@ -170,10 +170,19 @@ def split_hostport(text: str) -> tuple[str, str]:
     -------
     (str, str)
         The host (without brackets; empty if none) and the port's text (not checked).
+
+    Raises
+    ------
+    InputError
+        A bracket other than those around a whole IPv6 host (``[::1:4712``).
     """
     host, _, port = text.rpartition(":")
     if host.startswith("[") and host.endswith("]"):
         host = host[1:-1]
+    if "[" in host or "]" in host or "[" in port or "]" in port:
+        raise InputError(
+            f"{text!r} is not HOST:PORT (an IPv6 address in brackets, then its port: [::1]:4712)"
+        )
     return host, port
 
 

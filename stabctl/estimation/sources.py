@@ -86,7 +86,10 @@ def parse_source(text: str) -> Source:
                 f"--source {text}: {item!r}: write tcp:// once, before the list "
                 "(tcp://HOST:PORT,HOST:PORT)"
             )
-        host, ports = split_hostport(item)
+        try:
+            host, ports = split_hostport(item)
+        except InputError as exc:
+            raise InputError(f"--source {text}: {exc}") from None
         first, _, last = ports.partition("-")
         try:
             if not host:

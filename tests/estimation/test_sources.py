@@ -282,6 +282,10 @@ def test_a_port_range_is_one_server_per_port():
         ("tcp://a:0-3", "'a:0-3': port 0 is out of range"),
         ("tcp://a:1,tcp://a:1", "'tcp://a:1': write tcp:// once"),
         ("tcp://a:1-3,a:2", "a:2 given twice"),
+        # an unclosed bracket was looked up as a host name ("[[::1]:4712: Name or service
+        # not known")
+        ("tcp://[::1:4712", r"'\[::1:4712' is not HOST:PORT \(an IPv6 address in brackets"),
+        ("tcp://[::1]]:4712", r"'\[::1\]\]:4712' is not HOST:PORT"),
     ],
 )
 def test_bad_sources_are_named(text, needle):
