@@ -152,10 +152,10 @@ class Fault:
         s = f"3-phase fault{z} at bus {self.bus} at {self.t:g} s"
         if self.clear_near is None:
             return s + ", never cleared"
-        near = f"at {_ms(self.clear_near)} s (after {1000 * (self.clear_near - self.t):.1f} ms)"
+        near = f"at {_ms(self.clear_near)} s (after {_after(self.clear_near - self.t)} ms)"
         if self.far_bus is None:
             return s + f", cleared {near} without loss of a line"
-        far = f"at {_ms(self.far_clear)} s (after {1000 * (self.far_clear - self.t):.1f} ms)"
+        far = f"at {_ms(self.far_clear)} s (after {_after(self.far_clear - self.t)} ms)"
         return (
             s
             + f" on line {self.bus}-{self.far_bus} (circuit {self.circuit}), cleared "
@@ -748,6 +748,13 @@ def _fits(annotation: str, value) -> bool:
     if not isinstance(value, Real) or not math.isfinite(value):
         return False
     return "float" in annotation or float(value).is_integer()
+
+
+def _after(dt: float) -> str:
+    """A fault's duration dt (s) in ms for its description: one decimal (100.0), and
+    three significant digits below 0.1 ms (0.0167), which one decimal showed as 0.0."""
+    ms = 1000 * dt
+    return f"{ms:.1f}" if ms >= 0.1 or ms == 0 else f"{ms:.3g}"
 
 
 def _ms(t: float) -> str:

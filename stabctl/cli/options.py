@@ -855,6 +855,17 @@ def refuse_fault_of_no_length(ev, given: str, hint: str = "") -> None:
             f"{given}: cleared at {ev.t:g} s, as it starts: a fault of no length would do "
             f"nothing{hint}"
         )
+    if ev.clear_near is not None and ev.far_clear - ev.t < SHORTEST_FAULT_S:
+        raise InputError(
+            f"{given}: cleared {ev.far_clear - ev.t:.3g} s after it starts, under "
+            f"{SHORTEST_FAULT_S:g} s: no step of a run is that short, so it would do "
+            f"nothing{hint}"
+        )
+
+
+#: the shortest fault a command runs, s: a microsecond, the resolution of the time stamps
+#: (C37.118.2's TIME_BASE) and far below any integration step
+SHORTEST_FAULT_S = 1e-6
 
 
 def fault_options(required: bool, t_fault: bool = True, far_required: bool | None = None):

@@ -2180,6 +2180,23 @@ def test_a_fault_of_no_length_is_refused(no_simulation, args, needle):
     assert_error(run(*args), needle, NO_LENGTH)
 
 
+def test_a_fault_shorter_than_a_microsecond_is_refused_and_a_short_one_said_as_it_is(
+    no_simulation,
+):
+    """--clear-cycles 0.0000001 (1.7 ns) ran, said 'cleared at 1 s (after 0.0 ms)': a
+    fault under a microsecond, far below any step, is refused as doing nothing; one of
+    0.001 cycles (16.7 us) runs and its duration is shown (0.0167 ms, not 0.0)."""
+    args = KUNDUR_SIM + ("--fault", 3, "--far-bus", 101, "--tf", 2)
+    assert_error(
+        run(*args, "--clear-cycles", 0.0000001),
+        "--fault 3 --far-bus 101 --clear-cycles 1e-07: cleared 1.67e-09 s after it starts, "
+        "under 1e-06 s: no step of a run is that short, so it would do nothing",
+    )
+    from stabctl.case.events import Fault
+
+    assert "cleared at 1 s (after 0.0167 ms)" in str(Fault(3, 1.0, 1.0 + 0.001 / 60, 101))
+
+
 def test_a_case_s_own_fault_of_no_length_is_refused_and_a_far_end_feed_runs(tmp_path):
     """A case's own fault cleared as it starts is refused when its events run, naming
     --case-events and the event; a fault cleared at once at the near end while the far end
