@@ -91,6 +91,8 @@ def study_json(st: EigStudy) -> dict:
         "n_states": st.sys.nstates,
         "inputs": list(st.sys.input_labels),
         "reference_mode": ma.reference_mode,
+        # the machine numbers the modes' machine lists hold, named with their buses
+        "machine_names": {str(int(k)): st.case.machine_name(int(k)) for k in ma.machines},
         "areas": _areas(ma),
         "damping_statistics": ma.damping_statistics(),
         "electromechanical_modes": [int(i) for i in ma.electromechanical],
@@ -159,15 +161,18 @@ def _temp(out: Path, name: str) -> str:
     return path
 
 
-def _machines(numbers, most: int = 8, none: str = "-") -> str:
-    """'G1, G2, ...' (at most `most` machines), `none` for none."""
-    text = ", ".join(f"G{k}" for k in numbers[:most]) or none
+def _machines(numbers, most: int = 8, none: str = "-", name=None) -> str:
+    """'G1 (bus 1), G2 (bus 2), ...' (at most `most` machines; `name` the case's
+    `machine_name`, default 'G<k>'), `none` for none."""
+    named = name or (lambda k: f"G{k}")
+    text = ", ".join(named(int(k)) for k in numbers[:most]) or none
     return text + (" ..." if len(numbers) > most else "")
 
 
 def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str:
     """The report text (electromechanical-mode table, areas, statistics, figures)."""
     ma, sys = st.ma, st.sys
+    named = st.case.machine_name
     ref = (
         "none: an infinite bus (H = 0) holds the angles"
         if ma.reference_mode is None
@@ -213,7 +218,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         "Kundur 12.1 puts local plant modes at 0.8-2 Hz).",
         "",
     ]
-    lines += [f"- {name}: " + ", ".join(f"G{k}" for k in ks) for name, ks in _areas(ma).items()]
+    lines += [
+        f"- {area}: " + _machines(ks, most=len(ks), name=named) for area, ks in _areas(ma).items()
+    ]
     lines += [
         "",
         "## Electromechanical modes",
@@ -229,8 +236,9 @@ def report_markdown(st: EigStudy, figures: dict, with_mode_figures: bool) -> str
         lines.append(
             f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
             f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | {ma.area_sides(i)} | "
-            f"{_machines(ma.dominant_machines(i))} | {_machines(g1)} | "
-            f"{_machines(g2, none='others, each < 0.2')} | "
+            f"{_machines(ma.dominant_machines(i), name=named)} | "
+            f"{_machines(g1, name=named)} | "
+            f"{_machines(g2, none='others, each < 0.2', name=named)} | "
             f"{bus} ({r:.2e}) |"
         )
     lines += [

@@ -204,6 +204,16 @@ def test_eig_report_files(tmp_path):
     assert md.count("| inter-area |") == 1 and md.count("| local |") == 2
     assert "| inter-area | 1.00 | 2 vs 1 |" in md or "| inter-area | 1.00 | 1 vs 2 |" in md
     assert "#: the mode's number among all the model's modes" in md
+    # machines named with their buses, as `stabctl eig` prints them (the report said G3)
+    assert "- area 1: G1 (bus 1), G2 (bus 2)" in md
+    assert "| G3 (bus 11), G4 (bus 12) | G1 (bus 1), G2 (bus 2) |" in md
+    res = run("eig", "kundur", "--json")
+    assert json.loads(res.stdout)["machine_names"] == {
+        "1": "G1 (bus 1)",
+        "2": "G2 (bus 2)",
+        "3": "G3 (bus 11)",
+        "4": "G4 (bus 12)",
+    }
     for png in names[1:]:
         assert f"({png})" in md
 
