@@ -225,13 +225,35 @@ def clear_cache() -> int:
 
 
 def cached(dispatcher) -> bool:
-    """Whether a kernel has an entry in the on-disk cache (numba's index file of it), i.e.
-    a new process loads it instead of compiling it (for the argument types it was compiled
-    for; stale entries are gone, `ensure_fresh_cache`).  numba names the entry after the
-    source file, so a kernel of a package's ``__init__.py`` is ``__init__.<name>-...``."""
+    """Whether a kernel has a whole entry in the on-disk cache (numba's index file of it
+    and a data file, each whole pickles: `_whole_pickles`), i.e. a new process loads it
+    instead of compiling it (for the argument types it was compiled for; stale entries
+    are gone, `ensure_fresh_cache`).  An empty, cut or garbled file is no entry: the
+    kernel compiles again (numba drops such an entry), and ``compile --check`` says so
+    instead of calling the cache warm.  numba names the entry after the source file, so
+    a kernel of a package's ``__init__.py`` is ``__init__.<name>-...``."""
     py = dispatcher.py_func
     stem = f"{Path(py.__code__.co_filename).stem}.{py.__qualname__}-"
-    return any(Path(dispatcher.stats.cache_path).glob(stem + "*.nbi"))
+    return any(
+        _whole_pickles(index, 2)  # numba's version, then (source stamp, overloads)
+        and any(_whole_pickles(d, 1) for d in index.parent.glob(f"{index.stem}.*.nbc"))
+        for index in Path(dispatcher.stats.cache_path).glob(stem + "*.nbi")
+    )
+
+
+def _whole_pickles(path: Path, count: int) -> bool:
+    """Whether the file holds `count` whole pickles one after the other and nothing
+    more, read as opcodes (`pickletools.genops`: nothing is unpickled, no code runs)."""
+    import pickletools
+
+    try:
+        with open(path, "rb") as f:
+            for _ in range(count):
+                for _op in pickletools.genops(f):
+                    pass
+            return f.read(1) == b""
+    except (OSError, ValueError, EOFError):  # unreadable, cut, or not pickle opcodes
+        return False
 
 
 def _could_make(directory: str) -> None:

@@ -84,7 +84,47 @@ def test_a_kernel_of_a_package_init_is_found_in_the_cache(tmp_path):
         py_func=derivatives_at.py_func, stats=SimpleNamespace(cache_path=str(tmp_path))
     )
     assert not cached(stand_in)
-    (tmp_path / "converters.derivatives_at-609.py311.nbi").touch()  # the old, wrong name
+    _entry(tmp_path, "converters.derivatives_at-609.py311")  # the old, wrong name
     assert not cached(stand_in)
-    (tmp_path / "__init__.derivatives_at-609.py311.nbi").touch()
+    _entry(tmp_path, "__init__.derivatives_at-609.py311")
+    assert cached(stand_in)
+
+
+def _entry(where, name: str, index: bytes | None = None, data: bytes | None = None) -> None:
+    """A cache entry as numba writes it: the index (numba's version, then the source
+    stamp and overloads, two pickles) and a data file (one pickle); or the bytes given."""
+    import pickle
+
+    whole = pickle.dumps("0.60.0") + pickle.dumps((1.0, {}))
+    (where / f"{name}.nbi").write_bytes(whole if index is None else index)
+    (where / f"{name}.1.nbc").write_bytes(pickle.dumps(b"code") if data is None else data)
+
+
+def test_a_damaged_cache_entry_is_not_called_cached(tmp_path):
+    """A cache whose files were emptied, cut or garbled was called warm by `compile
+    --check` (only the index file's name was looked at), and the next command then
+    compiled for two minutes without the notice.  An entry is cached only if its index
+    and a data file are whole pickles, read as opcodes, nothing unpickled."""
+    import pickle
+
+    stand_in = SimpleNamespace(
+        py_func=derivatives_at.py_func, stats=SimpleNamespace(cache_path=str(tmp_path))
+    )
+    name = "__init__.derivatives_at-609.py311"
+    whole = pickle.dumps("0.60.0") + pickle.dumps((1.0, {}))
+    for index, data in (
+        (b"", None),  # an emptied index
+        (whole[:-5], None),  # cut
+        (b"\x00garbage" * 8, None),  # not pickle opcodes
+        (whole + b"more", None),  # something after the two pickles
+        (None, b""),  # an emptied data file
+        (None, pickle.dumps(b"code")[:-3]),  # a cut data file
+    ):
+        for f in tmp_path.iterdir():
+            f.unlink()
+        _entry(tmp_path, name, index, data)
+        assert not cached(stand_in), (index, data)
+    (tmp_path / f"{name}.1.nbc").unlink()  # no data file at all
+    assert not cached(stand_in)
+    _entry(tmp_path, name)
     assert cached(stand_in)
