@@ -469,6 +469,12 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
     return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"
 
 
+#: how long before its stream's CFG-2 a data frame may be stamped, s: a frame measured
+#: before the CFG-2 was sent and sent after it (a PMU's reporting latency); a frame stamped
+#: earlier is refused (`merge`)
+BEFORE_CFG2_S = 1.0
+
+
 def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
     """One `Frame` per time stamp from streams of (CFG-2 as pyc37 reads it, data frames'
     bytes); each stream's values go to its PMUs' columns (by station name), those of a
@@ -500,7 +506,8 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
     ------
     InputError
         As `read_frames`; a stream that shares no time stamp with the first (both
-        sending frames).
+        sending frames); a data frame stamped more than BEFORE_CFG2_S before the earliest
+        CFG-2.
     """
     called = list(stream_names or (f"stream {s + 1}" for s in range(len(streams))))
     labels = [p.label for p in pmus]
@@ -533,6 +540,13 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
                 raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
             # a frame after a leap second is 1 s later than stamped (`c37.leap_offsets`)
             t = c37.reporting_instant(frame.t + int(leap) - frac, cfg.rate, base)
+            if t < -BEFORE_CFG2_S:
+                raise InputError(
+                    f"stream {s + 1}, data frame {k + 1}: stamped {-t:.6g} s before the "
+                    f"CFG-2{'s' * (len(streams) > 1)} (t = 0 the earliest CFG-2's time "
+                    "stamp): a configuration frame comes before the data it describes; a "
+                    "clock or a time stamp is wrong"
+                )
             frames.append(frame._replace(t=t))
             flagged.update(why for why in c37.flags(cfg2, d) if why)
         # after the frames' own checks (`c37.check_data_frame`), as a receiver makes them

@@ -402,3 +402,25 @@ def test_a_receiver_checks_each_frame_against_the_first_and_last_only(wire):
     why = c37.next_frame_fault(_OnlyEnds(body[:41]), back, cfg2)
     whole = c37.order_faults([*body[:41], back], cfg2, "")
     assert why is not None and "data frame 42" in why and whole and "data frame 42" in whole[0][1]
+
+
+def test_data_stamped_long_before_its_cfg2_is_refused(wire, tmp_path):
+    """A recording whose data frames are stamped 100 s before its CFG-2 (or a CFG-2 of
+    SOC 0xFFFFFFFF, year 2106) was tracked at t = -98.9 s (or -2.6e9 s), exit 0: t = 0 is
+    the CFG-2's stamp, and a configuration frame comes before the data it describes.
+    Refused beyond BEFORE_CFG2_S; a frame stamped within it (a PMU's latency) is kept."""
+    from stabctl.estimation.sources import BEFORE_CFG2_S
+
+    _, head, body = wire
+    soc = int.from_bytes(head[6:10], "big")
+    for later, bad in ((100, True), (2**32 - 1 - soc, True), (0, False)):
+        moved = _crc(head[:6] + (soc + later).to_bytes(4, "big") + head[10:])
+        res = _track(tmp_path, moved, body)
+        if bad:
+            assert res.exit_code == 2, res.output
+            assert "stream 1, data frame 1: stamped " in res.stderr
+            assert "s before the CFG-2 (t = 0 the earliest CFG-2's time stamp)" in res.stderr
+        else:
+            assert res.exit_code == 0, res.output
+    early = [_later(f, -round(0.5e6)) for f in body]  # 0.5 s before: a latency, kept
+    assert BEFORE_CFG2_S > 0.5 and _track(tmp_path, head, early).exit_code == 0
