@@ -1144,9 +1144,11 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
                         )
                     if data:  # a leap second between the last frame and this one
                         leaps += int(c37.leap_offsets([data[-1], frame], cfg2)[-1])
+                    elapsed = float(c37.stamp_times([frame], cfg2, leaps)[0] - soc) - frac
+                    if end.tf is not None and elapsed > end.tf + 0.5e-6:
+                        return "", ""  # past the end (after a gap): not taken
                     data.append(frame)
                     since = time.monotonic()
-                    elapsed = float(c37.stamp_times([frame], cfg2, leaps)[0] - soc) - frac
                     last = f", the last stamped {elapsed:.4f} s"
                     if end.tf is not None and elapsed >= end.tf - 0.5e-6:
                         return "", ""

@@ -454,17 +454,22 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
     soc, frac = c37.config_stamp(cfg2)  # t = 0
     if end.frames is not None:
         data = data[: end.frames]
+    reached_tf = False
     if end.tf is not None:
         stamps = c37.stamp_times(data, cfg2) - soc - frac
         reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
-        data = data[: reached[0] + 1] if reached else data
+        if reached:  # the frames up to the end, not one stamped past it (after a gap)
+            reached_tf = True
+            k = reached[0]
+            data = data[: k + 1] if stamps[k] <= end.tf + 0.5e-6 else data[:k]
+            if not data:
+                raise InputError(
+                    f"{name}: its first data frame is stamped {stamps[0]:.4f} s (t = 0 its "
+                    f"CFG-2's time stamp), after the end asked for ({end}): no frame to track"
+                )
     # whichever end comes first, as a TCP stream's (`c37_tcp._data_frames`)
     at = c37.stamp_times(data, cfg2)[-1] - soc - frac if data else None
-    whole = (
-        not end.given
-        or (end.frames is not None and len(data) == end.frames)
-        or (end.tf is not None and at is not None and at >= end.tf - 0.5e-6)
-    )
+    whole = not end.given or (end.frames is not None and len(data) == end.frames) or reached_tf
     last = f", the last stamped {at:.4f} s" if at is not None else ""
     return cfg2, data, "" if whole else f"{name}: {len(data)} data frames{last}, before {end}"
 

@@ -424,3 +424,26 @@ def test_data_stamped_long_before_its_cfg2_is_refused(wire, tmp_path):
             assert res.exit_code == 0, res.output
     early = [_later(f, -round(0.5e6)) for f in body]  # 0.5 s before: a latency, kept
     assert BEFORE_CFG2_S > 0.5 and _track(tmp_path, head, early).exit_code == 0
+
+
+def test_until_takes_the_frames_up_to_it_not_one_past_a_gap(wire, tmp_path):
+    """A recording whose CFG-2 is stamped 1000 s before its data, tracked --until 1:
+    one frame at t = 1000 s was tracked as if it were the end (the first frame at or
+    after --until was taken).  The frames up to --until are taken, none past it: here
+    none, refused by name; and --until 0.51 takes the frames to 0.5 s (31), as 0.5."""
+    _, head, body = wire
+    soc = int.from_bytes(head[6:10], "big")
+    early = _crc(head[:6] + (soc - 1000).to_bytes(4, "big") + head[10:])
+    path = tmp_path / "r.c37"
+    path.write_bytes(early + b"".join(body))
+    out = tmp_path / "t.csv"
+    args = ["estimate", "track", "kundur", "--source", str(path), "--out", str(out)]
+    res = CliRunner().invoke(main, [*args, "--until", "1"])
+    assert res.exit_code == 2 and not out.exists()
+    assert "its first data frame is stamped 1000.0000 s (t = 0 its CFG-2's time stamp), " in (
+        res.stderr
+    )
+    path.write_bytes(head + b"".join(body))
+    for until in ("0.5", "0.51"):
+        res = CliRunner().invoke(main, [*args, "--until", until])
+        assert res.exit_code == 0 and res.stdout.startswith("tracked 31 frames"), res.output
