@@ -151,9 +151,10 @@ class SimulationResult:
         `stabctl.dynamics.driver.separated_group`); empty (default) if none.
     meta : dict, optional
         Run description: ``case``, ``conventions``, ``wall_time_s`` (s),
-        ``max_initial_derivative`` (the largest |dx/dt| at t = 0 over the states, in its
-        state's unit per s: pu/s, rad/s) and ``max_initial_derivative_state`` (that state's
-        name, e.g. ``exc.Efd.G3``), and with storage ``switchings`` (the
+        ``max_initial_derivative`` (the largest absolute derivative at t = 0 over the
+        states, in its state's unit per s: pu/s, rad/s) and
+        ``max_initial_derivative_state`` (that state's name, e.g. ``exc.Efd.G3``), and
+        with storage ``switchings`` (the
         switching log, see `switching_records`) and ``storage`` (per-device figures:
         switchings, chattering, energy absorbed / delivered in MJ, peak power in MW); with
         islanding ``islanded`` (per stage: buses cut from every machine with the load

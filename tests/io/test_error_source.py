@@ -324,7 +324,7 @@ def andes_edited(tmp_path, case: str, model: str, field: str, value):
     "case, model, field, value, expected",
     [
         # the table named its own column: ibr_con 'mva', 'pc_fdbd1', 'wq_Twref', 'dbd1'
-        ("ieee14/ieee14_wt3.xlsx", "REGCA1", "Sn", -100, r"Sn = -100: must be >= 0"),
+        ("ieee14/ieee14_wt3.xlsx", "REGCA1", "Sn", -100, r"Sn = -100: device base must be > 0"),
         ("ieee14/ieee14_wt3.xlsx", "REECA1", "dbd1", 0.05, r"dbd1 = 0.05: must be <= 0"),
         ("ieee14/ieee14_wt3.xlsx", "REPCA1", "fdbd1", 0.05, r"fdbd1 = 0.05: must be <= 0"),
         (
