@@ -55,13 +55,45 @@ def exclusive(path: str | os.PathLike) -> Iterator[Path]:
     lock = lock_path(path)
     lock.parent.mkdir(parents=True, exist_ok=True)
     fd = _locked(lock, path)
+    own = None
     try:
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        own = _file_locked(path)
         yield lock
     finally:
         lock.unlink(missing_ok=True)  # still holding it: no one else has this file
         os.close(fd)  # releases the lock
+        if own is not None:
+            os.close(own)
+
+
+def _file_locked(path) -> int | None:
+    """A descriptor of the output file itself holding its exclusive lock, None if it is
+    no regular file yet: a writer through another name of the same file (a hard link,
+    whose lock file beside it is another) finds it held.
+
+    Raises
+    ------
+    InputError
+        Another process holds it.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:  # not there yet, or no file to read (a directory's own lock suffices)
+        return None
+    if not os.path.isfile(path):
+        os.close(fd)
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        raise InputError(
+            f"{path}: another stabctl process is writing this file under another name (a "
+            "link to it); wait for it to end or choose another output"
+        ) from None
+    return fd
 
 
 def _holder(fd: int) -> str:

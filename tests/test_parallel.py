@@ -314,9 +314,10 @@ def test_a_second_writer_of_a_sweep_file_is_refused_with_the_holders_pid(tmp_pat
 
 
 def test_a_second_writer_through_a_link_to_the_sweep_file_is_refused(tmp_path, monkeypatch):
-    """Two sweeps on one file named twice (a symbolic link to it, ./x against x): each
-    took the lock beside the name it was given, both ran, and the file held 97 records
-    of 51 jobs.  The lock is taken beside the file the name leads to."""
+    """Two sweeps on one file named twice (a symbolic link to it, ./x against x, a hard
+    link): each took the lock beside the name it was given, both ran, and the file held
+    97 records of 51 jobs.  The lock is taken beside the file the name leads to, and on
+    the file itself (a hard link's lock file is another)."""
     out = tmp_path / "one.jsonl"
     run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
     link = tmp_path / "link.jsonl"
@@ -332,6 +333,17 @@ def test_a_second_writer_through_a_link_to_the_sweep_file_is_refused(tmp_path, m
         holder.kill()
         holder.wait()
     assert len(out.read_text().splitlines()) == 1
+    hard = tmp_path / "hard.jsonl"  # a hard link: its lock file beside it is another
+    os.link(out, hard)
+    holder = _holder(out)
+    try:
+        with pytest.raises(InputError, match="another stabctl process is writing this file"):
+            run_sweep(jobs_of(square, 1, 2), hard, workers=1, progress=False)
+    finally:
+        holder.kill()
+        holder.wait()
+    rep = run_sweep(jobs_of(square, 1, 2), hard, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (1, 1)  # the holder gone, the link is written
 
 
 _WRITER = """
