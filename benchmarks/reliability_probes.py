@@ -215,11 +215,18 @@ def probes(cwd: Path) -> list[Probe]:
     link.symlink_to("/dev/full")
     zero = cwd / "zero.json"
     zero.symlink_to("/dev/zero")
+    (cwd / "zero.jsonl").symlink_to("/dev/zero")  # the suffix right: the file refused
     out += [
         Probe(
             "8",
             "--out /dev/zero",
             ["sweep-cct", "kundur", "--faults", "f.csv", "--out", "/dev/zero"],
+            needle="the file name must end in .jsonl",
+        ),
+        Probe(
+            "8",
+            "--out link to /dev/zero",
+            ["sweep-cct", "kundur", "--faults", "f.csv", "--out", "zero.jsonl"],
             needle="not a regular file",
         ),
         Probe(

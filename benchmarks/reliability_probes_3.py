@@ -146,7 +146,7 @@ def simple(cwd: Path) -> list[Probe]:
         "var",
         "cct --tf before the fault",
         "cct kundur --fault 3 --far-bus 101 --tf 0.5",
-        needle="run end 0.5 s must come after",
+        needle="--tf 0.5 s: fault at bus 3 on line 3-101 at 1 s is cleared as late as 2 s",
     )
     add("var", "cct --t-max 0", "cct kundur --fault 3 --far-bus 101 --t-max 0", needle="--t-max")
     add(
