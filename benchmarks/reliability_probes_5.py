@@ -382,13 +382,13 @@ def probes() -> list[P5]:
         ("rows_dict", "rows"), ("tables_list", "tables"), ("sw_con_text", "sw_con"),
         ("island", "77"), ("h_1e300", "1e+15"), ("truncated", "c_truncated.json"),
         ("extra_col", "Hx"), ("short_row", "column count"), ("no_base", "base_mva"),
-        ("no_machines", "mac_con"), ("freq_1", ""),
+        ("no_machines", "machine 1 does not exist in table 'machines'"), ("freq_1", ""),
     ):  # fmt: skip
         add("case", f"case c_{name}.json", ["simulate", f"c_{name}.json", "--tf", "1"],
             needle=needle, exit=0 if name == "freq_1" else 2)  # fmt: skip
     # -- import-psse -------------------------------------------------------------------
     for name, needle in (
-        ("trunc", "cut short"), ("dupbus", "bus number 1"), ("branch_absent", "bus 9"),
+        ("trunc", "cut short"), ("dupbus", "bus 1 appears twice"), ("branch_absent", "bus 9"),
         ("zero_z", "R + jX"), ("nan_x", "nan"), ("version99", "99"), ("base0", "SBASE"),
         ("busstr", "'X'"), ("extra_fields", "field"), ("gen_absent_bus", "bus 7"),
         ("neg_mbase", "MBASE"), ("semicolons", "r_semicolons.raw:1"),
@@ -425,7 +425,7 @@ def probes() -> list[P5]:
     add("csv", "place --site-costs a faults CSV",
         f"{PLACE} --site-costs f.csv", needle="'bus', 'far_bus' unknown")  # fmt: skip
     add("csv", "sweep-cct --out /dev/null", f"{SWEEP} f.csv".replace("o.jsonl", "/dev/null"),
-        needle="not a regular file")  # fmt: skip
+        needle="the file name must end in .jsonl")  # fmt: skip
     # -- pmu network options -------------------------------------------------------------
     serve = "pmu serve kundur --fault 3 --far-bus 101 --timeout 1 --port 0"
     for args, needle in (
