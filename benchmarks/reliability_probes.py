@@ -164,7 +164,7 @@ def probes(cwd: Path) -> list[Probe]:
             "5",
             "place --screening of other records",
             [*place, "--screening", "not_screening.jsonl"],
-            needle="no fault bracketed",
+            needle="the records must be whole",
         )
     )
     for name, table, field, value, needle in (
