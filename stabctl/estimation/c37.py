@@ -1163,6 +1163,13 @@ def read_config(data: bytes, what: str):
     return cfg2
 
 
+def frame_interval(cfg2) -> float:
+    """The time between two reporting instants of a CFG-2's stream, s (DATA_RATE frames
+    a second, or a negative DATA_RATE's seconds a frame; C37.118.2-2011 Table 8)."""
+    rate = cfg2.get_data_rate()
+    return 1.0 / rate if rate > 0 else float(-rate)
+
+
 def config_stamp(cfg2) -> tuple[int, float]:
     """A CFG-2's time stamp, SOC and FRACSEC / TIME_BASE: t = 0 of the stream it
     describes (the frames' times, the ``--until`` end and the gaps are read from it).

@@ -1105,6 +1105,7 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
     the `End.tf` end, are the time elapsed since the CFG-2's time stamp
     (`c37.config_stamp`), across a leap second too (`c37.stamp_times`, as a recording's)."""
     soc, frac = c37.config_stamp(cfg2)
+    step = c37.frame_interval(cfg2)  # a frame within one interval past --until ends it
     leaps = 0  # positive leap seconds in the stream up to its last data frame
     last = ""  # ", the last stamped ... s" of the last data frame, for the messages
     since = time.monotonic()  # of 'start', then of the last data frame
@@ -1145,8 +1146,8 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
                     if data:  # a leap second between the last frame and this one
                         leaps += int(c37.leap_offsets([data[-1], frame], cfg2)[-1])
                     elapsed = float(c37.stamp_times([frame], cfg2, leaps)[0] - soc) - frac
-                    if end.tf is not None and elapsed > end.tf + 0.5e-6:
-                        return "", ""  # past the end (after a gap): not taken
+                    if end.tf is not None and elapsed > end.tf + step + 0.5e-6:
+                        return "", ""  # past the end after a gap: not taken
                     data.append(frame)
                     since = time.monotonic()
                     last = f", the last stamped {elapsed:.4f} s"

@@ -458,10 +458,11 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
     if end.tf is not None:
         stamps = c37.stamp_times(data, cfg2) - soc - frac
         reached = [k for k, t in enumerate(stamps) if t >= end.tf - 0.5e-6]
-        if reached:  # the frames up to the end, not one stamped past it (after a gap)
+        if reached:  # the frames to the end, not one stamped past it after a gap
             reached_tf = True
             k = reached[0]
-            data = data[: k + 1] if stamps[k] <= end.tf + 0.5e-6 else data[:k]
+            past = stamps[k] > end.tf + c37.frame_interval(cfg2) + 0.5e-6
+            data = data[:k] if past else data[: k + 1]
             if not data:
                 raise InputError(
                     f"{name}: its first data frame is stamped {stamps[0]:.4f} s (t = 0 its "

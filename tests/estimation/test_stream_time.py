@@ -429,8 +429,9 @@ def test_data_stamped_long_before_its_cfg2_is_refused(wire, tmp_path):
 def test_until_takes_the_frames_up_to_it_not_one_past_a_gap(wire, tmp_path):
     """A recording whose CFG-2 is stamped 1000 s before its data, tracked --until 1:
     one frame at t = 1000 s was tracked as if it were the end (the first frame at or
-    after --until was taken).  The frames up to --until are taken, none past it: here
-    none, refused by name; and --until 0.51 takes the frames to 0.5 s (31), as 0.5."""
+    after --until is the end's).  A frame more than one reporting interval past --until
+    (after a gap) is not taken: here none is left, refused by name; --until 0.5 takes
+    the frames to 0.5 s (31), --until 0.51 the one reaching it too (32)."""
     _, head, body = wire
     soc = int.from_bytes(head[6:10], "big")
     early = _crc(head[:6] + (soc - 1000).to_bytes(4, "big") + head[10:])
@@ -444,6 +445,6 @@ def test_until_takes_the_frames_up_to_it_not_one_past_a_gap(wire, tmp_path):
         res.stderr
     )
     path.write_bytes(head + b"".join(body))
-    for until in ("0.5", "0.51"):
+    for until, n in (("0.5", 31), ("0.51", 32)):
         res = CliRunner().invoke(main, [*args, "--until", until])
-        assert res.exit_code == 0 and res.stdout.startswith("tracked 31 frames"), res.output
+        assert res.exit_code == 0 and res.stdout.startswith(f"tracked {n} frames"), res.output
