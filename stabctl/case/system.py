@@ -1655,6 +1655,19 @@ class Case:
         except (KeyError, ValueError, TypeError):
             raise CaseError(f"machine {number} is not in case '{self.name}'") from None
 
+    def infinite_buses(self) -> set[int]:
+        """The machines that are infinite buses, by number: classical machines of H = 0
+        (PSS/E's GENCLS holding the rest of the system; the table admits H = 0 only with
+        x_d = 0), which keep their speed and are no ESD site.
+
+        Returns
+        -------
+        set of int
+            Machine numbers.
+        """
+        m = self.machines
+        return {int(k) for k, h in zip(m.number, m.H) if h == 0}
+
     def machine_name(self, number) -> str:
         """How outputs name machine ``number``: its number and its bus, ``"G14 (bus 3)"``.
 

@@ -242,7 +242,7 @@ def place(
     from stabctl.parallel import RunnerOptions, atomic_write, default_workers
     from stabctl.placement.loop import PlaceOptions, Study
     from stabctl.placement.plan import PlanOptions, plan
-    from stabctl.placement.program import candidate_sites, infinite_buses
+    from stabctl.placement.program import candidate_sites
     from stabctl.placement.requirements import (
         CostModel,
         Requirement,
@@ -282,7 +282,7 @@ def place(
         cost_mw,
         cost_mwh,
         cost_site,
-        read_site_costs(site_costs, n_mac, infinite_buses(case)) if site_costs else {},
+        read_site_costs(site_costs, n_mac, case.infinite_buses()) if site_costs else {},
     )
     brackets = screening_brackets(screening, case_name, case.digest()) if screening else None
     faults = read_fault_list(case, case_name, faults_src)

@@ -556,11 +556,8 @@ def simulate(
             "pct_of_machine_mva": esd_pct,
             "model": esd_model,
             "devices": len(fleet.devices),  # type: ignore[union-attr]
-            "none_at": [  # infinite buses (H = 0): the rest of the system, no site
-                case.machine_name(int(k))
-                for k, H in zip(case.machines.number, case.machines.H)
-                if H == 0
-            ],
+            # infinite buses (H = 0): the rest of the system, no site
+            "none_at": [case.machine_name(k) for k in sorted(case.infinite_buses())],
             "control": "bang-bang COI (paper Table 3)",
             "deadband_hz": deadband_hz,
             "v_gate_pu": v_gate,

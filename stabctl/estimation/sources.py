@@ -292,7 +292,7 @@ def stream_gaps(data, cfg2) -> str:
     rate = cfg2.get_data_rate()
     if not rate or len(data) < 2:
         return ""
-    per_s = rate if rate > 0 else 1.0 / -rate
+    per_s = 1.0 / c37.frame_interval(cfg2)
     soc, frac = c37.config_stamp(cfg2)
     t = list(c37.stamp_times(data, cfg2) - soc - frac)
     gaps = [

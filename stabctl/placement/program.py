@@ -66,21 +66,6 @@ class Site:
             )
 
 
-def infinite_buses(case) -> set[int]:
-    """The machines of a case that are infinite buses (H = 0), by number: no ESD site.
-
-    Parameters
-    ----------
-    case : stabctl.case.Case
-
-    Returns
-    -------
-    set of int
-        Machine numbers.
-    """
-    return {int(k) for k, h in zip(case.machines.number, case.machines.H) if h == 0}
-
-
 def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tuple[Site, ...]:
     """One site per generator (default every one but infinite buses, or the numbers in
     `machines`) at its HV bus (`stabctl.storage.devices.hv_bus`), bounded at max_pct % of
@@ -96,7 +81,7 @@ def candidate_sites(case, max_pct: float = 50.0, machines=None, cost=None) -> tu
 
     if not max_pct > 0:
         raise InputError(f"largest site rating must be > 0 % of machine MVA, got {max_pct:g}")
-    fixed = infinite_buses(case)
+    fixed = case.infinite_buses()
     if machines is None:
         nums = [int(k) for k in case.machines.number if int(k) not in fixed]
     else:

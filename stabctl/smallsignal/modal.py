@@ -176,7 +176,7 @@ class ModalAnalysis:
             f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  dominant state",
         ]
         for i in np.argsort(self.damping, kind="stable")[:LEAST_DAMPED_SHOWN]:
-            top = self.states[int(np.argmax(self.participation[:, i]))]
+            top = self.dominant_states(i, 1)[0][0]
             lines.append(f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {top}")
         return "\n".join(lines)
 

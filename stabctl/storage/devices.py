@@ -259,7 +259,8 @@ def uniform_fleet(
 ) -> StorageFleet:
     """One ideal ESD per generator, rated pct % of the generator's MVA, at its HV
     bus or its terminal bus; none for an infinite bus (H = 0: PSS/E's GENCLS holding the
-    rest of the system, no site, as `stabctl.placement.program.candidate_sites`).
+    rest of the system, no site: `stabctl.case.Case.infinite_buses`, as
+    `stabctl.placement.program.candidate_sites`).
 
     Parameters
     ----------
@@ -307,9 +308,9 @@ def uniform_fleet(
             f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {pct}"
         )
     devs = []
-    m = case.machines
-    for num, bus, mva, H in zip(m.number, m.bus, m.mva, m.H):
-        if H == 0:  # an infinite bus: the rest of the system, no site
+    infinite = case.infinite_buses()  # the rest of the system: no site
+    for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
+        if int(num) in infinite:
             continue
         b = hv_bus(case, int(num)) if at == "hv" else int(bus)
         devs.append(StorageDevice(bus=b, machine=int(num), pmax_mw=pct / 100.0 * mva))
