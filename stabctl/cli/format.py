@@ -706,7 +706,8 @@ def _plan_verdict(d) -> str:
     """The plan's label: VERIFIED, NOT verified, or NOTHING TO PLACE when every
     contingency was set aside as infeasible (a verdict on the contingencies, not a plan
     verified on them; the plan's message, printed after it, says so)."""
-    if d["verified"] and d["set_aside"] and not d["n_met"]:
+    aside = d["set_aside"] or d.get("not_simulable")
+    if d["verified"] and aside and not d["n_met"]:
         return "NOTHING TO PLACE"
     return "VERIFIED" if d["verified"] else "NOT verified"
 
@@ -777,11 +778,18 @@ def print_plan(case_name, d) -> None:
             f"{r.get('absorbed_mj', 0.0) / MJ_PER_MWH:13.3f} "
             f"{r.get('delivered_mj', 0.0) / MJ_PER_MWH:14.3f}"
         )
-    aside = len(d.get("set_aside") or [])
+    aside = [
+        f"{n} more set aside as {why}"
+        for n, why in (
+            (len(d.get("set_aside") or []), "infeasible"),
+            (len(d.get("not_simulable") or {}), "not simulable"),
+        )
+        if n
+    ]
     click.echo(
         f"{d['n_met']} of {counted(d['n_contingencies'], 'contingency', 'contingencies')} "
         "stable at their required clearing time"
-        + (f" ({aside} more set aside as infeasible, below)" if aside else "")
+        + (f" ({', '.join(aside)}, below)" if aside else "")
         + f"; solved for: {', '.join(d['active']) or 'none'}"
     )
     rows = [r for r in d["contingencies"] if not (r["cct_s"] is None and r["met"])]
@@ -797,6 +805,8 @@ def print_plan(case_name, d) -> None:
         click.echo("out of scope (unstable when cleared at once): " + ", ".join(d["out_of_scope"]))
     for proof in d.get("infeasible") or []:
         click.echo("set aside as " + proof)
+    for name, why in (d.get("not_simulable") or {}).items():
+        click.echo(f"set aside as not simulable without storage: {name}: {why}")
     u = d.get("uniform")
     if u and u.get("pct") is not None:
         click.echo(

@@ -148,8 +148,11 @@ from stabctl.errors import InputError
     "--set-aside-infeasible",
     is_flag=True,
     help="A contingency that storage at the candidate sites cannot make meet its "
-    "requirement (proven by simulation with every site at its bound) is "
-    "listed and the others are planned for (default: error, exit 2).",
+    "requirement (proven by simulation with every site at its bound), or whose "
+    "fault cannot be simulated without storage while it is on (in a case with "
+    "converters each is held on for --t-max first, one short run), is listed and "
+    "the others are planned for "
+    "(default: error, exit 2).",
 )
 @storage_options(with_rating=False, critical=True)
 @esd_model_option

@@ -21,6 +21,7 @@ from stabctl.placement.evaluation import (
     check,
     controller_dict,
     devices_of,
+    simulable,
 )
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
@@ -39,10 +40,11 @@ class PlanContext:
     callable (`stabctl.progress.Heartbeat`); n_runs: simulations counted; base: name ->
     evaluation without storage (`add_base`); energy_rate: usable energy per MW at each site (MWh/MW,
     `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
-    infeasible, set_aside: what was set aside; place: the `PlaceOptions` of every
-    round's `place` (damping, sparsity, iterations); esd_model: the devices' model
-    (`Study.esd_model`); critical_reference: the law armed per contingency
-    (`Study.critical_reference`).
+    infeasible, set_aside: what was set aside as infeasible; not_simulable: name -> why
+    of the contingencies set aside as not simulable (`simulable`); place: the
+    `PlaceOptions` of every round's `place` (damping, sparsity, iterations); esd_model:
+    the devices' model (`Study.esd_model`); critical_reference: the law armed per
+    contingency (`Study.critical_reference`).
     """
 
     case: str
@@ -61,6 +63,7 @@ class PlanContext:
     brackets: dict | None = None
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
+    not_simulable: dict = field(default_factory=dict)
     place: PlaceOptions = PlaceOptions()
     esd_model: str = "ideal"
     critical_reference: bool = False
@@ -95,6 +98,27 @@ class PlanContext:
             for c in contingencies
         ]
         return dict(zip((c.name for c in contingencies), self.run_map(check, jobs)))
+
+    def simulable(self, contingencies) -> tuple:
+        """The contingencies whose fault can be simulated without storage while it is on
+        for up to the search limit (`stabctl.placement.evaluation.simulable`, one short
+        run each, in parallel); the others go to `not_simulable` with the failure's
+        message."""
+        jobs = [
+            {
+                "case": self.case,
+                "fault": fault_inputs(c.fault),
+                "t_max": self.t_max,
+                "load": c.load,
+                **self.model.to_inputs(),
+            }
+            for c in contingencies
+        ]
+        out = self.run_map(simulable, jobs)
+        for c, o in zip(contingencies, out):
+            if o["failure"] is not None:
+                self.not_simulable[c.name] = o["failure"]
+        return tuple(c for c in contingencies if c.name not in self.not_simulable)
 
     def priced(self, mwh_per_mw) -> tuple:
         """Sites whose cost per MW includes their energy at mwh_per_mw (MWh/MW)."""

@@ -31,6 +31,7 @@ from stabctl.stability.cct import (
     critical_clearing_time,
     fault_inputs,
     fault_of_inputs,
+    fault_on_failure,
 )
 from stabctl.stability.sime import (
     clearing_energy_rate,
@@ -244,6 +245,27 @@ def check(job: dict) -> dict:
     fleet = _fleet(job, ctrl)
     out = _check_run(sim, fault, fleet, float(job["t_clear"]), job["sites"], ctrl)
     return {**out, "n_simulations": sim.n_runs}
+
+
+def simulable(job: dict) -> dict:
+    """Whether a contingency can be simulated without storage: its fault held on for the
+    search limit, to its clearing (`stabctl.stability.cct.fault_on_failure`; a worker
+    job, JSON-able in and out).
+
+    Parameters
+    ----------
+    job : dict
+        case, fault (`fault_inputs`), t_max (s: how long the fault is held on),
+        conventions, h (None: the default), load (load level, default 1).
+
+    Returns
+    -------
+    dict
+        {"failure": the failure's message or None, "n_simulations": 1}.
+    """
+    sim = cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
+    failure = fault_on_failure(sim, fault_of_inputs(job["fault"]), float(job["t_max"]))
+    return {"failure": failure, "n_simulations": 1}
 
 
 #: the critical groups a worker has found (`_law`), by case content (at its load level),

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError, counted
+from stabctl.errors import InputError, NumericalInstabilityError, SimulationError, counted
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
 from stabctl.placement.evaluation import TARGET_SLACK_S, VerifyOptions
@@ -74,7 +74,9 @@ class PlanResult:
     uniform, alone: the references when asked (`least_uniform`, `faults_alone`); half_step: the
     tightest contingencies again at half the step (`half_step`) when asked; out_of_scope:
     contingencies unstable when cleared at once; infeasible, set_aside: the proofs and
-    names of those set aside as infeasible.
+    names of those set aside as infeasible; not_simulable: name -> why of those set aside
+    as not simulable without storage (their fault fails while on: `PlanOptions.
+    drop_infeasible`).
     """
 
     case: str
@@ -93,6 +95,7 @@ class PlanResult:
     out_of_scope: list = field(default_factory=list)
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
+    not_simulable: dict = field(default_factory=dict)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
     half_step: dict | None = None
@@ -132,6 +135,7 @@ class PlanResult:
             "out_of_scope": self.out_of_scope,
             "infeasible": self.infeasible,
             "set_aside": self.set_aside,
+            "not_simulable": self.not_simulable,
             "contingencies": self.contingencies,
             "rounds": self.rounds,
             "n_simulations": self.n_simulations,
@@ -183,8 +187,11 @@ class PlanOptions:
         are infeasible unless storage makes the trip alone stable.
     drop_infeasible : bool
         A contingency proven infeasible (named by `InfeasibleError`) is set aside, listed
-        in `PlanResult.infeasible`, and the others are planned for; default False: the
-        error is raised.
+        in `PlanResult.infeasible`, and the others are planned for; so is one whose fault
+        cannot be simulated without storage while it is on, in a case with converters
+        (one run each with the fault held on for the search limit first:
+        `stabctl.stability.cct.fault_on_failure`), listed in `PlanResult.not_simulable`.
+        Default False: the error is raised.
     half_step_n : int
         Also simulate the half_step_n contingencies of least clearing margin again at
         half the integration step (`half_step`); default 0: not done.
@@ -261,6 +268,22 @@ def plan(
     levels = _load_levels(o.load_levels)
     freq_hz, sites = _case_at_levels(case, study.model, levels, study.sites)
     say = Heartbeat(progress or logger.info)
+    try:
+        result = _planned(case, faults, requirement, o, study, say, freq_hz, sites, levels)
+    except SimulationError as exc:
+        if o.drop_infeasible or isinstance(exc, NumericalInstabilityError):
+            raise
+        raise type(exc)(
+            f"{exc}; a plan with --set-aside-infeasible (PlanOptions.drop_infeasible) sets "
+            "aside a contingency whose fault cannot be simulated without storage",
+            result=exc.result,
+        ) from exc
+    result.wall_time_s = time.perf_counter() - wall
+    return result
+
+
+def _planned(case, faults, requirement, o: PlanOptions, study, say, freq_hz, sites, levels):
+    """`plan`'s rounds, references and result (its wall time not yet set)."""
     with _pool(study) as pool_map, say:
         pl = PlanContext(
             case,
@@ -288,6 +311,7 @@ def plan(
         result.out_of_scope, result.load_levels = sorted(out), levels
         result.requirement = describe(requirement, o.overrides)
         result.infeasible, result.set_aside = list(pl.infeasible), list(pl.set_aside)
+        result.not_simulable = dict(pl.not_simulable)
         kept = {r["name"] for r in result.contingencies}
         _references(
             pl,
@@ -298,7 +322,6 @@ def plan(
             o,
         )
     result.n_simulations = pl.n_runs
-    result.wall_time_s = time.perf_counter() - wall
     return result
 
 
@@ -329,11 +352,16 @@ def _contingencies(
     """Every fault at every load level with its required clearing time
     (`contingencies_of`); where a requirement is a CCT gain, the CCTs without storage of
     every contingency are simulated first (into pl.base)."""
+    every = contingencies_of(faults, Requirement(cct_s=pl.t_max), freq_hz, pl.tol, levels)
+    if pl.drop_infeasible:
+        _set_aside_not_simulable(pl, every)
+    every = tuple(c for c in every if c.name not in pl.not_simulable)
     if requirement.needs_base or any(r.needs_base for r in (overrides or {}).values()):
-        every = contingencies_of(faults, Requirement(cct_s=pl.t_max), freq_hz, pl.tol, levels)
         pl.say(f"CCT without storage of {counted(len(every), 'contingency', 'contingencies')}")
         pl.add_base(every, pl.brackets, kw)
-    cons = contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base)
+    cons = contingencies_of(
+        faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base, pl.not_simulable
+    )
     _check_search_limit(pl, cons, requirement, overrides)
     held = [c.name for c in cons if _held_at_limit(pl, c, overrides, requirement)]
     if held:
@@ -343,6 +371,26 @@ def _contingencies(
             f"gain a search can show), held to stay stable cleared there: {', '.join(held)}"
         )
     return cons
+
+
+def _set_aside_not_simulable(pl: PlanContext, every) -> None:
+    """Set aside (into pl.not_simulable) the contingencies whose fault cannot be
+    simulated without storage while it is on, up to the search limit (one short run
+    each: `PlanContext.simulable`), in a case with converters: current sources, whose
+    network equations can have no solution facing a fault of almost no impedance
+    (`stabctl.network.solution.no_solution_hint`).  Without converters the faulted
+    network of machines and loads is not run in advance."""
+    from stabctl.stability.cct import cached_simulator
+
+    if not len(cached_simulator(pl.case, pl.model).case.converters):
+        return
+    pl.say(
+        f"{counted(len(every), 'contingency', 'contingencies')}: each fault held on for the "
+        f"search limit t_max = {pl.t_max:g} s without storage (can it be simulated?)"
+    )
+    pl.simulable(every)
+    for name, why in pl.not_simulable.items():
+        pl.say(f"set aside, not simulable without storage: {name}: {why}")
 
 
 def _held_at_limit(pl: PlanContext, c, overrides, requirement: Requirement) -> bool:
@@ -632,9 +680,13 @@ def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
     binding of those that fail are the next active set.  Returns whether none fails."""
     if not st.cons:
         st.mw, st.verified = np.zeros_like(st.mw), True
+        aside = [f"as infeasible ({', '.join(pl.set_aside)})"] if pl.set_aside else []
+        if pl.not_simulable:
+            aside.append(f"as not simulable ({', '.join(pl.not_simulable)})")
         st.message = (
-            f"every contingency set aside as infeasible ({', '.join(pl.set_aside)}): "
-            "no storage to place"
+            f"every contingency set aside {' and '.join(aside)}: no storage to place"
+            if aside
+            else "no contingency left to plan for: no storage to place"
         )
         return True
     fails = _check_all(pl, st)

@@ -359,12 +359,14 @@ def contingencies_of(
     load_levels=(1.0,),
     overrides: dict | None = None,
     base: dict | None = None,
+    leave_out=(),
 ) -> tuple:
     """One `Contingency` per fault and load level with its required clearing time (s):
     the fault's override (by fault name) or `requirement`; base (name -> evaluation
     without storage) for gain requirements (a gain on a fault robust at the search limit
-    holds it stable cleared there: `Requirement.target_s`).  Raises InputError (a gain
-    without base)."""
+    holds it stable cleared there: `Requirement.target_s`); none for the names in
+    leave_out (contingencies set aside before).  Raises InputError (a gain without
+    base)."""
     overrides = overrides or {}
     out = []
     for f in faults:
@@ -372,6 +374,8 @@ def contingencies_of(
         req = overrides.get(name, requirement)
         for load in load_levels:
             c = Contingency(f, 1.0, float(load))
+            if c.name in leave_out:
+                continue
             ev = None if base is None else base.get(c.name)
             b, robust = (None, False) if ev is None else (ev["cct_s"], ev.get("above_t_max"))
             out.append(replace(c, target_cct_s=req.target_s(freq_hz, tol, b, bool(robust))))

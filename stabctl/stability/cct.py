@@ -1371,6 +1371,36 @@ def _outcome(fault: LineFault, t_clear: float, call) -> tuple[SimulationResult, 
         ) from exc
 
 
+def fault_on_failure(sim, fault: LineFault, t_on: float) -> str | None:
+    """Why a fault cannot be simulated without storage while it is on, or None.
+
+    One run with the fault on for ``t_on`` s (the longest a CCT search up to that limit
+    holds it on), up to its clearing: every shorter clearing shares this run's faulted
+    stretch, so a search's probe can fail while the fault is on (its model's limit, e.g.
+    a current source beside a bolted fault: `stabctl.network.solution`) only if this run
+    does.  A run whose machines separate first, or that fails after they did, is
+    simulable (its probes are unstable, `_outcome`).
+
+    Parameters
+    ----------
+    sim : Simulator
+    fault : LineFault
+    t_on : float
+        How long the fault is on, s (> 0).
+
+    Returns
+    -------
+    str or None
+        The failure's message, naming the fault; None when the run reaches the clearing.
+    """
+    t_end = fault.t_fault + t_on + sim.default_h
+    try:
+        _outcome(fault, t_on, lambda: sim.run(fault.events(t_on), t_end, stop_at_separation=True))
+    except SimulationError as exc:
+        return str(exc)
+    return None
+
+
 # -- CCT sweeps (jobs for stabctl.parallel) -------------------------------------------------
 
 

@@ -168,3 +168,38 @@ def test_place_takes_the_power_flow_without_q_limits_a_case_needs(tmp_path):
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert d["verified"] and d["settings"]["q_limits"] is False
+
+
+def test_a_contingency_that_cannot_be_simulated_is_set_aside_by_name(tmp_path):
+    """ANDES's Kundur system with a wind turbine: a bolted fault at bus 9, beside the
+    converter, leaves the network equations without a solution as soon as it is on (ANDES
+    stops there too: tests/io/test_andes.py::test_converter_case_bus_faults_match_andes,
+    whose stored ANDES run of bus 9 ends at the fault).  `place --set-aside-infeasible`
+    sets that contingency aside as not simulable, with the failure's words, and plans
+    for the other (verified); without the option the plan stops (exit 2) naming the
+    fault and the option."""
+    andes = pytest.importorskip("andes")
+    case = str(tmp_path / "kundur_wtdta1.json")
+    src = andes.get_case("kundur/kundur_wtdta1.xlsx")
+    res = CliRunner().invoke(main, ["import-andes", src, "-o", case, "--skip-unsupported"])
+    assert res.exit_code == 0, res.output
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n8,\n9,10\n")
+    args = ["place", case, "--faults", str(faults), "--target-cct-gain", "10"]
+    args += ["--no-q-limits", "--workers", "1"]
+    stopped = CliRunner().invoke(main, args)
+    assert stopped.exit_code == 2
+    assert "fault at bus 9 on line 9-10" in stopped.output
+    assert "--set-aside-infeasible" in stopped.output
+    res = CliRunner().invoke(main, [*args, "--set-aside-infeasible", "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert list(d["not_simulable"]) == ["9-10"]
+    assert "did not converge" in d["not_simulable"]["9-10"]
+    assert "current sources" in d["not_simulable"]["9-10"]
+    assert d["verified"] and [r["name"] for r in d["contingencies"]] == ["8"]
+    assert d["contingencies"][0]["met"] and not d["set_aside"]
+    text = CliRunner().invoke(main, [*args, "--set-aside-infeasible"])
+    assert text.exit_code == 0, text.output
+    assert "1 more set aside as not simulable, below" in text.output
+    assert "set aside as not simulable without storage: 9-10: fault at bus 9" in text.output
