@@ -55,6 +55,9 @@ if TYPE_CHECKING:
 ESTIMATORS = ("ideal", "raw", "kf", "ekf")
 #: how frames reach the controller (`LoopOptions.transport`)
 TRANSPORTS = ("process", "codec", "tcp")
+
+#: rows of a controller's record stacked into one array (`LoopController.row`)
+ROW_BLOCK = 4096
 #: trajectory handed to the controller at each frame (PMU estimation windows): the two
 #: windows a frame reads (`_tail_truth`) and one more of margin; a longer tail only costs time
 HISTORY_WINDOWS = 3
@@ -127,7 +130,8 @@ class LoopController:
         self.filter = _make_filter(estimator, self.models, settings)
         self.mode = np.zeros(len(devices), np.int64)
         self.held = np.full(self.models.n, np.nan)
-        self.rows: list = []
+        self.rows: list = []  # `row`s, and blocks of them
+        self._loose = 0  # rows appended since the last block
         #: frame -> frame as on the wire (transport "codec"), None: as measured
         self.wire: Callable | None = None
 
@@ -165,8 +169,19 @@ class LoopController:
         rel = np.nan_to_num(rel)
         self.mode = law.desired_modes(self.sa, self.mode, rel)
         f0 = self.case.freq_hz
-        self.rows.append((t_f, rel * f0, self.mode.copy(), np.asarray(speed) * f0))
+        self.rows.append(self.row(t_f, rel * f0, self.mode, np.asarray(speed) * f0))
+        self._loose += 1
+        if self._loose == ROW_BLOCK:  # a block of rows in one array (`row`)
+            self.rows[-ROW_BLOCK:] = [np.vstack(self.rows[-ROW_BLOCK:])]
+            self._loose = 0
         return self.mode
+
+    @staticmethod
+    def row(t_f: float, rel_hz, modes, freq_hz) -> np.ndarray:
+        """A row of `diagnostics` packed in one array (t, rel (n_mac,), modes (n_dev,),
+        freq (n_mac,)); `rows` holds such rows, every `ROW_BLOCK` of them stacked in
+        one array (a track of millions of frames keeps about 8 bytes a value)."""
+        return np.concatenate(([t_f], rel_hz, modes, freq_hz))
 
     def measure(self, t_f: float, partial: SimulationResult) -> Frame:
         """The PMUs' half: the measured frame at t_f, true values from the trajectory's
@@ -194,17 +209,10 @@ class LoopController:
         )
 
     def diagnostics(self) -> Diagnostics:
-        n = self.models.n
-        t, rel, modes, freq = (
-            (np.array(a) for a in zip(*self.rows))
-            if self.rows
-            else (
-                np.zeros(0),
-                np.zeros((0, n)),
-                np.zeros((0, self.mode.size), int),
-                np.zeros((0, n)),
-            )
-        )
+        n, m = self.models.n, self.mode.size
+        a = np.vstack(self.rows) if self.rows else np.zeros((0, 1 + 2 * n + m))
+        t, rel, freq = a[:, 0], a[:, 1 : 1 + n], a[:, 1 + n + m :]
+        modes = a[:, 1 + n : 1 + n + m].astype(np.int64)
         return Diagnostics(
             t=t,
             rel=rel,
@@ -506,7 +514,7 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         remote.rows[:0] = plant.rows  # the instants before a frame could be made
         return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
     nan = np.full(plant.models.n, np.nan)
-    plant.rows += [(t, nan, modes, nan) for t, modes in link.answers]
+    plant.rows += [plant.row(t, nan, modes, nan) for t, modes in link.answers]
     summary = {**link.stats().summary(), "dropped_peers": list(link.refused)}
     return ClosedLoopRun(res, plant.diagnostics(), summary)
 

@@ -53,6 +53,7 @@ adding PMUs at the end does not change the noise of the others.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -153,6 +154,51 @@ class Frame(NamedTuple):
         """The frame of the PMUs at indices cols only (a sequence of int)."""
         cols = list(cols)
         return Frame(self.t, *(x[cols] for x in self[1:]))
+
+
+@dataclass(frozen=True)
+class Frames(Sequence):
+    """Frames held column by column: a sequence of `Frame` (indexing makes each from
+    its rows, views of the arrays), at about 50 bytes per PMU and frame where a list of
+    Frame objects takes about 200 (a recording of millions of frames is tracked from
+    these, `stabctl.estimation.sources.merge`).
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (n_f,)
+        Time stamps, s.
+    valid : numpy.ndarray, shape (n_f, n_pmu), bool
+    v, i : numpy.ndarray, shape (n_f, n_pmu), complex
+        Phasors, pu (NaN where invalid).
+    freq, rocof : numpy.ndarray, shape (n_f, n_pmu)
+        Hz and Hz/s (NaN where invalid).
+    """
+
+    t: np.ndarray
+    valid: np.ndarray
+    v: np.ndarray
+    i: np.ndarray
+    freq: np.ndarray
+    rocof: np.ndarray
+
+    @classmethod
+    def missing(cls, n_f: int, n_pmu: int) -> Frames:
+        """n_f frames of n_pmu PMUs, every value missing (NaN, invalid), t zero."""
+        nan = np.full((n_f, n_pmu), np.nan)
+        return cls(np.zeros(n_f), np.zeros((n_f, n_pmu), bool), nan + 0j, nan + 0j, nan, nan.copy())
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return Frames(*(x[k] for x in self._columns()))
+        return Frame(
+            float(self.t[k]), self.valid[k], self.v[k], self.i[k], self.freq[k], self.rocof[k]
+        )
+
+    def _columns(self) -> tuple:
+        return (self.t, self.valid, self.v, self.i, self.freq, self.rocof)
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ import numpy as np
 from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.estimation.c37_tcp import hostport, port_number, split_hostport
-from stabctl.estimation.pmu import Frame
+from stabctl.estimation.pmu import Frame, Frames
 
 TCP = "tcp://"
 
@@ -112,8 +112,9 @@ class Received:
 
     Attributes
     ----------
-    frames : list of Frame
-        One per time stamp any stream sent, in order, one column per PMU of the run.
+    frames : Frames
+        One per time stamp any stream sent, in order, one column per PMU of the run
+        (held column by column).
     streams : int
         Streams merged.
     data_frames : int
@@ -144,7 +145,7 @@ class Received:
         filter predicting across it would give figures of no meaning.
     """
 
-    frames: list
+    frames: Frames
     streams: int
     data_frames: int
     absent: int
@@ -408,7 +409,7 @@ def read_frames(
         raise InputError(f"--source {source}: {exc}") from None
     if not received.frames:
         raise InputError(f"--source {source}: no data frame (a configuration frame only)")
-    if received.frames and not any(f.valid.any() for f in received.frames):
+    if received.frames and not received.frames.valid.any():
         raise InputError(
             f"--source {source}: every PMU value of its {len(received.frames)} frames is "
             f"missing or not used: {unused_values(received.flagged) or 'none flagged'}, "
@@ -537,7 +538,7 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
             c37.check_config(cfg2, cfg)
         except InputError as exc:
             raise InputError(f"stream {s + 1}: {exc}") from None
-        frames = []
+        frames = Frames.missing(len(data), len(cols))
         base = cfg2.get_time_base()
         for k, (d, leap) in enumerate(zip(data, c37.leap_offsets(data, cfg2))):
             try:
@@ -553,7 +554,9 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
                     "stamp): a configuration frame comes before the data it describes; a "
                     "clock or a time stamp is wrong"
                 )
-            frames.append(frame._replace(t=t))
+            frames.t[k] = t
+            for column, value in zip(frames._columns()[1:], frame[1:]):
+                column[k] = value
             flagged.update(why for why in c37.flags(cfg2, d) if why)
         # after the frames' own checks (`c37.check_data_frame`), as a receiver makes them
         check_order(data, cfg2, f"stream {s + 1}")
@@ -567,24 +570,40 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
     )
 
 
+def _stamps(frames: Frames) -> np.ndarray:
+    """The frames' time stamps in us (int64), the keys they are merged on."""
+    return np.round(frames.t * c37.TIME_BASE).astype(np.int64)
+
+
 def _unsent(streams, names) -> tuple:
-    """The `Unsent` time stamps of each of `streams` (each a list of `Frame`): those
-    another stream sent; refused if a stream shares none with the first (both sending)."""
-    stamps = [{round(f.t * c37.TIME_BASE): f.t for f in frames} for frames in streams]
+    """The `Unsent` time stamps of each of `streams` (each `Frames`): those another
+    stream sent; refused if a stream shares none with the first (both sending)."""
+    stamps = [_stamps(frames) for frames in streams]
     for s in range(1, len(stamps)):
-        if stamps[0] and stamps[s] and not stamps[0].keys() & stamps[s].keys():
-            t0, ts = min(stamps[0].values()), min(stamps[s].values())
+        if stamps[0].size and stamps[s].size and not np.intersect1d(stamps[0], stamps[s]).size:
+            t0, ts = streams[0].t.min(), streams[s].t.min()
             raise InputError(
                 f"{names[s]} shares no time stamp with {names[0]}: its first is "
                 f"{ts - t0:+.6f} s from {names[0]}'s (t = {ts:.6f} s and {t0:.6f} s, t = 0 "
                 "the earliest CFG-2's): their clocks disagree, or they are of other times"
             )
-    every = {k: t for own in stamps for k, t in own.items()}
+    every, at = _every_stamp(streams)
     out = []
     for name, own in zip(names, stamps):
-        if lack := sorted(every.keys() - own.keys()):
-            out.append(Unsent(name, len(lack), every[lack[0]], every[lack[-1]]))
+        lack = np.setdiff1d(every, own)
+        if lack.size:
+            first, last = at[np.searchsorted(every, lack[[0, -1]])]
+            out.append(Unsent(name, int(lack.size), float(first), float(last)))
     return tuple(out)
+
+
+def _every_stamp(streams) -> tuple[np.ndarray, np.ndarray]:
+    """(every time stamp any of `streams` (`Frames`) sent, us, sorted; its time, s: the
+    last stream's that sent it)."""
+    keys = np.concatenate([_stamps(f) for f in streams] or [np.zeros(0, np.int64)])
+    times = np.concatenate([f.t for f in streams] or [np.zeros(0)])
+    every, last = np.unique(keys[::-1], return_index=True)
+    return every, times[::-1][last]
 
 
 def check_order(data, cfg2, what: str) -> None:
@@ -617,43 +636,44 @@ def check_order(data, cfg2, what: str) -> None:
 
 
 def _by_time_stamp(n: int, parsed, rate: float) -> Received:
-    """Frames of every (columns, frames) stream filled in at their time stamps (us), the
+    """Frames of every (columns, `Frames`) stream filled in at their time stamps (us), the
     reporting instants no stream sent between them counted as gaps (`Received.gaps`):
     those of a gap of at most `FILL_S` s added as frames of missing values, a longer one
     a break (`Received.breaks`)."""
-    at = {round(f.t * c37.TIME_BASE): f.t for _, frames in parsed for f in frames}
-    stamps = sorted(at)
-    row = {stamp: k for k, stamp in enumerate(stamps)}
-    valid = np.zeros((len(stamps), n), bool)
-    came = np.zeros((len(stamps), n), bool)
-    v, i = (np.full((len(stamps), n), np.nan + 0j) for _ in range(2))
-    freq, rocof = (np.full((len(stamps), n), np.nan) for _ in range(2))
-    for cols, frames in parsed:
-        for f in frames:
-            k = row[round(f.t * c37.TIME_BASE)]
-            came[k, cols], valid[k, cols] = True, f.valid
-            v[k, cols], i[k, cols], freq[k, cols], rocof[k, cols] = f.v, f.i, f.freq, f.rocof
-    out: list[Frame] = []
-    gaps, breaks = [], []
+    stamps, at = _every_stamp([frames for _, frames in parsed])
+    lost = np.round(np.diff(at) * rate).astype(np.int64) - 1 if at.size else np.zeros(0, int)
+    if len(parsed) == 1 and not (lost > 0).any() and list(parsed[0][0]) == list(range(n)):
+        frames = parsed[0][1]  # one stream of every PMU, in order (`check_order`), whole
+        absent = int(np.sum(~frames.valid))
+        return Received(frames, 1, len(frames), absent, 0)
     fill = int(round(FILL_S * rate))
-    for k, s in enumerate(stamps):
+    filled = np.where((lost > 0) & (lost <= fill), lost, 0)
+    row = np.arange(at.size) + np.concatenate([[0], np.cumsum(filled)])  # each stamp's
+    out = Frames.missing(at.size + int(filled.sum()), n)
+    came = np.zeros(out.valid.shape, bool)
+    out.t[row] = at
+    for cols, frames in parsed:
+        rows = row[np.searchsorted(stamps, _stamps(frames))][:, None]
+        came[rows, cols] = True
+        for column, values in zip(out._columns()[1:], frames._columns()[1:]):
+            column[rows, cols] = values
+    gaps, breaks = [], []
+    for k in np.nonzero(lost > 0)[0]:
         # counted by the time between (t = 0, the CFG-2's stamp, need not be an instant)
-        if k and (lost := round((at[s] - at[stamps[k - 1]]) * rate) - 1) > 0:
-            gaps.append(Gap(at[stamps[k - 1]], at[s], lost, lost <= fill))
-            if lost <= fill:
-                before = at[stamps[k - 1]]
-                first = round(before * rate) + 1
-                off = before - (first - 1) / rate  # the instants' offset from k / rate
-                out += [missing_frame((first + j) / rate + off, n) for j in range(lost)]
-            else:
-                breaks.append(len(out))
-        out.append(Frame(at[s], valid[k], v[k], i[k], freq[k], rocof[k]))
+        before, many = float(at[k]), int(lost[k])
+        gaps.append(Gap(before, float(at[k + 1]), many, many <= fill))
+        if many <= fill:
+            first = round(before * rate) + 1
+            off = before - (first - 1) / rate  # the instants' offset from k / rate
+            out.t[row[k] + 1 : row[k + 1]] = (first + np.arange(many)) / rate + off
+        else:
+            breaks.append(int(row[k + 1]))
     return Received(
         out,
         len(parsed),
         sum(len(f) for _, f in parsed),
-        int(np.sum(came & ~valid)),
-        int(np.sum(~came)) + n * sum(g.frames for g in gaps if g.filled),
+        int(np.sum(came & ~out.valid)),
+        int(np.sum(~came)),
         gaps=tuple(gaps),
         breaks=tuple(breaks),
     )

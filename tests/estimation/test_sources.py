@@ -291,3 +291,34 @@ def test_a_port_range_is_one_server_per_port():
 def test_bad_sources_are_named(text, needle):
     with pytest.raises(InputError, match=needle):
         sources.parse_source(text)
+
+
+def test_a_long_track_keeps_its_frames_and_rows_in_blocks_frame_for_frame(kundur_run):
+    """A recording of 2 ROW_BLOCK + 3 frames (whose rows the controller stacks in blocks)
+    read back as one column-held `Frames`: each frame equals the one recorded (FREQ sent
+    in whole mHz), and the raw estimator's track, which holds each machine's measured
+    frequency, gives every frame's own time stamp and frequency, in order, across the
+    blocks' seams."""
+    case, _res, pmus, _drawn = kundur_run
+    from stabctl.estimation import closed_loop as cl
+
+    n = 2 * cl.ROW_BLOCK + 3
+    k = np.arange(n)
+    freq = case.freq_hz + 1e-3 * np.round(300 * np.sin(k / 50))[:, None] * np.ones(len(pmus))
+    one = np.ones(len(pmus), complex)
+    frames = [
+        pm.Frame(j / 60, np.ones(len(pmus), bool), one, one, freq[j], np.zeros(len(pmus)))
+        for j in range(n)
+    ]
+    cfg = c37.stream_config(case, pmus, 60)
+    data = [c37.data_frame(cfg, c37.config_frame(cfg), f) for f in frames]
+    got = sources.merge(case, pmus, 60, [(c37.config_frame(cfg), data)])
+    assert isinstance(got.frames, pm.Frames) and len(got.frames) == n
+    assert got.missing == got.absent == 0 and not got.gaps
+    assert got.frames[-1].t == pytest.approx((n - 1) / 60, abs=1e-6)
+    assert np.allclose(got.frames[5:9].freq, freq[5:9], atol=5e-4)
+    ctrl = cl.LoopController(case, (), "raw", SETTINGS, 0, 1.0)
+    d = cl.track(ctrl, got.frames)
+    assert len(ctrl.rows) == 2 + 3  # two blocks, three rows
+    assert np.array_equal(d.t, got.frames.t)
+    assert np.allclose(d.freq, got.frames.freq, rtol=1e-14, atol=0)  # f / f0 * f0
