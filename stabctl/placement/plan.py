@@ -271,7 +271,11 @@ def plan(
     try:
         result = _planned(case, faults, requirement, o, study, say, freq_hz, sites, levels)
     except SimulationError as exc:
-        if o.drop_infeasible or isinstance(exc, NumericalInstabilityError):
+        if (
+            o.drop_infeasible
+            or isinstance(exc, NumericalInstabilityError)
+            or not _converters(case, study.model)
+        ):
             raise
         raise type(exc)(
             f"{exc}; a plan with --set-aside-infeasible (PlanOptions.drop_infeasible) sets "
@@ -373,6 +377,13 @@ def _contingencies(
     return cons
 
 
+def _converters(case: str, model: ModelOptions) -> bool:
+    """Whether the case has converters (current sources: `_set_aside_not_simulable`)."""
+    from stabctl.stability.cct import cached_simulator
+
+    return bool(len(cached_simulator(case, model).case.converters))
+
+
 def _set_aside_not_simulable(pl: PlanContext, every) -> None:
     """Set aside (into pl.not_simulable) the contingencies whose fault cannot be
     simulated without storage while it is on, up to the search limit (one short run
@@ -380,9 +391,7 @@ def _set_aside_not_simulable(pl: PlanContext, every) -> None:
     network equations can have no solution facing a fault of almost no impedance
     (`stabctl.network.solution.no_solution_hint`).  Without converters the faulted
     network of machines and loads is not run in advance."""
-    from stabctl.stability.cct import cached_simulator
-
-    if not len(cached_simulator(pl.case, pl.model).case.converters):
+    if not _converters(pl.case, pl.model):
         return
     pl.say(
         f"{counted(len(every), 'contingency', 'contingencies')}: each fault held on for the "
@@ -548,7 +557,15 @@ def _generate(
     """The rounds of constraint generation (module docstring), then the energies."""
     st = _Rounds(cons, checks, np.zeros(len(pl.sites)))
     if not failing:
-        st.verified, st.message = True, "every contingency is stable without storage"
+        st.verified = True
+        st.message = (
+            "every contingency is stable without storage"
+            if cons
+            else f"every contingency set aside as not simulable ({', '.join(pl.not_simulable)})"
+            ": no storage to place"
+            if pl.not_simulable
+            else "no contingency left to plan for: no storage to place"
+        )
     else:
         if not pl.brackets:  # no screening to rank by: simulate every failing one
             pl.add_base(failing, None, kw)

@@ -203,3 +203,7 @@ def test_a_contingency_that_cannot_be_simulated_is_set_aside_by_name(tmp_path):
     assert text.exit_code == 0, text.output
     assert "1 more set aside as not simulable, below" in text.output
     assert "set aside as not simulable without storage: 9-10: fault at bus 9" in text.output
+    faults.write_text("bus,far_bus\n9,10\n")
+    none = CliRunner().invoke(main, [*args, "--set-aside-infeasible"])
+    assert none.exit_code == 0, none.output
+    assert "NOTHING TO PLACE (every contingency set aside as not simulable (9-10)" in none.output
