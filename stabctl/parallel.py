@@ -22,14 +22,17 @@ A job that raises a `stabctl.errors.Verdict` (a robust fault, an N-1 insecure on
 recorded as that verdict, not as a failure, with the runs that reached it when the study
 counted them (``n_simulations``) and its islanding, if any.  A job that raises anything
 else is recorded as failed with the exception's type and message (and the traceback for
-anything but a stabctl error), never dropped; so is a job whose worker
-process died in a local pool.  On Dask a job whose worker died runs again on another
-worker (the scheduler's ``distributed.scheduler.allowed-failures``, default 3) and is
-recorded failed only when it killed a worker each time (KilledWorker); each job is
-released once recorded, so that a worker's death makes no finished job run again.  Jobs
-a Dask cluster could not run (its scheduler gone, or no worker left for
-DASK_NO_WORKER_S) are not recorded: `SweepIncomplete` names them, and the same call runs
-them.  Rerunning with the same file skips the keys already there (failed ones too, unless
+anything but a stabctl error), never dropped. A worker process that dies in a local pool
+(killed, out of memory) breaks the pool and every job not finished with it: they run
+again on a new pool, those then running first and each alone, and a job whose worker
+dies again alone is recorded failed; a job never run is never recorded (`_local`). On
+Dask a job whose worker died runs again on another worker (the scheduler's
+``distributed.scheduler.allowed-failures``, default 3) and is recorded failed only when
+it killed a worker each time (KilledWorker); each job is released once recorded, so that
+a worker's death makes no finished job run again. Jobs a Dask cluster could not run (its
+scheduler gone, or no worker left for DASK_NO_WORKER_S) are not recorded:
+`SweepIncomplete` names them, and the same call runs them.
+Rerunning with the same file skips the keys already there (failed ones too, unless
 `retry_failed`); the last line of a key wins.  One sweep per file at a time: a sweep
 holds the file's lock (`stabctl.locking.exclusive`) from its repair to its last line, and
 a second one is refused with the holder's pid.  A sweep's Dask client (and the local
@@ -39,6 +42,7 @@ cluster of ``scheduler="local"``) is closed when the sweep returns or raises, ho
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import io
 import json
@@ -60,7 +64,8 @@ import traceback
 import warnings
 from collections.abc import Callable, Generator, Iterable, Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from contextlib import ExitStack, closing, contextmanager
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import ExitStack, closing, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeGuard
@@ -1164,26 +1169,101 @@ class _appender:
 
 def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, None]:
     """Records in completion order from a process pool: `pool` if given, else one of
-    `workers` processes for these jobs (in this process if workers == 1)."""
-    if pool is not None:
-        yield from _completed(pool, jobs)
-        return
-    workers = min(workers or default_workers(), len(jobs))
-    if workers == 1:
+    `workers` processes for these jobs (in this process if workers == 1).
+
+    A pool broken by a worker that died (killed, out of memory: every job not finished
+    is lost with it) is replaced by a new one for those jobs, up to `POOL_RESTARTS`
+    times (beyond, they are not recorded: `SweepIncomplete`, and the same command runs
+    them).  The jobs that were running when it broke run again first, each alone: one
+    whose worker dies again is recorded failed (as Dask records a job that killed its
+    workers, KilledWorker); a job that never ran is never recorded."""
+    n = min(workers or default_workers(), len(jobs))
+    if pool is None and n == 1:
         for j in jobs:
             yield run_job(j.func, j.key, j.inputs)
         return
-    with pooled(workers) as pool:
-        yield from _completed(pool, jobs)
+    left, restarts = list(jobs), 0
+    with tempfile.TemporaryDirectory(prefix="stabctl-running-") as marks:
+        while left:
+            given = pool is not None and not getattr(pool, "_broken", False)
+            with nullcontext(pool) if given else pooled(n) as p:
+                left, running = yield from _completed(p, left, marks)
+            if not left:
+                return
+            restarts += 1
+            if restarts > POOL_RESTARTS:
+                keys = [j.key for j in left]
+                more = f" and {len(keys) - 3} more" if len(keys) > 3 else ""
+                raise SweepIncomplete(
+                    f"{len(left)} of {len(jobs)} jobs not run: worker processes died "
+                    f"{restarts} times (killed, or out of memory; not run: "
+                    f"{', '.join(keys[:3])}{more}); the finished records are kept, and the "
+                    "same command runs the rest"
+                )
+            warnings.warn(
+                f"a worker process died (killed, or out of memory): {len(left)} job(s) not "
+                f"finished run again, the {len(running)} then running each alone first "
+                f"(pool restart {restarts} of at most {POOL_RESTARTS})",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            for j in running:
+                with pooled(1) as alone:
+                    again, _ = yield from _completed(alone, [j], marks)
+                if again:
+                    yield _lost(j, BrokenProcessPool(_DIED_ALONE))
+            left = [j for j in left if not any(j is r for r in running)]
 
 
-def _completed(pool, jobs: list) -> Generator[dict, None, None]:
-    futures = {pool.submit(run_job, j.func, j.key, j.inputs): j for j in jobs}
+#: why a job is recorded failed when its worker dies again running it alone (`_local`)
+_DIED_ALONE = (
+    "its worker process died while it ran, then again when it ran alone (killed, or out of memory)"
+)
+
+
+#: times a sweep replaces a process pool broken by a worker's death (`_local`)
+POOL_RESTARTS = 5
+
+
+def _marked(marks: str, index: int, func, key: str, inputs) -> dict:
+    """`run_job` in a worker, its job's index written to a file of the worker's pid in
+    the directory `marks` while it runs (left there if the worker dies: `_completed`)."""
+    path = os.path.join(marks, str(os.getpid()))
+    with open(path, "w") as fh:
+        fh.write(str(index))
+    rec = run_job(func, key, inputs)
+    os.unlink(path)
+    return rec
+
+
+def _completed(pool, jobs: list, marks: str) -> Generator[dict, None, tuple[list, list]]:
+    """Records of `jobs` run on `pool` (`_marked` in `marks`), in completion order;
+    returns (the jobs not finished when the pool broke, none recorded; those of them
+    that were running then)."""
+    futures: dict = {}  # future -> index of its job
+    for k, j in enumerate(jobs):
+        try:
+            futures[pool.submit(_marked, marks, k, j.func, j.key, j.inputs)] = k
+        except BrokenProcessPool:
+            break
+    broken = set(range(len(futures), len(jobs)))  # not sent
     for fut in as_completed(futures):
         try:
-            yield fut.result()
-        except Exception as exc:  # noqa: BLE001 - e.g. BrokenProcessPool
-            yield _lost(futures[fut], exc)
+            rec = fut.result()
+        except BrokenProcessPool:
+            broken.add(futures[fut])
+            continue
+        except Exception as exc:  # noqa: BLE001 - the job could not be sent or returned
+            rec = _lost(jobs[futures[fut]], exc)
+        yield rec
+    running = set()
+    for name in os.listdir(marks):  # the workers that died, and those stopped with them
+        path = os.path.join(marks, name)
+        with contextlib.suppress(OSError, ValueError):
+            running.add(int(Path(path).read_text()))
+        with contextlib.suppress(OSError):
+            os.unlink(path)
+    return [jobs[k] for k in sorted(broken)], [jobs[k] for k in sorted(running & broken)]
 
 
 #: seconds the first contact with a Dask scheduler may take before it is given up

@@ -80,6 +80,22 @@ def crash(inputs):
     os._exit(x)  # the worker process dies (as on a segfault or OOM kill)
 
 
+def killed_once(inputs):
+    """Killed (SIGKILL, as the out-of-memory killer does) the first time it runs, while
+    a sibling job sleeps; done the next time (a file in inputs["dir"] remembers)."""
+    flag = Path(inputs["dir"]) / f"killed-{inputs['x']}"
+    if not flag.exists():
+        flag.touch()
+        time.sleep(0.5)
+        os.kill(os.getpid(), signal.SIGKILL)
+    return {"y": inputs["x"]}
+
+
+def slow_square(inputs):
+    time.sleep(0.2)
+    return square(inputs)
+
+
 def simulator_identity(inputs):
     return {"id": id(cached_simulator(inputs["case"])), "pid": os.getpid()}
 
@@ -157,6 +173,25 @@ def test_a_dying_worker_is_recorded_not_dropped(tmp_path):
     assert died["status"] == "failed" and died["error"].startswith("worker failed: Broken")
     again = run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False, retry_failed=True)
     assert all(r["status"] == "ok" for r in again.records.values())
+
+
+def test_a_worker_killed_once_loses_no_job_and_records_none_it_did_not_run(tmp_path):
+    """A worker killed mid-sweep breaks the process pool, and every job not finished is
+    lost with it: they run again on a new pool (said in a warning), the ones then running
+    alone first; no job is recorded failed, each once, every result as its job gives
+    it (the sweep's records against a run without the kill)."""
+    out = tmp_path / "kill.jsonl"
+    jobs = [Job("killed_once/1", killed_once, {"x": 1, "dir": str(tmp_path)})]
+    jobs += jobs_of(slow_square, *range(2, 12))
+    with pytest.warns(RuntimeWarning, match="a worker process died"):
+        rep = run_sweep(jobs, out, workers=2, progress=False)
+    assert (rep.ran, rep.failed) == (11, 0)
+    recs = lines(out)
+    assert sorted(r["key"] for r in recs) == sorted(j.key for j in jobs)  # each once
+    assert all(r["status"] == "ok" for r in recs)
+    assert all(
+        r["result"]["y"] == r["inputs"]["x"] ** 2 for r in recs if r["key"] != "killed_once/1"
+    )
 
 
 def test_simulator_built_once_per_case_per_process(tmp_path):
