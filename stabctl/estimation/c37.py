@@ -907,11 +907,12 @@ LEAP_PENDING, LEAP_OCCURRED, LEAP_DELETED = 0x10, 0x20, 0x40
 def leap_offsets(data, cfg2) -> np.ndarray:
     """The seconds a positive leap second puts between each data frame's time stamp and
     the time elapsed: SOC counts UTC seconds without leap seconds (C37.118.2-2011 6.2.2),
-    so across an inserted leap second one second's SOC comes twice.  A frame stamped at
-    or before the one before it, by less than a second, where the frame before flags a
-    leap second pending or the frame a leap second occurred (FRACSEC's time quality,
-    Table 3; neither flagging a deleted one) is 1 s later than stamped, as is every frame
-    after it.
+    so across an inserted leap second one second's SOC comes twice.  A frame stamped in
+    the same second (SOC) as the one before it, earlier by more than half a second (the
+    second's SOC again from its rollover: a frame repeated, swapped or replayed steps back
+    less), where the frame before flags a leap second pending or the frame a leap second
+    occurred (FRACSEC's time quality, Table 3; neither flagging a deleted one), is 1 s
+    later than stamped, as is every frame after it.
 
     Parameters
     ----------
@@ -936,7 +937,10 @@ def leap_offsets(data, cfg2) -> np.ndarray:
     back = np.diff(stamps)
     flagged = (quality[:-1] & LEAP_PENDING != 0) | (quality[1:] & LEAP_OCCURRED != 0)
     inserted = (quality[:-1] | quality[1:]) & LEAP_DELETED == 0
-    leap = (back <= 0) & (back > -base) & flagged & inserted
+    # the second's SOC again, from its rollover: within half a second of the frame before
+    # once the second is added (a repeated or swapped frame steps back less)
+    repeat = (stamps[1:] // base == stamps[:-1] // base) & (back + base <= base // 2)
+    leap = (back <= 0) & (back > -base) & repeat & flagged & inserted
     return np.concatenate([[0], np.cumsum(leap)])
 
 
@@ -1041,8 +1045,10 @@ def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
         leap = any(d[10] & (LEAP_PENDING | LEAP_OCCURRED) for d in data[max(k - 1, 0) : k + 1])
         why = (
             ": its FRACSEC flags a leap second (C37.118.2-2011 Table 3), but the stamps are "
-            "not one second inserted (a SOC repeated, going back less than 1 s): a deleted "
-            "one, or more than the leap second, is not read across; split the stream there"
+            "not one second inserted (the second's SOC again from its rollover, more than "
+            "half a second and less than 1 s back): a frame repeated or out of order, a "
+            "deleted second, or more than the leap second, is not read across; split the "
+            "stream there"
             if leap
             else ""
         )

@@ -217,7 +217,8 @@ def test_a_leap_second_is_read_across_in_order(wire, tmp_path):
     second is the leap second, so the frames from it on are 1 s later than stamped.  The
     track is the one of the same frames stamped without the leap (row for row), and the
     recording passes the order check; a stream that goes back more than the second, or
-    flags a deleted second, is still refused naming the leap-second flags."""
+    flags a deleted second, is still refused naming the leap-second flags, and so is a
+    flagged stream whose frames repeat or go back within a second."""
     from stabctl.estimation.sources import check_order
 
     _, head, body = wire
@@ -240,6 +241,21 @@ def test_a_leap_second_is_read_across_in_order(wire, tmp_path):
         assert res.exit_code == 2, res.output
         assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
         assert "its FRACSEC flags a leap second (C37.118.2-2011 Table 3)" in res.stderr
+    # flags set, but a frame repeated, two swapped, or ten sent again within a second:
+    # not the second's SOC again from its rollover (they were read as a leap: every frame
+    # after them 1 s late and a gap of 59 frames made up)
+    flagged = [_quality(f, 0x10) for f in body]
+    occurred = [_quality(f, 0x20) for f in body]
+    for frames, k, how in (
+        (flagged[:51] + flagged[50:], 51, "repeats"),
+        (occurred[:30] + [occurred[31], occurred[30]] + occurred[32:], 31, "goes back from"),
+        (flagged[:60] + flagged[50:], 60, "goes back from"),
+    ):
+        assert list(c37.leap_offsets(frames, cfg2)) == [0] * len(frames)
+        res = _track(tmp_path, head, frames)
+        assert res.exit_code == 2, res.output
+        assert f"data frame {k + 1} {how} the time stamp of frame {k}" in res.stderr
+        assert "a frame repeated or out of order" in res.stderr
 
 
 def test_one_frame_tracked_is_said_in_the_singular(wire, tmp_path):
