@@ -667,7 +667,9 @@ def track(
         )
         raise
     _write_track(out_path, ctrl, d, esd_pct is not None)
-    worst = np.unravel_index(np.argmax(np.abs(d.rel)), d.rel.shape) if d.rel.size else None
+    rel = np.where(d.formed[:, None], np.abs(d.rel), -1.0)
+    worst = np.unravel_index(np.argmax(rel), rel.shape) if d.formed.any() else None
+    unformed = d.unformed([p.label for p in ctrl.pmus])
     click.echo(
         f"tracked {_instants(got)} from {src} with {estimator}"
         + (
@@ -676,6 +678,7 @@ def track(
             else f": largest |f_i - f_COI| {1e3 * abs(d.rel[worst]):.1f} mHz "
             f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
         )
+        + (f"; {unformed}" if unformed else "")
         + (f"; {counted(d.starts, 'ESD start')}" if esd_pct is not None else "")
         + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + (f"; {gaps}" if (gaps := sources.gap_line(got)) else "")
@@ -717,7 +720,8 @@ def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:
     labels = [p.label for p in ctrl.pmus]
     head = ["t_s", *(f"f_{x}_hz" for x in labels), "f_coi_hz"]
     head += [f"rel_{x}_mhz" for x in labels]
-    cols = [d.t[:, None], d.freq, (d.freq - d.rel)[:, :1], 1e3 * d.rel]
+    rel = np.where(d.formed[:, None], d.rel, np.nan)  # none without every machine's speed
+    cols = [d.t[:, None], d.freq, (d.freq - rel)[:, :1], 1e3 * rel]
     if with_modes:
         buses = ctrl.case.buses.number[ctrl.sa.bus]
         head += [f"mode_esd{k + 1}_bus{int(b)}" for k, b in enumerate(buses)]

@@ -694,9 +694,11 @@ def control(
     got = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
     d = ctrl.diagnostics()
     flagged, gaps = unused_values(got.flagged), gaps_line(got.gaps, " (no frame sent)")
+    unformed = d.unformed([p.label for p in ctrl.pmus])
     click.echo(
         f"controller ({estimator}): answered {counted(got.frames, 'frame')} from {address}, "
         f"{counted(d.starts, 'ESD start')}"
+        + (f"; {unformed}" if unformed else "")
         + (f"; {flagged}" if flagged else "")
         + (f"; {gaps}" if gaps else "")
     )

@@ -86,6 +86,27 @@ class Diagnostics:
         m = self.modes
         return int(((m[1:] != 0) & (m[1:] != m[:-1])).sum())
 
+    @property
+    def formed(self) -> np.ndarray:
+        """(n_f,) bool: whether a frame's relative speeds could be formed, every machine's
+        speed estimated (a COI needs them all); where not, `rel` holds 0, on which the
+        law keeps the devices idle."""
+        return np.isfinite(self.freq).all(axis=1)
+
+    def unformed(self, labels) -> str:
+        """The words for the frames without relative speeds (`formed`), naming the
+        machines (their PMU labels, `labels`) whose speed no frame had; '' if every frame
+        has them."""
+        lost = ~self.formed
+        if not lost.any():
+            return ""
+        never = [x for x, ok in zip(labels, np.isfinite(self.freq).any(axis=0)) if not ok]
+        which = f"; no estimate ever of {', '.join(never)}" if never else ""
+        return (
+            f"no relative speed in {lost.sum()} of {lost.size} frames (a COI needs an "
+            f"estimate of every machine{which}): the devices idle there"
+        )
+
 
 class LoopController:
     """The `decide(t_f, partial)` callback of `Simulator.run_commanded` (`CommandFrames`).

@@ -464,3 +464,28 @@ def test_until_takes_the_frames_up_to_it_not_one_past_a_gap(wire, tmp_path):
     for until, n in (("0.5", 31), ("0.51", 32)):
         res = CliRunner().invoke(main, [*args, "--until", until])
         assert res.exit_code == 0 and res.stdout.startswith(f"tracked {n} frames"), res.output
+
+
+def test_a_machine_never_measured_leaves_no_relative_speed_not_zero(wire, tmp_path):
+    """A recording whose first PMU says in every frame that its data are absent (STAT
+    bits 15-14 = 10): a COI needs every machine's speed, so no relative speed can be
+    formed.  The track said "largest |f_i - f_COI| 0.0 mHz" and wrote 0 in every
+    relative speed; it now writes none (nan, as the COI) beside the other machines'
+    speeds, and says why, naming the machine."""
+    _, head, body = wire
+    absent = [
+        _crc(f[:14] + (int.from_bytes(f[14:16], "big") | 0x8000).to_bytes(2, "big") + f[16:])
+        for f in body
+    ]
+    res = _track(tmp_path, head, absent)
+    assert res.exit_code == 0, res.output
+    assert "largest" not in res.stdout
+    assert (
+        f"no relative speed in {len(body)} of {len(body)} frames (a COI needs an estimate "
+        "of every machine; no estimate ever of B1:G1): the devices idle there" in res.stdout
+    )
+    rows = np.genfromtxt(tmp_path / "t.csv", delimiter=",", names=True)
+    assert np.isnan(rows["f_B1G1_hz"]).all() and np.isfinite(rows["f_B2G2_hz"]).all()
+    assert np.isnan(rows["f_coi_hz"]).all() and np.isnan(rows["rel_B2G2_mhz"]).all()
+    whole = _track(tmp_path, head, body)
+    assert "no relative speed" not in whole.stdout and _largest_mhz(whole) > 100
