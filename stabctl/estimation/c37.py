@@ -590,6 +590,55 @@ def _frequency(b: Block, data: bytes, at: int) -> tuple[float, float]:
     return f, dfreq
 
 
+#: bounds beyond which a received value is no measurement (a byte error the CRC did not
+#: catch, a PMU's fault): a voltage magnitude (pu of the bus's rated kV: insulation fails
+#: far below), a current magnitude (pu on the system base: 100 GW on 100 MVA), a ROCOF
+#: (Hz/s: the span of the integer DFREQ, C37.118.2-2011 Table 6)
+V_PLAUSIBLE_PU = 3.0
+I_PLAUSIBLE_PU = 1000.0
+ROCOF_PLAUSIBLE_HZ_S = 327.67
+#: the reason `plausible` gives
+IMPLAUSIBLE = (
+    f"|V| > {V_PLAUSIBLE_PU:g} pu, |I| > {I_PLAUSIBLE_PU:g} pu or |ROCOF| > "
+    f"{ROCOF_PLAUSIBLE_HZ_S:g} Hz/s"
+)
+
+
+def plausible(frame: Frame) -> tuple[Frame, list[str]]:
+    """A parsed frame (`parse_frame`) with each PMU whose values no measurement gives
+    (beyond `V_PLAUSIBLE_PU`, `I_PLAUSIBLE_PU`, `ROCOF_PLAUSIBLE_HZ_S`) made invalid, its
+    values NaN, as a STAT saying absent data makes them: one such sample (1e30 pu, or a
+    voltage a million times its value) drove an estimator to 1e28 Hz.
+
+    Parameters
+    ----------
+    frame : Frame
+
+    Returns
+    -------
+    (Frame, list of str)
+        The frame, and per PMU `IMPLAUSIBLE` or '' (for `Received.flagged`).
+    """
+    with np.errstate(invalid="ignore"):
+        bad = frame.valid & (
+            (np.abs(frame.v) > V_PLAUSIBLE_PU)
+            | (np.abs(frame.i) > I_PLAUSIBLE_PU)
+            | (np.abs(frame.rocof) > ROCOF_PLAUSIBLE_HZ_S)
+        )
+    if not bad.any():
+        return frame, [""] * bad.size
+    nan = np.where(bad, np.nan, 1.0)
+    out = Frame(
+        frame.t,
+        frame.valid & ~bad,
+        frame.v * nan,
+        frame.i * nan,
+        frame.freq * nan,
+        frame.rocof * nan,
+    )
+    return out, [IMPLAUSIBLE if b else "" for b in bad]
+
+
 def flags(cfg2, data: bytes) -> list[str]:
     """Why each PMU's values in a data frame are not used, by its STAT (`unusable`) or,
     STAT aside, the frame's FRACSEC time quality (`time_unusable`); '' for those used.
@@ -1085,8 +1134,30 @@ def next_frame_fault(data, frame: bytes, cfg2) -> str | None:
     """
     # the first (the grid), the last, the new; no slice of `data` past its ends, which
     # would copy every frame received at each frame
-    window = [*data[:1], *(data[-1:] if len(data) > 1 else ()), frame]
-    numbers = [1, len(data), len(data) + 1][-len(window) :]
+    return ends_fault(data[0] if data else None, data[-1] if data else None, len(data), frame, cfg2)
+
+
+def ends_fault(first: bytes | None, last: bytes | None, n: int, frame: bytes, cfg2) -> str | None:
+    """`next_frame_fault` of a frame arriving after n data frames of which only the
+    first and the last are kept (None for none): its time stamp on the DATA_RATE grid of
+    the first, after the last.
+
+    Parameters
+    ----------
+    first, last : bytes or None
+        The first and the last data frame received before it.
+    n : int
+        Data frames received before it.
+    frame : bytes
+        The data frame that came.
+    cfg2 : pyc37 ConfigFrame2
+
+    Returns
+    -------
+    str or None
+    """
+    window = [*([first] if n else []), *([last] if n > 1 else []), frame]
+    numbers = [1, n, n + 1][-len(window) :]
     faults = order_faults(window, cfg2, "", numbers)
     return next((why for k, why in faults if k == len(window) - 1), None)
 

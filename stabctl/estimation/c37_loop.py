@@ -492,6 +492,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
     from stabctl.estimation.sources import FILL_S, Gap, missing_frame
 
     n, last = 0, None
+    ends: list[bytes] = []  # the first and the last data frame (`c37.ends_fault`)
     flagged: collections.Counter = collections.Counter()
     gaps: list[Gap] = []
     fill = int(round(FILL_S * cfg.rate))
@@ -509,14 +510,17 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 if (t_end := _end_time(data, cfg.idcode)) is not None:
                     _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
                     return Answered(n, dict(flagged), tuple(gaps))
-                try:  # a data frame, checked (`c37.check_data_frame`)
-                    frame = c37.parse_frame(cfg, cfg2, data)
+                try:  # a data frame, checked (`c37.check_data_frame`), on the rate's grid
+                    frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, data))
+                    first, prev = (ends[0], ends[-1]) if ends else (None, None)
+                    if why := c37.ends_fault(first, prev, n, data, cfg2):
+                        raise InputError(why)
                 except InputError as exc:
                     raise InputError(
                         f"the plant at {host}:{port}: its frame {n + 1} after 'start': {exc}"
                         f", after {n} frame(s) answered"
                     ) from None
-                flagged.update(why for why in c37.flags(cfg2, data) if why)
+                flagged.update(why for why in [*c37.flags(cfg2, data), *odd] if why)
                 k = round(frame.t * cfg.rate)
                 if last is not None and (lost := k - round(last * cfg.rate) - 1) > 0:
                     # as `sources.read_frames` and `closed_loop.track` take a gap: the
@@ -530,6 +534,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 soc, counts = int.from_bytes(data[6:10], "big"), int.from_bytes(data[11:14], "big")
                 conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
                 n, last = n + 1, frame.t
+                ends = [ends[0] if ends else data, data]
     except OSError as exc:  # a reset or broken pipe (not a plant, or a second controller)
         if isinstance(exc, FrameTimeout):  # a frame dripped, not finished in time
             what = f"sent {exc}"

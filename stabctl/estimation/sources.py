@@ -440,14 +440,17 @@ def unused_values(flagged: dict) -> str:
     -------
     str
         ``N PMU values not used by their STAT (n1 reason1, ...)`` (``STAT or time
-        quality`` when a clock failure is among the reasons); '' if none.
+        quality`` when a clock failure is among the reasons, ``value`` for values no
+        measurement gives, `c37.plausible`); '' if none.
     """
     if not flagged:
         return ""
     why = ", ".join(f"{n} {reason}" for reason, n in flagged.items())
     fracsec = {why for _, _, why in c37.TIME_QUALITY_UNUSABLE}
     by = "STAT or time quality" if fracsec.intersection(flagged) else "STAT"
-    return f"{sum(flagged.values())} PMU values not used by their {by} ({why})"
+    how = [f"by their {by}"] if set(flagged) - {c37.IMPLAUSIBLE} else []
+    how += ["beyond any measurement"] if c37.IMPLAUSIBLE in flagged else []
+    return f"{sum(flagged.values())} PMU values not used {', or '.join(how)} ({why})"
 
 
 def _recorded_to(end, cfg2, data, name: str) -> tuple:
@@ -542,9 +545,10 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
         base = cfg2.get_time_base()
         for k, (d, leap) in enumerate(zip(data, c37.leap_offsets(data, cfg2))):
             try:
-                frame = c37.parse_frame(cfg, cfg2, d)
+                frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, d))
             except InputError as exc:
                 raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
+            flagged.update(why for why in odd if why)
             # a frame after a leap second is 1 s later than stamped (`c37.leap_offsets`)
             t = c37.reporting_instant(frame.t + int(leap) - frac, cfg.rate, base)
             if t < -BEFORE_CFG2_S:

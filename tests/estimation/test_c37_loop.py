@@ -123,10 +123,10 @@ def test_a_controller_of_other_pmus_is_refused(kundur_loop):
     assert "its CFG-2 station names" in str(errors[0])
 
 
-def three_frames_then(kundur_loop, t_end):
-    """A plant link answered by a remote controller for three frames (1/60 to 3/60 s),
-    then ended with the end-of-run header at `t_end` (None: closed without it); returns
-    what the controller returned and what it raised."""
+def three_frames_then(kundur_loop, t_end, times=(1 / 60, 2 / 60, 3 / 60)):
+    """A plant link answered by a remote controller for three frames (at `times`, s;
+    1/60 to 3/60 s), then ended with the end-of-run header at `t_end` (None: closed
+    without it); returns what the controller returned and what it raised."""
     sim, events = kundur_loop
     from stabctl.storage.devices import uniform_fleet
 
@@ -137,17 +137,21 @@ def three_frames_then(kundur_loop, t_end):
     cfg = c37.stream_config(sim.case, ctrl.pmus, 60)
     out: list = []
     errors: list = []
+    plant: list = []  # what the plant's end raised (a controller that hung up)
     with c37_loop.PlantLink(ctrl, cfg, timeout=5) as link:
         thread = threading.Thread(
             target=_catch, args=(errors, _serve_into, out, remote, cfg, *link.address)
         )
         thread.start()
-        for k in (1, 2, 3):
-            link(k / 60, partial)
-        if t_end is not None:
-            link.finish(t_end)
+        try:
+            for t in times:
+                link(t, partial)
+            if t_end is not None:
+                link.finish(t_end)
+        except InputError as exc:
+            plant.append(exc)
     thread.join(timeout=10)
-    return out, errors
+    return out, errors + plant
 
 
 def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
@@ -162,6 +166,24 @@ def test_a_plant_that_stops_without_its_end_of_run_header_is_said(kundur_loop):
         else:
             assert not out and isinstance(errors[0], c37_loop.PlantStopped)
             assert "after 3 frame(s) answered, the last at t = 0.0500 s" in str(errors[0])
+
+
+@pytest.mark.parametrize(
+    "times, k",
+    [((1 / 60, 2 / 60, 2.5 / 60), 3), ((1 / 60, 1.5 / 60, 2 / 60), 2)],
+)
+def test_a_plant_s_frames_off_its_rate_s_grid_are_refused(kundur_loop, times, k):
+    """Frames stamped half a frame off the 60 frames/s grid, or every 1/120 s under a
+    60 frames/s CFG-2, were answered (exit 0; the half-frame steps counted as gaps and fed
+    to the estimator as missing frames): `estimate track` and `pmu record` refuse such a
+    stream.  The controller now checks each frame on the grid of the plant's first, as
+    they do, and names the frame."""
+    out, errors = three_frames_then(kundur_loop, 3 / 60, times)
+    assert not out and isinstance(errors[0], InputError)
+    said = str(errors[0])
+    assert f"its frame {k} after 'start': data frame {k} is stamped" in said
+    assert "not a reporting instant of its CFG-2's DATA_RATE 60" in said
+    assert f"after {k - 1} frame(s) answered" in said
 
 
 @pytest.mark.parametrize(

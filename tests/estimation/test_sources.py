@@ -322,3 +322,44 @@ def test_a_long_track_keeps_its_frames_and_rows_in_blocks_frame_for_frame(kundur
     assert len(ctrl.rows) == 2 + 3  # two blocks, three rows
     assert np.array_equal(d.t, got.frames.t)
     assert np.allclose(d.freq, got.frames.freq, rtol=1e-14, atol=0)  # f / f0 * f0
+
+
+def test_a_value_beyond_any_measurement_is_not_used(kundur_run):
+    """One frame whose first PMU's voltage reads 1e30 pu (CRC valid: a byte error the CRC
+    did not catch, or a PMU's fault) drove the EKF to 1e28 Hz and held a device at -1 to
+    the end.  Such a value (|V| above 3 pu of the rated kV) is not used, as a STAT saying
+    absent data makes it, and counted by its reason; the track's speeds are those of the
+    stream without that frame's PMU value (the EKF predicts across it)."""
+    case, _res, pmus, drawn = kundur_run
+    from stabctl.estimation import closed_loop as cl
+
+    frames = list(drawn)[:120]
+    spiked = list(frames)
+    f = spiked[70]
+    spiked[70] = f._replace(v=np.where(np.arange(len(pmus)) == 0, 1e30, f.v))
+    holed = list(frames)
+    holed[70] = f._replace(
+        valid=f.valid & (np.arange(len(pmus)) != 0),
+        **{
+            x: np.where(np.arange(len(pmus)) == 0, np.nan, getattr(f, x))
+            for x in ("v", "i", "freq", "rocof")
+        },
+    )
+    cfg = c37.stream_config(case, pmus, 60)
+    cfg2 = c37.config_frame(cfg)
+    tracks = []
+    for stream in (spiked, holed):
+        got = sources.merge(
+            case, pmus, 60, [(cfg2, [c37.data_frame(cfg, cfg2, x) for x in stream])]
+        )
+        tracks.append(cl.track(cl.LoopController(case, (), "ekf", SETTINGS, 0, 1.0), got.frames))
+        if stream is spiked:
+            assert got.flagged[c37.IMPLAUSIBLE] == 1 and not got.frames[70].valid[0]
+            absent = got.flagged["absent (STAT bits 15-14 = 10)"]  # the frames dropped
+            assert sources.unused_values(got.flagged) == (
+                f"{absent + 1} PMU values not used by their STAT, or beyond any measurement "
+                f"({absent} absent (STAT bits 15-14 = 10), 1 |V| > 3 pu, |I| > 1000 pu or "
+                "|ROCOF| > 327.67 Hz/s)"
+            )
+    assert np.array_equal(tracks[0].freq, tracks[1].freq)
+    assert np.abs(tracks[0].rel).max() < 1.0  # Hz
