@@ -241,6 +241,13 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
         ": give --clear-cycles > 0",
     )
     check_option_events(case, [(fault_text(fault, far_bus), ev)])
+    if late := [t for t in ev.times() if t >= tf]:
+        what = "starts" if late[0] == min(ev.times()) else "is cleared"
+        raise InputError(
+            f"{fault_text(fault, far_bus)} --t-fault {t_fault:g} --clear-cycles "
+            f"{clear_cycles:g}: the fault {what} at {late[0]:g} s, at or after the end of "
+            f"the run (--tf {tf:g} s): give a later --tf, or an earlier or shorter fault"
+        )
     return case, ev, tf
 
 

@@ -677,6 +677,38 @@ def test_a_latency_that_brings_no_frame_within_the_run_is_refused(no_simulation,
     assert_error(res, "--latency-ms 6000", needle, "no PMU frame used arrives within the run")
 
 
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("pmu", "serve", "kundur", "--port", 0),
+        ("pmu", "plant", "kundur", "--esd-pct", 5, "--port", 0),
+        ("estimate", "rmse", "kundur", "--runs", 1),
+        ("estimate", "closed-loop", "kundur", "--esd-pct", 5),
+    ],
+)
+@pytest.mark.parametrize(
+    "timing, needle",
+    [
+        (
+            ("--t-fault", 5, "--tf", 2),
+            "the fault starts at 5 s, at or after the end of the run (--tf 2 s)",
+        ),
+        (
+            ("--clear-cycles", 600, "--tf", 3),
+            "the fault is cleared at 11 s, at or after the end of the run (--tf 3 s)",
+        ),
+    ],
+)
+def test_a_fault_beyond_the_run_is_refused_naming_it(no_simulation, args, timing, needle):
+    """`pmu serve --t-fault 5 --tf 2` served 121 frames without a fault, and with
+    `--clear-cycles 600 --tf 3` a fault never cleared; `pmu plant` and `estimate
+    closed-loop` blamed --latency-ms for it.  Every command of a PMU run through a fault
+    refuses a fault that starts or is cleared at or after the run's end, before any run,
+    naming the fault's options."""
+    res = run(*args, "--fault", 3, "--far-bus", 101, *timing)
+    assert_error(res, "--fault 3 --far-bus 101 --t-fault", needle, "give a later --tf")
+
+
 def test_errors_are_stabctl_errors():
     assert issubclass(CaseError, StabctlError) and issubclass(InputError, StabctlError)
 
