@@ -318,7 +318,7 @@ def check_power_flow(case, model) -> None:
     solve_powerflow(case, q_limits=model.q_limits)
 
 
-def check_step_given(case, model) -> None:
+def check_step_given(case, model, t_end: float | None = None) -> None:
     """Check ``--step`` against the case before a batch dispatches any job, as `cct` and
     `place` do when they build their simulator: a step too large for the case's fastest
     time constant was recorded as every job's failure, the command exiting 0.
@@ -330,15 +330,23 @@ def check_step_given(case, model) -> None:
     model : stabctl.dynamics.options.ModelOptions
         Its settings (`model_settings`); without a step (the case's default) nothing is
         checked.
+    t_end : float, optional
+        The latest end of the batch's runs, s: the step's count to it is checked too
+        (`stabctl.dynamics.grid.check_step_count`, as each run checks it).
 
     Raises
     ------
     InputError
         The step is not below twice the case's fastest time constant
-        (`stabctl.dynamics.grid.check_step`, as the jobs' simulators check it).
+        (`stabctl.dynamics.grid.check_step`, as the jobs' simulators check it), or needs
+        too many steps to t_end.
     """
+    from stabctl.dynamics.grid import check_step_count
+
     if model.h is not None:
         model.simulator(case, background_compile=False)
+        if t_end is not None:
+            check_step_count(t_end, model.h, case)
 
 
 def check_method(method: str, conventions: str, storage: bool) -> None:

@@ -475,7 +475,7 @@ def cct(
         settings, ev.t, t_end, f"the runs' end {t_end:g} s (the fault at {ev.t:g} s + 5 s)"
     )
     model = model_settings(conventions, step, q_limits)
-    check_step_given(case, model)  # before the searches: not one failure per run
+    check_step_given(case, model, t_end)  # before the searches: not one failure per run
     _check_estimable(case, model)
     table = estimator_ccts(
         case_name,  # the file given, not the case's name: an edited copy of a built-in

@@ -395,7 +395,7 @@ def sweep_cct(
     """
     from stabctl.io import load_case
     from stabctl.parallel import run_sweep
-    from stabctl.stability.cct import storage_fleet
+    from stabctl.stability.cct import T_AFTER_FAULT, storage_fleet
     from stabctl.studies.sweeps import controlled_cct_jobs
 
     search = search_settings(tol_ms, t_max, tf)
@@ -412,7 +412,8 @@ def sweep_cct(
     faults = read_fault_list(case, case_name, faults_src)
     check_run_end(faults, search)
     check_power_flow(case, model)  # before any job: not one failure per job
-    check_step_given(case, model)
+    t_end = search.t_end or max(f.t_fault for f in faults) + T_AFTER_FAULT
+    check_step_given(case, model, t_end)
     jobs = controlled_cct_jobs(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )
@@ -517,6 +518,7 @@ def screen(
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
+    from stabctl.stability.cct import T_AFTER_FAULT
     from stabctl.stability.screening import screen as run_screen
 
     if not lines:
@@ -527,7 +529,7 @@ def screen(
     check_suffix(out_path, (".jsonl",), "--out")
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault
-    check_step_given(case, model)
+    check_step_given(case, model, 1.0 + T_AFTER_FAULT)  # the faults at 1 s
     rows = run_screen(
         case_name,
         out_path,

@@ -144,11 +144,13 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
     return min(cands) if cands else (np.inf, "")
 
 
-#: largest trapezoid step run without a warning, s: ANDES's default (1/30 s, two cycles
-#: at 60 Hz).  The trapezoid is A-stable, so a larger step runs, but a 1-2 Hz swing is then
-#: sampled a dozen times a period or less and the run is not to be trusted (Kundur's
-#: bus-3 fault cleared in 6 cycles, stable, is unstable at 0.25 s: angles of 13-26 rad).
-TRAPEZOID_TRUSTED_STEP = 1 / 30
+#: largest trapezoid step run without a warning, s: one cycle at 60 Hz (PSS/E's default
+#: is half a cycle, ANDES's two).  The trapezoid is A-stable, so a larger step runs, but a
+#: 1-2 Hz swing is then sampled a few dozen times a period or less and a verdict near the
+#: CCT is the step's (Kundur's bus-3 fault cleared in 6 cycles, stable, is unstable at
+#: 0.25 s: angles of 13-26 rad; cleared in 9.2 cycles, 1.2 ms below its CCT, it is stable
+#: at 5 and 10 ms and unstable at 20 ms).
+TRAPEZOID_TRUSTED_STEP = 1 / 60
 
 
 def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> None:
@@ -166,7 +168,7 @@ def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> N
         raise InputError(f"step must be a positive number of seconds, got {h}")
     if explicit and h >= 2 * T:
         raise InputError(
-            f"step {h} s is too large: the fastest time constant is {T} s "
+            f"step {h} s is too large (--step): the fastest time constant is {T} s "
             f"({where}); the predictor-corrector needs h < {2 * T} s"
         )
     if explicit and h > T * (1 + 1e-9):
@@ -179,7 +181,7 @@ def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> N
         )
     if not explicit and h > TRAPEZOID_TRUSTED_STEP * (1 + 1e-9):
         warnings.warn(
-            f"trapezoid step {h:g} s is above {TRAPEZOID_TRUSTED_STEP:.4g} s (two cycles): "
+            f"trapezoid step {h:g} s is above {TRAPEZOID_TRUSTED_STEP:.4g} s (one cycle): "
             "the swings are sampled too coarsely to trust the verdict; halve the step and "
             "compare",
             stacklevel=3,

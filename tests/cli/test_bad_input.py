@@ -2364,7 +2364,8 @@ def test_a_case_whose_power_flow_does_not_converge_is_refused_before_any_job(
 def test_a_step_too_large_for_the_case_is_refused_before_any_job(tmp_path, monkeypatch, command):
     """sweep-cct, screen and estimate cct with --step 0.05 on Kundur (fastest time
     constant 0.01 s) exited 0 with every job recorded as failed on the same step error:
-    they refuse the step before any job, as cct and place do."""
+    they refuse the step before any job, as cct and place do, naming --step; so is a
+    step of 1e-9 s, whose runs would need more steps than a run may take."""
 
     def dispatched(*a, **k):
         raise AssertionError("jobs dispatched before the step was checked")
@@ -2376,9 +2377,13 @@ def test_a_step_too_large_for_the_case_is_refused_before_any_job(tmp_path, monke
     args = [faults if a == "FAULTS" else out if a == "OUT" else a for a in command]
     assert_error(
         run(*args, "--step", 0.05),
-        "step 0.05 s is too large: the fastest time constant is 0.01 s (exc_con T_R row 1); "
-        "the predictor-corrector needs h < 0.02 s",
+        "step 0.05 s is too large (--step): the fastest time constant is 0.01 s (exc_con T_R "
+        "row 1); the predictor-corrector needs h < 0.02 s",
     )
+    assert not out.exists()
+    # a step too small for the runs' steps is refused before any job too (it was each
+    # job's failure, recorded, exit 1)
+    assert_error(run(*args, "--step", 1e-9), "step 1e-09 s: a run to 6 s needs 6e+09 steps")
     assert not out.exists()
 
 

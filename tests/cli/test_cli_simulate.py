@@ -664,20 +664,25 @@ def test_output_that_cannot_reach_stdout_is_an_error(where, args):
     assert said == [f"error: cannot write to standard output (stdout): {reason}"], proc.stderr
 
 
-def test_a_trapezoid_step_above_two_cycles_is_a_warning():
+def test_a_trapezoid_step_above_one_cycle_is_a_warning():
     """`simulate --method trapezoid --step 0.25` (the finding: a stable fault reported
     unstable with angles of 13-26 rad, exit 0, no word): at 0.1 s Kundur's bus-3 fault
     cleared in 6 cycles is stable with 1.013 rad from the COI where the default step gives
-    0.838 rad;
-    it is printed with a warning to halve the step; at 1/30 s (ANDES's default) there is
-    none."""
+    0.838 rad; it is printed with a warning to halve the step.  So is a step of 20 ms,
+    at which the fault cleared in 9.2 cycles (1.2 ms below its CCT) is unstable where at
+    5 and 10 ms it is stable; at one cycle there is none."""
     args = ["simulate", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "3"]
     coarse = run(*args, "--method", "trapezoid", "--step", "0.1")
     assert coarse.exit_code == 0, coarse.output
-    assert "warning: trapezoid step 0.1 s is above 0.03333 s (two cycles)" in coarse.stderr
+    assert "warning: trapezoid step 0.1 s is above 0.01667 s (one cycle)" in coarse.stderr
     assert "halve the step and compare" in coarse.stderr
-    fine = run(*args, "--method", "trapezoid", "--step", str(1 / 30))
+    fine = run(*args, "--method", "trapezoid", "--step", str(1 / 60))
     assert fine.exit_code == 0 and "warning" not in fine.stderr
+    near = [*args[:-1], "5", "--clear-cycles", "9.2", "--method", "trapezoid", "--json"]
+    at = {h: json.loads(run(*near, "--step", h).stdout)["stable"] for h in ("0.005", "0.01")}
+    assert at == {"0.005": True, "0.01": True}
+    coarse = run(*near, "--step", "0.02")
+    assert "warning: trapezoid step 0.02 s is above 0.01667 s (one cycle)" in coarse.stderr
 
 
 def test_tripping_every_machine_is_reported_as_de_energised_not_stable(tmp_path):
