@@ -95,12 +95,16 @@ _LOOPBACK = ("127.0.0.1", "::1", "localhost")
 
 def _loopback(host: str) -> bool:
     """Whether a server on `host` listens on loopback only: localhost, or an address of
-    127.0.0.0/8 or ::1."""
+    127.0.0.0/8 or ::1, also as the socket layer reads it (inet_aton: 127.1, 0x7f.1)."""
     if host in _LOOPBACK:
         return True
     try:
         return ipaddress.ip_address(host).is_loopback
-    except ValueError:  # a name other than localhost
+    except ValueError:
+        pass
+    try:  # the short and hexadecimal IPv4 forms the server's bind accepts
+        return ipaddress.ip_address(socket.inet_aton(host)).is_loopback
+    except OSError:  # a name other than localhost
         return False
 
 

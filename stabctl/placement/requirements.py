@@ -159,6 +159,11 @@ def read_requirements(path) -> dict:
     return out
 
 
+#: largest cost a `CostModel` takes (any currency per MW, MWh or site): the program's
+#: scaling of 1e308 overflowed (numpy's warnings, the plan run on infinities)
+LARGEST_COST = 1e15
+
+
 @dataclass(frozen=True)
 class CostModel:
     """Cost of an ESD: per MW, per MWh of usable energy and per site (any currency).
@@ -173,7 +178,7 @@ class CostModel:
     Raises
     ------
     InputError
-        A negative cost, or no cost per MW nor per MWh.
+        A cost that is not a number in [0, LARGEST_COST], or no cost per MW nor per MWh.
     """
 
     per_mw: float = 1.0
@@ -186,9 +191,12 @@ class CostModel:
             (None, {"per_mw": self.per_mw, "per_mwh": self.per_mwh, "per_site": self.per_site}),
             *self.overrides.items(),
         ]:
-            if any(not (np.isfinite(v) and v >= 0) for v in o.values()):
+            if any(not (0 <= v <= LARGEST_COST) for v in o.values()):
                 where = "" if k is None else f" (site of G{k})"
-                raise InputError(f"costs must be numbers >= 0{where}, got {o}")
+                raise InputError(
+                    f"costs must be numbers in [0, {LARGEST_COST:g}]{where} (a larger one "
+                    f"overflows the program's scaling), got {o}"
+                )
         if not self.per_mw + self.per_mwh > 0:
             raise InputError("need a cost per MW or per MWh > 0")
 
@@ -249,7 +257,7 @@ def read_site_costs(path, n_machines: int, no_site=()) -> dict:
                 "takes no site cost"
             )
         out[m] = {
-            k: number(row, c, 0.0)
+            k: number(row, c, 0.0, LARGEST_COST)
             for k, c in (("per_mw", "cost_mw"), ("per_mwh", "cost_mwh"), ("per_site", "cost_site"))
             if row.values.get(c)
         }

@@ -329,17 +329,21 @@ def test_record_beyond_the_stream_keeps_what_came_and_says_so(tmp_path):
 def test_listening_beyond_loopback_without_allow_list_warns(capsys):
     """`--host 0.0.0.0` with no --allow is named a warning (any host that reaches the
     port may connect) as the server starts, not when it ends; with --allow it is not, nor
-    on any loopback address (all of 127.0.0.0/8, ::1, localhost).  An empty --host, which
+    on any loopback address (all of 127.0.0.0/8, ::1, localhost, and 127.1, which was
+    warned as public).  An empty --host, which
     listened on every interface, is refused."""
     from stabctl.cli.pmu import _allowed
     from stabctl.errors import InputError
 
     assert _allowed("0.0.0.0", None) == ()
     assert _allowed("0.0.0.0", "10.0.0.5, 10.0.0.6") == ("10.0.0.5", "10.0.0.6")
-    for host in ("127.0.0.1", "127.0.0.2", "127.255.0.9", "::1", "localhost"):
+    # 127.1 and 0x7f.1 are 127.0.0.1 as the server's bind reads them (inet_aton)
+    for host in ("127.0.0.1", "127.0.0.2", "127.255.0.9", "::1", "localhost", "127.1", "0x7f.1"):
         assert _allowed(host, None) == ()
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("warning: listening on 0.0.0.0: any host")
+    _allowed("10.1", None)  # 10.0.0.1: beyond loopback
+    assert "warning: listening on 10.1: any host" in capsys.readouterr().err
     with pytest.raises(InputError, match="--host '': an empty address"):
         _allowed("", None)
 

@@ -101,6 +101,8 @@ def test_requirement_columns_misspelt_are_refused_not_ignored(tmp_path):
         ("machine,cost_mw\n99,5\n", r"machine 99 is outside \[1, 4\]"),
         ("machine,cost_mw\n2,5\n2,6\n", r"c\.csv:3: machine 2 listed twice"),
         ("machine,cost_mw\n2,-5\n", r"cost_mw -5 is outside"),
+        # 1e308 overflowed the program's scaling (numpy's warnings, exit 0)
+        ("machine,cost_site\n2,1e308\n", r"c\.csv:2: cost_site 1e308 is outside \[0, 1e\+15\]"),
     ],
 )
 def test_site_costs_refusals(tmp_path, text, needle):
