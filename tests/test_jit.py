@@ -303,6 +303,23 @@ def test_a_damaged_cache_entry_is_compiled_again(tmp_path):
         assert again.stdout.split()[0] == first.stdout.split()[0]  # sqrt(0.75 - 0.25)
 
 
+def test_a_directory_in_place_of_a_cache_entry_is_compiled_around(tmp_path):
+    """A directory where a kernel's index belongs (the finding: the command stopped with
+    "Is a directory", exit 2): it is not loaded, never removed, the kernel compiled for
+    the process and not saved, a warning naming the entry."""
+    first = _fresh_process(_LOAD, tmp_path)
+    assert first.returncode == 0, first.stderr
+    index = next(tmp_path.rglob("blocks.rectifier_loading-*.nbi"))
+    index.unlink()
+    (index / "kept").mkdir(parents=True)
+    again = _fresh_process(_LOAD, tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert again.stdout.split()[0] == first.stdout.split()[0]  # sqrt(0.75 - 0.25)
+    assert f"numba cache: {index} is not a regular file; not loaded" in again.stderr
+    assert f"numba cache: {index} cannot be replaced (Is a directory)" in again.stderr
+    assert (index / "kept").is_dir()
+
+
 class _Planted:
     """A pickle that makes the directory `path` when it is unpickled."""
 

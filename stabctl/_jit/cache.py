@@ -363,11 +363,26 @@ class GuardedCache(FunctionCache):
             cache_file = self._cache_file
             index = Path(cache_file._index_path)
             for path in (index, *index.parent.glob(index.stem + "*.nbc")):
-                path.unlink(missing_ok=True)
+                try:
+                    path.unlink(missing_ok=True)
+                except OSError as err:  # a directory in its place: never removed
+                    self._kept_out = f"{path} cannot be replaced ({err.strerror})"
+                    warnings.warn(
+                        f"numba cache: {self._kept_out}: the kernel is compiled for this "
+                        "process only, not saved",
+                        RuntimeWarning,
+                        stacklevel=2,
+                    )
             return None
 
+    #: why this kernel is not saved (an entry that cannot be replaced), '' if it is
+    _kept_out = ""
+
     def save_overload(self, sig, data):
-        """Save a compiled kernel, the cache's key (`stamp_cache`) first."""
+        """Save a compiled kernel, the cache's key (`stamp_cache`) first; not if an entry
+        in its place cannot be replaced (`load_overload`)."""
+        if self._kept_out:
+            return None
         stamp_cache()
         return super().save_overload(sig, data)
 
