@@ -615,8 +615,19 @@ def _interrupted(kwargs, exc: BaseException | None = None) -> str:
                 out = f"{out} ({len(read_records(out))} recorded)"
             except (StabctlError, OSError):  # a file no longer read (above the size cap)
                 pass
+    if name in _LIVE:
+        return f"interrupted: {_LIVE[name]}; run again with: {shlex.join(argv)}"
     kept = _KEPT.get(name or "", "nothing is kept; the work starts again").format(out=out)
     return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
+
+
+#: what an interrupted live command (a server, a closed loop) leaves: nothing to resume
+_LIVE = {
+    "plant": "the plant's run stopped with its controller's loop (a closed loop is not resumed)",
+    "serve": "the server stopped (a live stream is not resumed: its PDCs connect again)",
+    "replay": "the server stopped (a live stream is not resumed: its PDCs connect again)",
+    "control": "the controller stopped (a closed loop is not resumed)",
+}
 
 
 # -- option decorators -------------------------------------------------------------------

@@ -535,6 +535,14 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 conn.sendall(modes_frame(cfg.idcode, soc, counts, controller.act(frame)))
                 n, last = n + 1, frame.t
                 ends = [ends[0] if ends else data, data]
+    except KeyboardInterrupt as exc:  # said with what was answered (a loop is not resumed)
+        at = "" if last is None else f", the last at t = {last:.4f} s"
+        exc.kept = (  # type: ignore[attr-defined]
+            f"the controller stopped after answering {n} frame(s) from the plant at "
+            f"{host}:{port}{at}; a closed loop is not resumed: the plant's run is to be "
+            "started again with its controller"
+        )
+        raise
     except OSError as exc:  # a reset or broken pipe (not a plant, or a second controller)
         if isinstance(exc, FrameTimeout):  # a frame dripped, not finished in time
             what = f"sent {exc}"

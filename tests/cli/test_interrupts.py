@@ -277,6 +277,17 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
             "stabctl.stability.screening.screen",
             "finished searches are in s.jsonl (0 recorded); they are skipped; resume with:",
         ),
+        # a live loop or stream is not resumed (it said "the work starts again; resume")
+        (
+            ["pmu", "control", "kundur", "127.0.0.1:4712", "--esd-pct", "5"],
+            "stabctl.estimation.c37_loop.serve_controller",
+            "the controller stopped (a closed loop is not resumed); run again with: stabctl",
+        ),
+        (
+            ["pmu", "serve", "kundur", "--fault", "3", "--far-bus", "101", "--port", "0"],
+            "stabctl.cli.pmu._serve",
+            "the server stopped (a live stream is not resumed: its PDCs connect again); run",
+        ),
     ],
 )
 def test_every_long_command_ends_the_same_way_on_ctrl_c(
@@ -300,7 +311,8 @@ def test_every_long_command_ends_the_same_way_on_ctrl_c(
     assert len(lines) == 1 and lines[0].startswith("interrupted: "), res.stderr
     assert kept in lines[0]
     resume = " ".join(command) + (" --resume" if command[0] == "paper" else "")
-    assert lines[0].endswith("resume with: stabctl " + resume)
+    again = "run again with: " if command[0] == "pmu" else "resume with: "
+    assert lines[0].endswith(again + "stabctl " + resume)
 
 
 @pytest.fixture(scope="module")
