@@ -1502,9 +1502,26 @@ def _handshake(address: str, timeout: float) -> None:
     thread.start()
     thread.join()  # (a daemon: Ctrl-C ends the wait, the thread ends within timeout)
     if isinstance(ended[0], TimeoutError):
+        if why := _no_listener(address):  # Dask retried a refused connection till then
+            raise ConnectionRefusedError(
+                f"{why}, through the {timeout:g} s a starting scheduler is waited for"
+            )
         raise TimeoutError("it accepted the connection and sent no Dask handshake")
     if ended[0] is not None:
         raise ended[0]
+
+
+def _no_listener(address: str) -> str:
+    """Why nothing takes a TCP connection at the Dask address `address` (''
+    if something does): refused, unreachable, or the host unknown."""
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address)
+    try:
+        socket.create_connection((parts.hostname, parts.port), timeout=1.0).close()
+    except OSError as exc:
+        return f"nothing listens there ({exc.strerror or type(exc).__name__})"
+    return ""
 
 
 def dask_setup(worker) -> None:

@@ -637,6 +637,23 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
     assert_no_dask_client_left()
 
 
+def test_a_scheduler_address_nothing_listens_at_is_said_so(tmp_path, monkeypatch):
+    """Nothing listening at the address (a port closed): the sweep said "it accepted the
+    connection and sent no Dask handshake" after its wait; it now says nothing listens
+    there, after the wait a starting scheduler gets."""
+    pytest.importorskip("distributed")
+    import socket
+
+    monkeypatch.setattr("stabctl.parallel.SCHEDULER_TIMEOUT_S", 2.0)
+    with socket.socket() as s:  # a port free a moment ago, nothing listening
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(InputError, match=r"nothing listens there \(Connection refused\)"):
+        run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler=f"tcp://127.0.0.1:{port}")
+    assert not (tmp_path / "d.jsonl").exists()
+    assert_no_dask_client_left()
+
+
 def assert_no_dask_client_left():
     """No distributed Client or local cluster of this process open (each closed, none
     left to Dask's finaliser, which closes a forgotten client whenever the garbage
