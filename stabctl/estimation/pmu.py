@@ -192,12 +192,13 @@ class Frames(Sequence):
 
     def __getitem__(self, k):
         if isinstance(k, slice):
-            return Frames(*(x[k] for x in self._columns()))
+            return Frames(*(x[k] for x in self.columns()))
         return Frame(
             float(self.t[k]), self.valid[k], self.v[k], self.i[k], self.freq[k], self.rocof[k]
         )
 
-    def _columns(self) -> tuple:
+    def columns(self) -> tuple:
+        """(t, valid, v, i, freq, rocof): the arrays, in `Frame`'s order."""
         return (self.t, self.valid, self.v, self.i, self.freq, self.rocof)
 
 

@@ -440,8 +440,8 @@ def unused_values(flagged: dict) -> str:
     -------
     str
         ``N PMU values not used by their STAT (n1 reason1, ...)`` (``STAT or time
-        quality`` when a clock failure is among the reasons, ``value`` for values no
-        measurement gives, `c37.plausible`); '' if none.
+        quality`` when a clock failure is among the reasons; ``beyond any measurement``
+        for values no measurement gives, `c37.plausible`); '' if none.
     """
     if not flagged:
         return ""
@@ -559,7 +559,7 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
                     "clock or a time stamp is wrong"
                 )
             frames.t[k] = t
-            for column, value in zip(frames._columns()[1:], frame[1:]):
+            for column, value in zip(frames.columns()[1:], frame[1:]):
                 column[k] = value
             flagged.update(why for why in c37.flags(cfg2, d) if why)
         # after the frames' own checks (`c37.check_data_frame`), as a receiver makes them
@@ -659,7 +659,7 @@ def _by_time_stamp(n: int, parsed, rate: float) -> Received:
     for cols, frames in parsed:
         rows = row[np.searchsorted(stamps, _stamps(frames))][:, None]
         came[rows, cols] = True
-        for column, values in zip(out._columns()[1:], frames._columns()[1:]):
+        for column, values in zip(out.columns()[1:], frames.columns()[1:]):
             column[rows, cols] = values
     gaps, breaks = [], []
     for k in np.nonzero(lost > 0)[0]:
