@@ -646,7 +646,7 @@ def test_a_server_drops_a_peer_addressing_another_idcode_and_names_it(
     if kind == "replay":
         args, n = ["replay", str(kundur_recording)], 73
     else:
-        args, n = ["serve", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "1"], 61
+        args, n = ["serve", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "1.2"], 73
     proc, address = serving(*args, "--speed", "0", "--timeout", "2")
     host, port = address.rsplit(":", 1)
     with socket.create_connection((host, int(port)), timeout=5) as peer:
