@@ -604,39 +604,36 @@ IMPLAUSIBLE = (
 )
 
 
-def plausible(frame: Frame) -> tuple[Frame, list[str]]:
-    """A parsed frame (`parse_frame`) with each PMU whose values no measurement gives
-    (beyond `V_PLAUSIBLE_PU`, `I_PLAUSIBLE_PU`, `ROCOF_PLAUSIBLE_HZ_S`) made invalid, its
-    values NaN, as a STAT saying absent data makes them: one such sample (1e30 pu, or a
-    voltage a million times its value) drove an estimator to 1e28 Hz.
+def plausible(frames):
+    """Frames (a `Frame`, or `pmu.Frames` held column by column) with each PMU value that
+    no measurement gives (beyond `V_PLAUSIBLE_PU`, `I_PLAUSIBLE_PU`,
+    `ROCOF_PLAUSIBLE_HZ_S`) made invalid, its values NaN, as a STAT saying absent data
+    makes them: one such sample (1e30 pu, or a voltage a million times its value) drove
+    an estimator to 1e28 Hz.
 
     Parameters
     ----------
-    frame : Frame
+    frames : Frame or pmu.Frames
+        Parsed (`parse_frame`).
 
     Returns
     -------
-    (Frame, list of str)
-        The frame, and per PMU `IMPLAUSIBLE` or '' (for `Received.flagged`).
+    (Frame or pmu.Frames, int)
+        The frames, of the same type, and how many PMU values were made invalid (counted
+        as `IMPLAUSIBLE` in `Received.flagged`).
     """
     with np.errstate(invalid="ignore"):
-        bad = frame.valid & (
-            (np.abs(frame.v) > V_PLAUSIBLE_PU)
-            | (np.abs(frame.i) > I_PLAUSIBLE_PU)
-            | (np.abs(frame.rocof) > ROCOF_PLAUSIBLE_HZ_S)
+        bad = frames.valid & (
+            (np.abs(frames.v) > V_PLAUSIBLE_PU)
+            | (np.abs(frames.i) > I_PLAUSIBLE_PU)
+            | (np.abs(frames.rocof) > ROCOF_PLAUSIBLE_HZ_S)
         )
-    if not bad.any():
-        return frame, [""] * bad.size
+    n = int(np.count_nonzero(bad))
+    if not n:
+        return frames, 0
     nan = np.where(bad, np.nan, 1.0)
-    out = Frame(
-        frame.t,
-        frame.valid & ~bad,
-        frame.v * nan,
-        frame.i * nan,
-        frame.freq * nan,
-        frame.rocof * nan,
-    )
-    return out, [IMPLAUSIBLE if b else "" for b in bad]
+    kept = (frames.v * nan, frames.i * nan, frames.freq * nan, frames.rocof * nan)
+    return type(frames)(frames.t, frames.valid & ~bad, *kept), n
 
 
 def flags(cfg2, data: bytes) -> list[str]:

@@ -512,6 +512,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                     return Answered(n, dict(flagged), tuple(gaps))
                 try:  # a data frame, checked (`c37.check_data_frame`), on the rate's grid
                     frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, data))
+                    if odd:
+                        flagged[c37.IMPLAUSIBLE] += odd
                     first, prev = (ends[0], ends[-1]) if ends else (None, None)
                     if why := c37.ends_fault(first, prev, n, data, cfg2):
                         raise InputError(why)
@@ -520,7 +522,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                         f"the plant at {host}:{port}: its frame {n + 1} after 'start': {exc}"
                         f", after {n} frame(s) answered"
                     ) from None
-                flagged.update(why for why in [*c37.flags(cfg2, data), *odd] if why)
+                flagged.update(why for why in c37.flags(cfg2, data) if why)
                 k = round(frame.t * cfg.rate)
                 if last is not None and (lost := k - round(last * cfg.rate) - 1) > 0:
                     # as `sources.read_frames` and `closed_loop.track` take a gap: the

@@ -545,10 +545,9 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
         base = cfg2.get_time_base()
         for k, (d, leap) in enumerate(zip(data, c37.leap_offsets(data, cfg2))):
             try:
-                frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, d))
+                frame = c37.parse_frame(cfg, cfg2, d)
             except InputError as exc:
                 raise InputError(f"stream {s + 1}, data frame {k + 1}: {exc}") from None
-            flagged.update(why for why in odd if why)
             # a frame after a leap second is 1 s later than stamped (`c37.leap_offsets`)
             t = c37.reporting_instant(frame.t + int(leap) - frac, cfg.rate, base)
             if t < -BEFORE_CFG2_S:
@@ -564,6 +563,9 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
             flagged.update(why for why in c37.flags(cfg2, d) if why)
         # after the frames' own checks (`c37.check_data_frame`), as a receiver makes them
         check_order(data, cfg2, f"stream {s + 1}")
+        frames, odd = c37.plausible(frames)
+        if odd:
+            flagged[c37.IMPLAUSIBLE] += odd
         parsed.append((cols, frames))
     if lost := [x for x in labels if x not in owner]:
         raise InputError(f"PMU {', '.join(lost)} in no stream")
