@@ -22,14 +22,14 @@ A job that raises a `stabctl.errors.Verdict` (a robust fault, an N-1 insecure on
 recorded as that verdict, not as a failure, with the runs that reached it when the study
 counted them (``n_simulations``) and its islanding, if any.  A job that raises anything
 else is recorded as failed with the exception's type and message (and the traceback for
-anything but a stabctl error), never dropped. A worker process that dies in a local pool
+anything but a stabctl error), never dropped.  A worker process that dies in a local pool
 (killed, out of memory) breaks the pool and every job not finished with it: they run
 again on a new pool, those then running first and each alone, and a job whose worker
-dies again alone is recorded failed; a job never run is never recorded (`_local`). On
+dies again alone is recorded failed; a job never run is never recorded (`_local`).  On
 Dask a job whose worker died runs again on another worker (the scheduler's
 ``distributed.scheduler.allowed-failures``, default 3) and is recorded failed only when
 it killed a worker each time (KilledWorker); each job is released once recorded, so that
-a worker's death makes no finished job run again. Jobs a Dask cluster could not run (its
+a worker's death makes no finished job run again.  Jobs a Dask cluster could not run (its
 scheduler gone, or no worker left for DASK_NO_WORKER_S) are not recorded:
 `SweepIncomplete` names them, and the same call runs them.
 Rerunning with the same file skips the keys already there (failed ones too, unless
