@@ -518,6 +518,7 @@ def screen(
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
+    from stabctl.stability import screening
     from stabctl.stability.cct import T_AFTER_FAULT
     from stabctl.stability.screening import screen as run_screen
 
@@ -529,7 +530,7 @@ def screen(
     check_suffix(out_path, (".jsonl",), "--out")
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault
-    check_step_given(case, model, 1.0 + T_AFTER_FAULT)  # the faults at 1 s
+    check_step_given(case, model, screening.T_FAULT + T_AFTER_FAULT)
     rows = run_screen(
         case_name,
         out_path,

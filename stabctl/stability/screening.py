@@ -44,7 +44,7 @@ def _whose(rec: dict, jobs=()) -> str:
     if same is not None:
         differ = parallel.input_differences(inputs, same.inputs, same.compared)
         return f"the same fault screened with other inputs ({differ or 'none named'})"
-    if inputs.get("trips") or inputs.get("esd_pct") is not None or inputs.get("t_fault") != 1.0:
+    if inputs.get("trips") or inputs.get("esd_pct") is not None or inputs.get("t_fault") != T_FAULT:
         return "a sweep-cct record (trips, a storage rating or a fault time no screening has)"
     return "a sweep-cct record or another screening's (of other buses or lines)"
 
@@ -90,8 +90,12 @@ def _guess(case: Case, fault: LineFault, bus_cct: float | None) -> float | None:
     return None if splits_machines(case, opened) else bus_cct
 
 
+#: when every fault of a screening starts, s
+T_FAULT = 1.0
+
+
 def screening_faults(
-    case: Case, buses=None, lines: bool = False, t_fault: float = 1.0
+    case: Case, buses=None, lines: bool = False, t_fault: float = T_FAULT
 ) -> list[LineFault]:
     """Bus faults at `buses` (default all) and, with `lines`, a fault at the from-end of
     every branch (first circuit of parallel ones once each) with the branch tripped."""
