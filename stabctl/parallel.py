@@ -1501,11 +1501,14 @@ def _handshake(address: str, timeout: float) -> None:
     thread = threading.Thread(target=run, name="stabctl-dask-handshake", daemon=True)
     thread.start()
     thread.join()  # (a daemon: Ctrl-C ends the wait, the thread ends within timeout)
+    # Dask retries a refused connection till the time-out, then says "Timed out trying
+    # to connect" (an OSError) or asyncio's wait ends first (a TimeoutError): either way
+    # whether anything listens is asked of the port itself
+    if isinstance(ended[0], OSError) and (why := _no_listener(address)):
+        raise ConnectionRefusedError(
+            f"{why}, through the {timeout:g} s a starting scheduler is waited for"
+        )
     if isinstance(ended[0], TimeoutError):
-        if why := _no_listener(address):  # Dask retried a refused connection till then
-            raise ConnectionRefusedError(
-                f"{why}, through the {timeout:g} s a starting scheduler is waited for"
-            )
         raise TimeoutError("it accepted the connection and sent no Dask handshake")
     if ended[0] is not None:
         raise ended[0]
