@@ -49,10 +49,10 @@ from stabctl.cli.pmu_options import (
     fault_event,
     fault_run_options,
     keep_interrupted,
+    kept_at,
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
-    refuse_short_over,
     stream_controller,
     stream_idcodes,
 )
@@ -646,8 +646,7 @@ def track(
         raise
     why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
     kept = f"{_instants(got)} tracked"
-    if got.short:
-        refuse_short_over(out_path, why, kept)
+    at = kept_at(out_path) if got.short else out_path
     try:
         d = cl.track(ctrl, got.frames, got.breaks)
     except KeyboardInterrupt as exc:  # what was estimated is kept, as record keeps frames
@@ -660,13 +659,13 @@ def track(
                 len(d.t),
                 "frame estimated" if len(d.t) == 1 else "frames estimated",
                 "a partial estimate",
-                lambda: _write_track(out_path, ctrl, d, esd_pct is not None),
+                lambda to: _write_track(to, ctrl, d, esd_pct is not None),
             )
             if d.t.size
             else f"no frame was estimated yet, so nothing is kept: {what}"
         )
         raise
-    _write_track(out_path, ctrl, d, esd_pct is not None)
+    _write_track(at, ctrl, d, esd_pct is not None)
     rel = np.where(d.formed[:, None], np.abs(d.rel), -1.0)
     worst = np.unravel_index(np.argmax(rel), rel.shape) if d.formed.any() else None
     unformed = d.unformed([p.label for p in ctrl.pmus])
@@ -683,10 +682,10 @@ def track(
         + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + (f"; {gaps}" if (gaps := sources.gap_line(got)) else "")
         + "".join(f"; {unsent}" for unsent in got.unsent)
-        + f"; wrote {out_path}"
+        + f"; wrote {at}"
     )
     if got.short:
-        fail_short(out_path, why, kept)
+        fail_short(out_path, at, why, kept)
 
 
 def _instants(got) -> str:

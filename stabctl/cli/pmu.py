@@ -40,10 +40,10 @@ from stabctl.cli.pmu_options import (
     fault_event,
     fault_run_options,
     keep_interrupted,
+    kept_at,
     pmu_noise_options,
     pmu_settings,
     rate_latency_options,
-    refuse_short_over,
     stream_controller,
     stream_idcodes,
 )
@@ -425,16 +425,16 @@ def record(address, out, frames, idcode):
     then 'start', addressed to stream --idcode) and write its CFG-2 and FRAMES data frames
     to OUT, as received (an IPv6 HOST in brackets: [::1]:4712).  Each frame is checked as
     it comes (CRC; each data frame's IDCODE, type, size and FRACSEC count against the
-    CFG-2; a CFG-2 resent must be the one in use) and must come whole within 30 s, each data frame
-    within 30 s of the one before, whatever other frames come between.  A stream that
-    stops before FRAMES (the server closes, resets or sends no whole data frame for 30 s,
-    or a frame is refused) is written as far as it
-    came, up to the frame refused, and named an error (exit status 2: the recording is
-    partial), unless OUT exists: a file there is replaced only by a whole recording (OUT
-    left as it was).  Time stamps are checked as `pmu replay` and `estimate track` check
-    them, each data frame as it comes: one whose time stamp repeats or goes back, or is
-    off the reporting instants of the CFG-2's DATA_RATE, is refused so, named with its
-    time stamp, and the stream is cut there.
+    CFG-2; a CFG-2 resent must be the one in use) and must come whole within 30 s, each data
+    frame within 30 s of the one before, whatever other frames come between.  A stream that
+    stops before FRAMES (the server closes, resets or sends no whole data frame for 30 s, or
+    a frame is refused) is written as far as it came, up to the frame refused, and named an
+    error (exit status 2: the recording is partial), beside OUT when a file is there
+    (STEM.partial.SUFFIX: a file at OUT is replaced only by a whole recording).  Time stamps
+    are checked as `pmu replay` and `estimate track` check them, each data frame as it
+    comes: one whose time stamp repeats or goes back, or is off the reporting instants of
+    the CFG-2's DATA_RATE, is refused so, named with its time stamp, and the stream is cut
+    there.
     Interrupted (Ctrl-C, SIGTERM), the frames received are written likewise, as a partial
     recording (exit status 130, 143), and said.  Reporting instants the stream skipped
     (gaps), and PMU values of a failed clock or flagged by their STAT, are counted and
@@ -460,12 +460,10 @@ def record(address, out, frames, idcode):
         raise
     cfg2 = c37.read_config(got.cfg2, "the CFG-2")
     data, why, kept = got.data, f"{address}: {got.short}", f"{len(got.data)} received"
-    short = bool(got.short)
-    if short:
-        refuse_short_over(out, why, kept)
-    _write_recording(out, got.cfg2, data)
-    if short:
-        fail_short(out, why, kept)
+    at = kept_at(out) if got.short else out
+    _write_recording(at, got.cfg2, data)
+    if got.short:
+        fail_short(out, at, why, kept)
     gaps = stream_gaps(data, cfg2)
     flagged = unused_values(
         collections.Counter(why for d in data for why in c37.flags(cfg2, d) if why)
@@ -487,9 +485,9 @@ def _write_recording(out, cfg2: bytes, data) -> None:
 def _keep_interrupted(out, address: str, stream) -> str:
     """What an interrupted `record` keeps, for its ``interrupted:`` line: the data frames
     received (`c37_tcp.receive`'s partial `stream`, None if the CFG-2 had not come) written
-    to OUT as a partial recording, atomically, unless OUT exists (left as it was, as for
-    any stream cut short) or no data frame came.  A second interrupt while writing leaves
-    OUT as it was."""
+    to OUT as a partial recording, atomically (beside OUT when a file is there, as for
+    any stream cut short), unless no data frame came.  A second interrupt while writing
+    leaves the files as they were."""
     if stream is None:
         return f"nothing is kept: {address} had not sent its CFG-2"
     n = len(stream.data)
@@ -502,7 +500,7 @@ def _keep_interrupted(out, address: str, stream) -> str:
         n,
         "received",
         "a partial recording",
-        lambda: _write_recording(out, stream.cfg2, stream.data),
+        lambda at: _write_recording(at, stream.cfg2, stream.data),
     )
 
 

@@ -291,39 +291,62 @@ def stream_controller(case, estimator, settings, esd_pct, law, pmu_at):
     return ctrl
 
 
-def refuse_short_over(out, why: str, kept: str) -> None:
-    """Refuse to write what a stream that stopped before its end brought over an existing
-    output: a file there is replaced only by a whole stream (`pmu record`, `estimate
-    track`).
+def kept_at(out) -> Path:
+    """Where a stream cut short keeps what it brought: `out` itself when no file is there,
+    else a sibling ``STEM.partial.SUFFIX`` (``STEM.partial-2.SUFFIX``, ... when that is
+    taken too), so a file at `out` is replaced only by a whole result and the frames that
+    came are not lost (`pmu record`, `estimate track`).
 
     Parameters
     ----------
     out : str or Path
-        The output file.
-    why : str
-        The stream and what cut it, as the message starts.
-    kept : str
-        What came, e.g. ``"121 received"``.
+        The output file asked for.
 
-    Raises
-    ------
-    InputError
-        `out` exists: the message says it is left as it was.
+    Returns
+    -------
+    Path
+        A path where no file is.
     """
-    if Path(out).exists():
-        raise InputError(f"{why}; {out} is left as it was (the {kept} are not written over it)")
+    out = Path(out)
+    n = 1
+    at = out
+    while at.exists() or at.is_symlink():
+        tag = "partial" if n == 1 else f"partial-{n}"
+        at = out.with_name(f"{out.stem}.{tag}{out.suffix}")
+        n += 1
+    return at
 
 
-def fail_short(out, why: str, kept: str) -> None:
-    """Name, as an error, a stream that stopped before its end: `out` holds what it
-    brought (a new file, written whole as far as the stream came; `refuse_short_over`
-    refused an existing one), so the frames received are kept while the exit status says
-    the result is partial.
+def where_kept(out, at) -> str:
+    """Where `kept_at` put a partial result, as a message ends: ``"in OUT"``, or ``"in
+    SIBLING (OUT is left as it was)"``.
 
     Parameters
     ----------
     out : str or Path
-        The output file written.
+        The output file asked for.
+    at : str or Path
+        Where the partial result was written.
+
+    Returns
+    -------
+    str
+        The words.
+    """
+    return f"in {at}" if Path(at) == Path(out) else f"in {at} ({out} is left as it was)"
+
+
+def fail_short(out, at, why: str, kept: str) -> None:
+    """Name, as an error, a stream that stopped before its end: `at` (`kept_at`) holds what
+    it brought, written whole as far as the stream came, so the frames received are kept
+    while the exit status says the result is partial.
+
+    Parameters
+    ----------
+    out : str or Path
+        The output file asked for.
+    at : str or Path
+        Where what came was written.
     why : str
         The stream and what cut it.
     kept : str
@@ -334,19 +357,20 @@ def fail_short(out, why: str, kept: str) -> None:
     InputError
         Always: the message names the shortfall and where what came is (exit status 2).
     """
-    raise InputError(f"{why}; the {kept} are in {out}")
+    raise InputError(f"{why}; the {kept} are {where_kept(out, at)}")
 
 
 def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> str:
     """What an interrupted command keeps, for its ``interrupted:`` line: `n` items (the
-    frames `pmu record` received, the frames `estimate track` estimated) written to `out`
-    by `write` (atomically), unless `out` exists (left as it was, as for any stream cut
-    short).  A second interrupt while writing leaves `out` as it was.
+    frames `pmu record` received, the frames `estimate track` estimated) written by
+    `write` (atomically) to `out`, or beside it when a file is there (`kept_at`: left as
+    it was, as for any stream cut short).  A second interrupt while writing leaves the
+    files as they were.
 
     Parameters
     ----------
     out : str or Path
-        The output file.
+        The output file asked for.
     what : str
         What was done before the interrupt, as the line starts.
     n : int
@@ -355,9 +379,9 @@ def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> 
         What they are, after their number, singular for one (``"received"``, ``"frames
         estimated"``, ``"frame estimated"``).
     partial : str
-        What `out` then is (``"a partial recording"``).
+        What the file written then is (``"a partial recording"``).
     write : callable
-        Writes them to `out`, atomically, as a partial result.
+        ``write(path)`` writes them to `path`, atomically, as a partial result.
 
     Returns
     -------
@@ -365,12 +389,13 @@ def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> 
         Where the items are, or why they are lost.
     """
     are = "is" if n == 1 else "are"
-    if Path(out).exists():
-        return f"{what}; {out} is left as it was (the {n} {noun} {are} not written over it)"
+    at = kept_at(out)
     try:
-        write()
+        write(at)
     except OSError as exc:
-        return f"{what}; the {n} {noun} {are} lost: {out}: {exc.strerror or exc}"
+        return f"{what}; the {n} {noun} {are} lost: {at}: {exc.strerror or exc}"
     except KeyboardInterrupt:
-        return f"{what}; the {n} {noun} {are} lost: interrupted again while writing {out}"
-    return f"{what}; the {n} {noun} {are} in {out}, {partial}"
+        return f"{what}; the {n} {noun} {are} lost: interrupted again while writing {at}"
+    if at == Path(out):
+        return f"{what}; the {n} {noun} {are} in {out}, {partial}"
+    return f"{what}; the {n} {noun} {are} in {at}, {partial} ({out} is left as it was)"

@@ -1918,20 +1918,26 @@ def test_stream_errors_name_the_address_and_the_source(kundur_wire, tmp_path):
 def test_record_cut_short_leaves_an_existing_recording_as_it_was(kundur_wire, tmp_path):
     """`pmu record -o good.c37` from a stream cut after 3 frames replaced the good
     recording with the 3 frames: a file there is replaced only by a whole recording (it
-    is left byte for byte, no temporary file beside it); a whole recording replaces it."""
+    is left byte for byte), and the frames that came are not lost either: they are
+    written beside it (good.partial.c37, then good.partial-2.c37); a whole recording
+    replaces it."""
     _, _, head, body = kundur_wire
     out = tmp_path / "good.c37"
     out.write_bytes(head + b"".join(body))
-    srv, port = _pmu_server(head, body[:3])
-    with srv:
-        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 50, "-o", out)
-    assert_error(
-        res,
-        f"127.0.0.1:{port}: the server closed the connection after 3 data frames",
-        f"{out} is left as it was (the 3 received are not written over it)",
-    )
-    assert out.read_bytes() == head + b"".join(body)
-    assert list(tmp_path.iterdir()) == [out]
+    for n, name in ((3, "good.partial.c37"), (4, "good.partial-2.c37")):
+        srv, port = _pmu_server(head, body[:n])
+        with srv:
+            res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 50, "-o", out)
+        assert_error(
+            res,
+            f"127.0.0.1:{port}: the server closed the connection after {n} data frames",
+            f"the {n} received are in {tmp_path / name} ({out} is left as it was)",
+        )
+        assert out.read_bytes() == head + b"".join(body)
+        assert (tmp_path / name).read_bytes() == head + b"".join(body[:n])
+    assert len(list(tmp_path.iterdir())) == 3
+    (tmp_path / "good.partial.c37").unlink()
+    (tmp_path / "good.partial-2.c37").unlink()
     srv, port = _pmu_server(head, body[:5])
     with srv:
         res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 5, "-o", out)
@@ -2147,7 +2153,8 @@ def test_omib_refuses_a_fault_not_cleared_before_the_run_ends(args, needle):
 def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, tmp_path):
     """`estimate track --until 100` of a 1.2 s recording replaced an existing --out with
     the frames tracked and exited 2: as `pmu record`, an existing file is replaced only by
-    the track of a whole stream (exit 2, left byte for byte, refused before tracking); a
+    the track of a whole stream (exit 2, left byte for byte; the partial track written
+    beside it, keep.partial.csv); a
     new one is written as far as the stream came and the shortfall named an error (exit
     2: the result is partial, the frames received kept)."""
     from stabctl.estimation import c37
@@ -2159,12 +2166,14 @@ def test_track_of_a_stream_cut_short_replaces_no_file_on_an_error(kundur_wire, t
     out.write_text("keep\n")
     track = ("estimate", "track", "kundur", "--source", rec, "--until", 100, "--out")
     res = run(*track, out)
-    assert_error(
-        res,
-        f"--source {rec} stopped before t = 100 s: ",
-        f"; {out} is left as it was (the 73 frames tracked are not written over it)",
-    )
-    assert out.read_text() == "keep\n" and sorted(tmp_path.iterdir()) == [out, rec]
+    beside = tmp_path / "keep.partial.csv"
+    assert res.exit_code == 2, res.output
+    [said] = res.stderr.splitlines()
+    assert said.startswith(f"error: --source {rec} stopped before t = 100 s: ")
+    assert said.endswith(f"; the 73 frames tracked are in {beside} ({out} is left as it was)")
+    assert res.stdout.endswith(f"wrote {beside}\n")
+    assert out.read_text() == "keep\n" and sorted(tmp_path.iterdir()) == [out, beside, rec]
+    assert len(beside.read_text().splitlines()) == 1 + 73
     new = tmp_path / "new.csv"
     res = run(*track, new)
     assert res.exit_code == 2, res.output

@@ -442,10 +442,13 @@ def test_an_interrupted_track_keeps_what_it_estimated(
         said = f"interrupted: 30 of the {len(c37.recorded_frames(kundur_recording)[1])} frames"
         assert res.stderr.startswith(said), res.stderr
         if existing:
-            assert f"; {out} is left as it was (the 30 frames estimated are not written " in (
-                res.stderr
+            beside = tmp_path / "t.partial.csv"
+            assert (
+                f"; the 30 frames estimated are in {beside}, a partial estimate ({out} is left "
+                "as it was); " in res.stderr
             )
             assert out.read_text() == "kept"
+            assert len(beside.read_text().splitlines()) == 1 + 30
         else:
             assert f"; the 30 frames estimated are in {out}, a partial estimate; " in res.stderr
             head, *rows = out.read_text().splitlines()
@@ -707,7 +710,8 @@ def test_record_refuses_time_stamps_replay_and_track_refuse(kundur_recording, tm
     repeated frame was even named a 9-instant gap), a recording `pmu replay` and
     `estimate track` then refuse: refused as they refuse it, naming the frame and its
     time stamp (exit 2), the frames before it written as a partial recording, as for a
-    frame refused by its CRC; an existing OUT is left as it was.  The frame is refused
+    frame refused by its CRC; an existing OUT is left as it was, the frames written beside
+    it.  The frame is refused
     as it comes: the stream, served in real time, is cut there, not received to its end
     (all 73 frames) before the time stamps were looked at."""
     from stabctl.estimation.c37_tcp import StreamServer
@@ -738,10 +742,12 @@ def test_record_refuses_time_stamps_replay_and_track_refuse(kundur_recording, tm
             "before 73 frames; " in res.stderr
         )
         if existing:
+            beside = tmp_path / "o.partial.c37"
             assert res.stderr.endswith(
-                f"; {out} is left as it was (the 20 received are not written over it)\n"
+                f"; the 20 received are in {beside} ({out} is left as it was)\n"
             )
             assert out.read_bytes() == b"kept"
+            assert c37.recorded_frames(beside)[1] == data[:20]
         else:
             assert res.stderr.endswith(f"; the 20 received are in {out}\n")
             assert c37.recorded_frames(out)[1] == data[:20]

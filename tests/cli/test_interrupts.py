@@ -704,7 +704,7 @@ def test_an_interrupted_recording_keeps_the_frames_received(
     the frames received written as a partial recording (whole frames, CFG-2 first, read
     back as they were sent), named on the one ``interrupted:`` line with their count and
     last time stamp; a second interrupted recording to the same file leaves it as it
-    was, and says so."""
+    was and writes its frames beside it (r.partial.c37), and says so."""
     cfg2, data = kundur_on_the_wire
     kept = b""
     for again in (False, True):
@@ -721,9 +721,13 @@ def test_an_interrupted_recording_keeps_the_frames_received(
         n = int(said[1])
         assert n >= 1 and float(said[2]) == pytest.approx((n - 1) / 60, abs=1e-4)
         if again:
-            assert said[3] == f"r.c37 is left as it was (the {n} received are not written over it)"
+            assert said[3] == (
+                f"the {n} received are in r.partial.c37, a partial recording (r.c37 is left "
+                "as it was)"
+            )
+            assert (tmp_path / "r.partial.c37").read_bytes() == cfg2 + b"".join(data[:n])
         else:
             assert said[3] == f"the {n} received are in r.c37, a partial recording"
             kept = cfg2 + b"".join(data[:n])
         assert (tmp_path / "r.c37").read_bytes() == kept
-        assert [p.name for p in tmp_path.iterdir()] == ["r.c37"]
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["r.c37", "r.partial.c37"][: 1 + again]

@@ -114,7 +114,8 @@ def test_record_keeps_the_good_frames_before_a_refused_one(wire, tmp_path, bad, 
     """Data frames with a bad CRC, or of another IDCODE (CRC recomputed), were recorded
     with exit status 0.  The recording stops at the first refused frame: a new file holds
     the good frames before it and the command exits 2 naming the server, the frame and
-    why; an existing file is left as it was; a stream bad from its first frame writes
+    why; an existing file is left as it was, the good frames written beside it; a stream
+    bad from its first frame writes
     nothing."""
     _, _, head, body = wire
     stream = b"".join([*body[:5], bad(body[5]), *body[6:20]])
@@ -134,8 +135,10 @@ def test_record_keeps_the_good_frames_before_a_refused_one(wire, tmp_path, bad, 
     srv, port = _server(head, stream)
     with srv:
         res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 15, "-o", keep)
-    one_error(res, "data frame 6", f"{keep} is left as it was (the 5 received")
+    beside = tmp_path / "keep.partial.c37"
+    one_error(res, "data frame 6", f"the 5 received are in {beside} ({keep} is left as it was)")
     assert keep.read_bytes() == head + b"".join(body)
+    assert beside.read_bytes() == head + b"".join(body[:5])
     srv, port = _server(head, b"".join(bad(f) for f in body[:20]))
     with srv:
         res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 15, "-o", tmp_path / "n.c37")
