@@ -719,8 +719,7 @@ def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:
     labels = [p.label for p in ctrl.pmus]
     head = ["t_s", *(f"f_{x}_hz" for x in labels), "f_coi_hz"]
     head += [f"rel_{x}_mhz" for x in labels]
-    rel = np.where(d.formed[:, None], d.rel, np.nan)  # none without every machine's speed
-    cols = [d.t[:, None], d.freq, (d.freq - rel)[:, :1], 1e3 * rel]
+    cols = [d.t[:, None], d.freq, (d.freq - d.rel)[:, :1], 1e3 * d.rel]  # nan: not formed
     if with_modes:
         buses = ctrl.case.buses.number[ctrl.sa.bus]
         head += [f"mode_esd{k + 1}_bus{int(b)}" for k, b in enumerate(buses)]

@@ -66,7 +66,8 @@ HISTORY_WINDOWS = 3
 @dataclass
 class Diagnostics:
     """What the controller saw, per frame: t (n_f,) s time stamps; rel (n_f, n_mac) the
-    relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency); modes
+    relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency;
+    nan in a frame where they could not be formed, `formed`); modes
     (n_f, n_dev) the commanded modes; freq (n_f, n_mac) the machine speeds those came from
     (Hz); mac: each device's machine index; latency (s), f0 (Hz), coi ("system" or "rest")
     of the loop."""
@@ -89,8 +90,8 @@ class Diagnostics:
     @property
     def formed(self) -> np.ndarray:
         """(n_f,) bool: whether a frame's relative speeds could be formed, every machine's
-        speed estimated (a COI needs them all); where not, `rel` holds 0, on which the
-        law keeps the devices idle."""
+        speed estimated (a COI needs them all); where not, `rel` is nan (the law acted
+        on 0 there, which keeps the devices idle)."""
         return np.isfinite(self.freq).all(axis=1)
 
     def unformed(self, labels) -> str:
@@ -233,6 +234,7 @@ class LoopController:
         n, m = self.models.n, self.mode.size
         a = np.vstack(self.rows) if self.rows else np.zeros((0, 1 + 2 * n + m))
         t, rel, freq = a[:, 0], a[:, 1 : 1 + n], a[:, 1 + n + m :]
+        rel = np.where(np.isfinite(freq).all(axis=1, keepdims=True), rel, np.nan)
         modes = a[:, 1 + n : 1 + n + m].astype(np.int64)
         return Diagnostics(
             t=t,

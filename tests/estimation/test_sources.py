@@ -363,3 +363,28 @@ def test_a_value_beyond_any_measurement_is_not_used(kundur_run):
             )
     assert np.array_equal(tracks[0].freq, tracks[1].freq)
     assert np.abs(tracks[0].rel).max() < 1.0  # Hz
+
+
+def test_a_frame_without_relative_speeds_gives_none_not_zero(kundur_run):
+    """The library's track of frames whose first PMU is absent throughout: no relative
+    speed can be formed (a COI needs every machine's speed), so `Diagnostics.rel` is nan
+    in every frame (it held 0, the value the law acts on, idling the devices), while the
+    other machines' speeds are estimated; the same frames with that PMU present form
+    every relative speed."""
+    case, _res, pmus, drawn = kundur_run
+    from stabctl.estimation import closed_loop as cl
+
+    frames = list(drawn)[:60]
+    gone = np.arange(len(pmus)) == 0
+    holed = [
+        f._replace(
+            valid=f.valid & ~gone,
+            **{x: np.where(gone, np.nan, getattr(f, x)) for x in ("v", "i", "freq", "rocof")},
+        )
+        for f in frames
+    ]
+    for stream, whole in ((holed, False), (frames, True)):
+        d = cl.track(cl.LoopController(case, (), "raw", SETTINGS, 0, 1.0), stream)
+        assert d.formed.all() == whole and d.formed.any() == whole
+        assert np.isfinite(d.rel).all() == whole and np.isnan(d.rel).all() != whole
+        assert np.isfinite(d.freq[:, 1:]).all()
