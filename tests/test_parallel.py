@@ -68,9 +68,17 @@ def sleepy(inputs):
 
 
 def ctrl_c_parent(inputs):
-    """Press Ctrl-C on the sweep's own process (the pool's parent) after x s."""
-    x = inputs["x"]
-    time.sleep(x)
+    """Press Ctrl-C on the sweep's own process (the pool's parent) after x s, or, with
+    inputs["after"] = [path, n], once the records file at path holds n lines (within a
+    minute, however loaded the machine); the time of the press is written to path.sig."""
+    time.sleep(inputs["x"])
+    if "after" in inputs:
+        path, n = Path(inputs["after"][0]), inputs["after"][1]
+        for _ in range(600):
+            if path.exists() and len(path.read_text().splitlines()) >= n:
+                break
+            time.sleep(0.1)
+        Path(f"{path}.sig").write_text(repr(time.time()))
     os.kill(os.getppid(), signal.SIGINT)
     return {}
 
@@ -252,12 +260,13 @@ def sigint_raises():
 
 def test_ctrl_c_on_a_process_pool_keeps_finished_lines(tmp_path, sigint_raises):
     out = tmp_path / "ctrl_c.jsonl"
-    slow = jobs_of(sleepy, 2.0, 2.5)
-    jobs = jobs_of(square, 1, 2) + jobs_of(ctrl_c_parent, 0.5) + slow
-    t0 = time.perf_counter()
+    slow = jobs_of(sleepy, 30.0, 40.0)
+    press = Job("ctrl_c_parent/0", ctrl_c_parent, {"x": 0.0, "after": [str(out), 2]})
+    jobs = [*jobs_of(square, 1, 2), press, *slow]
     with pytest.raises(KeyboardInterrupt):
         run_sweep(jobs, out, workers=2, progress=False)
-    assert time.perf_counter() - t0 < 10
+    # ended at the press, not after the sleeping jobs (30 s on): killed, not waited for
+    assert time.time() - float(Path(f"{out}.sig").read_text()) < 20
     keys = [r["key"] for r in lines(out)]
     assert {"square/1", "square/2"} <= set(keys) and not any(k.startswith("sleepy") for k in keys)
     rest = run_sweep(
