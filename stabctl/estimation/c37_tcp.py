@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 from stabctl.errors import InputError
 from stabctl.estimation import c37
+from stabctl.jsontext import MAX_INPUT_BYTES
 
 #: C37.118.2-2011 Table 15 command words this server acts on
 COMMANDS = {1: "stop", 2: "start", 3: "header", 5: "cfg2"}
@@ -905,9 +906,54 @@ def _recv_exactly(
     return out
 
 
-#: Most data frames a receiver keeps from one stream (about 12 h at 60 frames/s): a
-#: stream without an end (`End`) is refused beyond it instead of filling the memory.
-MAX_FRAMES = 2_600_000
+#: Most bytes of data frames a receive keeps (`receive`'s ``max_bytes``): what a
+#: recording may hold (`stabctl.jsontext.MAX_INPUT_BYTES`, 256 MiB), so a stream received
+#: is never more than a recording that can be read back; an end (`End`) that asks for
+#: more is refused before 'start', a stream without one is refused past it, instead of
+#: filling the memory.
+MAX_STREAM_BYTES = MAX_INPUT_BYTES
+
+
+def most_frames(config, max_bytes: int, end: End) -> int:
+    """The most data frames of a stream of CFG-2 `config` that fit in `max_bytes`
+    (`c37.data_frame_size` each).
+
+    Parameters
+    ----------
+    config : pyc37 ConfigFrame2
+        The stream's CFG-2.
+    max_bytes : int
+        The bytes the data frames may take.
+    end : End
+        The end asked for: refused if it needs more frames (``frames``, or the
+        reporting instants up to ``tf`` at the DATA_RATE).
+
+    Returns
+    -------
+    int
+        The frames.
+
+    Raises
+    ------
+    InputError
+        `end` needs more frames than fit: the message names the frame size, the most
+        frames and seconds that fit, and the options that set the end.
+    """
+    size = c37.data_frame_size(config)
+    most = max(1, max_bytes // size)
+    step = c37.frame_interval(config)  # (a DATA_RATE of 0 is refused with the frames)
+    wanted = end.frames
+    if end.tf is not None and step > 0:
+        by_time = math.floor(end.tf / step + 1e-6) + 1
+        wanted = by_time if wanted is None else min(wanted, by_time)
+    if wanted is not None and wanted > most:
+        raise InputError(
+            f"a stream to {end} is {wanted} data frames of {size} bytes, more than the "
+            f"{max_bytes / 2**20:.0f} MiB a stream received may hold (at most {most} frames, "
+            f"{(most - 1) * step:.0f} s of this stream; a recording holds as much): "
+            "receive it in parts (--frames or --until)"
+        )
+    return most
 
 
 @dataclass(frozen=True)
@@ -992,6 +1038,7 @@ def receive(
     idcode: int = 1,
     timeout: float | None = None,
     data: list | None = None,
+    max_bytes: int = MAX_STREAM_BYTES,
 ) -> Stream:
     """The CFG-2 frame and the data frames of the C37.118.2 stream at host:port: command
     frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached, each
@@ -1024,7 +1071,8 @@ def receive(
         reply to 'cfg2' that is not a readable CFG-2 (`c37.read_config`: its frame type,
         its CRC), a peer of another protocol or bytes off a frame's start (a FRAMESIZE
         that is not the frame's), a connection reset or closed before the first data
-        frame, a first data frame refused, or more than `MAX_FRAMES` frames of a stream
+        frame, a first data frame refused, an `end` whose data frames are more than
+        `max_bytes` (`most_frames`, before 'start'), or more than those of a stream
         without a stated end: each named with host:port.
     """
     from pyc37.frame import CommandFrame
@@ -1052,8 +1100,9 @@ def receive(
                     f"addressed (its messages say which)"
                 )
             config = c37.read_config(cfg2, "its CFG-2")
+            most = most_frames(config, max_bytes, end)
             conn.sendall(CommandFrame(idcode, "start").convert2bytes())
-            short, refused = _data_frames(conn, config, end, data, timeout)
+            short, refused = _data_frames(conn, config, end, data, timeout, most)
         except FrameTimeout as exc:
             raise InputError(f"{where}: sent {exc}, before any data frame") from None
         except TimeoutError:
@@ -1091,7 +1140,9 @@ def _interrupted_stream(cfg2, data: list, end: End) -> Stream | None:
     return Stream(cfg2, data, said)
 
 
-def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float) -> tuple[str, str]:
+def _data_frames(
+    conn: socket.socket, cfg2, end: End, data: list, budget: float, most: int
+) -> tuple[str, str]:
     """Append data frames from conn to data until `end`, every frame checked against cfg2
     (the CFG-2 as pyc37 reads it; `c37.check_stream_frame`: a data frame's CRC, IDCODE,
     type and size, any other frame's CRC, a CFG-2 resent unchanged; a data frame's time
@@ -1103,7 +1154,8 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
     first byte to end, so a wait that runs out in the middle of a header frame is no
     frame cut short); the connection's time-out is left at it.  The frames' times, and
     the `End.tf` end, are the time elapsed since the CFG-2's time stamp
-    (`c37.config_stamp`), across a leap second too (`c37.stamp_times`, as a recording's)."""
+    (`c37.config_stamp`), across a leap second too (`c37.stamp_times`, as a recording's).
+    More than `most` data frames (`most_frames`) is an InputError."""
     soc, frac = c37.config_stamp(cfg2)
     step = c37.frame_interval(cfg2)  # a frame within one interval past --until ends it
     leaps = 0  # positive leap seconds in the stream up to its last data frame
@@ -1153,10 +1205,11 @@ def _data_frames(conn: socket.socket, cfg2, end: End, data: list, budget: float)
                     last = f", the last stamped {elapsed:.4f} s"
                     if end.tf is not None and elapsed >= end.tf - 0.5e-6:
                         return "", ""
-                    if not end.given and len(data) > MAX_FRAMES:
+                    if len(data) > most:  # only without an end: `most_frames` checked it
                         raise InputError(
-                            f"more than {MAX_FRAMES} frames without an end: give the frames "
-                            "or the last time stamp to receive"
+                            f"more than {most} data frames (what a stream received may "
+                            "hold) without an end: give the frames or the last time stamp "
+                            "to receive (--frames or --until)"
                         )
                     continue
                 if not end.given:

@@ -326,7 +326,8 @@ def read_frames(
     each, as a PDC does; Ctrl-C ends the wait; `idcode` the IDCODE of the stream each
     server sends, which the commands address: one int for all, or one per server of the
     source; `timeout` the longest wait for a whole
-    frame, None: `c37_tcp.RECEIVE_TIMEOUT_S`), then merged.  A stream that stops before
+    frame, None: `c37_tcp.RECEIVE_TIMEOUT_S`; the streams share `c37_tcp.MAX_STREAM_BYTES`,
+    what one recording may hold), then merged.  A stream that stops before
     `end` is kept and named in `Received.short`; one cut at a data frame that is refused
     is not (the whole source is refused).
 
@@ -344,7 +345,7 @@ def read_frames(
         stream whose time stamps repeat or go backwards, streams that share no time stamp
         (`merge`), or frames whose every value is absent.
     """
-    from stabctl.estimation.c37_tcp import End, Stream, receive
+    from stabctl.estimation.c37_tcp import MAX_STREAM_BYTES, End, Stream, receive
 
     end = end or End()
     if source.path is not None:
@@ -364,10 +365,13 @@ def read_frames(
             )
         got: list[Stream | Exception | None] = [None] * len(source.servers)
         came: list[list] = [[] for _ in source.servers]  # each stream's data frames so far
+        n_servers = len(source.servers)  # sharing what one stream may hold, as a recording
 
         def fetch(k, host, port):
             try:
-                got[k] = receive(host, port, end, idcode=codes[k], timeout=timeout, data=came[k])
+                got[k] = receive(
+                    host, port, end, codes[k], timeout, came[k], MAX_STREAM_BYTES // n_servers
+                )
             except (InputError, OSError) as exc:  # handed to the caller
                 got[k] = exc
 

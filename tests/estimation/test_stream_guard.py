@@ -6,6 +6,7 @@ takes as controller only an allowed peer that completes the handshake and refuse
 outside {-1, 0, +1}; recordings whose time stamps repeat or go back, or whose every value
 is absent, are refused by name."""
 
+import re
 import socket
 import threading
 import time
@@ -93,20 +94,39 @@ def test_a_stream_ends_at_its_end_and_the_server_is_told_stop(kundur_stream):
     assert len(whole.data) == 61 and not whole.short
 
 
-def test_a_stream_without_an_end_stops_at_the_frame_cap(kundur_stream, monkeypatch):
-    """A source with neither a frame count nor a last time stamp keeps at most
-    `c37_tcp.MAX_FRAMES` frames (the finding: an endless stream held 4.5 GB in 11 min):
-    past them one error naming the cap and what sets an end.  The cap set to 5 against
-    the 61 frames of the fixture; with an end given the cap does not apply."""
-    from stabctl.estimation import c37_tcp
+def test_a_stream_holds_no_more_than_a_recording(kundur_stream, monkeypatch):
+    """A source with neither a frame count nor a last time stamp keeps at most the data
+    frames `c37_tcp.MAX_STREAM_BYTES` holds (the finding: an endless stream held 4.5 GB in
+    11 min): past them one error naming the cap and what sets an end.  An end given was
+    not bounded at all (``--frames 1000000000`` or ``--until 1e9`` against an endless
+    server filled the memory as before): an end that needs more frames than the cap is
+    refused before 'start', naming the frame size and the most frames and seconds; one
+    within it is received.  The cap set to 5 data frames of Kundur's 4 PMUs against the
+    61 frames of the fixture; streams of several servers share it."""
+    from stabctl.estimation import c37, c37_tcp
 
-    monkeypatch.setattr(c37_tcp, "MAX_FRAMES", 5)
     _case, _pmus, cfg, cfg2, frames = kundur_stream
     data = _encoded(cfg, cfg2, frames)
+    size = c37.data_frame_size(cfg2)
     with StreamServer(cfg2, data, speed=float("inf")) as server:
-        with pytest.raises(InputError, match="more than 5 frames without an end: give the"):
-            receive(*server.address, timeout=10)
-        assert len(receive(*server.address, End(frames=20), timeout=10).data) == 20
+        address = server.address
+        with pytest.raises(
+            InputError, match=r"more than 5 data frames \(what a stream received may hold\) "
+        ):
+            receive(*address, timeout=10, max_bytes=5 * size)
+        for end, wanted in ((End(frames=20), 20), (End(tf=0.1), 7), (End(20, 0.05), 4)):
+            if wanted > 5:
+                with pytest.raises(
+                    InputError,
+                    match=rf"a stream to {re.escape(str(end))} is {wanted} data frames of "
+                    rf"{size} bytes, more than the 0 MiB a stream received may hold \(at "
+                    r"most 5 frames, 0 s of this stream; ",
+                ):
+                    receive(*address, end, timeout=10, max_bytes=5 * size + 3)
+            else:
+                assert len(receive(*address, end, timeout=10, max_bytes=5 * size).data) == 4
+        assert len(receive(*address, End(frames=20), timeout=10).data) == 20
+    assert c37_tcp.MAX_STREAM_BYTES == 256 * 2**20  # what a recording may hold
 
 
 def test_server_drops_scans_silent_peers_bad_crc_and_strangers(kundur_stream):
