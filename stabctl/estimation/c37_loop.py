@@ -47,6 +47,7 @@ import numpy as np
 from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.estimation.c37_tcp import (
+    MAX_STREAM_BYTES,
     FrameTimeout,
     Guard,
     _read_frame,
@@ -478,7 +479,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
         that does not describe the controller's stream (`c37.check_config`: its FNOM the
         case's nominal frequency among its fields), or a frame after 'start' that is
         neither a data frame of the stream (`c37.parse_frame`) nor the end-of-run header
-        (its CRC valid).
+        (its CRC valid), or more data frames than `c37_tcp.MAX_STREAM_BYTES` holds (a
+        run that does not end).
     PlantStopped
         The plant closed the loop without its end-of-run header, or announced an end
         that is not its last frame's (`_check_run_end`) (an InputError).
@@ -505,11 +507,19 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 c37.check_config(cfg2, cfg)
             except InputError as exc:
                 raise InputError(f"the plant at {host}:{port}: {exc}") from None
+            most = MAX_STREAM_BYTES // c37.data_frame_size(cfg2)  # the rows the loop keeps
             conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
             while (data := _read_frame(conn)) is not None:
                 if (t_end := _end_time(data, cfg.idcode)) is not None:
                     _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
                     return Answered(n, dict(flagged), tuple(gaps))
+                if n >= most:
+                    raise InputError(
+                        f"the plant at {host}:{port} sent more than {most} data frames (what "
+                        f"a stream received may hold, {MAX_STREAM_BYTES / 2**20:g} MiB) "
+                        "without ending its run: a plant's run is one disturbance, whose "
+                        "frames the controller keeps"
+                    )
                 try:  # a data frame, checked (`c37.check_data_frame`), on the rate's grid
                     frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, data))
                     if odd:

@@ -186,6 +186,23 @@ def test_a_plant_s_frames_off_its_rate_s_grid_are_refused(kundur_loop, times, k)
     assert f"after {k - 1} frame(s) answered" in said
 
 
+def test_a_plant_that_never_ends_its_run_is_refused_at_the_stream_cap(kundur_loop, monkeypatch):
+    """A plant that streams on and on without its end-of-run header: the controller kept
+    a row per frame answered without bound.  It answers at most the data frames a stream
+    received may hold (`c37_tcp.MAX_STREAM_BYTES`, here two frames' bytes and one), then
+    refuses the plant naming the cap; within it the run is answered to its end."""
+    sim, _events = kundur_loop
+    pmus = cl.LoopController(sim.case, (), "ekf", *_rest()).pmus
+    cfg2 = c37.config_frame(c37.stream_config(sim.case, pmus, 60))
+    one = c37.data_frame_size(cfg2)
+    monkeypatch.setattr(c37_loop, "MAX_STREAM_BYTES", 2 * one + 1)
+    out, errors = three_frames_then(kundur_loop, 3 / 60)
+    assert not out and isinstance(errors[0], InputError), (out, errors)
+    assert "sent more than 2 data frames (what a stream received may hold, " in str(errors[0])
+    monkeypatch.setattr(c37_loop, "MAX_STREAM_BYTES", 3 * one)
+    assert three_frames_then(kundur_loop, 3 / 60) == ([3], [])
+
+
 @pytest.mark.parametrize(
     "t_end, whole",
     [(3 / 60, True), (3.9 / 60, True), (30.0, False), (4.5 / 60, False), (2 / 60, False)],
