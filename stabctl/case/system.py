@@ -240,9 +240,8 @@ class Table:
                 self._fail(bad[0], name, f"non-finite value {arr[bad[0]]}")
             bad = np.flatnonzero(np.abs(arr) > LARGEST_VALUE)
             if bad.size:
-                self._fail(
-                    bad[0], name, f"{arr[bad[0]]:g} is beyond +-{LARGEST_VALUE:g}: no datum is"
-                )
+                big = f"{arr[bad[0]]:g} is beyond +-{LARGEST_VALUE:g}: no datum is that large"
+                self._fail(bad[0], name, big)
             if name in self.INTEGER:
                 bad = np.flatnonzero(arr != np.round(arr))
                 if bad.size:

@@ -105,6 +105,7 @@ and governors above) and its ``psse-dyr.yaml``; PSS/E Model Library for the para
 from __future__ import annotations
 
 import json
+import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -1019,7 +1020,8 @@ _WHAT = {
 
 def _violated(p, v: float) -> str:
     """Why ANDES would replace a given value v of NumParam p by its default ('' if not)."""
-    if not np.isfinite(v):
+    v = float(v)  # (an int read from a sheet may be beyond int64: 1e30 as 10**30)
+    if not math.isfinite(v):
         return "not a finite number"
     if v == 0 and p.get_property("non_zero"):
         return "must not be 0"

@@ -129,6 +129,8 @@ def edited(tmp_path, case: str, model: str, **values):
         (SOLAR, "REGCA1", {"bus": 77}, "bus = 77: no ACNode (Bus) of that idx in the case"),
         (WT3, "WTARA1", {"rego": 99}, "rego = 99: no RenGovernor (WTDTA1) of that idx in the case"),
         (WT3, "REECA1", {"reg": 99}, "reg = 99: no RenGen (REGCA1) of that idx in the case"),
+        # a "no limit" written 1e30, read back as an integer beyond int64: a traceback
+        (ESD1, "ESD1", {"SOCmax": 1e30}, "SOCmax = 1e+30: it must be SOCmax <= 1"),
     ],
 )
 def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
@@ -140,6 +142,22 @@ def test_converter_data_andes_would_default_or_that_cannot_be_is_refused(
     ) as err:
         read_andes_case(path, on_unsupported="skip")
     assert needle in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "case, model, name",
+    [(WT3, "REECA1", "Imax"), (WT3, "REGCA1", "Iqrmax"), (SOLAR, "REECA1", "Imax")],
+)
+def test_a_no_limit_of_1e30_is_refused_by_name_not_a_traceback(tmp_path, case, model, name):
+    """A converter limit written 1e30 (a "no limit" of other tools), which the sheet reader
+    hands on as an integer beyond int64: `import-andes` stopped with numpy's TypeError
+    (isfinite of an object).  It is refused, as any value beyond 1e15, naming the row and
+    the parameter."""
+    path = edited(tmp_path, case, model, **{name: 1e30})
+    with pytest.raises(CaseError) as err:
+        read_andes_case(path, on_unsupported="skip")
+    assert f"{path.name}: {model} row 1 (idx " in str(err.value)
+    assert f"{name} = 1e+30: 1e+30 is beyond +-1e+15: no datum is that large" in str(err.value)
 
 
 def test_parameters_left_out_are_named_with_andes_s_default(tmp_path):
