@@ -243,9 +243,9 @@ def _int16(value, what: str, k: int) -> int:
 #: 12 (data sorting by arrival): the PDC put the values in the frame as they came, not by
 #: their own time stamps, so they may belong to another instant.
 STAT_UNUSABLE: tuple[tuple[int, int, str], ...] = (
-    (0xC000, 0x4000, "PMU error (STAT bits 15-14 = 01)"),
-    (0xC000, 0x8000, "absent (STAT bits 15-14 = 10)"),
-    (0xC000, 0xC000, "test mode (STAT bits 15-14 = 11)"),
+    (0xC000, 0x4000, "PMU error, no information about data (STAT bits 15-14 = 01)"),
+    (0xC000, 0x8000, "test mode or absent (STAT bits 15-14 = 10)"),
+    (0xC000, 0xC000, "PMU error (STAT bits 15-14 = 11)"),
     (0x2000, 0x2000, "PMU sync lost (STAT bit 13)"),
     (0x1000, 0x1000, "sorted by arrival (STAT bit 12)"),
 )
@@ -300,6 +300,54 @@ def time_unusable(data: bytes) -> str:
     """
     q = data[10]
     return next((why for mask, value, why in TIME_QUALITY_UNUSABLE if q & mask == value), "")
+
+
+#: the reason `marked` gives: a field holding C37.118.2's absent-data value (0x8000 in a
+#: 16-bit integer, NaN in a floating-point field), or an integer FREQ or DFREQ at the end
+#: of its span (0x7FFF or -0x7FFF: saturated, no measurement)
+MARKED = "absent-data value (0x8000 or NaN) or saturated FREQ/DFREQ"
+#: 16-bit integers that are no measurement: C37.118.2's absent-data value, and in FREQ
+#: and DFREQ the ends of the span (saturated)
+_ABSENT_INT, _SATURATED_INT = -0x8000, 0x7FFF
+
+
+def marked(b: Block, data: bytes, at: int) -> str:
+    """Why a PMU block's fields hold no measurement, STAT aside: `MARKED` if a phasor,
+    FREQ or DFREQ field holds the absent-data value (0x8000 in a signed 16-bit integer
+    field, NaN in a floating-point one; an unsigned integer magnitude has no such value),
+    or an integer FREQ or DFREQ is saturated (+-0x7FFF); else ''.  Such a value read as a
+    measurement (0x8000 in FREQ is FNOM - 32.768 Hz) drove the raw estimator 25 Hz off.
+
+    Parameters
+    ----------
+    b : Block
+        The PMU's block.
+    data : bytes
+        A data frame.
+    at : int
+        Byte offset of the block's first phasor (after its STAT).
+
+    Returns
+    -------
+    str
+        `MARKED` or ''.
+    """
+    n = len(b.units)
+    if b.ph_float:
+        ph = struct.unpack_from(f">{2 * n}f", data, at)
+        if any(math.isnan(x) for x in ph):
+            return MARKED
+    else:
+        ph = struct.unpack_from(">" + ("Hh" if b.polar else "hh") * n, data, at)
+        signed = ph[1::2] if b.polar else ph
+        if _ABSENT_INT in signed:
+            return MARKED
+    at += n * (8 if b.ph_float else 4)
+    if b.fr_float:
+        fr = struct.unpack_from(">ff", data, at)
+        return MARKED if any(math.isnan(x) for x in fr) else ""
+    fr = struct.unpack_from(">hh", data, at)
+    return MARKED if any(x in (_ABSENT_INT, _SATURATED_INT, -_SATURATED_INT) for x in fr) else ""
 
 
 def unusable(stat: int) -> str:
@@ -518,8 +566,9 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     """A data frame of the stream back to a `pmu.Frame` (pu, Hz, Hz/s), read as cfg2
     says (`check_config`; its checks first, and `check_data_frame`'s).  A PMU whose STAT
     makes its values unusable (`unusable`: absent, PMU error, test mode, sync lost,
-    sorted by arrival) is invalid, its values NaN, as is every PMU of a frame whose
-    FRACSEC time quality says clock failure (`time_unusable`).
+    sorted by arrival), or whose fields hold an absent-data value (`marked`), is invalid,
+    its values NaN, as is every PMU of a frame whose FRACSEC time quality says clock
+    failure (`time_unusable`).
 
     Raises
     ------
@@ -538,7 +587,8 @@ def parse_frame(cfg: StreamConfig, cfg2, data: bytes) -> Frame:
     at = 14
     clock = time_unusable(data)
     for k, b in enumerate(lay.blocks):
-        if not clock and not unusable(int.from_bytes(data[at : at + 2], "big")):
+        stat = int.from_bytes(data[at : at + 2], "big")
+        if not clock and not unusable(stat) and not marked(b, data, at + 2):
             valid[k] = True
             ph = _phasors(b, data, at + 2)
             v[k] = ph[lay.voltage[k]] / cfg.v_base[k]
@@ -638,7 +688,8 @@ def plausible(frames):
 
 def flags(cfg2, data: bytes) -> list[str]:
     """Why each PMU's values in a data frame are not used, by its STAT (`unusable`) or,
-    STAT aside, the frame's FRACSEC time quality (`time_unusable`); '' for those used.
+    STAT aside, the frame's FRACSEC time quality (`time_unusable`) or an absent-data value
+    in its fields (`marked`); '' for those used.
 
     Parameters
     ----------
@@ -654,7 +705,8 @@ def flags(cfg2, data: bytes) -> list[str]:
     """
     out, at, clock = [], 14, time_unusable(data)
     for b in blocks(cfg2):
-        out.append(unusable(int.from_bytes(data[at : at + 2], "big")) or clock)
+        stat = unusable(int.from_bytes(data[at : at + 2], "big"))
+        out.append(stat or clock or marked(b, data, at + 2))
         at += b.size
     return out
 

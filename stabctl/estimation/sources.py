@@ -444,15 +444,17 @@ def unused_values(flagged: dict) -> str:
     -------
     str
         ``N PMU values not used by their STAT (n1 reason1, ...)`` (``STAT or time
-        quality`` when a clock failure is among the reasons; ``beyond any measurement``
-        for values no measurement gives, `c37.plausible`); '' if none.
+        quality`` when a clock failure is among the reasons; ``as marked absent in their
+        fields`` for `c37.marked`; ``beyond any measurement`` for values no measurement
+        gives, `c37.plausible`); '' if none.
     """
     if not flagged:
         return ""
     why = ", ".join(f"{n} {reason}" for reason, n in flagged.items())
     fracsec = {why for _, _, why in c37.TIME_QUALITY_UNUSABLE}
     by = "STAT or time quality" if fracsec.intersection(flagged) else "STAT"
-    how = [f"by their {by}"] if set(flagged) - {c37.IMPLAUSIBLE} else []
+    how = [f"by their {by}"] if set(flagged) - {c37.IMPLAUSIBLE, c37.MARKED} else []
+    how += ["as marked absent in their fields"] if c37.MARKED in flagged else []
     how += ["beyond any measurement"] if c37.IMPLAUSIBLE in flagged else []
     return f"{sum(flagged.values())} PMU values not used {', or '.join(how)} ({why})"
 

@@ -64,7 +64,7 @@ def test_over_tcp_equals_the_same_frames_in_process(kundur_run):
         "frames": len(drawn),
         "data_frames": len(drawn),
         "absent": int((~drawn.valid).sum()),
-        "flagged": {"absent (STAT bits 15-14 = 10)": int((~drawn.valid).sum())},
+        "flagged": {"test mode or absent (STAT bits 15-14 = 10)": int((~drawn.valid).sum())},
         "missing": 0,
         "gaps": [],
         "unsent": [],
@@ -355,11 +355,11 @@ def test_a_value_beyond_any_measurement_is_not_used(kundur_run):
         tracks.append(cl.track(cl.LoopController(case, (), "ekf", SETTINGS, 0, 1.0), got.frames))
         if stream is spiked:
             assert got.flagged[c37.IMPLAUSIBLE] == 1 and not got.frames[70].valid[0]
-            absent = got.flagged["absent (STAT bits 15-14 = 10)"]  # the frames dropped
+            absent = got.flagged["test mode or absent (STAT bits 15-14 = 10)"]  # the frames dropped
             assert sources.unused_values(got.flagged) == (
                 f"{absent + 1} PMU values not used by their STAT, or beyond any measurement "
-                f"({absent} absent (STAT bits 15-14 = 10), 1 |V| > 3 pu, |I| > 1000 pu or "
-                "|ROCOF| > 327.67 Hz/s)"
+                f"({absent} test mode or absent (STAT bits 15-14 = 10), 1 |V| > 3 pu, "
+                "|I| > 1000 pu or |ROCOF| > 327.67 Hz/s)"
             )
     assert np.array_equal(tracks[0].freq, tracks[1].freq)
     assert np.abs(tracks[0].rel).max() < 1.0  # Hz

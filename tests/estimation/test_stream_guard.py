@@ -354,7 +354,7 @@ def test_an_all_absent_recording_is_refused_and_ends_cut_it(kundur_stream, tmp_p
     with pytest.raises(
         InputError,
         match=r"every PMU value of its 61 frames is missing or not used: 244 PMU values not "
-        r"used by their STAT \(244 absent \(STAT bits 15-14 = 10\)\), 0 missing",
+        r"used by their STAT \(244 test mode or absent \(STAT bits 15-14 = 10\)\), 0 missing",
     ):
         sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
     path = tmp_path / "r.c37"

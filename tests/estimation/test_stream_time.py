@@ -5,6 +5,7 @@ are counted and said, a short gap filled with missing values and a long one rest
 the estimator, never predicted across."""
 
 import binascii
+import struct
 
 import numpy as np
 import pytest
@@ -489,3 +490,58 @@ def test_a_machine_never_measured_leaves_no_relative_speed_not_zero(wire, tmp_pa
     assert np.isnan(rows["f_coi_hz"]).all() and np.isnan(rows["rel_B2G2_mhz"]).all()
     whole = _track(tmp_path, head, body)
     assert "no relative speed" not in whole.stdout and _largest_mhz(whole) > 100
+
+
+def _first_pmu_field(cfg2, frame: bytes, field: str, raw: bytes) -> bytes:
+    """frame with the first PMU's `field` (``freq``, ``dfreq`` or ``phasor``: its first
+    phasor's second word) written `raw`, its CRC valid."""
+    b = c37.blocks(cfg2)[0]
+    at = 16 + len(b.units) * (8 if b.ph_float else 4)
+    at = {"freq": at, "dfreq": at + len(raw), "phasor": 16 + len(raw)}[field]
+    return _crc(frame[:at] + raw + frame[at + len(raw) :])
+
+
+@pytest.mark.parametrize(
+    "field, raw",
+    [
+        ("freq", b"\x80\x00"),  # the absent-data value: FNOM - 32.768 Hz as a number
+        ("freq", b"\x7f\xff"),  # saturated: FNOM + 32.767 Hz
+        ("dfreq", b"\x80\x00"),
+        ("phasor", struct.pack(">f", float("nan"))),  # a floating-point phasor's NaN
+    ],
+)
+def test_an_absent_data_value_in_a_field_is_not_a_measurement(wire, tmp_path, field, raw):
+    """C37.118.2's absent-data value (0x8000) in G1's FREQ on six frames, its STAT good:
+    the raw estimator read it as FNOM - 32.768 Hz, "largest |f_i - f_COI| 24988.7 mHz";
+    a saturated FREQ (0x7FFF), 0x8000 in DFREQ and a NaN in a floating-point phasor
+    likewise (a NaN was not counted).  Such values are not used, as a STAT saying
+    absent makes them, and counted under their own reason: the track equals that of the
+    same frames with G1's STAT flagged absent."""
+    cfg2, head, body = wire
+    assert not c37.blocks(cfg2)[0].fr_float and c37.blocks(cfg2)[0].ph_float
+    hit = range(60, 66)
+    marked = [_first_pmu_field(cfg2, f, field, raw) if k in hit else f for k, f in enumerate(body)]
+    assert c37.flags(cfg2, marked[60]) == [c37.MARKED, "", "", ""]
+    flagged = [_stat_first(cfg2, f) if k in hit else f for k, f in enumerate(body)]
+    args = ["--estimator", "raw"]
+    res = CliRunner().invoke(main, [*_track_args(tmp_path, head, marked, "m"), *args])
+    same = CliRunner().invoke(main, [*_track_args(tmp_path, head, flagged, "s"), *args])
+    assert res.exit_code == 0 and same.exit_code == 0, (res.output, same.output)
+    assert "6 PMU values not used as marked absent in their fields (6 absent-data value " in (
+        res.stdout
+    )
+    assert _largest_mhz(res) == _largest_mhz(same) < 1000
+    assert (tmp_path / "m.csv").read_text() == (tmp_path / "s.csv").read_text()
+
+
+def _stat_first(cfg2, frame: bytes) -> bytes:
+    """frame with the first PMU's STAT saying absent data (bits 15-14 = 10), CRC valid."""
+    stat = int.from_bytes(frame[14:16], "big") | 0x8000
+    return _crc(frame[:14] + stat.to_bytes(2, "big") + frame[16:])
+
+
+def _track_args(tmp_path, head, body, name):
+    path = tmp_path / f"{name}.c37"
+    path.write_bytes(head + b"".join(body))
+    out = str(tmp_path / f"{name}.csv")
+    return ["estimate", "track", "kundur", "--source", str(path), "--out", out]
