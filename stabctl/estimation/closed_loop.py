@@ -45,6 +45,7 @@ from stabctl.estimation.pmu import (
     window_estimates,
 )
 from stabctl.estimation.settings import PMUSettings
+from stabctl.estimation.sources import FILL_S
 from stabctl.network.ybus import branch_admittances
 from stabctl.storage import control as law
 from stabctl.storage import devices as st
@@ -152,6 +153,8 @@ class LoopController:
         self.filter = _make_filter(estimator, self.models, settings)
         self.mode = np.zeros(len(devices), np.int64)
         self.held = np.full(self.models.n, np.nan)
+        #: time stamp (s) of each machine's last usable PMU value (nan: none yet)
+        self.seen = np.full(self.models.n, np.nan)
         self.rows: list = []  # `row`s, and blocks of them
         self._loose = 0  # rows appended since the last block
         #: frame -> frame as on the wire (transport "codec"), None: as measured
@@ -162,6 +165,7 @@ class LoopController:
         the rows recorded (`track` after a gap in the frames too long to predict across)."""
         self.filter = _make_filter(self.estimator, self.models, self.settings)
         self.held = np.full(self.models.n, np.nan)
+        self.seen = np.full(self.models.n, np.nan)
         self.mode = np.zeros_like(self.mode)
 
     def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
@@ -177,13 +181,31 @@ class LoopController:
         """The controller's half: the modes (n_dev,) of a measured frame (the estimator fed
         the frame, Table 3 on its speeds for the instant the modes take effect), wherever
         the frame comes from (`measure`, or a C37.118.2 stream:
-        `stabctl.estimation.c37_loop`)."""
+        `stabctl.estimation.c37_loop`).
+
+        A machine whose PMU values have been unusable (absent, flagged, a clock failure)
+        for more than `stabctl.estimation.sources.FILL_S` s has no speed (nan: no
+        relative speed is formed, the devices idle), as a gap in the frames that long is
+        not predicted across, and its estimate starts again at its next usable value
+        (`filters._MachineFilters.forget`).  A prediction across 4 s of flagged values
+        drove a machine to 62.8 Hz and the devices with it."""
+        usable = frame.valid[self.models.pmu]
+        back = usable & (frame.t - self.seen > FILL_S + 1e-9)  # lost longer than a gap
+        if back.any():
+            if self.estimator == "raw":
+                self.held[back] = np.nan
+            else:
+                self.filter.forget(back)
+        self.seen = np.where(usable, frame.t, self.seen)
         if self.estimator == "raw":
             f = frame.freq[self.models.pmu] / self.models.f0
             self.held = np.where(np.isfinite(f), f, self.held)
-            return self._command(frame.t, self.held)
-        self.filter.step(frame)
-        return self._command(frame.t, self.filter.forecast(self.settings.latency_s)[0])
+            speed = self.held
+        else:
+            self.filter.step(frame)
+            speed = self.filter.forecast(self.settings.latency_s)[0]
+        stale = frame.t - self.seen > FILL_S + 1e-9
+        return self._command(frame.t, np.where(stale, np.nan, speed))
 
     def _command(self, t_f: float, speed: np.ndarray) -> np.ndarray:
         """Table 3 modes on the relative speeds of `speed` (n_mac,) pu, recorded."""

@@ -579,6 +579,20 @@ class _MachineFilters:
         self.t = frame.t
         return self._output()
 
+    def forget(self, which: np.ndarray) -> None:
+        """Start the machines `which` ((n,) bool) again, as before their first valid
+        frame: each starts anew at its next valid frame (a machine without a usable value
+        for longer than a gap is predicted across, `LoopController.act`).
+
+        Parameters
+        ----------
+        which : numpy.ndarray of bool, shape (n,)
+            The machines to start again.
+        """
+        self.ready[which] = False
+        self.nis[which] = np.nan
+        self.x[which], self.P[which] = np.nan, np.nan
+
     def forecast(self, horizon: float) -> tuple[np.ndarray, np.ndarray]:
         """Speed estimates (n,) pu and variances (n,) pu^2 `horizon` s after the last
         frame's time stamp, without changing the filter (e.g. to the instant a controller
@@ -650,6 +664,18 @@ class SwingEKF(_MachineFilters):
             np.full(models.n, np.nan + 0j),
             np.zeros((models.n, NG)),
         )
+
+    def forget(self, which: np.ndarray) -> None:
+        """As `_MachineFilters.forget`, the values held between frames of those machines
+        cleared too (`Held`).
+
+        Parameters
+        ----------
+        which : numpy.ndarray of bool, shape (n,)
+            The machines to start again.
+        """
+        super().forget(which)
+        self.held.hold[which], self.held.cur[which], self.held.g[which] = np.nan, np.nan, 0.0
 
     def _frame(self, frame: Frame) -> MachineFrame:
         """This filter's machines' voltage, current, frequency and valid mask."""

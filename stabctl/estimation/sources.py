@@ -181,6 +181,38 @@ class Received:
 FILL_S = 1.0
 
 
+def longest_unusable(frames, labels) -> str:
+    """The longest stretch over which one PMU's values were all unusable (invalid: absent,
+    flagged, a clock failure, a gap filled with missing values), if longer than `FILL_S`
+    s, in words naming the PMU and its time stamps; '' if none is.  An estimator predicts
+    that PMU's machine across such a stretch no better than across a gap of frames that
+    long (`closed_loop.LoopController.act`).
+
+    Parameters
+    ----------
+    frames : pmu.Frames
+        The frames, column by column (`Received.frames`).
+    labels : sequence of str
+        The PMUs' labels, in column order.
+
+    Returns
+    -------
+    str
+        E.g. ``"B1:G1's values unusable from t = 1.5000 s to 5.4833 s (4 s)"``, or ''.
+    """
+    t, best = np.asarray(frames.t), ("", 0.0)
+    for k, label in enumerate(labels):
+        bad = ~np.asarray(frames.valid[:, k], bool)
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], bad.astype(np.int8), [0]))))
+        for a, b in zip(edges[::2], edges[1::2]):  # [a, b): a stretch of unusable values
+            # from the last usable value before it to the first after (or the end)
+            span = (t[b] if b < t.size else t[-1]) - (t[a - 1] if a else t[0])
+            if span > FILL_S + 1e-9 and span > best[1]:
+                when = f"from t = {t[a]:.4f} s to {t[b - 1]:.4f} s"
+                best = (f"{label}'s values unusable {when}", span)
+    return "" if not best[0] else f"{best[0]} ({best[1]:.3g} s between usable values)"
+
+
 @dataclass(frozen=True)
 class Gap:
     """Reporting instants (k / DATA_RATE) that no stream of a source sent, between two

@@ -136,7 +136,8 @@ def estimator_errors(
         ``t_end`` before the errors start; a source as
         `stabctl.estimation.sources.read_frames`, or one whose streams stop before the
         run's end, or with a gap of reporting instants longer than
-        `stabctl.estimation.sources.FILL_S` (`stabctl.estimation.sources.Received.breaks`).
+        `stabctl.estimation.sources.FILL_S` (`stabctl.estimation.sources.Received.breaks`)
+        or a PMU whose values are unusable that long (`sources.longest_unusable`).
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import ambient as am
@@ -195,6 +196,11 @@ def _received(case, res, settings, source, mc: ErrorRuns, window) -> dict:
         raise InputError(
             f"--source {source}: {sources.gap_line(got)}: a gap longer than "
             f"{sources.FILL_S:g} s, which the estimators cannot be evaluated across"
+        )
+    if lost := sources.longest_unusable(got.frames, [p.label for p in pmus]):
+        raise InputError(
+            f"--source {source}: {lost}: longer than {sources.FILL_S:g} s without a usable "
+            "value, which the estimators cannot be evaluated across (as a gap)"
         )
     truth = pm.phasor_truth(case, res, pmus, settings.window_cycles)
     drawn = pm.measure(truth, settings, mc.seed)

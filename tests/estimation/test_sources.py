@@ -388,3 +388,86 @@ def test_a_frame_without_relative_speeds_gives_none_not_zero(kundur_run):
         assert d.formed.all() == whole and d.formed.any() == whole
         assert np.isfinite(d.rel).all() == whole and np.isnan(d.rel).all() != whole
         assert np.isfinite(d.freq[:, 1:]).all()
+
+
+@pytest.mark.parametrize("estimator", ["ekf", "kf", "raw"])
+def test_a_machine_unmeasured_longer_than_a_gap_has_no_speed_then_starts_again(
+    kundur_run, estimator
+):
+    """G1's PMU values unusable (flagged) from 1.5 s to 5.5 s: the estimator predicted G1
+    across all 4 s (the finding: 62.8 Hz, the ESDs commanded on it), where a gap of
+    frames that long is not predicted across.  Once G1 has had no usable value for more
+    than `sources.FILL_S` s it has no speed (no relative speed formed, the devices
+    idle), and its estimate starts again at its next usable value: from 0.5 s after
+    that, the track equals, within 20 mHz, that of the frames with G1 measured
+    throughout."""
+    from stabctl.estimation import closed_loop as cl
+    from stabctl.storage.devices import uniform_fleet
+
+    case, _res, pmus, drawn = kundur_run
+    frames = list(drawn)
+    g1 = np.arange(len(pmus)) == 0
+    lost = set(range(90, 330))
+    holed = [
+        f._replace(
+            valid=f.valid & ~g1,
+            **{x: np.where(g1, np.nan, getattr(f, x)) for x in ("v", "i", "freq", "rocof")},
+        )
+        if k in lost
+        else f
+        for k, f in enumerate(frames)
+    ]
+    devices = uniform_fleet(case, 5).devices
+    runs = [
+        cl.track(cl.LoopController(case, devices, estimator, SETTINGS, 0, 6.0), x)
+        for x in (holed, frames)
+    ]
+    d, whole = runs
+    t = d.t
+    usable = np.array([f.valid[0] for f in holed])
+    seen = np.maximum.accumulate(np.where(usable, np.arange(t.size), -1))
+    stale = t - t[np.maximum(seen, 0)] > sources.FILL_S + 1e-9
+    assert stale.sum() >= 170 and np.array_equal(~d.formed, stale)
+    assert (d.modes[stale] == 0).all() and np.isnan(d.freq[stale, 0]).all()
+    after = t >= t[330] + 0.5
+    assert np.abs(d.freq[after] - whole.freq[after]).max() < 0.02  # Hz
+
+
+def test_a_source_with_a_pmu_unusable_longer_than_a_gap_is_no_ground_for_error_figures(
+    tmp_path,
+):
+    """`estimate rmse --source` of a recording whose G1 values are flagged (STAT bits
+    15-14 = 11) from 0.5 s to 1.75 s presented its figures, where the same stretch of
+    frames missing is refused: the estimators cannot be evaluated across either.  It is
+    refused naming the PMU and the stretch; flagged for 0.75 s it is evaluated."""
+    from click.testing import CliRunner
+    from pmu_streams import kundur_stream
+
+    from stabctl.cli import main
+
+    _, _, cfg, frames = kundur_stream(t_end=2.0)
+    g1 = np.arange(len(frames[0].valid)) == 0
+    run = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101"]
+    run += ["--clear-cycles", "6", "--tf", "2", "--seed", "1", "--source"]
+    for last, refused in ((105, True), (75, False)):
+        flagged = [
+            f._replace(
+                valid=f.valid & ~g1,
+                **{x: np.where(g1, np.nan, getattr(f, x)) for x in ("v", "i", "freq", "rocof")},
+            )
+            if 30 <= k <= last
+            else f
+            for k, f in enumerate(frames)
+        ]
+        path = tmp_path / f"g1_{last}.c37"
+        c37.record(path, cfg, flagged)
+        res = CliRunner().invoke(main, [*run, str(path)])
+        if refused:
+            assert res.exit_code == 2, res.output
+            assert (
+                f"error: --source {path}: B1:G1's values unusable from t = 0.5000 s to "
+                "1.7500 s (1.28 s between usable values): longer than 1 s without a usable "
+                "value, which the estimators cannot be evaluated across" in res.stderr
+            )
+        else:
+            assert res.exit_code == 0, res.output
