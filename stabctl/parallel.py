@@ -697,7 +697,8 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         running another stabctl (`_on_worker`).
     SweepIncomplete
         (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S; a job
-        whose worker died runs again on another worker.
+        whose worker died runs again on another worker.  (From map, on processes) worker
+        processes died more than `POOL_RESTARTS` times in one map (`_RestartedPool`).
     """
     if scheduler is not None:  # '' is refused (`check_scheduler`), never local
         with dask_client(scheduler, workers) as client:
@@ -706,10 +707,65 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     if workers == 1:
         yield _in_process
         return
-    with pooled(workers) as pool:
-        yield lambda func, jobs, done=None: [
-            f.result() for f in _told([pool.submit(func, j) for j in jobs], as_completed, done)
-        ]
+    with ExitStack() as stack:
+        yield _RestartedPool(workers, stack).map
+
+
+class _RestartedPool:
+    """`worker_pool`'s map on `pooled` processes, kept for the with block (`stack`): a
+    pool broken by a worker that died (killed, out of memory: every job not finished is
+    lost with it, BrokenProcessPool) is replaced by a new one for those jobs, up to
+    `POOL_RESTARTS` times in one map (beyond, `SweepIncomplete`), as a sweep's
+    (`_local`): a placement whose worker was killed stopped with a traceback."""
+
+    def __init__(self, workers: int, stack: ExitStack):
+        self.workers, self.stack = workers, stack
+        self.pool = stack.enter_context(pooled(workers))
+
+    def map(self, func, jobs: list, done=None) -> list:
+        """func(job) for each job, results in job order; done(k, n) as each finishes."""
+        results: dict = {}
+        left, restarts = list(range(len(jobs))), 0
+        while True:
+            lost = self._run(func, jobs, left, results, done)
+            if not lost:
+                return [results[k] for k in range(len(jobs))]
+            restarts += 1
+            if restarts > POOL_RESTARTS:
+                raise SweepIncomplete(
+                    f"{len(lost)} of {len(jobs)} jobs not run: worker processes died "
+                    f"{restarts} times (killed, or out of memory)"
+                )
+            warnings.warn(
+                f"a worker process died (killed, or out of memory): the {len(lost)} job(s) "
+                f"not finished run again (pool restart {restarts} of at most "
+                f"{POOL_RESTARTS})",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            stop_pool(self.pool)
+            self.pool = self.stack.enter_context(pooled(self.workers))
+            left = lost
+
+    def _run(self, func, jobs: list, left: list, results: dict, done) -> list:
+        """Run the jobs `left` (indices) on the pool into `results`; returns those lost
+        with a broken pool, in order (a job's own exception is raised)."""
+        futures: dict = {}
+        for k in left:
+            try:
+                futures[self.pool.submit(func, jobs[k])] = k
+            except BrokenProcessPool:
+                break
+        lost = left[len(futures) :]  # not sent
+        for fut in as_completed(futures):
+            try:
+                results[futures[fut]] = fut.result()
+            except BrokenProcessPool:
+                lost.append(futures[fut])
+                continue
+            if done is not None:
+                done(len(results), len(jobs))
+        return sorted(lost)
 
 
 def _finished(futures, workers):
@@ -772,15 +828,6 @@ def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:
         if done is not None:
             done(len(out), len(jobs))
     return out
-
-
-def _told(futures: list, completed: Callable, done) -> list:
-    """The futures, after calling done(k, n) as each finishes (`completed`:
-    concurrent.futures' as_completed); without done, at once."""
-    if done is not None:
-        for k, _ in enumerate(completed(futures), 1):
-            done(k, len(futures))
-    return futures
 
 
 def run_sweep(

@@ -99,6 +99,13 @@ def killed_once(inputs):
     return {"y": inputs["x"]}
 
 
+def dies_if(inputs):
+    """The worker process dies (os._exit) if inputs["die"], each time; else {}."""
+    if inputs["die"]:
+        os._exit(1)
+    return {}
+
+
 def slow_square(inputs):
     time.sleep(0.2)
     return square(inputs)
@@ -1254,6 +1261,31 @@ def test_worker_pool_runs_on_a_local_dask_cluster():
         assert run_map(dict, [{"a": 1}, {"b": 2}]) == [{"a": 1}, {"b": 2}]
         done = run_map(dict, [{"a": 1}, {"b": 2}], done=lambda k, n: seen.append((k, n)))
     assert done == [{"a": 1}, {"b": 2}] and seen == [(1, 2), (2, 2)]  # told as each finished
+
+
+def test_worker_pool_on_processes_loses_no_job_when_a_worker_is_killed(tmp_path):
+    """`worker_pool`'s map on two processes (`place --workers 2`, `paper`), one job's
+    worker killed (SIGKILL) the first time it runs: the map stopped with
+    BrokenProcessPool and a traceback, the plan lost.  The pool is replaced for the jobs
+    not finished, with a warning, and every result comes back in job order; the pool is
+    kept for the next map.  A job that kills its worker every time ends the map with
+    SweepIncomplete after `POOL_RESTARTS` restarts, naming the jobs not run."""
+    from stabctl.parallel import POOL_RESTARTS, SweepIncomplete, worker_pool
+
+    jobs = [{"x": k, "dir": str(tmp_path)} for k in range(6)]
+    with worker_pool(2) as run_map:
+        with pytest.warns(RuntimeWarning, match=r"a worker process died .*: the \d+ job\(s\) "):
+            got = run_map(killed_once, jobs)
+        assert got == [{"y": k} for k in range(6)]
+        assert run_map(killed_once, jobs[:2]) == [{"y": 0}, {"y": 1}]  # the new pool, kept
+        with (
+            pytest.warns(RuntimeWarning),
+            pytest.raises(
+                SweepIncomplete,
+                match=rf"1 of 2 jobs not run: worker processes died {POOL_RESTARTS + 1} times",
+            ),
+        ):
+            run_map(dies_if, [{"die": True}, {"die": False}])
 
 
 def test_an_output_file_without_any_record_is_left_alone(tmp_path):
