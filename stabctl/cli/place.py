@@ -287,7 +287,14 @@ def place(
         cost_site,
         read_site_costs(site_costs, n_mac, case.infinite_buses()) if site_costs else {},
     )
-    brackets = screening_brackets(screening, case_name, case.digest()) if screening else None
+    model = model_settings(conventions, step, q_limits)
+    brackets = (
+        screening_brackets(
+            screening, case_name, case.digest(), {**model.to_inputs(), "t_end": search.t_end}
+        )
+        if screening
+        else None
+    )
     faults = read_fault_list(case, case_name, faults_src)
     overrides = read_requirements(faults_src) if faults_src != "DEFAULT" else {}
     sites = candidate_sites(case, max_site_pct)
@@ -312,7 +319,7 @@ def place(
         controller=controller(deadband_hz, v_gate, "system" if armed else coi, hysteresis_hz),
         critical_reference=armed,
         search=search,
-        model=model_settings(conventions, step, q_limits),
+        model=model,
         runner=RunnerOptions(n, scheduler),
         esd_model=esd_model,
     )

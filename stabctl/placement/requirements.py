@@ -264,7 +264,7 @@ def read_site_costs(path, n_machines: int, no_site=()) -> dict:
     return out
 
 
-def screening_brackets(path, case: str, digest: str) -> dict:
+def screening_brackets(path, case: str, digest: str, settings: dict | None = None) -> dict:
     """The [stable, unstable] clearing times without storage of a case's faults, as a
     screening bracketed them.
 
@@ -277,6 +277,13 @@ def screening_brackets(path, case: str, digest: str) -> dict:
         name or a case file).
     digest : str
         The digest of that case's content (`stabctl.case.Case.digest`).
+    settings : dict, optional
+        The run settings the brackets must be of, as a job's inputs record them: the
+        model's (`stabctl.dynamics.options.ModelOptions.to_inputs`: conventions, h,
+        q_limits, subintervals) and the run end ``t_end`` (s, None: the default);
+        default: the defaults.  A bracket found with other settings is another model's
+        (a screening in PSTess's conventions made a fault stable that the placement's
+        runs find unstable: "0.0 MW ... VERIFIED").
 
     Returns
     -------
@@ -292,8 +299,9 @@ def screening_brackets(path, case: str, digest: str) -> dict:
         record (a damaged or cut line: the file must be whole) or one no CCT search can
         have written (`stabctl.stability.cct.cct_record_problem`), a record of another case or
         of other content of the case (its line named,
-        `stabctl.parallel.check_records_case`), a malformed screening record, or records
-        that bracket no fault.
+        `stabctl.parallel.check_records_case`), a record of other run settings than
+        `settings` (the first such named, with both values), a malformed screening
+        record, or records that bracket no fault.
     """
     from stabctl.io.inputs import input_file
     from stabctl.parallel import check_records_case, read_records
@@ -310,9 +318,18 @@ def screening_brackets(path, case: str, digest: str) -> dict:
         raise
     except (OSError, ValueError) as exc:
         raise InputError(f"screening records {path}: {exc}") from None
+    want = _run_settings(settings or {})
     out = {}
     for rec in records.values():
         r, inputs = rec.get("result") or {}, rec.get("inputs") or {}
+        if differ := [k for k, v in _run_settings(inputs).items() if v != want[k]]:
+            k = differ[0]
+            raise InputError(
+                f"screening records {path}: record {rec.get('key')!r} was run with {k} "
+                f"{_run_settings(inputs)[k]!r}, the placement with {want[k]!r}: its brackets "
+                "are of another model; give the records of `stabctl screen` run with the "
+                "placement's --conventions, --step and --no-q-limits, and its default --tf"
+            )
         still = verdict(rec) == ABOVE and "t_max" in inputs
         if inputs.get("esd_pct") is not None or not (
             (rec.get("status") == "ok" and "t_stable_s" in r) or still
@@ -343,6 +360,19 @@ def screening_brackets(path, case: str, digest: str) -> dict:
             "records of `stabctl screen --out`)"
         )
     return out
+
+
+def _run_settings(inputs) -> dict:
+    """The settings of a job's inputs that make its runs (`screening_brackets`), each
+    at its default when not recorded: conventions, h (None: the case's step),
+    q_limits, subintervals, t_end (None: the default run end)."""
+    return {
+        "conventions": inputs.get("conventions", "ieee"),
+        "h": inputs.get("h"),
+        "q_limits": inputs.get("q_limits", True),
+        "subintervals": inputs.get("subintervals", True),
+        "t_end": inputs.get("t_end"),
+    }
 
 
 def _whole(v) -> int:

@@ -1183,6 +1183,38 @@ def _screening_record(fault, digest):
     return json.dumps(rec)
 
 
+@pytest.mark.parametrize(
+    "inputs, args, needle",
+    [
+        ({"conventions": "pstess"}, (), "with conventions 'pstess', the placement with 'ieee'"),
+        ({"h": 0.01}, (), "with h 0.01, the placement with None"),
+        ({"q_limits": False}, (), "with q_limits False, the placement with True"),
+        ({"t_end": 3.0}, (), "with t_end 3.0, the placement with None"),
+        ({}, ("--conventions", "pstess"), "with conventions 'ieee', the placement with 'pstess'"),
+    ],
+)
+def test_screening_records_of_other_run_settings_are_refused(
+    tmp_path, no_simulation, inputs, args, needle
+):
+    """`place --screening` of a screening run in PSTess's conventions, while the
+    placement runs in the IEEE ones: a fault the screening found stable at the target was
+    left out, "0.0 MW ... VERIFIED", where the placement's own runs need 138.9 MW.  The
+    brackets are used only from records of the placement's run settings (conventions,
+    step, Q limits, run end): else refused, naming the record and both values."""
+    fault = {"bus": 3, "far_bus": 101, "t_fault": 1.0, "circuit": 1, "trips": []}
+    rec = json.loads(_screening_record(fault, load_case("kundur").digest()))
+    rec["inputs"].update(inputs)
+    screening = tmp_path / "s.jsonl"
+    screening.write_text(json.dumps(rec) + "\n")
+    place = ["place", "kundur", "--faults", "DEFAULT", "--workers", "1", "--target-cct-gain"]
+    assert_error(
+        run(*place, "5", *args, "--screening", screening),
+        f"screening records {screening}: record '{rec['key']}' was run ",
+        needle,
+        "give the records of `stabctl screen` run with the placement's --conventions",
+    )
+
+
 def test_screening_records_with_a_damaged_line_are_refused(tmp_path, no_simulation):
     """`place --screening` of a file whose line 2 is NUL bytes went on with a warning
     ("not a sweep record, ignored"): the placement used part of the screening as all of
