@@ -1040,10 +1040,12 @@ def _row_list(rows: list[int]) -> str:
 def _load(path: Path, dyr, said: list):
     """ANDES's ``System`` of ``path`` (+ ``dyr``), parsed, not set up; InputError if ANDES
     cannot read it, with what ANDES said (``said``: its log records)."""
+    from stabctl.jsontext import input_file
+
     andes = _andes()
-    for file in (path,) if dyr is None else (path, Path(dyr)):
-        if not file.is_file():
-            raise InputError(f"case file not found: {file}")
+    for file, what in ((path, "case file"), (dyr, "DYR file")):
+        if file is not None:  # missing, a pipe, a device, a directory or too large: named
+            input_file(file, what)
     kw = {} if dyr is None else {"addfile": str(dyr)}
     try:
         with warnings.catch_warnings():  # ANDES's own deprecation notices

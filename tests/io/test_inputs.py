@@ -81,6 +81,28 @@ def test_devices_pipes_and_directories_are_refused_before_reading(tmp_path):
     assert not (tmp_path / "o.jsonl").exists()
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="/dev/zero")
+def test_import_andes_names_a_pipe_or_device_as_such(tmp_path):
+    """`import-andes` of an existing FIFO or /dev/urandom said "case file not found", where
+    every other reader says what the path is: named as not a regular file; a DYR beside
+    a RAW file likewise; a missing file by the system's words."""
+    pytest.importorskip("andes")
+    fifo = tmp_path / "fifo.xlsx"
+    os.mkfifo(fifo)
+    raw = tmp_path / "c.raw"
+    raw.write_text("0, 100.0\n")
+    out = ["-o", str(tmp_path / "o.json")]
+    for args, needle in (
+        ([str(fifo)], f"case file {fifo}: not a regular file"),
+        (["/dev/urandom"], "case file /dev/urandom: not a regular file"),
+        ([str(raw), "/dev/zero"], "DYR file /dev/zero: not a regular file"),
+        ([str(tmp_path / "none.xlsx")], "none.xlsx: No such file or directory"),
+    ):
+        res = CliRunner().invoke(main, ["import-andes", *args, *out])
+        assert res.exit_code == 2 and needle in res.stderr, res.output
+    assert not (tmp_path / "o.json").exists()
+
+
 def test_requirement_columns_misspelt_are_refused_not_ignored(tmp_path):
     """A misspelt override column was ignored and the plan reported verified against the
     global requirement."""
