@@ -348,6 +348,25 @@ def test_listening_beyond_loopback_without_allow_list_warns(capsys):
         _allowed("", None)
 
 
+def test_a_host_given_as_the_servers_print_it_or_not_of_this_machine(kundur_recording):
+    """`--host [::1]` (the form the servers print their address in) failed with "Name or
+    service not known" after a warning that any host may connect; an address of no
+    interface here (fe80::1%lo) or a name that does not resolve likewise.  The brackets
+    are taken off; a host this machine cannot listen on is refused as a usage error,
+    before any warning and before any server starts."""
+    from stabctl.cli.pmu import _listen_host
+
+    assert _listen_host(None, None, "[::1]") == "::1"
+    assert _listen_host(None, None, "127.0.0.1") == "127.0.0.1"
+    for host in ("no.such.host.invalid", "[192.0.2.1]"):  # a name; a documentation address
+        res = CliRunner().invoke(
+            main, ["pmu", "replay", str(kundur_recording), "--port", "0", "--host", host]
+        )
+        assert res.exit_code == 2, res.output
+        [said] = res.stderr.splitlines()
+        assert said.startswith("error: Invalid value for '--host': ") and "cannot listen" in said
+
+
 def test_an_allow_list_no_peer_can_match_is_named(capsys):
     """`--allow 10.1.2.3` with `--host 127.0.0.1` (a loopback listener's peers are
     loopback) or `--allow ::1` on an IPv4 listener admitted no one without a word: each
