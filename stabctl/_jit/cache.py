@@ -350,6 +350,7 @@ class GuardedCache(FunctionCache):
 
     def load_overload(self, sig, target_context):
         """The cached kernel for sig, or None (compile it) if none, damaged or unsafe."""
+        _say_moved()
         try:
             return super().load_overload(sig, target_context)
         except Exception as exc:  # noqa: BLE001 - whatever a damaged pickle raises
@@ -381,6 +382,7 @@ class GuardedCache(FunctionCache):
     def save_overload(self, sig, data):
         """Save a compiled kernel, the cache's key (`stamp_cache`) first; not if an entry
         in its place cannot be replaced (`load_overload`)."""
+        _say_moved()
         if self._kept_out:
             return None
         stamp_cache()
@@ -475,18 +477,28 @@ def private_cache_dir() -> Path:
 
 
 def ensure_safe_cache() -> None:
-    """Point numba's cache at `private_cache_dir` (a RuntimeWarning names why) if
-    NUMBA_CACHE_DIR or one of stabctl's cache directories is unsafe (`unsafe_reason`)."""
+    """Point numba's cache at `private_cache_dir` if NUMBA_CACHE_DIR or one of stabctl's
+    cache directories is unsafe (`unsafe_reason`); a RuntimeWarning names why when a
+    kernel is first loaded or saved (`_say_moved`): at import it came before the CLI
+    reads warnings, as Python's raw text with a source line."""
     root = numba.config.CACHE_DIR
     places = ([Path(root)] if root else []) + cache_dirs()
     why = next((r for r in map(unsafe_reason, places) if r), "")
     if why:
         numba.config.CACHE_DIR = str(private_cache_dir())
-        warnings.warn(
-            f"numba cache: {why}; stabctl's kernels are cached in {numba.config.CACHE_DIR} instead",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+        _MOVED[:] = [
+            f"numba cache: {why}; stabctl's kernels are cached in {numba.config.CACHE_DIR} instead"
+        ]
+
+
+#: why the cache was moved (`ensure_safe_cache`), said once (`_say_moved`)
+_MOVED: list[str] = []
+
+
+def _say_moved() -> None:
+    """The RuntimeWarning of `ensure_safe_cache`, once, when the cache is first used."""
+    while _MOVED:
+        warnings.warn(_MOVED.pop(), RuntimeWarning, stacklevel=3)
 
 
 #: the cache key `stamp_cache` is to write (None: the stamp is up to date)
