@@ -534,9 +534,15 @@ def _keep_interrupted(out, address: str, stream) -> str:
 
 def _host_port(address: str) -> tuple[str, int]:
     """(host, port) of a HOST:PORT argument; InputError naming the address: no host or
-    port, or a port outside 1-65535 (`c37_tcp.port_number`)."""
+    port, a port outside 1-65535 (`c37_tcp.port_number`), or a list (one server here:
+    "127.0.0.1:1,127.0.0.1:2" was looked up as the host "[127.0.0.1:1,127.0.0.1]")."""
     from stabctl.estimation.c37_tcp import port_number, split_hostport
 
+    if "," in address:
+        raise InputError(
+            f"address {address!r}: one HOST:PORT (this command talks to one server; "
+            "`estimate track --source tcp://A,B` reads several)"
+        )
     try:
         host, port = split_hostport(address)
         if not host:

@@ -215,6 +215,9 @@ def test_estimate_source_refuses_monte_carlo_options(tmp_path):
         (["serve", "kundur", "--fault", "3", "--far-bus", "101", "--speed", "-1"], "--speed"),
         (["control", "kundur", "127.0.0.1:1", "--esd-pct", "5"], "no plant at 127.0.0.1:1"),
         (["control", "kundur", "127.0.0.1", "--esd-pct", "5"], "expected HOST:PORT"),
+        # a list, looked up as one host ("[127.0.0.1:1,127.0.0.1]:2")
+        (["record", "127.0.0.1:1,127.0.0.1:2", "--frames", "5", "-o", "r.c37"], "one HOST:PORT"),
+        (["control", "kundur", "127.0.0.1:1,127.0.0.1:2", "--esd-pct", "5"], "one HOST:PORT"),
         (["track", "kundur", "--source", "junk.c37", "--out", "t.csv"], "junk.c37: no frame SYNC"),
         (["track", "kundur", "--source", "missing.c37", "--out", "t.csv"], "no such recording"),
         (
