@@ -569,7 +569,12 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
         names = [str(x).strip() for x in (names if isinstance(names, list) else [names])]
         for name in names:
             if name not in labels:
-                raise InputError(f"stream {s + 1}: station {name!r} is not a PMU of this run")
+                raise InputError(
+                    f"stream {s + 1}: station {name!r} is not a PMU of this run (its PMUs "
+                    f"are {', '.join(labels[:4])}{', ...' if len(labels) > 4 else ''}: "
+                    "at the machines' terminal buses by default, at their HV buses with "
+                    "--pmu-at hv; the stream must be of the same case and placement)"
+                )
             if name in owner:
                 raise InputError(f"station {name!r} is in streams {owner[name] + 1} and {s + 1}")
             owner[name] = s

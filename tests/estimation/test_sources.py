@@ -201,7 +201,8 @@ def test_track_names_the_time_stamps_a_stream_did_not_send(kundur_run, tmp_path)
 @pytest.mark.parametrize(
     "change, needle",
     [
-        ("foreign", "station 'B9:G9' is not a PMU of this run"),
+        # named with the run's PMUs and --pmu-at (a stream of HV-bus PMUs read as terminal)
+        ("foreign", "station 'B9:G9' is not a PMU of this run (its PMUs are B1:G1, B2:G2, "),
         ("twice", "station 'B1:G1' is in streams 1 and 2"),
         ("rate", "stream 1: its CFG-2 DATA_RATE 30, not the 60 expected"),
         ("half", "PMU B3:G3, B4:G4 in no stream"),
