@@ -1066,7 +1066,7 @@ def _dyr_unmatched(path: Path, dyr) -> InputError | None:
     (`stabctl.io.dyr`'s reading of both files); None if no record is such, the files
     are not RAW + DYR, or either cannot be read so (ANDES's message is then the better
     one)."""
-    from stabctl.io.dyr import _KIND, _no_generator, machine_id, read_dyr
+    from stabctl.io.dyr import _KIND, machine_id, no_generator, read_dyr
     from stabctl.io.psse_raw import read_raw
 
     if dyr is None or path.suffix.lower() != ".raw":
@@ -1090,7 +1090,7 @@ def _dyr_unmatched(path: Path, dyr) -> InputError | None:
     if not unmatched:
         return None
     more = f" and {len(unmatched) - 3} more" if len(unmatched) > 3 else ""
-    named = "; ".join(f"{r.label()}: {_no_generator(r, gens)}" for r in unmatched[:3])
+    named = "; ".join(f"{r.label()}: {no_generator(r, gens)}" for r in unmatched[:3])
     return InputError(f"{path.name}: ANDES cannot read the case: {named}{more}")
 
 

@@ -116,13 +116,26 @@ class _Unsupported(Exception):
     """A record of a model (or model option) stabctl does not represent."""
 
 
-#: why a record of no generator is left out (`_no_generator`)
+#: why a record of no generator is left out (`no_generator`)
 NO_GENERATOR = "matches no generator in service of the RAW data"
 
 
-def _no_generator(rec: DyrRecord, gens: Mapping) -> str:
-    """Why ``rec`` is left out: its (bus, id) is none of ``gens``' (``(bus, id) ->
-    generator``), with the ids of the generators at its bus."""
+def no_generator(rec: DyrRecord, gens: Mapping) -> str:
+    """Why ``rec`` is left out: its (bus, id) is none of ``gens``', with the ids of the
+    generators at its bus (a machine's, a converter's or a compensator's record alike).
+
+    Parameters
+    ----------
+    rec : DyrRecord
+        The record.
+    gens : Mapping
+        ``(bus, id) -> generator`` of the RAW's generators in service.
+
+    Returns
+    -------
+    str
+        `NO_GENERATOR` and where: ``(bus 3's: id '1', '2')`` or ``(none at bus 999)``.
+    """
     ids = [f"'{gid}'" for bus, gid in gens if bus == rec.bus]
     at = f"bus {rec.bus}'s: id {', '.join(ids)}" if ids else f"none at bus {rec.bus}"
     return f"{NO_GENERATOR} ({at})"
@@ -352,7 +365,7 @@ def _integer(tok: str) -> int | None:
 
 
 def dyr_tables(
-    records, generators, on_unsupported: str = "error", conventions: str = "psse"
+    records, generators, on_unsupported: str = "error", conventions: str = "psse", strays=()
 ) -> DyrTables:
     """PST matrices for the generators of a RAW file from their DYR records.
 
@@ -367,6 +380,10 @@ def dyr_tables(
             "sbase" (system base, MVA, default 100; used by conventions="andes").
         on_unsupported: "error" (raise, listing every unsupported record) or "skip" (leave
             those records out and return them in `unsupported`).
+        strays: (record, why) of source records read elsewhere (converters,
+            compensators) and left out: those of no generator (`no_generator`) are named
+            with the generators without a machine model, as the likely cause (a REGCA1
+            at a bus of no generator beside a generator without a record).
         conventions: "psse" (the PSS/E Model Library's machines, `_PSSE_MACHINE`: stator
             at rated speed, P_m and D divided by speed, each model's saturation; the
             controls of `_PSSE_MAPPERS` as PSS/E solves them, e.g. EXST1's output
@@ -409,7 +426,7 @@ def dyr_tables(
             + " them out):\n"
             + "\n".join(f"  {r.label()}: {why}" for r, why in skipped)
         )
-    _check_machines(generators, rows["machine"], skipped, records)
+    _check_machines(generators, rows["machine"], [*skipped, *strays], records)
     _set_fractions(generators, rows["machine"])
     tables = {k: _matrix(rows[k], width) for k, width in _WIDTH.items()}
     return DyrTables(
@@ -526,7 +543,7 @@ def _map_records(records, generators, conventions):
             _check_count(rec)
             gen = gens.get((rec.bus, rec.id))
             if gen is None:
-                raise _Unsupported(_no_generator(rec, gens))
+                raise _Unsupported(no_generator(rec, gens))
             mapper = _CONVENTION_MAPPERS.get(conventions, {}).get(rec.model)
             if rec.model == "IEEEG1":  # its LP shaft may be another generator's
                 row = (_ieeeg1_andes if andes else _ieeeg1)(rec, gen, _lp_generator(rec, gens))
@@ -630,7 +647,7 @@ def compensator_rows(records, generators) -> Compensators:
         _check_count(rec)
         gen = by_key.get((rec.bus, rec.id))
         if gen is None:
-            out.skipped.append((rec, "no such generator in the RAW data (or out of service)"))
+            out.skipped.append((rec, no_generator(rec, by_key)))
             continue
         if float(gen["pg"]) != 0.0:
             raise CaseError(

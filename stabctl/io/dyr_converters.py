@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stabctl.errors import CaseError
-from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, machine_id
+from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, machine_id, no_generator
 from stabctl.io.provenance import Origin
 from stabctl.models.converters import (
     CONVERTER,
@@ -156,7 +156,7 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
                 raise _Refused("no REGCA1 or REGCB1 record for its generator")
             gen = gens.get(key)
             if gen is None:
-                raise _Refused("no such generator in the RAW data (or out of service)")
+                raise _Refused(no_generator(next(iter(plant.values())), gens))
             if "DERA1" in plant:
                 row = _dera1_row(plant["DERA1"], gen, len(rows) + 1)
             else:

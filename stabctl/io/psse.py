@@ -367,7 +367,13 @@ def _dynamic_tables(
     for number, g in enumerate(gens, 1):
         g["number"] = number
     records = [r for r in records if r.model not in CONVERTER_RECORDS and r.model not in SVC_DYR]
-    tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
+    tables = dyr_tables(
+        records,
+        gens,
+        on_unsupported="skip",
+        conventions=conventions,
+        strays=(*conv.skipped, *svc.skipped),
+    )
     mats: dict = {"ibr_con": np.array(conv.rows, float)} if conv.rows else {}
     if svc.rows:
         mats["svc_con"] = np.array(svc.rows, float)

@@ -422,3 +422,24 @@ def test_reecd1_plant_runs_flat_and_through_a_fault(tmp_path):
     res = Simulator(case, q_limits=False).run([Fault(101, 1.0, 1.1, x=1e-3)], 3.5, h=0.002)
     assert np.all(np.isfinite(res.ibr_p))
     assert abs(res.ibr_p[-1, 0] / res.ibr_p[0, 0] - 1.0) < 0.01
+
+
+def test_a_converter_record_of_no_generator_is_named_with_the_generator_it_left_bare(tmp_path):
+    """RENA's REGCA1 plant written at bus 999, where the RAW has no generator: the import
+    said only that machine 2 (bus 103) has no model.  The REGCA1 that matches no generator
+    is named first, as a machine record of no generator is: the likely cause."""
+    from stabctl.io.dyr import UnmodelledError
+
+    recs = read_dyr(DYR)
+    moved = [_text(r).replace(f"{r.bus} '", "999 '", 1) if r.bus == 103 else _text(r) for r in recs]
+    with pytest.raises(UnmodelledError) as err:
+        load_psse(RAW, _dyr(tmp_path, moved))
+    said = str(err.value)
+    assert said.startswith(f"{Path(tmp_path / 'plant.dyr').name}:")
+    assert (
+        "REGCA1 (bus 999, id 1): matches no generator in service of the RAW data (none at " in said
+    )
+    assert (
+        "; so generator(s) without a machine model record in the DYR data: machine 2 (bus 103"
+        in said
+    )
