@@ -666,7 +666,10 @@ def plant(
 @ESTIMATOR
 @rate_latency_options
 @pmu_noise_options
-@storage_options(" Required: the ESDs commanded, as the plant's.")
+@storage_options(
+    " Required: the plant's ESDs, one at each generator's HV bus; the controller sends "
+    "their modes, so P sets no mode here (the plant's --esd-pct sets their power)."
+)
 @PMU_AT
 @click.option(
     "--timeout",
