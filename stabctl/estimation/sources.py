@@ -198,7 +198,8 @@ def longest_unusable(frames, labels) -> str:
     Returns
     -------
     str
-        E.g. ``"B1:G1's values unusable from t = 1.5000 s to 5.4833 s (4 s)"``, or ''.
+        E.g. ``"B1:G1's values unusable from t = 1.5000 s to 5.4833 s (4.02 s between
+        usable values)"``, or ''.
     """
     t, best = np.asarray(frames.t), ("", 0.0)
     for k, label in enumerate(labels):
