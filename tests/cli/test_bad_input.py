@@ -1885,8 +1885,9 @@ def _with_crc(frame: bytes) -> bytes:
 
 def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
     """A port in use, an address not this machine's and a host that does not resolve were
-    the system's message with the address as a Python tuple; each names --host and --port
-    and their values, for `pmu replay` and the plant's listener alike."""
+    the system's message with the address as a Python tuple: a port in use names --host
+    and --port and their values, for `pmu replay` and the plant's listener alike; the
+    address and the host are refused as --host's value, before the server starts."""
     import socket
 
     from stabctl.estimation import c37
@@ -1904,13 +1905,16 @@ def test_a_server_that_cannot_listen_names_host_and_port(kundur_wire, tmp_path):
         )
         with pytest.raises(InputError, match=f"--host 127.0.0.1 --port {port}: cannot listen"):
             PlantLink(None, cfg, port=port)
+    # an address of no interface here, a host that does not resolve: refused as the option
+    # is read, before any warning about who may connect (`pmu._listen_host`)
     assert_error(
         run(*replay, "--host", "203.0.113.9", "--port", 4712),
-        "--host 203.0.113.9 --port 4712: cannot listen: Cannot assign requested address",
+        "Invalid value for '--host': 203.0.113.9: this machine cannot listen there (Cannot "
+        "assign requested address)",
     )
     assert_error(
         run(*replay, "--host", "no.such.host.invalid", "--port", 0),
-        "--host no.such.host.invalid --port 0: cannot listen: ",
+        "Invalid value for '--host': no.such.host.invalid: this machine cannot listen there (",
     )
 
 
