@@ -71,19 +71,18 @@ def _listen_host(ctx, param, host: str) -> str:
     """--host as the socket layer takes it: an IPv6 address in brackets, as the servers
     print their address ([::1]:4712), without them; a usage error (before any warning
     about who may connect) for a host this machine cannot listen on (a name that does not
-    resolve, an address of no interface here: a bind to a free port is tried)."""
+    resolve, an address of no interface here, an IPv4-mapped IPv6 address: the servers'
+    own `c37_tcp.listen` is tried on a free port)."""
+    from stabctl.estimation.c37_tcp import listen
+
     if host.startswith("[") and host.endswith("]"):
         host = host[1:-1]
     if not host.strip():
         return host  # refused with its own words (`_allowed`)
     try:
-        family, kind, proto, _, address = socket.getaddrinfo(
-            host, 0, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE
-        )[0]
-        with socket.socket(family, kind, proto) as probe:
-            probe.bind(address)
-    except (OSError, UnicodeError) as exc:
-        why = getattr(exc, "strerror", None) or exc
+        listen(host, 0).close()
+    except (InputError, UnicodeError) as exc:
+        why = str(exc).partition("cannot listen: ")[2] or exc
         raise click.BadParameter(
             f"{host}: this machine cannot listen there ({why}); give an IPv4 or IPv6 "
             "address of one of its interfaces (127.0.0.1, ::1; 0.0.0.0 or :: for all)",

@@ -303,9 +303,9 @@ def time_unusable(data: bytes) -> str:
 
 
 #: the reason `marked` gives: a field holding C37.118.2's absent-data value (0x8000 in a
-#: 16-bit integer, NaN in a floating-point field), or an integer FREQ or DFREQ at the end
-#: of its span (0x7FFF or -0x7FFF: saturated, no measurement)
-MARKED = "absent-data value (0x8000 or NaN) or saturated FREQ/DFREQ"
+#: 16-bit integer, NaN in a floating-point field), an infinite floating-point value, or an
+#: integer FREQ or DFREQ at the end of its span (0x7FFF or -0x7FFF: saturated)
+MARKED = "absent-data value (0x8000 or NaN), infinite or saturated FREQ/DFREQ"
 #: 16-bit integers that are no measurement: C37.118.2's absent-data value, and in FREQ
 #: and DFREQ the ends of the span (saturated)
 _ABSENT_INT, _SATURATED_INT = -0x8000, 0x7FFF
@@ -315,7 +315,8 @@ def marked(b: Block, data: bytes, at: int) -> str:
     """Why a PMU block's fields hold no measurement, STAT aside: `MARKED` if a phasor,
     FREQ or DFREQ field holds the absent-data value (0x8000 in a signed 16-bit integer
     field, NaN in a floating-point one; an unsigned integer magnitude has no such value),
-    or an integer FREQ or DFREQ is saturated (+-0x7FFF); else ''.  Such a value read as a
+    a floating-point field is infinite, or an integer FREQ or DFREQ is saturated
+    (+-0x7FFF); else ''.  Such a value read as a
     measurement (0x8000 in FREQ is FNOM - 32.768 Hz) drove the raw estimator 25 Hz off.
 
     Parameters
@@ -335,7 +336,7 @@ def marked(b: Block, data: bytes, at: int) -> str:
     n = len(b.units)
     if b.ph_float:
         ph = struct.unpack_from(f">{2 * n}f", data, at)
-        if any(math.isnan(x) for x in ph):
+        if not all(math.isfinite(x) for x in ph):
             return MARKED
     else:
         ph = struct.unpack_from(">" + ("Hh" if b.polar else "hh") * n, data, at)
@@ -345,7 +346,7 @@ def marked(b: Block, data: bytes, at: int) -> str:
     at += n * (8 if b.ph_float else 4)
     if b.fr_float:
         fr = struct.unpack_from(">ff", data, at)
-        return MARKED if any(math.isnan(x) for x in fr) else ""
+        return "" if all(math.isfinite(x) for x in fr) else MARKED
     fr = struct.unpack_from(">hh", data, at)
     return MARKED if any(x in (_ABSENT_INT, _SATURATED_INT, -_SATURATED_INT) for x in fr) else ""
 

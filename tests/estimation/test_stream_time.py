@@ -508,6 +508,7 @@ def _first_pmu_field(cfg2, frame: bytes, field: str, raw: bytes) -> bytes:
         ("freq", b"\x7f\xff"),  # saturated: FNOM + 32.767 Hz
         ("dfreq", b"\x80\x00"),
         ("phasor", struct.pack(">f", float("nan"))),  # a floating-point phasor's NaN
+        ("phasor", struct.pack(">f", float("inf"))),  # set aside, but neither counted nor said
     ],
 )
 def test_an_absent_data_value_in_a_field_is_not_a_measurement(wire, tmp_path, field, raw):
