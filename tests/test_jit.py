@@ -431,6 +431,9 @@ def test_a_cache_others_may_write_into_is_not_used(tmp_path):
     assert run.returncode == 0, run.stderr
     said = f"numba cache: {shared} is writable by others than its owner"
     assert run.stderr.count(said) == 1
+    check = "from stabctl._jit.cache import cached\nfrom stabctl.models import blocks\n"
+    read = _fresh_process(code + check + "cached(blocks.rectifier_loading)\n", shared)
+    assert read.stderr.count(said) == 1  # `compile --check` reads the cache: said there too
     assert run.stdout.split()[0] == str(home / "stabctl-numba")
     assert (home / "stabctl-numba").stat().st_mode & 0o777 == 0o700
     assert not list(shared.iterdir())

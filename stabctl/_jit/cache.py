@@ -231,7 +231,9 @@ def cached(dispatcher) -> bool:
     are gone, `ensure_fresh_cache`).  An empty, cut or garbled file is no entry: the
     kernel compiles again (numba drops such an entry), and ``compile --check`` says so
     instead of calling the cache warm.  numba names the entry after the source file, so
-    a kernel of a package's ``__init__.py`` is ``__init__.<name>-...``."""
+    a kernel of a package's ``__init__.py`` is ``__init__.<name>-...``.  A cache moved
+    from an unsafe place is said here too (`_say_moved`): ``compile --check`` reads it."""
+    _say_moved()
     py = dispatcher.py_func
     stem = f"{Path(py.__code__.co_filename).stem}.{py.__qualname__}-"
     return any(
@@ -478,9 +480,9 @@ def private_cache_dir() -> Path:
 
 def ensure_safe_cache() -> None:
     """Point numba's cache at `private_cache_dir` if NUMBA_CACHE_DIR or one of stabctl's
-    cache directories is unsafe (`unsafe_reason`); a RuntimeWarning names why when a
-    kernel is first loaded or saved (`_say_moved`): at import it came before the CLI
-    reads warnings, as Python's raw text with a source line."""
+    cache directories is unsafe (`unsafe_reason`); a RuntimeWarning names why when the
+    cache is first read (a kernel loaded or saved, `cached`; `_say_moved`): at import it
+    came before the CLI reads warnings, as Python's raw text with a source line."""
     root = numba.config.CACHE_DIR
     places = ([Path(root)] if root else []) + cache_dirs()
     why = next((r for r in map(unsafe_reason, places) if r), "")
