@@ -48,12 +48,14 @@ from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.estimation.c37_tcp import (
     MAX_STREAM_BYTES,
+    End,
     FrameTimeout,
     Guard,
     _read_frame,
     command_word,
     hostport,
     listen,
+    most_frames,
 )
 
 EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
@@ -507,7 +509,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                 c37.check_config(cfg2, cfg)
             except InputError as exc:
                 raise InputError(f"the plant at {host}:{port}: {exc}") from None
-            most = MAX_STREAM_BYTES // c37.data_frame_size(cfg2)  # the rows the loop keeps
+            most = most_frames(cfg2, MAX_STREAM_BYTES, End())  # the rows the loop keeps
             conn.sendall(CommandFrame(cfg.idcode, "start").convert2bytes())
             while (data := _read_frame(conn)) is not None:
                 if (t_end := _end_time(data, cfg.idcode)) is not None:
