@@ -63,7 +63,7 @@ import time
 import traceback
 import warnings
 from collections.abc import Callable, Generator, Iterable, Iterator, Mapping
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, closing, contextmanager, nullcontext
 from dataclasses import dataclass, field
@@ -757,7 +757,7 @@ class _RestartedPool:
             except BrokenProcessPool:
                 break
         lost = left[len(futures) :]  # not sent
-        for fut in as_completed(futures):
+        for fut in _as_finished(futures, self.pool):
             try:
                 results[futures[fut]] = fut.result()
             except BrokenProcessPool:
@@ -766,6 +766,52 @@ class _RestartedPool:
             if done is not None:
                 done(len(results), len(jobs))
         return sorted(lost)
+
+
+def _as_finished(futures, pool) -> Iterator:
+    """The process pool's `futures` as each finishes.  While none finishes for
+    `STALL_CHECK_S`, the pool's workers are looked at: one stopped (SIGSTOP, Ctrl-Z
+    sent to it alone, a debugger) is named once, at once (logged as a warning, as a
+    Dask worker lost is), as its job waits for it without end (a stopped process
+    neither runs nor dies)."""
+    pending, named = set(futures), set[int]()
+    while pending:
+        done, pending = wait(pending, timeout=STALL_CHECK_S, return_when=FIRST_COMPLETED)
+        yield from done
+        if not done:
+            _name_stopped(pool, named)
+
+
+def _name_stopped(pool, named: set) -> None:
+    """Log a warning of each worker process of `pool` that is stopped (Linux's /proc
+    state T or t) and not in `named` (then added): which, and how its job goes on."""
+    for pid in list(getattr(pool, "_processes", None) or {}):
+        if pid in named or _proc_state(pid) not in ("T", "t"):
+            continue
+        named.add(pid)
+        _log.warning(
+            "worker process %d is stopped (SIGSTOP, SIGTSTP or a debugger): the job it runs "
+            "waits until it is continued (kill -CONT %d); killed instead, its job runs again "
+            "on a new worker",
+            pid,
+            pid,
+        )
+
+
+def _proc_state(pid: int) -> str:
+    """A process's state letter from /proc/PID/stat ('' where there is no /proc or the
+    process is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            stat_line = fh.read().decode("ascii", "replace")
+    except OSError:
+        return ""
+    return stat_line[stat_line.rfind(")") + 1 :].split()[0] if ")" in stat_line else ""
+
+
+#: seconds without a finished job after which a process pool's workers are looked at
+#: for a stopped one (`_as_finished`)
+STALL_CHECK_S = 10.0
 
 
 def _finished(futures, workers):
@@ -1294,7 +1340,7 @@ def _completed(pool, jobs: list, marks: str) -> Generator[dict, None, tuple[list
         except BrokenProcessPool:
             break
     broken = set(range(len(futures), len(jobs)))  # not sent
-    for fut in as_completed(futures):
+    for fut in _as_finished(futures, pool):
         try:
             rec = fut.result()
         except BrokenProcessPool:

@@ -99,6 +99,16 @@ def killed_once(inputs):
     return {"y": inputs["x"]}
 
 
+def stops_once(inputs):
+    """Stopped (SIGSTOP) the first time it runs, its pid written to inputs["flag"]
+    first; done, once continued, with {"y": x}."""
+    flag = Path(inputs["flag"])
+    if inputs["stop"] and not flag.exists():
+        flag.write_text(str(os.getpid()))
+        os.kill(os.getpid(), signal.SIGSTOP)
+    return {"y": inputs["x"]}
+
+
 def dies_if(inputs):
     """The worker process dies (os._exit) if inputs["die"], each time; else {}."""
     if inputs["die"]:
@@ -1286,6 +1296,42 @@ def test_worker_pool_on_processes_loses_no_job_when_a_worker_is_killed(tmp_path)
             ),
         ):
             run_map(dies_if, [{"die": True}, {"die": False}])
+
+
+def test_a_stopped_worker_is_named_and_its_job_goes_on_once_continued(
+    tmp_path, monkeypatch, caplog
+):
+    """A worker process stopped (SIGSTOP) left a sweep or a placement waiting without a
+    word.  While no job finishes the pool's workers are looked at, and the stopped one is
+    named once, at once (a logged warning, as a lost Dask worker), with how its job goes
+    on; continued, every result comes back."""
+    import threading
+
+    from stabctl import parallel
+
+    monkeypatch.setattr(parallel, "STALL_CHECK_S", 0.2)
+    flag = tmp_path / "stopped"
+    jobs = [{"x": k, "stop": k == 1, "flag": str(flag)} for k in range(3)]
+
+    def cont():  # continued 2 s after it stopped, as an operator would
+        while not flag.exists() or not flag.read_text():
+            time.sleep(0.05)
+        time.sleep(2.0)
+        os.kill(int(flag.read_text()), signal.SIGCONT)
+
+    helper = threading.Thread(target=cont, daemon=True)
+    helper.start()
+    with parallel.worker_pool(2) as run_map, caplog.at_level("WARNING", "stabctl.parallel"):
+        got = run_map(stops_once, jobs)
+    helper.join(5)
+    assert got == [{"y": k} for k in range(3)]
+    pid = int(flag.read_text())
+    named = [r.getMessage() for r in caplog.records if "is stopped" in r.getMessage()]
+    assert named == [
+        f"worker process {pid} is stopped (SIGSTOP, SIGTSTP or a debugger): the job it runs "
+        f"waits until it is continued (kill -CONT {pid}); killed instead, its job runs "
+        "again on a new worker"
+    ]
 
 
 def test_an_output_file_without_any_record_is_left_alone(tmp_path):
