@@ -524,6 +524,18 @@ class _Formula(str):
     program that does not compute formulas): read by pandas, and so ANDES, as empty."""
 
 
+class _NaText(float):
+    """A spreadsheet cell holding text that pandas, and so ANDES, reads as NaN ("NaN",
+    "N/A", "null", ...): NaN, with the text kept to say so (`_how_left_out`)."""
+
+    text: str
+
+    def __new__(cls, text: str) -> _NaText:
+        obj = super().__new__(cls, float("nan"))
+        obj.text = text
+        return obj
+
+
 @dataclass(frozen=True)
 class _Given:
     """What `_file_inputs` found in the rows of a case file."""
@@ -638,25 +650,55 @@ def _input_rows(path: Path) -> tuple[dict, dict[str, list[int]]]:
 
         try:
             sheets = pd.read_excel(path, sheet_name=None)
-            formulas = _formulas(path)
+            texts = _cell_texts(path)
         except Exception:  # noqa: BLE001 - ANDES's own reading names what is wrong
             return {}, {}
-        for name, df in sheets.items():
-            for (i, col), text in formulas.get(name, {}).items():
-                if col in df.columns and i in df.index and pd.isna(df.at[i, col]):
-                    df[col] = df[col].astype(object)
-                    df.at[i, col] = _Formula(text)
-        kept = {name: df.dropna(axis=0, how="all") for name, df in sheets.items()}
-        return (
-            {name: df.to_dict("records") for name, df in kept.items()},
-            {name: [int(i) + 2 for i in df.index] for name, df in kept.items()},
-        )
+        kept = {  # rows with a value, or a cell pandas read as NaN that holds something
+            name: df[df.notna().any(axis=1) | df.index.isin([i for i, _ in texts.get(name, {})])]
+            for name, df in sheets.items()
+        }
+        rows = {}
+        for name, df in kept.items():
+            rows[name] = df.to_dict("records")
+            at = {int(i): k for k, i in enumerate(df.index)}
+            for (i, col), text in texts.get(name, {}).items():
+                row = rows[name][at[i]] if i in at else {}
+                if col in row and pd.isna(row[col]):  # pandas kept no value of it
+                    row[col] = _Formula(text) if text.startswith("=") else _NaText(text)
+        return rows, {name: [int(i) + 2 for i in df.index] for name, df in kept.items()}
     return {}, {}
 
 
-def _formulas(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
-    """Sheet -> {(row from 0 below the header, column name): formula} of the formula cells
-    of an xlsx file (pandas reads the values the file holds: NaN where it holds none)."""
+#: the texts pandas's read_excel reads as NaN (its default ``na_values``), but for ''
+_NA_TEXTS = frozenset(
+    [
+        "#N/A",
+        "#N/A N/A",
+        "#NA",
+        "-1.#IND",
+        "-1.#QNAN",
+        "-NaN",
+        "-nan",
+        "1.#IND",
+        "1.#QNAN",
+        "<NA>",
+        "N/A",
+        "NA",
+        "NULL",
+        "NaN",
+        "None",
+        "n/a",
+        "nan",
+        "null",
+    ]
+)
+
+
+def _cell_texts(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
+    """Sheet -> {(row from 0 below the header, column name): text} of the cells of an
+    xlsx file that pandas reads as NaN though they hold something: a formula (pandas
+    reads the value the file holds: NaN where it holds none), or text pandas takes for
+    NaN ("NaN", "N/A", "null", ...)."""
     import openpyxl  # type: ignore[import-untyped]  # ANDES reads xlsx with it (pandas)
 
     book = openpyxl.load_workbook(path, read_only=True, data_only=False)
@@ -670,7 +712,7 @@ def _formulas(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
                 (i, col): v
                 for i, row in enumerate(rows)
                 for col, v in zip(header, row)
-                if isinstance(v, str) and v.startswith("=")
+                if isinstance(v, str) and (v.startswith("=") or v in _NA_TEXTS)
             }
         return found
     finally:
@@ -748,7 +790,13 @@ def _file_inputs(path: Path, ss) -> _Given:
                 if name in _REQUIRED_INPUTS.get(model, ()) and not (number and np.isfinite(v)):
                     raise CaseError(
                         f"{where}: {name} "
-                        + (f"= {v!r}: not a finite number" if not empty else "missing")
+                        + (
+                            f"= {v!r}: not a finite number"
+                            if not empty
+                            else f"= {v.text!r} (read as NaN): missing"
+                            if isinstance(v, _NaText)
+                            else "missing"
+                        )
                         + f" (ANDES would run with its default {p.default!r})"
                     )
                 if empty:
@@ -805,6 +853,8 @@ def _how_left_out(path: Path, row: dict, name: str) -> str:
     v = row[name]
     if path.suffix.lower() == ".json" and isinstance(v, float) and v != v:
         return "NaN in the file"
+    if isinstance(v, _NaText):
+        return f"the text {v.text!r} in the file, read as NaN"
     return "empty in the file"
 
 

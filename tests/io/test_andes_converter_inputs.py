@@ -174,6 +174,17 @@ def test_parameters_left_out_are_named_with_andes_s_default(tmp_path):
     )
 
 
+@pytest.mark.parametrize("text", ["NaN", "N/A", "null"])
+def test_a_cell_whose_text_reads_as_nan_is_named_as_that_text_not_as_empty(tmp_path, text):
+    """A cell holding the text "NaN" (or another text the sheet reader takes for NaN) was
+    summarised as "empty in the file": it is named as the text it holds, run at ANDES's
+    default as ANDES runs it; an empty cell stays "empty"."""
+    path = edited(tmp_path, "kundur/kundur_reg.xlsx", "REGCA1", Tg=text)
+    got = read_andes_case(path, on_unsupported="skip")
+    assert f"REGCA1 Tg = 0.1 (row 1: the text {text!r} in the file, read as NaN)" in got.defaulted
+    assert not any("empty in the file" in d for d in got.defaulted if d.startswith("REGCA1 Tg"))
+
+
 def test_the_summary_says_how_a_file_leaves_a_parameter_out_and_what_andes_uses(tmp_path):
     """A NaN in a json file was summarised as "not in the file"; a default that is no
     number as "REPCA1 Rc = None", "WTTQA1 Tn = nan": each says how the file leaves it out
