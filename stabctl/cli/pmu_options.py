@@ -396,6 +396,5 @@ def keep_interrupted(out, what: str, n: int, noun: str, partial: str, write) -> 
         return f"{what}; the {n} {noun} {are} lost: {at}: {exc.strerror or exc}"
     except KeyboardInterrupt:
         return f"{what}; the {n} {noun} {are} lost: interrupted again while writing {at}"
-    if at == Path(out):
-        return f"{what}; the {n} {noun} {are} in {out}, {partial}"
-    return f"{what}; the {n} {noun} {are} in {at}, {partial} ({out} is left as it was)"
+    left = "" if at == Path(out) else f" ({out} is left as it was)"
+    return f"{what}; the {n} {noun} {are} in {at}, {partial}{left}"
