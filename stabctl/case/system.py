@@ -1341,6 +1341,10 @@ class Case:
     extra : Mapping[str, numpy.ndarray]
         Other PST matrices of the data file kept as given (``lmod_con``, ``PDC``, ...),
         name -> read-only 2-D float array (units as in the file).
+    machine_ids : Mapping[int, str]
+        The machines' IDs in the data they came from (PSS/E's machine ID, unique at its
+        bus), machine number -> ID, read-only; outputs name a machine by its number, bus
+        and ID (`machine_name`).  Read by no run.  Empty by default (PST data has none).
     source : str
         Where the data came from (file, licence).
     description : str
@@ -1377,6 +1381,7 @@ class Case:
     sw_con: np.ndarray | None = None
     events: tuple = ()
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+    machine_ids: Mapping[int, str] = field(default_factory=dict)
     source: str = ""
     description: str = ""
     _bus_map: Mapping[int, int] = field(init=False, repr=False, compare=False)
@@ -1407,10 +1412,35 @@ class Case:
         object.__setattr__(self, "sw_con", _check_sw_con(self.sw_con))
         object.__setattr__(self, "events", _check_events(self.events))
         object.__setattr__(self, "extra", _freeze_extra(self.extra))
+        object.__setattr__(self, "machine_ids", self._checked_ids(self.machine_ids))
         self._check_references()
         self._check_shares()
 
     # -- validation -------------------------------------------------------------------
+
+    def _checked_ids(self, ids: Mapping | None) -> Mapping[int, str]:
+        """`machine_ids` read-only, keyed by the machines of the table (a machine left
+        out of the case, e.g. at a dead bus, takes its ID with it); CaseError for an ID
+        that is no text of 1 to 16 characters, or one that two machines of a bus share."""
+        out: dict[int, str] = {}
+        for number, ident in (ids or {}).items():
+            if not isinstance(ident, str) or not 1 <= len(ident.strip()) <= 16:
+                raise CaseError(
+                    f"case '{self.name}': machine {number}: ID {ident!r} must be a text of 1 "
+                    "to 16 characters"
+                )
+            if int(number) in self._mac_map:
+                out[int(number)] = ident.strip()
+        seen: dict[tuple[int, str], int] = {}
+        for number, ident in out.items():
+            bus = int(self.machines.bus[self._mac_map[number]])
+            if (bus, ident) in seen:
+                raise CaseError(
+                    f"case '{self.name}': machines {seen[bus, ident]} and {number} at bus "
+                    f"{bus} share the ID {ident!r}"
+                )
+            seen[bus, ident] = number
+        return MappingProxyType(out)
 
     def _check_references(self):
         if not np.any(self.buses.kind == SWING):
@@ -1668,7 +1698,9 @@ class Case:
         return {int(k) for k, h in zip(m.number, m.H) if h == 0}
 
     def machine_name(self, number) -> str:
-        """How outputs name machine ``number``: its number and its bus, ``"G14 (bus 3)"``.
+        """How outputs name machine ``number``: its number and its bus, ``"G14 (bus 3)"``,
+        and its ID where the data gave one (`machine_ids`: ``"G2 (bus 102, id '1')"``, as
+        PSS/E names a machine by bus and ID).
 
         Every listing of machines (the CLI's text, the plots' legends) names them through
         this one function, so that a reader finds them in the case's machine table (the
@@ -1682,7 +1714,8 @@ class Case:
         Returns
         -------
         str
-            ``"G<number> (bus <bus number>)"``.
+            ``"G<number> (bus <bus number>)"`` or ``"G<number> (bus <bus number>, id
+            '<ID>')"``.
 
         Raises
         ------
@@ -1690,7 +1723,10 @@ class Case:
             The machine is not in the case; the message names it.
         """
         k = self.machine_index(number)
-        return f"G{int(self.machines.number[k])} (bus {int(self.machines.bus[k])})"
+        n = int(self.machines.number[k])
+        ident = self.machine_ids.get(n)
+        named = "" if ident is None else f", id {ident!r}"
+        return f"G{n} (bus {int(self.machines.bus[k])}{named})"
 
     def motor_index(self, number) -> int:
         """0-based row of motor ``number`` in ``motors``.
@@ -1823,7 +1859,8 @@ class Case:
         str
             16 hex digits of the SHA-256 of the bases, every table (its columns, shape
             and float64 values), ``sw_con`` and the event records; the name,
-            description, source and ``extra`` (read by no run) are not part of it.
+            description, source, ``extra`` and ``machine_ids`` (read by no run) are not
+            part of it.
         """
         h = hashlib.sha256(json.dumps([self.base_mva, self.freq_hz]).encode())
         for name in TABLES:
@@ -1847,9 +1884,9 @@ class Case:
         Returns
         -------
         bool
-            True if the name, every table, base, frequency, ``sw_con``, the events and
-            every extra matrix are identical (exact float equality; ``source`` and
-            ``description`` are not compared).
+            True if the name, every table, base, frequency, ``sw_con``, the events,
+            every extra matrix and the machine IDs are identical (exact float equality;
+            ``source`` and ``description`` are not compared).
         """
         if not isinstance(other, Case):
             return False
@@ -1867,6 +1904,7 @@ class Case:
         same_extra = self.extra.keys() == other.extra.keys() and all(
             np.array_equal(self.extra[k], other.extra[k]) for k in self.extra
         )
+        same_extra = same_extra and dict(self.machine_ids) == dict(other.machine_ids)
         same_events = self.events == other.events
         return same_scalars and same_tables and same_sw and same_extra and same_events
 

@@ -435,7 +435,9 @@ def simulate(
 
     \b
     CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu_mbase.G<k>,
-    efd_pu.G<k> per machine k, vmag_pu.B<n>, vang_rad.B<n> per bus n, and with
+    efd_pu.G<k> per machine k (machine number k; --json's `machine_names` gives each
+    one's bus, and its ID in a PSS/E case: "G2 (bus 102, id '1')"), vmag_pu.B<n>,
+    vang_rad.B<n> per bus n, and with
     --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage
     settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak
     power used (MW) (`storage`), and every switching as {t_s, device, bus, machine, mode
@@ -594,6 +596,9 @@ def simulate(
                 "esd": esd,
                 "events": [str(e) for e in events],
                 "suspect_starts": list(sim.suspect),
+                "machine_names": {
+                    str(int(k)): case.machine_name(int(k)) for k in case.machines.number
+                },
                 "files": written,
                 **({} if halved is None else {"step_check": halved}),
             }

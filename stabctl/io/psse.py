@@ -147,6 +147,7 @@ def import_psse(
     unsupported = [str(s) for s in raw.unsupported]
     changed: tuple[str, ...] = ()
     origins: dict = {}
+    ids: dict[int, str] = {}
     lost: list[str] = []
     off_network = [str(s) for s in raw.switched_off]
     with_netted: list[str] = []
@@ -155,7 +156,7 @@ def import_psse(
         off_network += ignored
         records, with_netted = _of_netted(records, raw.netted_ids)
         try:
-            dyn, dyr_unsupported, lost, changed, origins = _dynamic_tables(
+            dyn, dyr_unsupported, lost, changed, origins, ids = _dynamic_tables(
                 raw, records, conventions
             )
         except UnmodelledError as exc:
@@ -190,6 +191,7 @@ def import_psse(
         )
     except CaseError as exc:  # the record and parameters the table's row came from
         raise _located(exc, origins, where) from None
+    case = case.replace(machine_ids=ids)
     changed = (
         *(str(c) for c in raw.changed),
         *(str(h.source) for h in raw.load_buses),
@@ -344,13 +346,14 @@ def _without_machine(records):
 
 def _dynamic_tables(
     raw: RawData, records, conventions
-) -> tuple[dict, list[str], list[str], tuple, dict]:
+) -> tuple[dict, list[str], list[str], tuple, dict, dict[int, str]]:
     """PST dynamic matrices from the DYR records (the converter table ``ibr_con`` from
     the converter records, :mod:`stabctl.io.dyr_converters`; the machines, numbered 1, 2,
     ... in RAW order, the other generators), the unsupported records (as text), the
     generators whose REGCA1 plant or DERA1 was left out (``bus B 'ID'``), the records
-    read with a value other than the file's and each table's row origins (table name ->
-    `stabctl.io.provenance.Origin` per row)."""
+    read with a value other than the file's, each table's row origins (table name ->
+    `stabctl.io.provenance.Origin` per row) and the machines' RAW IDs (machine number ->
+    ID, `stabctl.case.Case.machine_ids`)."""
     from stabctl.io.dyr import SVC_DYR, compensator_rows, dyr_origin, dyr_tables, machine_id
     from stabctl.io.dyr_converters import CONVERTER_RECORDS, converter_rows, shares
 
@@ -392,6 +395,7 @@ def _dynamic_tables(
         [f"bus {b} '{i}'" for b, i in sorted(lost)],
         tables.changed,
         origins,
+        {int(g["number"]): machine_id(g["id"]) for g in gens},
     )
 
 

@@ -495,6 +495,11 @@ def case_to_dict(case: Case, licence: str = "") -> dict:
         "sw_con": None if case.sw_con is None else case.sw_con.tolist(),
         **({"events": [dict(e) for e in case.events]} if case.events else {}),
         "extra": {k: v.tolist() for k, v in case.extra.items()},
+        **(
+            {"machine_ids": {str(k): v for k, v in case.machine_ids.items()}}
+            if case.machine_ids
+            else {}
+        ),
     }
 
 
@@ -510,7 +515,7 @@ _HEAD_KEYS = (
     "freq_hz",
 )
 #: every top-level key of the own format
-_CASE_KEYS = frozenset((*_HEAD_KEYS, "tables", "sw_con", "events", "extra"))
+_CASE_KEYS = frozenset((*_HEAD_KEYS, "tables", "sw_con", "events", "extra", "machine_ids"))
 
 
 def case_from_dict(data: Mapping, where: str = "<dict>") -> Case:
@@ -593,6 +598,7 @@ def _case_of_dict(data: Mapping, raw_tables: Mapping, where: str) -> Case:
             sw_con=data.get("sw_con"),
             events=_events_field(data.get("events"), where),
             extra=extra,
+            machine_ids=_machine_ids_field(data.get("machine_ids"), where),
             source=str(data.get("source", "")),
             description=str(data.get("description", "")),
             **tables,
@@ -626,6 +632,23 @@ def _extra_field(extra, where: str) -> Mapping:
         if not _is_numeric(value):
             raise CaseError(f"{where}: extra matrix '{key}' is not a numeric matrix")
     return extra
+
+
+def _machine_ids_field(ids, where: str) -> dict[int, str]:
+    """The ``machine_ids`` of a case file: an object of machine number (text of a positive
+    integer) -> ID (text), or absent (none); the IDs themselves are checked by `Case`."""
+    if ids is None:
+        return {}
+    if not isinstance(ids, Mapping):
+        raise CaseError(f"{where}: 'machine_ids' must be an object of machine number -> ID")
+    out = {}
+    for key, ident in ids.items():
+        if not (isinstance(key, str) and key.isdigit() and key.isascii() and int(key) > 0):
+            raise CaseError(f"{where}: machine_ids: {key!r} is no machine number")
+        if not isinstance(ident, str):
+            raise CaseError(f"{where}: machine_ids: machine {key}: ID {ident!r} is no text")
+        out[int(key)] = ident
+    return out
 
 
 def _field_number(data: Mapping, key: str, where: str) -> float:
@@ -754,7 +777,8 @@ def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
     ``source``, ``licence``, ``base_mva`` (MVA), ``freq_hz`` (Hz), ``tables`` (table field
     -> ``{"columns": [names in PST order], "rows": [[...], ...]}``, one row per line),
     ``sw_con`` (PST rows or null), ``events`` (the case's own disturbance records, one
-    per line; only when it has some), ``extra`` (name -> rows). Floats are written with
+    per line; only when it has some), ``extra`` (name -> rows), ``machine_ids``
+    (machine number -> ID; only when the case has some).  Floats are written with
     Python's shortest round-trip repr, so reading gives back identical values.
     """
     d = case_to_dict(case, licence)
@@ -777,7 +801,10 @@ def write_case_json(case: Case, path: str | Path, licence: str = "") -> Path:
         ev = ",\n".join(f"    {json.dumps(e)}" for e in d["events"])
         parts.append(f'  "events": [\n{ev}\n  ],')
     eparts = [f"    {json.dumps(k)}: {_dump_matrix(v, '    ')}" for k, v in d["extra"].items()]
-    parts.append('  "extra": {' + ("\n" + ",\n".join(eparts) + "\n  " if eparts else "") + "}")
+    ids = f',\n  "machine_ids": {json.dumps(d["machine_ids"])}' if "machine_ids" in d else ""
+    parts.append(
+        '  "extra": {' + ("\n" + ",\n".join(eparts) + "\n  " if eparts else "") + "}" + ids
+    )
     parts.append("}")
     path = Path(path)
     path.write_text("\n".join(parts) + "\n", encoding="utf-8")
@@ -802,4 +829,8 @@ def read_case_json(path: str | Path) -> Case:
 def read_case_header(path: str | Path) -> dict:
     """The scalar header of an own-format case file (name, description, source, ...)."""
     data = _load_json(Path(path))
-    return {k: v for k, v in data.items() if k not in ("tables", "sw_con", "events", "extra")}
+    return {
+        k: v
+        for k, v in data.items()
+        if k not in ("tables", "sw_con", "events", "extra", "machine_ids")
+    }

@@ -159,6 +159,26 @@ def test_dyr_machines_share_their_bus_generation():
     np.testing.assert_allclose(mac.H, [5.0, 4.0, 3.0])
 
 
+def test_machines_are_named_by_bus_and_psse_id_and_keep_their_ids_in_the_case_file(tmp_path):
+    """Outputs named a PSS/E case's machines "G2 (bus 3)" and "G3 (bus 3)": which of bus
+    3's machines '1' and '2' was which had to be guessed from the RAW order.  The import
+    keeps each machine's RAW ID (the out-of-service '3' has no machine) and names them as
+    PSS/E does, by bus and ID; the case file keeps the IDs; a case whose two machines of
+    one bus share an ID is refused."""
+    from stabctl.io.pst import read_case_json, write_case_json
+
+    case = load_psse(V33, DATA / "five_bus.dyr")
+    assert dict(case.machine_ids) == {1: "1", 2: "1", 3: "2"}
+    names = [case.machine_name(k) for k in case.machines.number]
+    assert names == ["G1 (bus 1, id '1')", "G2 (bus 3, id '1')", "G3 (bus 3, id '2')"]
+    back = read_case_json(write_case_json(case, tmp_path / "five.json"))
+    assert back.equals(case) and dict(back.machine_ids) == dict(case.machine_ids)
+    assert back.digest() == case.digest() == case.replace(machine_ids={}).digest()
+    with pytest.raises(CaseError, match=r"machines 2 and 3 at bus 3 share the ID '1'"):
+        case.replace(machine_ids={1: "1", 2: "1", 3: "1"})
+    assert load_case("kundur").machine_name(1) == "G1 (bus 1)"  # PST data: no IDs
+
+
 def _dyr(tmp_path, *lines):
     """A DYR file of the given record lines."""
     path = tmp_path / "edited.dyr"

@@ -50,6 +50,16 @@ def test_it_imports_whole(imported):
     assert summary["infeasible"] == []
     rr = case.remote_regulation
     assert len(rr) == 52 and np.all(rr.share == 1.0)  # one plant per regulated bus
+    # machines named by bus and RAW ID, numbered past the converters' generators (the
+    # RAW's 25th-27th generators, at bus 2233, are machines 20-22)
+    at_2233 = [
+        case.machine_name(k) for k, b in zip(case.machines.number, case.machines.bus) if b == 2233
+    ]
+    assert at_2233 == [
+        "G20 (bus 2233, id 'DG')",
+        "G21 (bus 2233, id 'EG')",
+        "G22 (bus 2233, id 'TG')",
+    ]
 
 
 def test_power_flow_lands_on_the_raw_solution(imported):
