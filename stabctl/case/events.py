@@ -44,6 +44,7 @@ __all__ = [
     "Playback",
     "EVENT_KINDS",
     "as_record",
+    "described",
     "events_of_records",
     "check_names",
     "VREF_STEP_MAX",
@@ -410,6 +411,29 @@ EVENT_KINDS = {
         MotorSwitch,
     )
 }
+
+
+def described(ev, case: Case) -> str:
+    """How a summary names event `ev` of `case`: its text, its machine (if it has one)
+    named as every output names machines (`Case.machine_name`: ``G4 (bus 12) tripped at
+    5 s`` for ``machine 4 tripped at 5 s``).
+
+    Parameters
+    ----------
+    ev : event
+        One of the event classes.
+    case : Case
+        The case it belongs to.
+
+    Returns
+    -------
+    str
+    """
+    text = str(ev)
+    machine = getattr(ev, "machine", None)
+    if machine is None:
+        return text
+    return text.replace(f"machine {machine}", case.machine_name(machine), 1)
 
 
 def as_record(ev, source: str) -> dict:

@@ -459,6 +459,7 @@ def simulate(
     converging) and a run that diverges exit with status 2 and one `error:` line; no file
     is written then (a diverged run reports where it stopped).
     """
+    from stabctl.case.events import described
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.dynamics.grid import check_step_count
@@ -569,7 +570,9 @@ def simulate(
     )
     written = []
     if plot_p is not None:
-        title = f"{case.name}: " + ("; ".join(map(str, events)) or "flat run")
+        title = f"{case.name}: " + (
+            "; ".join(described(e, case) for e in _in_time_order(events)) or "flat run"
+        )
         if esd is not None:
             title += "\n" + describe_esd(esd, short=True)
         save_plot_atomically(result, plot_p, title=title, case=case)
@@ -594,8 +597,9 @@ def simulate(
                 "conventions": conventions,
                 "q_limits": q_limits,
                 "esd": esd,
-                "events": [str(e) for e in events],
+                "events": [described(e, case) for e in _in_time_order(events)],
                 "suspect_starts": list(sim.suspect),
+                "stiff_intervals": result.meta.get("stiff_intervals", []),
                 "machine_names": {
                     str(int(k)): case.machine_name(int(k)) for k in case.machines.number
                 },
@@ -612,10 +616,17 @@ def simulate(
         + f", {conventions} conventions), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
     )
-    for e in events or ["flat run (no disturbance)"]:
+    for e in [described(e, case) for e in _in_time_order(events)] or ["flat run (no disturbance)"]:
         click.echo(f"  {e}")
     for line in sim.suspect:
         click.echo(f"  initial condition suspect, run on: {line}")
+    for cut in result.meta.get("stiff_intervals", []):
+        click.echo(
+            f"  stepped at {step_text(cut['step_s'])} from {cut['t_start_s']:g} s to "
+            f"{cut['t_end_s']:g} s: {case.machine_name(cut['machine'])}'s subtransient time "
+            f"constant in that network is {step_text(cut['time_constant_s'])}, shorter than "
+            "the step"
+        )
     for line in islanding_lines(
         case, result.meta.get("islanded", []), result.meta.get("tripped", [])
     ):
@@ -639,6 +650,12 @@ def simulate(
         click.echo(_step_check_line(result, halved))
     for w in written:
         click.echo(f"wrote {w}")
+
+
+def _in_time_order(events) -> list:
+    """The events as the summary names them: by their first time, those of one time in
+    the order the run takes them (the case's own, then the options' by kind)."""
+    return sorted(events, key=lambda e: min(e.times()))
 
 
 def _verdict(result) -> str:

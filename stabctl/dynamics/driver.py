@@ -39,11 +39,13 @@ from stabctl.dynamics import trapezoid
 from stabctl.dynamics.bounded import BoundedCache
 from stabctl.dynamics.coi import coi_of_islands
 from stabctl.dynamics.grid import (
+    STIFF_STEP_PER_TIME_CONSTANT,
     check_step,
     check_step_count,
     default_step,
     exciter_hmax,
     fastest_time_constant,
+    stiff_step,
     time_grid,
 )
 from stabctl.dynamics.model import (
@@ -599,7 +601,36 @@ class Simulator:
             res.meta["tripped"] = tripped
         if self.suspect:
             res.meta["suspect_starts"] = list(self.suspect)
+        stiff = self._stiff_log(grid, nets)
+        if stiff:
+            res.meta["stiff_intervals"] = stiff
         return res
+
+    def _stiff_log(self, grid, nets) -> list[dict]:
+        """The intervals of a run stepped finer than its step (`stiff_substeps`): each
+        one's start and end (s), step (s) and the machine whose subtransient time
+        constant (s) set it."""
+        out = []
+        ends = [*grid.starts[1:], grid.t[-1]]
+        for k, (a, b, hh) in enumerate(zip(grid.starts, ends, grid.h)):
+            if (
+                self.conventions == "pstess"
+                or b <= a
+                or self.stiff_substeps(self.model, nets[k]) == 1
+            ):
+                continue
+            T = self.model.subtransient_time_constants(nets[k], self.default_h)
+            i = int(np.argmin(T))
+            out.append(
+                {
+                    "t_start_s": float(a),
+                    "t_end_s": float(b),
+                    "step_s": float(hh),
+                    "machine": int(self.case.machines.number[i]),
+                    "time_constant_s": float(T[i]),
+                }
+            )
+        return out
 
     def _for_storage(self, storage) -> Simulator:
         """This simulator, or for a fleet of WECC batteries (`StorageFleet.model` "wecc")
@@ -651,10 +682,40 @@ class Simulator:
             xslot = start + int(conv.PLANT_PREF_SLOT) * m.cp.n + self.battery_rows
         sa = st.pack(storage, self.case, m.nc_idx, xslot)
         check_step(self.fastest, h, explicit=method == "heun")
-        check_step_count(t_end, h, self.case, None if bus_rows is None else bus_rows.size)
+        n_buses = None if bus_rows is None else bus_rows.size
+        check_step_count(t_end, h, self.case, n_buses)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
-        grid = time_grid(starts, t_end, h, self.conventions == "pstess")
-        return m, sa, grid, [m.network(c) for c in configs]
+        nets = [m.network(c) for c in configs]
+        pstess = self.conventions == "pstess"  # PSTess's grid, bit for bit
+        h_max = None if pstess else [h / self.stiff_substeps(m, net) for net in nets]
+        grid = time_grid(starts, t_end, h, pstess, h_max)
+        if h_max is not None and min(h_max) < h:
+            check_step_count(t_end, h, self.case, n_buses, n_steps=grid.t.size - 1)
+        return m, sa, grid, nets
+
+    def stiff_substeps(self, m: DynamicModel, net) -> int:
+        """The steps each step of an interval of network `net` is cut into in runs of
+        model m: 1 unless a machine's subtransient time constant there is shorter than
+        this simulator's step (`default_h`; `stabctl.dynamics.grid.stiff_step`: a fault at
+        the terminal of a machine with a tiny x"d), whatever the integrator (the
+        trapezoid rings on such a mode).  The count is the nominal step's, so that a run
+        at half the step (the half-step check of a verdict or a CCT) halves these steps
+        too and shows their error.
+
+        Parameters
+        ----------
+        m : DynamicModel
+            One of this simulator's models (`model_for`).
+        net : ReducedNetwork
+            The interval's network.
+
+        Returns
+        -------
+        int
+        """
+        h = self.default_h
+        bound = stiff_step(m.subtransient_time_constants(net, h / STIFF_STEP_PER_TIME_CONSTANT))
+        return 1 if bound >= h else int(np.ceil(h / bound - 1e-9))
 
     def exciter_hmax(self, m: DynamicModel, step: float) -> np.ndarray:
         """The longest sub-step of each exciter of model m in Heun runs of nominal step

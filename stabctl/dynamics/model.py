@@ -266,6 +266,34 @@ class DynamicModel:
         self.nc = NonConformingLoads(S_P=S_P, I0=S_I / V0[i], Y_low=np.conj(S_P + S_I) / V0[i] ** 2)
 
     # -- network stages ---------------------------------------------------------------
+    def subtransient_time_constants(self, net: ReducedNetwork, below: float) -> np.ndarray:
+        """Each machine's shortest subtransient time constant in stage `net` (s;
+        `MachineParams.subtransient_time_constants` behind the reactance it sees there,
+        `solution.external_impedance`), for the machines whose short-circuit one (T"do
+        x"d/x'd, the shortest any network gives) is below `below` (s); inf for the
+        others and for tripped machines.
+
+        Parameters
+        ----------
+        net : ReducedNetwork
+            A stage of this model (`network`).
+        below : float
+            The bound, s (a run's step: only shorter ones matter).
+
+        Returns
+        -------
+        ndarray, shape (n_mac,)
+        """
+        mp = self.mp
+        out = np.full(mp.n, np.inf)
+        rows = np.flatnonzero(mp.subtransient_time_constants(np.zeros(mp.n)) < below)
+        if rows.size:
+            z = solution.external_impedance(net, rows)
+            xe = np.full(mp.n, np.inf)
+            xe[rows] = np.where(np.isnan(z), np.inf, z.imag / mp.mac_pot[rows])
+            out[rows] = mp.subtransient_time_constants(xe)[rows]
+        return out
+
     def network(self, config: StageConfig = StageConfig()) -> ReducedNetwork:
         """Reduced network of a stage (the STAGES_KEPT most recently used are kept)."""
         return self._stage_cache.get(config, lambda: self._reduce(config))

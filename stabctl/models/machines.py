@@ -267,6 +267,30 @@ class MachineParams(Declared):
             )
         )
 
+    def subtransient_time_constants(self, xe: np.ndarray) -> np.ndarray:
+        """Each machine's shortest subtransient time constant (s) with its stator closed
+        through the reactance `xe` (machine base): T"do (x"d + xe)/(x'd + xe) and T"qo
+        (x"q + xe)/(x'q + xe), the shorter; inf where the machine is not subtransient.
+        At a bolted fault at its terminal (xe = 0) these are the short-circuit time
+        constants T"d = T"do x"d/x'd and T"q (Kundur, Power System Stability and Control,
+        section 4.1.4, the external reactance added to the stator's).
+
+        Parameters
+        ----------
+        xe : ndarray, shape (n_mac,)
+            External reactance of each machine, pu on its base, >= 0.
+
+        Returns
+        -------
+        ndarray, shape (n_mac,)
+        """
+        xe = np.maximum(np.asarray(xe, float), 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = self.Tdopp * (self.xdpp + xe) / (self.xdp + xe)
+            q = self.Tqopp * (self.xqpp + xe) / (self.xqp + xe)
+        t = np.fmin(d, q)
+        return np.where((self.kind == SUB) & (t > 0), t, np.inf)
+
     @property
     def x_network(self) -> np.ndarray:
         """Reactance behind which the internal voltage feeds the network (machine base)."""

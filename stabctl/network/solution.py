@@ -97,6 +97,33 @@ class ReducedNetwork:
     faulted: bool = False
 
 
+def external_impedance(net: ReducedNetwork, rows: np.ndarray) -> np.ndarray:
+    """The impedance (pu, system base) each machine of `rows` sees from its terminal in
+    stage `net`, the other machines' internal voltages held (shorted): from the stage's
+    driving-point admittance at its internal node, Y11 - Y12 Z22 Y21, its own internal
+    impedance Z_mac taken off; 0 at a bolted fault at its terminal, nan for a tripped
+    machine.
+
+    Parameters
+    ----------
+    net : ReducedNetwork
+        The stage.
+    rows : ndarray of int
+        Machine rows.
+
+    Returns
+    -------
+    ndarray of complex, shape (len(rows),)
+    """
+    rows = np.asarray(rows, int)
+    y = np.diag(net.Y11)[rows].astype(complex)
+    if net.Y22.size:
+        y = y - np.einsum("ij,ji->i", net.Y12[rows] @ net.Z22, net.Y21[:, rows])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = 1.0 / y - net.Z_mac[rows]
+    return np.where(net.Z_mac[rows] != 0, z, np.nan)
+
+
 def reduce_network(
     case: Case,
     y_shunt: np.ndarray,

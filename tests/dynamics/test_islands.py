@@ -77,7 +77,7 @@ def test_speed_estimators_refuse_islands_and_infinite_buses(kundur):
     with pytest.raises(InputError, match=r"'kundur': its machines lie in 2 islands"):
         machine_models(split, machine_pmus(split))
     smib = load_psse(DATA / "smib_v33.raw", DATA / "smib.dyr")
-    with pytest.raises(InputError, match=r"'smib_v33': G2 \(bus 2\) is an infinite bus"):
+    with pytest.raises(InputError, match=r"'smib_v33': G2 \(bus 2, id '1'\) is an infinite bus"):
         machine_models(smib, machine_pmus(smib))
 
 
