@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import shlex
 from pathlib import Path
 
 import click
@@ -37,8 +38,10 @@ from stabctl.errors import InputError
 @click.option(
     "--report",
     is_flag=True,
-    help="Write OUT_DIR/eig_<case>[_nopss].md with the eigenvalue plot, mode-shape "
-    "compass plots and participation bar charts (PNG).",
+    help="Write OUT_DIR/eig_<CASE>[_nopss][_areasN][_pstess][_noqlimits][_limits-X].md "
+    "(CASE as given, a file's own name; the settings other than their defaults) with the "
+    "eigenvalue plot, mode-shape compass plots and participation bar charts (PNG); its "
+    "header gives the command that made it.",
 )
 @out_dir_option("The report directory (with --report).")
 @conventions_option
@@ -102,7 +105,14 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
         )
     except AreaCountError as exc:  # fewer electromechanical modes than machines - 1
         raise InputError(f"--areas {n_areas}: {exc}") from None
-    written = [str(write_report(st, out_dir))] if report else []
+    written = []
+    if report:
+        stem, command = _report_name(
+            case_name, no_pss, n_areas, out_dir, conventions, q_limits, limits
+        )
+        replaced = (Path(out_dir) / f"{stem}.md").exists()
+        path = write_report(st, out_dir, stem, command)
+        written.append(str(path) + (" (the report there replaced)" if replaced else ""))
     if as_json:
         print_json(
             {**study_json(st), "conventions": conventions, "q_limits": q_limits, "files": written}
@@ -111,3 +121,23 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
     print_modes(st, no_pss)
     for w in written:
         click.echo(f"wrote {w}")
+
+
+def _report_name(case_name, no_pss, n_areas, out_dir, conventions, q_limits, limits):
+    """(file stem, command) of a report: named after CASE as given (a case file's own
+    name, not the name inside it: two cases imported from one RAW file are two reports)
+    and the settings that change the modes, other than their defaults; the command the
+    report says made it, those settings and --out-dir as given."""
+    settings = [
+        ("--no-pss", "nopss", no_pss),
+        (f"--areas {n_areas}", f"areas{n_areas}", n_areas is not None),
+        (f"--conventions {conventions}", conventions, conventions != "ieee"),
+        ("--no-q-limits", "noqlimits", not q_limits),
+        (f"--limits {limits}", f"limits-{limits}", limits != "auto"),
+    ]
+    stem = "_".join([f"eig_{Path(case_name).stem}", *(tag for _, tag, on in settings if on)])
+    given = [option for option, _, on in settings if on]
+    default = str(out_dir) == "reports"  # the option's default
+    where = [] if default else [f"--out-dir {shlex.quote(str(out_dir))}"]
+    command = " ".join(["stabctl eig", shlex.quote(case_name), *given, "--report", *where])
+    return stem, command
