@@ -748,12 +748,15 @@ def critical_group_line(case, group: dict, decimals: int = 3) -> str:
     )
 
 
-def print_plan(case_name, d) -> None:
-    """Print the `place` result as text.
+def print_plan(case, d) -> None:
+    """Print the `place` result as text: the plan's line, its sites (each at its bus,
+    beside its machine, named as every output names machines: `Case.machine_name`; no
+    table when nothing is placed) and each contingency.
 
     Parameters
     ----------
-    case_name : str
+    case : Case
+        The case planned for.
     d : dict
         The result (`place --json`, `stabctl.placement.plan.PlanResult.to_dict`).
     """
@@ -761,7 +764,7 @@ def print_plan(case_name, d) -> None:
 
     c = d["cost"]
     click.echo(
-        f"case {case_name} ({d['requirement']}; load levels "
+        f"case {case.name} ({d['requirement']}; load levels "
         f"{', '.join(f'{x:g}' for x in d['load_levels'])}; "
         f"{_ESD_NAMES[d.get('esd_model', 'ideal')]}{_law_named(d)}): {d['total_mw']:.1f} MW, "
         f"{d['total_mwh']:.2f} MWh at {d['n_sites']} site(s){_buses_of_sites(d)}, "
@@ -769,14 +772,15 @@ def print_plan(case_name, d) -> None:
         f"in the --cost-* options' unit (MW {c['mw']:.1f}, MWh {c['mwh']:.1f}, "
         f"sites {c['site']:.1f}); {_plan_verdict(d)} ({d['message']})"
     )
-    click.echo(
-        f"{'bus':>6} {'machine':>8} {'MW':>9} {'MWh':>8} {'absorbed MWh':>13} {'delivered MWh':>14}"
-    )
+    if d["allocation"]:
+        click.echo(
+            f"{'bus':>6} {'MW':>9} {'MWh':>8} {'absorbed MWh':>13} {'delivered MWh':>14}  beside"
+        )
     for r in d["allocation"]:
         click.echo(
-            f"{r['bus']:>6} {r['machine']:>8} {r['mw']:9.1f} {r['mwh']:8.2f} "
+            f"{r['bus']:>6} {r['mw']:9.1f} {r['mwh']:8.2f} "
             f"{r.get('absorbed_mj', 0.0) / MJ_PER_MWH:13.3f} "
-            f"{r.get('delivered_mj', 0.0) / MJ_PER_MWH:14.3f}"
+            f"{r.get('delivered_mj', 0.0) / MJ_PER_MWH:14.3f}  {case.machine_name(r['machine'])}"
         )
     aside = [
         f"{n} more set aside as {why}"

@@ -331,7 +331,7 @@ def place(
     if as_json:
         print_json(out)
     else:
-        print_plan(case.name, out)
+        print_plan(case, out)
     if out_path:  # after the plan is shown: a full disk does not lose the run
         atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if not result.verified:

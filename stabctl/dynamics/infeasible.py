@@ -47,8 +47,8 @@ def leave_out_infeasible(
     -------
     (Case, tuple of str)
         The case (the same object when nothing is left out) and one line per control left
-        out: ``"exciter of machine M (bus B): <the limit and the value>"`` (its stabiliser
-        with it) or ``"governor of machine M (bus B): ..."``.
+        out: ``"exciter of GM (bus B[, id I]): <the limit and the value>"`` (its stabiliser
+        with it) or ``"governor of GM (bus B[, id I]): ..."``.
 
     Raises
     ------
@@ -87,10 +87,8 @@ def _without(case: Case, err: InitialLimitError, left: list[str]) -> Case:
     ]
     rows = getattr(case, table)
     for r, message in zip(err.rows, err.messages):
-        m = int(rows.machine[r])
-        bus = int(case.machines.bus[case.machine_index(m)])
         what = message.split(": ", 1)[-1]
-        left.append(f"{kind} of machine {m} (bus {bus}): {what}")
+        left.append(f"{kind} of {case.machine_name(int(rows.machine[r]))}: {what}")
     keep = np.ones(len(rows), bool)
     keep[list(err.rows)] = False
     changes = {table: rows.select(keep)}

@@ -598,7 +598,10 @@ def _iterate(setup: _Setup, base: dict, start, max_iter: int, rtol: float, say) 
         say(
             f"iteration {it}: {trial.sum():.1f} MW at {np.count_nonzero(trial)} site(s), "
             f"{'meets every target' if new.feasible else 'misses'}, "
-            f"saving {rho:.2f} of the predicted; " + _cct_line(setup.contingencies, new.ev)
+            f"gain {rho:.2f} x the program's prediction"
+            + (" (worse than the last iterate)" if rho < 0 else "")
+            + "; "
+            + _cct_line(setup.contingencies, new.ev)
         )
         if new.feasible and (best is None or setup.cost @ new.mw < setup.cost @ best.mw):
             best = new

@@ -46,11 +46,11 @@ def test_leave_out_removes_and_names_them(crowded):
     """The EXST1 goes with its stabiliser, both governors go; the rest stays, and the case
     now starts at rest."""
     case, left = leave_out_infeasible(crowded)
-    assert left[0].startswith("exciter of machine 2 (bus 2): EXST1 initial field voltage")
+    assert left[0].startswith("exciter of G2 (bus 2): EXST1 initial field voltage")
     assert left[1:] == (
-        "governor of machine 1 (bus 1): initial power order 0.8068 pu outside [Tmin, Tmax] "
+        "governor of G1 (bus 1): initial power order 0.8068 pu outside [Tmin, Tmax] "
         "= [0.0000, 0.5000]",
-        "governor of machine 3 (bus 11): initial power order 0.7778 pu outside [Tmin, Tmax] "
+        "governor of G3 (bus 11): initial power order 0.7778 pu outside [Tmin, Tmax] "
         "= [0.0000, 0.5000]",
     )
     assert list(case.exciters.machine) == [1, 3, 4] and list(case.pss.machine) == [1, 3, 4]
@@ -83,7 +83,7 @@ def test_a_simple_exciter_whose_output_limit_is_below_its_field_voltage_is_named
     assert str(err.value).endswith(" pu: the regulator's output limit cannot deliver it")
     kept, left = leave_out_infeasible(case)
     assert len(left) == 1 and left[0].startswith(
-        "exciter of machine 2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0"
+        "exciter of G2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0"
     )
     assert list(kept.exciters.machine) == [1, 3, 4]
     assert Simulator(kept, background_compile=False).model.initial_residual[0] < 1e-8
