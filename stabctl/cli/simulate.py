@@ -463,6 +463,7 @@ def simulate(
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.dynamics.grid import check_step_count
+    from stabctl.dynamics.results import END_FREQUENCY_HZ, END_VOLTAGE_PU
     from stabctl.io import load_case
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
@@ -600,6 +601,10 @@ def simulate(
                 "events": [described(e, case) for e in _in_time_order(events)],
                 "suspect_starts": list(sim.suspect),
                 "stiff_intervals": result.meta.get("stiff_intervals", []),
+                "end_state": {
+                    **result.end_state(case.freq_hz),
+                    "concerns": result.end_concerns(case.freq_hz),
+                },
                 "machine_names": {
                     str(int(k)): case.machine_name(int(k)) for k in case.machines.number
                 },
@@ -640,6 +645,12 @@ def simulate(
         )
     elif result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
+        if concerns := result.end_concerns(case.freq_hz):
+            click.echo(
+                f"  note: at the end (t = {float(result.t[-1]):g} s) {' and '.join(concerns)}: "
+                "stable by the angle criterion, yet no normal operating point (below "
+                f"{END_VOLTAGE_PU:g} pu, or beyond +-{END_FREQUENCY_HZ:g} Hz)"
+            )
     else:
         click.echo(
             f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "

@@ -85,6 +85,15 @@ def de_energised_at(partitions, t_end: float) -> float | None:
     return None
 
 
+#: `SimulationResult.end_concerns`: a bus voltage below this at the end of a stable run
+#: is no normal operating point (pu; the storage controllers' gate, and the low end of
+#: the voltage recovery planning criteria ask for)
+END_VOLTAGE_PU = 0.8
+#: and a frequency further than this from nominal (Hz; NERC PRC-024's band of
+#: continuous operation, 59.4-60.6 Hz at 60 Hz)
+END_FREQUENCY_HZ = 0.6
+
+
 @dataclass
 class SimulationResult:
     """Trajectories of one run (`Simulator.run`), per machine, bus and storage device.
@@ -262,6 +271,67 @@ class SimulationResult:
         machine without `partitions`."""
         last = self.last_partition()
         return np.ones(self.machines.size, bool) if last is None else last.judged.copy()
+
+    def end_state(self, freq_hz: float) -> dict:
+        """Where the run ends: its time, the lowest bus voltage among the energised buses
+        (above 1e-3 pu: a de-energised island's are 0) and its bus, and the frequency of
+        the machines the criterion judges at the end (their inertia-weighted speed times
+        `freq_hz`).  A run stable by the angle criterion may end far from a normal
+        operating point (an area tripped off: the rest at 0.6 pu and 58.7 Hz), which
+        these show.
+
+        Parameters
+        ----------
+        freq_hz : float
+            The case's nominal frequency, Hz.
+
+        Returns
+        -------
+        dict
+            ``t_s``, ``lowest_voltage_pu``, ``lowest_voltage_bus`` (None without an
+            energised bus), ``frequency_hz`` (None without a judged machine).
+        """
+        v = self.vmag[-1] if self.vmag.size else np.zeros(0)
+        on = np.flatnonzero(v > 1e-3)
+        k = int(on[np.argmin(v[on])]) if on.size else None
+        judged = self.judged & (self.inertia > 0)
+        speed = (
+            float(self.speed[-1, judged] @ self.inertia[judged] / self.inertia[judged].sum())
+            if judged.any()
+            else None
+        )
+        return {
+            "t_s": float(self.t[-1]),
+            "lowest_voltage_pu": None if k is None else float(v[k]),
+            "lowest_voltage_bus": None if k is None else int(self.buses[k]),
+            "frequency_hz": None if speed is None else speed * freq_hz,
+        }
+
+    def end_concerns(self, freq_hz: float) -> list[str]:
+        """What of `end_state` is no normal operating point: a bus below
+        `END_VOLTAGE_PU`, a frequency more than `END_FREQUENCY_HZ` from `freq_hz`; one
+        phrase each, empty when neither (or the run is not stable).
+
+        Parameters
+        ----------
+        freq_hz : float
+            The case's nominal frequency, Hz.
+
+        Returns
+        -------
+        list of str
+        """
+        if not self.stable:
+            return []
+        end = self.end_state(freq_hz)
+        out = []
+        v = end["lowest_voltage_pu"]
+        if v is not None and v < END_VOLTAGE_PU:
+            out.append(f"bus {end['lowest_voltage_bus']} at {v:.3f} pu")
+        f = end["frequency_hz"]
+        if f is not None and abs(f - freq_hz) > END_FREQUENCY_HZ:
+            out.append(f"the machines it judges at {f:.2f} Hz")
+        return out
 
     def last_partition(self) -> Partition | None:
         """The partition of the last recorded time (`partitions`).

@@ -724,3 +724,32 @@ def test_check_step_reports_the_verdict_at_half_the_step():
     res = run("simulate", *fault, "--clear-cycles", "6", "--far-clear-cycles", "6")
     assert res.exit_code == 0, res.output
     assert "step check: stable at half the step (h = 5 ms) too" in res.output
+
+
+def test_a_stable_run_that_ends_far_from_a_normal_operating_point_says_so(tmp_path):
+    """Kundur's fault at bus 3 with line 3-20 tripped cuts area 1's machines off: the rest
+    runs on at 0.59 pu and 59.1 Hz for 19 s, reported "stable" without a word.  The end
+    state is given (`--json` `end_state`: the lowest energised bus voltage and the
+    judged machines' frequency, as the CSV's last row has them) and a stable run below
+    0.8 pu or beyond +-0.6 Hz says so in a note; a normal clearing says nothing."""
+    import csv
+
+    out = tmp_path / "k.csv"
+    args = ["simulate", "kundur", "--fault", 3, "--far-bus", 20, "--clear-cycles", 6, "--tf", 20]
+    res = run(*args, "--out", out, "--json")
+    assert res.exit_code == 0, res.output
+    end = json.loads(res.stdout)["end_state"]
+    with open(out) as fh:
+        rows = list(csv.DictReader(fh))
+    last = rows[-1]
+    volts = {int(k.split(".B")[1]): float(v) for k, v in last.items() if k.startswith("vmag_pu.B")}
+    on = {b: v for b, v in volts.items() if v > 1e-3}
+    bus = min(on, key=on.get)
+    assert (end["lowest_voltage_bus"], end["lowest_voltage_pu"]) == (bus, pytest.approx(on[bus]))
+    assert end["lowest_voltage_pu"] < 0.8 and abs(end["frequency_hz"] - 60.0) > 0.6
+    assert len(end["concerns"]) == 2
+    text = run(*args)
+    assert "  note: at the end (t = 20 s) bus " in text.stdout, text.stdout
+    assert "stable by the angle criterion, yet no normal operating point" in text.stdout
+    normal = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 6)
+    assert normal.exit_code == 0 and "note: at the end" not in normal.stdout
