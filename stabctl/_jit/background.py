@@ -11,12 +11,14 @@ pickled argument types on stdin, this module is the child.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import importlib
 import os
 import pickle
 import subprocess
 import sys
 import tempfile
+import time
 import warnings
 from pathlib import Path
 
@@ -79,6 +81,7 @@ def compile_in_background(dispatcher, argtypes, opt: int | None = None) -> bool:
         return False
     stamp_cache()  # the child finds the cache's key up to date: it clears nothing
     err = tempfile.TemporaryFile()  # noqa: SIM115 - the child's stderr, read after it exits
+    out = tempfile.TemporaryFile()  # noqa: SIM115 - the child's compile time, read likewise
     env = dict(os.environ, **({} if opt is None else {"NUMBA_OPT": str(opt)}))
     proc = subprocess.Popen(
         [
@@ -90,13 +93,13 @@ def compile_in_background(dispatcher, argtypes, opt: int | None = None) -> bool:
             str(os.getpid()),
         ],
         stdin=subprocess.PIPE,
-        stdout=subprocess.DEVNULL,
+        stdout=out,
         stderr=err,
         env=env,
     )
     proc.stdin.write(pickle.dumps(tuple(argtypes)))
     proc.stdin.close()
-    _BACKGROUND[name] = (proc, err)
+    _BACKGROUND[name] = (proc, err, out)
     atexit.register(_stop, proc)
     return True
 
@@ -111,7 +114,7 @@ def await_background(dispatcher) -> None:
     running = _BACKGROUND.pop(_name(dispatcher), None)
     if running is None:
         return
-    proc, err = running
+    proc, err, out = running
     if proc.poll() is None:
         data = {"dispatcher": dispatcher, "args": None, "return_type": None}
         event.start_event("numba:compile", data=data)
@@ -128,7 +131,32 @@ def await_background(dispatcher) -> None:
             RuntimeWarning,
             stacklevel=2,
         )
+    else:
+        out.seek(0)
+        with contextlib.suppress(ValueError):
+            COMPILED_S[_name(dispatcher)] = float(out.read().decode(errors="replace") or "nan")
     err.close()
+    out.close()
+
+
+#: seconds each kernel compiled in a child process took there (`await_background`),
+#: by name: what `stabctl compile` reports for it
+COMPILED_S: dict[str, float] = {}
+
+
+def compiled_seconds(dispatcher) -> float | None:
+    """The seconds a child process took to compile `dispatcher` (`compile_in_background`,
+    once `await_background` has waited for it); None if no child compiled it.
+
+    Parameters
+    ----------
+    dispatcher : numba dispatcher
+
+    Returns
+    -------
+    float or None
+    """
+    return COMPILED_S.get(_name(dispatcher))
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -156,4 +184,6 @@ def _die_with(parent: int) -> None:
 if __name__ == "__main__":  # the child of `compile_in_background`
     _module, _qualname, _parent = sys.argv[1:4]
     _die_with(int(_parent))
+    _t0 = time.perf_counter()
     getattr(importlib.import_module(_module), _qualname).compile(pickle.load(sys.stdin.buffer))
+    print(f"{time.perf_counter() - _t0:.3f}", end="")
