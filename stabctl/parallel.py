@@ -696,12 +696,13 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         Dask not installed or its scheduler unreachable; (from map, on Dask) a worker
         running another stabctl (`_on_worker`).
     SweepIncomplete
-        (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S; a job
-        whose worker died runs again on another worker.  (From map, on processes) worker
+        (from map, on Dask) The cluster has had no worker for DASK_NO_WORKER_S, or lost
+        the jobs (its scheduler gone: `_lost_by_cluster`); a job whose worker died runs
+        again on another worker.  (From map, on processes) worker
         processes died more than `POOL_RESTARTS` times in one map (`_RestartedPool`).
     """
     if scheduler is not None:  # '' is refused (`check_scheduler`), never local
-        with dask_client(scheduler, workers) as client:
+        with dask_client(scheduler, workers) as client, _quiet_dask():
             yield lambda func, jobs, done=None: _dask_map(client, func, jobs, done)
         return
     if workers == 1:
@@ -844,8 +845,9 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
         client.submit(_on_worker, digest, func, j, pure=False): i for i, j in enumerate(jobs)
     }
     results: list = [None] * len(jobs)
-    workers = _DaskWorkers(client)
+    address = client.scheduler.address  # (named when the cluster is gone)
     try:
+        workers = _DaskWorkers(client)
         for fut in _finished(futures, workers):
             try:
                 results[futures[fut]] = _dask_result(fut, workers)
@@ -857,13 +859,33 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
     except _NoWorker:
         raise SweepIncomplete(
             f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at "
-            f"{client.scheduler.address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
+            f"{address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
             "last one died or left)"
+        ) from None
+    except Exception as exc:
+        if not _lost_by_cluster(exc):
+            raise  # the job's own error
+        said = textwrap.shorten(" ".join(str(exc).split()), 160, placeholder=" ...")
+        raise SweepIncomplete(
+            f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at {address} "
+            f"lost them ({type(exc).__name__}: {said})"
         ) from None
     finally:
         for fut in futures:
             fut.release()
     return results
+
+
+def _lost_by_cluster(exc: BaseException) -> bool:
+    """Whether `exc`, raised while a Dask map waited for its results, is the cluster's
+    (its scheduler gone: a future cancelled, a connection closed) rather than a job's
+    own error, which Dask raises as the job raised it."""
+    import asyncio
+    import concurrent.futures
+
+    if isinstance(exc, (asyncio.CancelledError, concurrent.futures.CancelledError)):
+        return True
+    return type(exc).__module__.split(".")[0] in ("distributed", "tornado")
 
 
 def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:

@@ -954,6 +954,33 @@ def test_a_scheduler_killed_mid_sweep_records_no_job_it_did_not_run(tmp_path, ca
     assert len(lines(out)) == 8
 
 
+@pytest.mark.dask
+def test_a_scheduler_killed_mid_map_is_said_as_jobs_not_run_not_a_traceback(caplog):
+    """`worker_pool`'s map on a Dask cluster started apart (`place --scheduler`, `paper`),
+    the scheduler killed mid-map: the placement stopped with distributed's
+    FutureCancelledError and a traceback (exit 1), where a sweep names the jobs the
+    cluster lost.  The map ends with SweepIncomplete saying so, distributed's own log of
+    the lost connection not shown."""
+    pytest.importorskip("distributed")
+    from stabctl.parallel import SweepIncomplete, worker_pool
+
+    jobs = [{"x": 1.0 + 0.01 * k} for k in range(6)]
+    with separate_cluster(1) as (address, sched, _):
+
+        def kill_after_two(done, total):
+            if done == 2:
+                sched.kill()
+
+        with (
+            worker_pool(1, scheduler=address) as run_map,
+            pytest.raises(SweepIncomplete) as lost,
+        ):
+            run_map(sleepy, jobs, kill_after_two)
+        said = str(lost.value)
+        assert re.match(rf"[1-4] of 6 jobs not run: the Dask cluster at {address} lost them", said)
+        assert not [r for r in caplog.records if r.name.startswith("distributed.")]
+
+
 def counted_cct(inputs):
     """`cct_job`, each run's start and end appended to the file $STABCTL_TEST_RUNS (one
     line each: start|end, key, pid), so that a test counts how often each job ran."""
