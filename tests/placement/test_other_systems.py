@@ -118,7 +118,7 @@ def test_a_machine_against_an_infinite_bus_gets_a_site_the_infinite_bus_none(pss
 
     case = load_case(psse_omib)
     assert [s.machine for s in candidate_sites(case)] == [2]
-    with pytest.raises(InputError, match=r"G1 \(bus 101\) is an infinite bus"):
+    with pytest.raises(InputError, match=r"G1 \(bus 101, id '1'\) is an infinite bus"):
         candidate_sites(case, machines=[1, 2])
     sim = Simulator(case)
     beta = distribution_factors(

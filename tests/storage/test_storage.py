@@ -355,4 +355,4 @@ def test_a_uniform_fleet_has_no_device_at_an_infinite_bus(tmp_path):
     res = CliRunner().invoke(main, [*args, "--tf", "2"])
     assert res.exit_code == 0, res.output
     assert "storage: 1 ESDs of 5 % of machine MVA" in res.stdout
-    assert "; none at the infinite bus(es) G1 (bus 101) (H = 0)" in res.stdout
+    assert "; none at the infinite bus(es) G1 (bus 101, id '1') (H = 0)" in res.stdout
