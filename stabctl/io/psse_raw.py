@@ -492,7 +492,8 @@ _GNE_FIRST = ("NAME", "MODEL", "NTERM")
 def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
     """(SBASE, version, BASFRQ, index of its line) from the case identification record:
     IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ (the same six fields in v32-v36), after the
-    ``@!`` column-heading lines PSS/E 35 and later write above it."""
+    ``@!`` column-heading lines PSS/E 35 and later write above it.  IC must be 0 (a new
+    case): 1 is a change file, which PSS/E adds to the case in its working memory."""
     first = next((i for i, t in enumerate(lines) if not t.lstrip().startswith("@!")), len(lines))
     if len(lines) < first + 3:
         raise CaseError(
@@ -502,6 +503,17 @@ def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
     rec = _Rec(path.name, first + 1, [split_fields(lines[first])], "case identification")
     rec.names = (("IC", "SBASE", "REV", "XFRRAT", "NXFRAT", "BASFRQ"),)
     sbase, rev, freq = rec.num(0, 1), rec.int(0, 2, 33), rec.num(0, 5, 60.0)
+    ic = rec.int(0, 0, 0)
+    if ic != 0:
+        rec.fail(
+            f"IC {rec.written(0, 0)}: "
+            + (
+                "the file holds changes to add to a case in PSS/E's working memory (IC 1), "
+                "not a whole case: import the base case (IC 0)"
+                if ic == 1
+                else "not a change code of the POM (0: a new case, 1: changes to a case)"
+            )
+        )
     if rev not in _SECTIONS:
         rec.fail(f"RAW version {rev} is not supported (32, 33, 34, 35 or 36)")
     if sbase <= 0 or freq <= 0:

@@ -179,6 +179,25 @@ def test_machines_are_named_by_bus_and_psse_id_and_keep_their_ids_in_the_case_fi
     assert load_case("kundur").machine_name(1) == "G1 (bus 1)"  # PST data: no IDs
 
 
+@pytest.mark.parametrize(
+    "ic, needle",
+    [
+        (1, "IC 1: the file holds changes to add to a case in PSS/E's working memory"),
+        (2, "IC 2: not a change code of the POM (0: a new case, 1: changes to a case)"),
+    ],
+)
+def test_a_change_file_is_refused_not_read_as_a_whole_case(tmp_path, ic, needle):
+    """A RAW file with IC 1 (POM: changes PSS/E adds to the case in its working memory)
+    or IC 2 (no such code) was imported as a whole case without a word."""
+    text = V33.read_text().splitlines()
+    text[0] = str(ic) + text[0][1:]
+    path = tmp_path / f"ic{ic}.raw"
+    path.write_text("\n".join(text) + "\n")
+    with pytest.raises(CaseError, match=re.escape(f"ic{ic}.raw:1 case identification")) as err:
+        read_raw(path)
+    assert needle in str(err.value)
+
+
 def _dyr(tmp_path, *lines):
     """A DYR file of the given record lines."""
     path = tmp_path / "edited.dyr"
