@@ -10,7 +10,13 @@ import click
 
 from stabctl.cli.checks import check_suffix
 from stabctl.cli.format import describe_sw_con, print_json
-from stabctl.cli.options import AliasedOption, json_option, refuse_given, reports_errors
+from stabctl.cli.options import (
+    AliasedOption,
+    json_option,
+    note_written,
+    refuse_given,
+    reports_errors,
+)
 from stabctl.errors import InputError, StabctlError, counted
 
 #: the tables a case may hold beside its machines and controls, as summaries count them
@@ -807,8 +813,10 @@ def _powerflow_gap(imported, case, unsolved: str | None) -> tuple[float | None, 
 
 
 def _write_case_atomically(case, path: Path) -> None:
-    """Write the case JSON to a temporary file beside ``path``, then rename it."""
+    """Write the case JSON to a temporary file beside ``path``, then rename it (noted:
+    an interrupt after it says the case was written, `note_written`)."""
     from stabctl.io.pst import write_case_json
     from stabctl.parallel import atomic_write
 
     atomic_write(path, lambda tmp: write_case_json(case, tmp), mode=None)
+    note_written(path)

@@ -285,6 +285,7 @@ def reports_errors(func):
 
 def _reported(func, args, kwargs):
     """`reports_errors`'s call of the command ``func(*args, **kwargs)``."""
+    _WRITTEN.clear()  # this command's
     with (
         warnings.catch_warnings(record=True) as caught,
         _sigterm_as_interrupt(),
@@ -593,6 +594,23 @@ _KEPT = {
 }
 
 
+#: files a command has written whole so far (`note_written`), said if it is interrupted
+_WRITTEN: list[str] = []
+
+
+def note_written(path) -> None:
+    """Note that the running command has written `path` whole (renamed into place): an
+    interrupt after it says so instead of "nothing is kept" (`import-psse`'s case,
+    written before its summary is printed).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file written.
+    """
+    _WRITTEN.append(str(path))
+
+
 def _interrupted(kwargs, exc: BaseException | None = None) -> str:
     """The one line printed on Ctrl-C (SIGINT) or SIGTERM by every command: what was kept
     and the command that resumes (paper: with --resume); what the command itself said it
@@ -617,6 +635,9 @@ def _interrupted(kwargs, exc: BaseException | None = None) -> str:
                 pass
     if name in _LIVE:
         return f"interrupted: {_LIVE[name]}; run again with: {shlex.join(argv)}"
+    if _WRITTEN:
+        files = ", ".join(_WRITTEN)
+        return f"interrupted: {files} had been written whole; run again with: {shlex.join(argv)}"
     kept = _KEPT.get(name or "", "nothing is kept; the work starts again").format(out=out)
     return f"interrupted: {kept}; resume with: {shlex.join(argv)}"
 

@@ -396,6 +396,30 @@ def test_estimate_track_interrupted_before_any_frame_came_says_none_was_estimate
     assert list(tmp_path.iterdir()) == []
 
 
+def test_an_import_interrupted_after_its_case_was_written_says_so(tmp_path, monkeypatch):
+    """`import-psse` writes the case, then prints its summary; interrupted in between
+    (ACTIVSg2000's summary takes a while) it said "nothing is kept; the work starts
+    again" beside a whole case file.  It says the file had been written whole."""
+    from stabctl.cli import io as cli_io
+
+    data = Path(__file__).parents[1] / "data" / "psse"
+    monkeypatch.chdir(tmp_path)
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_io, "_imported", interrupted)
+    args = ["import-psse", str(data / "five_bus_v33.raw"), str(data / "five_bus.dyr")]
+    args += ["-o", "five.json"]
+    monkeypatch.setattr(sys, "argv", ["stabctl", *args])
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 130, (res.output, res.exception)
+    assert res.stderr.strip().splitlines()[-1] == (
+        "interrupted: five.json had been written whole; run again with: stabctl " + " ".join(args)
+    )
+    assert (tmp_path / "five.json").stat().st_size > 0
+
+
 def _record_interrupted(tmp_path, cfg2: bytes, data: list, sig) -> tuple:
     """`pmu record --frames 121 -o r.c37` of an endless stream of `data`, sent `sig` once
     a few frames came: (exit status, stdout, stderr, the server's port, the command)."""
