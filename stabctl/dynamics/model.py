@@ -612,10 +612,10 @@ class DynamicModel:
             warnings.warn(text, UserWarning, stacklevel=3)
             return
         hint = (
-            "; PSS/E data read with conventions 'pst': PST's exc_st3 (ESST3A) starts off "
-            "equilibrium with K_C != 0, read them with "
-            + advice("conventions 'andes'", "--conventions andes")
-            if state.startswith("exc.")
+            "; an ESST3A of PSS/E data read with the 'psse' or 'pst' conventions (PST's "
+            "exc_st3) starts off equilibrium with K_C != 0: import the data with "
+            + advice("load_psse(..., conventions='andes')", "import-psse --dyr-conventions andes")
+            if state.startswith("exc.") and np.any(self.ep.kind == exc.ST3)
             else ""
         )
         anyway = advice(" (Simulator(off_equilibrium='warn') runs it anyway)")

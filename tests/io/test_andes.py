@@ -418,6 +418,35 @@ def ieee14(tmp_path_factory):
     return CASES / "ieee14" / "ieee14.raw", dyr
 
 
+def test_an_esst3a_read_as_pst_reads_it_is_refused_with_the_import_option_that_reads_it(
+    ieee14, tmp_path
+):
+    """ANDES's IEEE 14 RAW + DYR imported with the defaults (psse conventions) starts off
+    equilibrium on its ESST3A (PST's exc_st3 estimate of the field current): the refusal
+    said "read them with --conventions andes", an option `simulate` does not have.  It
+    names the import's own option, with which the case runs."""
+    from stabctl.errors import CaseError
+
+    raw, dyr = ieee14
+    with pytest.raises(CaseError) as err:
+        Simulator(load_psse(raw, dyr), q_limits=False)
+    assert "starts off equilibrium with K_C != 0: import the data with load_psse(" in str(err.value)
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    out = tmp_path / "i14.json"
+    assert (
+        CliRunner().invoke(main, ["import-psse", str(raw), str(dyr), "-o", str(out)]).exit_code == 0
+    )
+    res = CliRunner().invoke(main, ["simulate", str(out), "--tf", "1"])
+    assert res.exit_code == 2 and res.stderr.rstrip().endswith(
+        "starts off equilibrium with K_C != 0: import the data with import-psse "
+        "--dyr-conventions andes"
+    ), res.stderr
+    Simulator(load_psse(raw, dyr, conventions="andes"), q_limits=False)  # runs
+
+
 def test_ieee14_fault_speeds_and_modes_match_andes(ieee14, ref):
     """Like for like as a new user would run it: the DYR read as ANDES reads it, the power
     flow without PV Q limits (ANDES's default), a 6-cycle fault at bus 9 through j1e-3 pu
