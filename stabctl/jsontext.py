@@ -46,9 +46,11 @@ def input_file(path: str | os.PathLike, what: str) -> Path:
     Raises
     ------
     InputError
-        Missing or unreadable, not a regular file (a device, a pipe, a directory), or too
-        large; the message names ``what`` and the path.
+        Empty, missing or unreadable, not a regular file (a device, a pipe, a directory),
+        or too large; the message names ``what`` and the path.
     """
+    if not str(os.fspath(path)).strip():  # Path("") is "." (the directory)
+        raise InputError(f"{what}: an empty path; give a file")
     path = Path(path)
     try:
         st = os.stat(path)

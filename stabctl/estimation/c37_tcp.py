@@ -159,8 +159,8 @@ def hostport(host: str, port: int) -> str:
 
 
 def split_hostport(text: str) -> tuple[str, str]:
-    """The host and port of an address (``HOST:PORT``, ``[IPv6]:PORT``, or ``::1:4712``:
-    the port is after the last colon).
+    """The host and port of an address (``HOST:PORT``, ``[IPv6]:PORT``: RFC 3986's
+    form).
 
     Parameters
     ----------
@@ -175,12 +175,15 @@ def split_hostport(text: str) -> tuple[str, str]:
     Raises
     ------
     InputError
-        A bracket other than those around a whole IPv6 host (``[::1:4712``).
+        A bracket other than those around a whole IPv6 host (``[::1:4712``), or an IPv6
+        host without them (``::1:4712`` is itself an IPv6 address: which colon ends the
+        host cannot be told).
     """
     host, _, port = text.rpartition(":")
-    if host.startswith("[") and host.endswith("]"):
+    bracketed = host.startswith("[") and host.endswith("]")
+    if bracketed:
         host = host[1:-1]
-    if "[" in host or "]" in host or "[" in port or "]" in port:
+    if "[" in host or "]" in host or "[" in port or "]" in port or (":" in host and not bracketed):
         raise InputError(
             f"{text!r} is not HOST:PORT (an IPv6 address in brackets, then its port: [::1]:4712)"
         )

@@ -34,7 +34,7 @@ from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.errors import InputError
+from stabctl.errors import InputError, advice
 
 #: largest voltage gate of the bang-bang law (pu)
 MAX_V_GATE_PU = 2.0
@@ -144,7 +144,11 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
         if not (
             0 <= self.deadband_hz < float("inf") and 0 <= self.hysteresis_hz <= self.deadband_hz
         ):
-            raise InputError("need deadband >= 0 and 0 <= hysteresis <= deadband (finite, Hz)")
+            raise InputError(
+                f"deadband {self.deadband_hz:g} Hz, hysteresis {self.hysteresis_hz:g} Hz: "
+                "need a finite deadband >= 0 and 0 <= hysteresis <= deadband "
+                + advice("(deadband_hz, hysteresis_hz)", "(--deadband-hz, --hysteresis-hz)")
+            )
         if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
             raise InputError(
                 f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got {self.v_gate_pu}"

@@ -63,6 +63,12 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (FAULT + ("--t-fault", "inf"), "--t-fault inf"),
         (FAULT + ("--tf", "-inf"), "--tf -inf"),
         (FAULT + ("--esd-pct", "1e6"), "--esd-pct 1e+06: must be in (0, 100] % of machine MVA"),
+        # a hysteresis above the deadband: both values and both options named
+        (
+            FAULT + ("--esd-pct", 5, "--hysteresis-hz", 0.5),
+            "deadband 0.1 Hz, hysteresis 0.5 Hz: need a finite deadband >= 0 and 0 <= "
+            "hysteresis <= deadband (--deadband-hz, --hysteresis-hz)",
+        ),
         # a value just outside the range is named as given, not rounded into the range
         (
             FAULT + ("--esd-pct", "100.0000001"),
@@ -2491,3 +2497,24 @@ def test_place_load_levels_outside_their_range_are_refused_before_any_work(
         run(*PLACE, "--load-levels", levels),
         f"--load-levels {levels}: {bad} is outside [0.1, 10] (fractions of the base load",
     )
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("sweep-cct", "kundur", "--faults", "", "--out", "r.jsonl"), "fault list: an empty path"),
+        (
+            ("estimate", "track", "kundur", "--source", "", "--out", "t.csv"),
+            "--source: an empty path",
+        ),
+    ],
+)
+def test_an_empty_path_is_named_as_such_not_as_the_directory_dot(
+    tmp_path, monkeypatch, args, needle
+):
+    """`--faults ""` and `--source ""` said "fault list .: not a regular file": an empty
+    path read as the current directory."""
+    monkeypatch.chdir(tmp_path)
+    res = run(*args)
+    assert res.exit_code == 2 and res.stderr == f"error: {needle}; give a file\n", res.stderr
+    assert list(tmp_path.iterdir()) == []

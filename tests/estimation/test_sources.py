@@ -287,6 +287,9 @@ def test_a_port_range_is_one_server_per_port():
         # not known")
         ("tcp://[::1:4712", r"'\[::1:4712' is not HOST:PORT \(an IPv6 address in brackets"),
         ("tcp://[::1]]:4712", r"'\[::1\]\]:4712' is not HOST:PORT"),
+        # an IPv6 host without brackets: '::1:4712' is itself an IPv6 address (it was read
+        # as [::1]:4712 without a word)
+        ("tcp://::1:4712", r"'::1:4712' is not HOST:PORT \(an IPv6 address in brackets"),
     ],
 )
 def test_bad_sources_are_named(text, needle):
