@@ -1239,9 +1239,17 @@ def _check_space(out: Path, n_jobs: int) -> None:
     need = n_jobs * RECORD_BYTES
     if free < need:
         raise InputError(
-            f"{out}: {n_jobs} job(s) need up to {need / 2**20:.1f} MiB for their records, "
-            f"{free / 2**20:.1f} MiB are free there"
+            f"{out}: {n_jobs} job(s) need up to {_size(need)} for their records, "
+            f"{_size(free)} are free there"
         )
+
+
+def _size(n: int) -> str:
+    """A byte count for a message, in the unit that shows it (bytes, KiB, MiB, GiB)."""
+    for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= scale:
+            return f"{n / scale:.1f} {unit}"
+    return f"{n} bytes"
 
 
 class _appender:

@@ -497,7 +497,8 @@ def test_a_sweep_without_room_for_its_records_is_refused_before_it_runs(tmp_path
 
     usage = collections.namedtuple("usage", "total used free")
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**9, 10**9 - 10000, 10000))
-    with pytest.raises(InputError, match=r"3 job\(s\) need up to 0.0 MiB .*0.0 MiB are free"):
+    # in the unit that shows them (the figures rounded to "0.0 MiB" each before)
+    with pytest.raises(InputError, match=r"3 job\(s\) need up to 24.0 KiB .*, 9.8 KiB are free"):
         run_sweep(jobs_of(square, 1, 2, 3), tmp_path / "n.jsonl", workers=1, progress=False)
     assert not (tmp_path / "n.jsonl").exists()
 

@@ -121,30 +121,45 @@ def _replaceable(path: Path, option: str) -> None:
 def not_an_input(path: Path, option: str) -> None:
     """Raise InputError when the output file ``path`` of ``option`` is a file that another
     parameter of the running command names (its case, ``--faults``, ``--screening``,
-    ``--source`` ...): writing it would overwrite an input.  Outside a command, or when
-    ``path`` does not exist yet, nothing is checked."""
+    ``--source`` ...): writing it would overwrite an input; or another output of the
+    command (``--plot`` the file ``--out`` names), existing or not.  Outside a command
+    nothing is checked."""
     ctx = click.get_current_context(silent=True)
-    if ctx is None or not path.is_file():
+    if ctx is None:
         return
     for param in ctx.command.params:
         if option in param.opts:
             continue
         value = ctx.params.get(param.name or "")
+        output = param.name in _OUTPUT_PARAMS
         for v in value if isinstance(value, (list, tuple)) else (value,):
-            if isinstance(v, (str, Path)) and _same_file(v, path):
-                what = (
-                    f"the input {param.opts[0]}"
-                    if isinstance(param, click.Option)
-                    else f"the input {param.human_readable_name}"
+            if isinstance(v, (str, Path)) and _same_file(v, path, output):
+                name = (
+                    param.opts[0] if isinstance(param, click.Option) else param.human_readable_name
                 )
+                if param.name in _OUTPUT_PARAMS:
+                    raise InputError(
+                        f"{option} {path} is also the output {name} {v}: one would overwrite "
+                        "the other; give two files"
+                    )
                 raise InputError(
-                    f"{option} {path} is also {what} {v}: writing it would overwrite that "
-                    "input; give another file"
+                    f"{option} {path} is also the input {name} {v}: writing it would overwrite "
+                    "that input; give another file"
                 )
 
 
-def _same_file(value, path: Path) -> bool:
-    return bool(str(value)) and os.path.isfile(value) and os.path.samefile(value, path)
+#: the parameters that name a command's outputs, not its inputs (`not_an_input`)
+_OUTPUT_PARAMS = frozenset(("out_path", "plot_path", "out", "out_dir"))
+
+
+def _same_file(value, path: Path, output: bool = False) -> bool:
+    """Whether `value` names the file `path`: both existing files, the same one; for
+    another output (`output`) also the same path not written yet."""
+    if not str(value):
+        return False
+    if os.path.isfile(value) and path.is_file():
+        return os.path.samefile(value, path)
+    return output and os.path.abspath(value) == os.path.abspath(path)
 
 
 OUT_SUFFIXES = (".csv", ".npz")

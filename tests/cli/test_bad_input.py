@@ -1113,6 +1113,26 @@ def test_an_output_file_that_is_also_an_input_is_refused(tmp_path, monkeypatch):
     assert case.read_bytes() == before
 
 
+@pytest.mark.parametrize("plot", ["k.png", "./k.png"])
+def test_two_outputs_naming_one_file_are_refused_whether_it_exists_or_not(
+    tmp_path, monkeypatch, plot
+):
+    """`simulate --out k.png --plot k.png` said "--out k.png is also the input --plot"
+    of an existing file (the plot is an output), and wrote the one over the other when
+    the file did not exist yet: both refused, naming the two outputs, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    for existing in (False, True):
+        if existing:
+            (tmp_path / "k.png").write_bytes(b"kept")
+        res = run("simulate", "kundur", "--out", "k.png", "--plot", plot, "--tf", 1)
+        assert res.exit_code == 2, res.output
+        assert res.stderr == (
+            f"error: --out k.png is also the output --plot {plot}: one would overwrite the "
+            "other; give two files\n"
+        )
+        assert [p.name for p in tmp_path.iterdir()] == (["k.png"] if existing else [])
+
+
 def test_estimate_track_refuses_its_recording_as_output_and_a_negative_end(tmp_path):
     """`estimate track --source r.c37 --out r.c37` overwrote the recording with the
     estimates (exit 0), and `--until -1` was taken; both are one error line (exit 2) and
