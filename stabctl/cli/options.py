@@ -701,14 +701,14 @@ def out_dir_option(help="Report directory."):
 
 
 def plot_option(what: str):
-    """``--plot FILE.png``: a figure file (.png, .pdf or .svg) of ``what``, into
+    """``--plot FILE.png|.pdf|.svg``: a figure file (.png, .pdf or .svg) of ``what``, into
     ``plot_path``."""
     return click.option(
         "--plot",
         "plot_path",
         type=click.Path(dir_okay=False),
         default=None,
-        metavar="FILE.png",
+        metavar="FILE.png|.pdf|.svg",
         help=f"Figure file (.png, .pdf or .svg): {what}.",
     )
 
