@@ -356,9 +356,15 @@ def _machine_styles(numbers, case, highlight=(), max_labels: int = 10) -> list[d
 
 def _speed_panel(ax, res, styles, label: str) -> None:
     """Machine speeds of one run with the given styles; highlighted machines named at the
-    end of their trace; a legend (with how many others when some are unlabelled)."""
+    end of their trace, and in the legend said "not separated" where they did not
+    separate in this run (thick is the highlight, not the verdict); a legend (with how
+    many others when some are unlabelled)."""
+    separated = {int(m) for m in res.separated}
     for j, st in enumerate(styles):
-        ax.plot(res.t, res.speed[:, j], **st)
+        shown = st
+        if st["label"] and len(styles) > 10 and int(res.machines[j]) not in separated:
+            shown = {**st, "label": f"{st['label']}, not separated"}
+        ax.plot(res.t, res.speed[:, j], **shown)
         if st["label"] and len(styles) > 10:
             _end_label(ax, res.t, res.speed[:, j], st["label"], st["color"])
     if len(styles) > 10:  # room for the names at the end of the traces

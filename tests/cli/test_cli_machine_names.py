@@ -155,3 +155,30 @@ def test_simulate_json_gives_the_buses_of_the_machines_that_separate():
     d = json.loads(res.stdout)
     lost = d["separated_machines"]
     assert lost and d["separated_buses"] == [table_bus(case, m) for m in lost]
+
+
+def test_a_highlighted_machine_that_did_not_separate_is_said_so(tmp_path, figures_made):
+    """The paper's Case 2 figure (miniWECC, 34 machines) highlights G13 and G14, drawn
+    thick; only G14 separates without storage and none with it, yet the legend named both
+    beside "other 32 machines not separated", as if G13 had.  A highlighted machine that
+    did not separate in the panel's run is named ", not separated" there."""
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.stability.cct import LineFault
+    from stabctl.storage.devices import uniform_fleet
+
+    case = load_case("miniwecc")
+    sim = Simulator(case)
+    fault = LineFault(83, 33, 1.0).events(6 / 60)
+    without = sim.run(fault, t_end=4.0, stop_at_separation=True)
+    with_ = sim.run(fault, t_end=4.0, storage=uniform_fleet(case, 5))
+    lost = {int(m) for m in without.separated}
+    assert lost and not with_.separated and 13 not in lost
+    figures.storage_case_figure(
+        without, with_, tmp_path / "c2.png", "Case 2", case=case, highlight=(13, 14)
+    )
+    (fig,) = figures_made
+    for ax, res in zip(fig.axes[:2], (without, with_)):
+        gone = {int(m) for m in res.separated}
+        for m in sorted({13, *lost}):
+            said = table_name(case, m) + ("" if m in gone else ", not separated")
+            assert said in legend(ax), (m, legend(ax))
