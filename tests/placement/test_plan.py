@@ -611,8 +611,12 @@ def test_sites_that_share_a_bus_are_counted_with_their_buses(capsys):
     )  # fmt: skip
     d = res.to_dict()
     assert (d["n_sites"], d["n_buses"]) == (2, 1)
-    print_plan("x", d)
-    assert "0.30 MWh at 2 site(s) on 1 bus, cost 30.0" in capsys.readouterr().out
+    case = load_case("kundur")  # its machines 1-3 name the sites' machines
+    print_plan(case, d)
+    out = capsys.readouterr().out
+    assert "0.30 MWh at 2 site(s) on 1 bus, cost 30.0" in out
+    rows = [line.split() for line in out.splitlines() if line.startswith("  6100")]
+    assert [" ".join(r[5:]) for r in rows] == [case.machine_name(1), case.machine_name(2)]
 
 
 def test_a_law_armed_per_contingency_is_the_cct_command_s_critical_reference():
