@@ -465,11 +465,19 @@ class _Rec:
         """CaseError ``file:line section record: what`` at the file line of the record's
         line ``row``; a record of several lines (:data:`_MULTI_LINE`) also names which
         (``(line 3 of the record)``), whatever the line, unless the error is about the
-        ``whole`` record (one cut short)."""
+        ``whole`` record (one cut short).  A record holding double quotes its version
+        does not read as quotes is said to."""
         line = self.at[row] if row < len(self.at) else self.line + row
         multi = self.section in _MULTI_LINE and not whole
         which = f" (line {row + 1} of the record)" if multi else ""
-        raise CaseError(f"{self.file}:{line} {self.section} record{which}: {what}")
+        quotes = any('"' in f for fields in self.lines for f in fields)  # not read as quotes
+        hint = (
+            " (the record holds double quotes: before v34 a RAW file quotes its names "
+            "with ' only, so a double-quoted name is split at its blanks)"
+            if quotes
+            else ""
+        )
+        raise CaseError(f"{self.file}:{line} {self.section} record{which}: {what}{hint}")
 
 
 #: the sections whose records take several lines: their errors name the record's line

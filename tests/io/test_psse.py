@@ -198,6 +198,20 @@ def test_a_change_file_is_refused_not_read_as_a_whole_case(tmp_path, ic, needle)
     assert needle in str(err.value)
 
 
+def test_a_double_quoted_name_in_a_v33_file_is_said_to_be_the_cause(tmp_path):
+    """A v33 bus record with its name in double quotes (read as quotes from v34 on) was
+    refused as "IDE = '230.0000': not an integer", the quotes unmentioned."""
+    text = V33.read_text().replace("'LOAD        '", '"LOAD BUS"', 1)
+    path = tmp_path / "dq33.raw"
+    path.write_text(text)
+    with pytest.raises(CaseError, match=r"dq33.raw:5 bus record: ") as err:
+        read_raw(path)
+    assert str(err.value).endswith(
+        "(the record holds double quotes: before v34 a RAW file quotes its names with ' "
+        "only, so a double-quoted name is split at its blanks)"
+    )
+
+
 def _dyr(tmp_path, *lines):
     """A DYR file of the given record lines."""
     path = tmp_path / "edited.dyr"
