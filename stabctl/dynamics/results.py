@@ -86,8 +86,8 @@ def de_energised_at(partitions, t_end: float) -> float | None:
 
 
 #: `SimulationResult.end_concerns`: a bus voltage below this at the end of a stable run
-#: is no normal operating point (pu; the storage controllers' gate, and the low end of
-#: the voltage recovery planning criteria ask for)
+#: is no normal operating point (pu; the storage controllers' voltage gate, and the
+#: lowest voltage the recovery criteria of planning studies accept after a fault)
 END_VOLTAGE_PU = 0.8
 #: and a frequency further than this from nominal (Hz; NERC PRC-024's band of
 #: continuous operation, 59.4-60.6 Hz at 60 Hz)
