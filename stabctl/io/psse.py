@@ -204,6 +204,15 @@ def import_psse(
             UserWarning,
             stacklevel=3,
         )
+    if raw.circuit_order:
+        warnings.warn(
+            f"{where}: parallel circuits are numbered in file order ("
+            + advice("LineFault and LineTrip's circuit", "--trip A B:K, --circuit K")
+            + "), which is not their CKT id here: "
+            + "; ".join(raw.circuit_order),
+            UserWarning,
+            stacklevel=3,
+        )
     held = held_lines(raw.held)
     if held:
         warnings.warn(

@@ -314,6 +314,9 @@ class RawData:
         load_buses: the IDE 2 buses without a generator in service (none, or all
             netted), read as load buses as PSS/E reads them (:class:`Held`, kind
             ``"IDE 2 bus"``), in file order.
+        circuit_order: the pairs of buses whose parallel branches' CKT ids are not '1',
+            '2', ... in file order, each with which id the commands' circuit K is
+            (``"1-4 (in file order :1 is 'A', :2 is '7')"``).
     """
 
     name: str
@@ -335,6 +338,7 @@ class RawData:
     netted_ids: frozenset[tuple[int, str]] = frozenset()
     held: tuple[Held, ...] = ()
     load_buses: tuple[Held, ...] = ()
+    circuit_order: tuple[str, ...] = ()
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
@@ -862,6 +866,7 @@ class _Builder:
     isolated: set = field(default_factory=set)
     load_parts: dict = field(default_factory=dict)  # bus -> [Pp, Qp, Pi, Qi]
     branches: list = field(default_factory=list)
+    circuits: list = field(default_factory=list)  # the CKT of each row of branches
     gens: list = field(default_factory=list)
     gen_vs: dict = field(default_factory=dict)
     gen_ireg: dict = field(default_factory=dict)  # bus -> IREG of its first generator
@@ -1215,6 +1220,7 @@ def _branch(b: _Builder, rec: _Rec):
         b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
     else:
         b.branches.append([i, j, r, x, bc, 0, 0, 0, 0, 0, gi, bi, gj, bj])
+    b.circuits.append(ckt)
 
 
 def _transformer(b: _Builder, rec: _Rec):
@@ -1244,6 +1250,7 @@ def _transformer(b: _Builder, rec: _Rec):
     ang = _angle(rec, 2, what)
     row = [i, j, r2, x2, 0, t1 / t2, -ang if ang else 0.0, 0, 0, 0]
     b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if g_mag or b_mag else []))
+    b.circuits.append(rec.text(0, 3))
 
 
 def _modelled(b: _Builder, rec: _Rec, rows: tuple, what: str) -> bool:
@@ -1306,6 +1313,7 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
         row += [-ang if ang else 0.0, 0, 0, 0]
         mag = w == 0 and (g_mag or b_mag)
         b.branches.append(row + ([g_mag, b_mag, 0.0, 0.0] if mag else []))
+        b.circuits.append(rec.text(0, 3))  # each winding alone between its bus and the star
 
 
 #: the POM's transformer control modes (COD; negative: the same control, switched off)
@@ -1733,4 +1741,21 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         netted_ids=frozenset(b.netted_ids),
         held=tuple(sorted(b.held, key=lambda h: h.source.line)),
         load_buses=tuple(b.load_buses),
+        circuit_order=_circuit_order(b),
     )
+
+
+def _circuit_order(b: _Builder) -> tuple[str, ...]:
+    """One line per pair of buses whose parallel branches' CKT ids are not '1', '2', ...
+    in file order: the commands number parallel circuits by their order in the branch
+    table (`stabctl.case.Case.branch_rows`: ``--trip A B:K``, ``--circuit K``), which is
+    the file's, so that there ``:1`` is not PSS/E's circuit '1'."""
+    pairs: dict[tuple[int, int], list[str]] = {}
+    for row, ckt in zip(b.branches, b.circuits):
+        pairs.setdefault((min(row[0], row[1]), max(row[0], row[1])), []).append(ckt)
+    out = []
+    for (i, j), ids in pairs.items():
+        if len(ids) > 1 and ids != [str(k) for k in range(1, len(ids) + 1)]:
+            given = ", ".join(f":{k} is '{c}'" for k, c in enumerate(ids, 1))
+            out.append(f"{int(i)}-{int(j)} (in file order {given})")
+    return tuple(out)

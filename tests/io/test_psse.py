@@ -212,6 +212,28 @@ def test_a_double_quoted_name_in_a_v33_file_is_said_to_be_the_cause(tmp_path):
     )
 
 
+def test_parallel_circuits_whose_ids_are_not_their_file_order_are_named(tmp_path):
+    """The commands number parallel circuits by their order in the file (--trip A B:K,
+    --circuit K), not by their CKT id: with circuits '2' then '1' between two buses,
+    `--trip A B:1` opens PSS/E's '2', without a word.  The import names every such pair
+    and which id each K is; circuits '1', '2', ... in file order say nothing."""
+    raw = read_raw(V33)  # 1-2: '1' in service, '2' out, '3' in (metered at 2)
+    assert raw.circuit_order == ("1-2 (in file order :1 is '1', :2 is '3')",)
+    swapped = V33.read_text().replace("    1,      2,'1 ',", "    1,      2,'9 ',", 1)
+    path = tmp_path / "swapped.raw"
+    path.write_text(swapped)
+    with pytest.warns(
+        UserWarning, match=r"numbered in file order \(LineFault and LineTrip's circuit\)"
+    ) as said:
+        load_psse(path, DATA / "five_bus.dyr")
+    text = " ".join(str(w.message) for w in said)
+    assert "1-2 (in file order :1 is '9', :2 is '3')" in text
+    ordered = V33.read_text().replace("    1,     -2,'3 ',", "    1,     -2,'2 ',", 1)
+    ordered = ordered.replace("    1,      2,'2 ',", "    1,      2,'8 ',", 1)
+    path.write_text(ordered)
+    assert read_raw(path).circuit_order == ()  # '1' then '2' in service: K is the id
+
+
 def _dyr(tmp_path, *lines):
     """A DYR file of the given record lines."""
     path = tmp_path / "edited.dyr"
