@@ -714,6 +714,8 @@ class Simulator:
         int
         """
         h = self.default_h
+        if m.short_circuit_time_constants.min(initial=np.inf) >= h / STIFF_STEP_PER_TIME_CONSTANT:
+            return 1  # no network makes one shorter: most cases, every run
         bound = stiff_step(m.subtransient_time_constants(net, h / STIFF_STEP_PER_TIME_CONSTANT))
         return 1 if bound >= h else int(np.ceil(h / bound - 1e-9))
 

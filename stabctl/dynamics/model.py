@@ -286,13 +286,20 @@ class DynamicModel:
         """
         mp = self.mp
         out = np.full(mp.n, np.inf)
-        rows = np.flatnonzero(mp.subtransient_time_constants(np.zeros(mp.n)) < below)
+        rows = np.flatnonzero(self.short_circuit_time_constants < below)
         if rows.size:
             z = solution.external_impedance(net, rows)
             xe = np.full(mp.n, np.inf)
             xe[rows] = np.where(np.isnan(z), np.inf, z.imag / mp.mac_pot[rows])
             out[rows] = mp.subtransient_time_constants(xe)[rows]
         return out
+
+    @functools.cached_property
+    def short_circuit_time_constants(self) -> np.ndarray:
+        """Each machine's subtransient time constant at a bolted fault at its terminal
+        (s; T"do x"d/x'd or the q axis's, the shorter; inf where not subtransient): the
+        shortest any network gives it, taken once per model (every run asks)."""
+        return self.mp.subtransient_time_constants(np.zeros(self.mp.n))
 
     def network(self, config: StageConfig = StageConfig()) -> ReducedNetwork:
         """Reduced network of a stage (the STAGES_KEPT most recently used are kept)."""
