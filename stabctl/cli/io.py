@@ -71,7 +71,11 @@ def _case_info(name: str) -> dict:
 @click.command()
 @click.argument("case_name", metavar="[CASE]", required=False)
 @click.option(
-    "--bus-table", "buses", is_flag=True, help="List CASE's buses (number, type, kV, V, load)."
+    "--bus-table",
+    "buses",
+    is_flag=True,
+    help="List CASE's buses (number, type, kV, V, angle, generation, load and "
+    "shunt in MW and Mvar, machines).",
 )
 @click.option(
     "--line-table",
@@ -129,25 +133,30 @@ def cases(case_name, buses, lines, as_json):
             click.echo(f"    data file disturbance: {r['sw_con']}")
     for name, table in tables.items():
         click.echo(f"\n{name}:")
-        click.echo("  ".join(f"{k:>8}" for k in table[0]) if table else "  (none)")
+        widths = [max(8, len(k)) for k in table[0]] if table else []
+        click.echo(
+            "  ".join(f"{k:>{w}}" for k, w in zip(table[0], widths)) if table else "  (none)"
+        )
         for row in table:
-            click.echo("  ".join(_cell(v) for v in row.values()))
+            click.echo("  ".join(_cell(v, w) for v, w in zip(row.values(), widths)))
 
 
-def _cell(v) -> str:
+def _cell(v, width: int) -> str:
     if isinstance(v, float):
-        return f"{v:>8.4g}"
-    return f"{'-' if v is None else v!s:>8}"
+        return f"{v:>{width}.4g}"
+    return f"{'-' if v is None else v!s:>{width}}"
 
 
 def _bus_rows(case) -> list[dict]:
-    """One dict per bus: number, type, kV, |V| and angle of the data, load, machines."""
+    """One dict per bus: number, type, kV, |V| and angle of the data, generation, load and
+    shunt in MW and Mvar (the shunt's at 1 pu, capacitive positive, as PSS/E's bus data),
+    the machines there named as every output names them (``G3``)."""
     from stabctl.case import PQ, PV, SWING
 
-    b, kinds = case.buses, {SWING: "swing", PV: "PV", PQ: "PQ"}
+    b, kinds, base = case.buses, {SWING: "swing", PV: "PV", PQ: "PQ"}, case.base_mva
     at: dict[int, list[str]] = {}
     for k, bus in enumerate(case.machines.bus):
-        at.setdefault(int(bus), []).append(str(int(case.machines.number[k])))
+        at.setdefault(int(bus), []).append(f"G{int(case.machines.number[k])}")
     return [
         {
             "bus": int(b.number[i]),
@@ -155,8 +164,12 @@ def _bus_rows(case) -> list[dict]:
             "kV": float(b.kv[i]),
             "V_pu": float(b.vmag[i]),
             "angle_deg": float(b.vang_deg[i]),
-            "P_load_pu": float(b.pload[i]),
-            "Q_load_pu": float(b.qload[i]),
+            "P_gen_MW": float(b.pgen[i] * base),
+            "Q_gen_Mvar": float(b.qgen[i] * base),
+            "P_load_MW": float(b.pload[i] * base),
+            "Q_load_Mvar": float(b.qload[i] * base),
+            "G_shunt_MW": float(b.gshunt[i] * base),
+            "B_shunt_Mvar": float(b.bshunt[i] * base),
             "machines": ",".join(at.get(int(b.number[i]), [])) or None,
         }
         for i in range(case.n_bus)

@@ -1021,6 +1021,8 @@ def read_fault_list(case, case_name: str, src: str):
     from stabctl.stability.cct import read_fault_rows
     from stabctl.studies.cases import default_faults
 
+    if not src.strip():  # read_fault_rows would name the file only as "fault list"
+        raise InputError("--faults: an empty path; give a file or DEFAULT")
     if src == "DEFAULT":
         rows = [(f, f"--faults {src}") for f in default_faults(case_name)]
     else:  # each fault named with its file:line

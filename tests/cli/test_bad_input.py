@@ -2522,10 +2522,13 @@ def test_place_load_levels_outside_their_range_are_refused_before_any_work(
 @pytest.mark.parametrize(
     "args, needle",
     [
-        (("sweep-cct", "kundur", "--faults", "", "--out", "r.jsonl"), "fault list: an empty path"),
+        (
+            ("sweep-cct", "kundur", "--faults", "", "--out", "r.jsonl"),
+            "--faults: an empty path; give a file or DEFAULT",
+        ),
         (
             ("estimate", "track", "kundur", "--source", "", "--out", "t.csv"),
-            "--source: an empty path",
+            "--source: an empty path; give a file",
         ),
     ],
 )
@@ -2536,5 +2539,5 @@ def test_an_empty_path_is_named_as_such_not_as_the_directory_dot(
     path read as the current directory."""
     monkeypatch.chdir(tmp_path)
     res = run(*args)
-    assert res.exit_code == 2 and res.stderr == f"error: {needle}; give a file\n", res.stderr
+    assert res.exit_code == 2 and res.stderr == f"error: {needle}\n", res.stderr
     assert list(tmp_path.iterdir()) == []

@@ -87,7 +87,12 @@ def test_cases_lists_one_cases_buses_and_lines_to_choose_a_fault():
     d = json.loads(res.stdout)
     assert d["name"] == "kundur" and len(d["buses"]) == 13 and len(d["lines"]) == 14
     bus1 = d["buses"][0]
-    assert (bus1["bus"], bus1["type"], bus1["kV"], bus1["machines"]) == (1, "swing", 22.0, "1")
+    assert (bus1["bus"], bus1["type"], bus1["kV"], bus1["machines"]) == (1, "swing", 22.0, "G1")
+    # MW and Mvar on PSTess's 100 MVA base: bus 4's load 976 MW + 100 Mvar, bus 3's shunt
+    # capacitor 300 Mvar (d2asbegp's bus matrix, 9.76 + j1.0 and b 3.0 pu)
+    bus3, bus4 = d["buses"][2], d["buses"][3]
+    assert (bus4["bus"], bus4["P_load_MW"], bus4["Q_load_Mvar"]) == (4, 976.0, 100.0)
+    assert (bus3["bus"], bus3["B_shunt_Mvar"], bus3["G_shunt_MW"]) == (3, 300.0, 0.0)
     pairs = [(r["from"], r["to"], r["circuit"]) for r in d["lines"]]
     assert (3, 101, 1) in pairs and (3, 101, 2) in pairs
     text = run("cases", "kundur", "--line-table").stdout
