@@ -96,6 +96,11 @@ class Verdict(StabctlError):
     #: the simulations the search ran to reach the verdict (set by the search; None: not
     #: counted)
     n_simulations: int | None = None
+    #: a robust fault's stable run at the search limit ending off a normal operating point
+    #: (`stabctl.dynamics.results.SimulationResult.end_concerns`: a phrase each) and the
+    #: time it ended, s (set by the search; empty and None: none)
+    end_concerns: tuple = ()
+    end_t_s: float | None = None
 
 
 class AboveSearchLimit(InputError, Verdict):

@@ -250,6 +250,30 @@ def cycle_decimals(tol_s: float | None) -> int:
     return max(2, time_decimals(tol_s) - 1)
 
 
+def end_note(t_s: float, concerns) -> str:
+    """What a stable run ends with off a normal operating point, said as `simulate`,
+    `cct` and `screen` say it.
+
+    Parameters
+    ----------
+    t_s : float
+        The run's end, s.
+    concerns : sequence of str
+        `stabctl.dynamics.results.SimulationResult.end_concerns`, at least one.
+
+    Returns
+    -------
+    str
+    """
+    from stabctl.dynamics.results import END_FREQUENCY_HZ, END_VOLTAGE_PU
+
+    return (
+        f"at the end (t = {t_s:g} s) {' and '.join(concerns)}: stable by the angle "
+        f"criterion, yet no normal operating point (below {END_VOLTAGE_PU:g} pu, or beyond "
+        f"+-{END_FREQUENCY_HZ:g} Hz)"
+    )
+
+
 def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 
@@ -307,6 +331,8 @@ def print_cct(case, rating, d) -> None:
             f"machine(s) {machine_list(case, d['separated_machines'])} lose "
             f"synchronism when cleared at {d['t_unstable_s']:.{n}f} s"
         )
+    if d.get("end_concerns"):
+        click.echo(f"note: cleared at the CCT, {end_note(d['end_t_s'], d['end_concerns'])}")
     click.echo(
         f"{counted(d['n_simulations'], 'simulation')} ({d['n_simulations_half_step']} at "
         "half the step, "
@@ -415,6 +441,7 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
         read from it (`run_counts`, from the rows' ``run_now``); None (default): not said.
     """
     n, c = time_decimals(tol_s), cycle_decimals(tol_s)
+    from stabctl.dynamics.results import END_FREQUENCY_HZ, END_VOLTAGE_PU
     from stabctl.stability.screening import ABOVE, INSECURE, VERDICTS
 
     width = max([22, *(len(_fault_label(r)) for r in rows)])
@@ -446,8 +473,14 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
         else:
             said = f"{r['error'][:70]}" + (" (recorded before)" if r.get("failed_before") else "")
             click.echo(f"{where} {'-':>7} {'-':>7} {'-':>6}  {said}")
+        if r.get("end_concerns"):  # after its row: of the run its verdict rests on
+            click.echo(
+                f"{where} ends off a normal operating point: {' and '.join(r['end_concerns'])}"
+                f" at t = {r['end_t_s']:g} s"
+            )
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
+    n_off = sum(bool(r.get("end_concerns")) for r in rows)
     ran = sum(bool(r.get("run_now")) for r in rows)
     reused = "" if out is None else f"{run_counts(ran, len(rows) - ran, out)}; "
     click.echo(
@@ -456,6 +489,12 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
         f"{counts['failed']} failed; {sum(bool(r.get('islanded')) for r in rows)} island "
         "load buses (their load shed, counted in the verdicts above)"
         + (f", {n_lost} island machines (lost; the verdicts judge the rest)" if n_lost else "")
+        + (
+            f"; {n_off} stable by the angle criterion ending off a normal operating point "
+            f"(below {END_VOLTAGE_PU:g} pu or beyond +-{END_FREQUENCY_HZ:g} Hz: see their rows)"
+            if n_off
+            else ""
+        )
     )
     if before := sum(bool(r.get("failed_before")) for r in rows):
         click.echo(

@@ -11,6 +11,7 @@ import click
 from stabctl.cli.checks import OUT_SUFFIXES, PLOT_SUFFIXES, check_method, check_suffix
 from stabctl.cli.format import (
     describe_esd,
+    end_note,
     islanding_lines,
     machine_buses,
     machine_list,
@@ -463,7 +464,6 @@ def simulate(
     from stabctl.dynamics.driver import Simulator
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.dynamics.grid import check_step_count
-    from stabctl.dynamics.results import END_FREQUENCY_HZ, END_VOLTAGE_PU
     from stabctl.io import load_case
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
@@ -646,11 +646,7 @@ def simulate(
     elif result.stable:
         click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
         if concerns := result.end_concerns(case.freq_hz):
-            click.echo(
-                f"  note: at the end (t = {float(result.t[-1]):g} s) {' and '.join(concerns)}: "
-                "stable by the angle criterion, yet no normal operating point (below "
-                f"{END_VOLTAGE_PU:g} pu, or beyond +-{END_FREQUENCY_HZ:g} Hz)"
-            )
+            click.echo(f"  note: {end_note(float(result.t[-1]), concerns)}")
     else:
         click.echo(
             f"loss of synchronism at t = {result.t_separation:.4f} s: machine(s) "

@@ -17,6 +17,7 @@ from stabctl.cli.checks import (
 )
 from stabctl.cli.format import (
     critical_group_line,
+    end_note,
     islanding_lines,
     machine_buses,
     print_cct,
@@ -233,6 +234,8 @@ def cct(
                     "reason": str(exc),
                     "n_simulations": exc.n_simulations,
                     "islanded": list(exc.islanded),
+                    "end_concerns": list(exc.end_concerns),
+                    "end_t_s": exc.end_t_s,
                     "conventions": model.conventions,
                     "tol_s": search.tol,
                     "t_max_s": search.t_max,
@@ -250,6 +253,8 @@ def cct(
             if group:
                 click.echo(critical_group_line(case, group["critical_group"]))
             _echo_islanding(case, exc.islanded)
+            if exc.end_concerns and exc.end_t_s is not None:
+                click.echo(f"note: cleared at the limit, {end_note(exc.end_t_s, exc.end_concerns)}")
         return
     out = {"case": case.name, "esd_pct": esd_pct, "esd_model": esd_model}
     for key, value in res.to_dict().items():

@@ -1327,12 +1327,29 @@ class _Run:
             partitions=self.partitions,
         )
 
+    def _end_voltages(self) -> np.ndarray | None:
+        """Every bus's |V| (n_bus,) pu at the last stored point, from one evaluation of
+        the model there: a run that records no voltage (a CCT search's) still tells
+        where it ends (`SimulationResult.end_state`); None when the network has no
+        solution there."""
+        kept = self.carry.kept
+        net = self.nets_list[int(self.grid.interval[self.k])]
+        try:
+            _, out = self.m.evaluate(self.carry.x.copy(), net, kept.V.copy(), kept.S_extra.copy())
+        except SimulationError:
+            return None
+        return np.abs(out.V_bus)
+
     def finish(self, storage) -> SimulationResult:
         """The result; raises SimulationError (with the partial result) after a divergence."""
         sim, g, k_end = self.sim, self.grid, self.k
         res = sim._result(
             g.t, self.rec, k_end + 1, self.wall, self.limit, self.bus_rows, self.partitions
         )
+        recorded = self.bus_rows is None or self.bus_rows.size
+        if res.stable and self.status == ig.OK and not recorded:  # `end_state` still told
+            res.meta["end_vmag"] = self._end_voltages()
+            res.meta["end_buses"] = self.sim.case.buses.number.astype(int)
         if storage is not None:
             log = self.rec.log
             log = log[~np.isnan(log[:, 0])]

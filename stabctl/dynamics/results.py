@@ -278,7 +278,9 @@ class SimulationResult:
         the machines the criterion judges at the end (their inertia-weighted speed times
         `freq_hz`).  A run stable by the angle criterion may end far from a normal
         operating point (an area tripped off: the rest at 0.6 pu and 58.7 Hz), which
-        these show.
+        these show.  A run that records no bus voltage (a CCT search's,
+        `stabctl.dynamics.driver.Simulator.run` ``voltages=False``) gives every bus's at
+        its end all the same (``meta`` ``end_vmag``, ``end_buses``).
 
         Parameters
         ----------
@@ -291,7 +293,9 @@ class SimulationResult:
             ``t_s``, ``lowest_voltage_pu``, ``lowest_voltage_bus`` (None without an
             energised bus), ``frequency_hz`` (None without a judged machine).
         """
-        v = self.vmag[-1] if self.vmag.size else np.zeros(0)
+        v, buses = self.vmag[-1] if self.vmag.size else np.zeros(0), self.buses
+        if not v.size and self.meta.get("end_vmag") is not None:  # a run recording none
+            v, buses = self.meta["end_vmag"], self.meta["end_buses"]
         on = np.flatnonzero(v > 1e-3)
         k = int(on[np.argmin(v[on])]) if on.size else None
         judged = self.judged & (self.inertia > 0)
@@ -303,7 +307,7 @@ class SimulationResult:
         return {
             "t_s": float(self.t[-1]),
             "lowest_voltage_pu": None if k is None else float(v[k]),
-            "lowest_voltage_bus": None if k is None else int(self.buses[k]),
+            "lowest_voltage_bus": None if k is None else int(buses[k]),
             "frequency_hz": None if speed is None else speed * freq_hz,
         }
 

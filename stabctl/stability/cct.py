@@ -305,6 +305,13 @@ class CCTResult:
     #: those of them that separated there
     resumed: int = 0
     overturned: int = 0
+    #: the run cleared at the CCT ending off a normal operating point, stable by the angle
+    #: criterion yet with a bus below 0.8 pu or the machines it judges beyond +-0.6 Hz (a
+    #: system split whose rest lacks generation: `SimulationResult.end_concerns`, a
+    #: phrase each), and the time it ended, s (its end or an early verdict's); empty and
+    #: None: none
+    end_concerns: tuple[str, ...] = ()
+    end_t_s: float | None = None
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -356,6 +363,8 @@ class CCTResult:
             "criterion": self.criterion,
             "separated_machines": list(self.separated),
             "islanded": list(self.islanded),
+            "end_concerns": list(self.end_concerns),
+            "end_t_s": self.end_t_s,
             "probes": [[t, ok] for t, ok in self.probes],
             "half_step_probes": [[t, ok] for t, ok in self.half_step_probes],
         }
@@ -583,6 +592,8 @@ def critical_clearing_time(
     except Verdict as exc:  # robust or N-1 insecure: the islanding and runs go with it
         exc.islanded = tuple(probe.islanded)
         exc.n_simulations = probe.n_runs()
+        if isinstance(exc, AboveSearchLimit):  # its stable run at the limit
+            exc.end_t_s, exc.end_concerns = probe.ends.get(bounds[2], (None, ()))
         raise
     probe.held.clear()  # the bracket is confirmed: no run is continued any more
     half = None
@@ -604,6 +615,8 @@ def critical_clearing_time(
         probes=tuple(probe.probes[h]),
         separated=probe.separated.get(k_hi, ()),
         islanded=tuple(probe.islanded),
+        end_t_s=probe.ends.get(k_lo, (None, ()))[0],
+        end_concerns=probe.ends.get(k_lo, (None, ()))[1],
         cct_half_step_s=half,
         half_step_probes=tuple(probe.probes[h / 2]),
         conventions=sim.conventions,
@@ -732,6 +745,9 @@ class _Probes:
         self.swings: dict = {}
         self.early_stops: list = []
         self.islanded: list = []
+        #: the whole stable runs at the step ending off a normal operating point, by
+        #: lattice index: (end time s, `SimulationResult.end_concerns`)
+        self.ends: dict[int, tuple[float, tuple[str, ...]]] = {}
         #: the step's verdicts by lattice index; the provisional ones; their runs kept
         #: (handle, grid points reached)
         self.verdicts: dict[int, bool] = {}
@@ -876,6 +892,9 @@ class _Probes:
         self.verdicts[k] = ok
         if ok and provisional:
             self.provisional.add(k)
+        ends = getattr(res, "end_concerns", None)  # a stand-in result: none
+        if ok and not provisional and ends is not None and (concerns := ends(case.freq_hz)):
+            self.ends[k] = (float(res.t[-1]), tuple(concerns))
         if not ok:
             self._trim()
             self.separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))

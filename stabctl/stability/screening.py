@@ -219,7 +219,10 @@ def screen(
         :data:`ABOVE` the search's limit ``t_max_s``; with :data:`INSECURE` CCT 0 and the
         reason), the buses it islands from every generator (``islanded``) and the
         machines it cuts off the main grid with their islands' buses
-        (``islanded_machines``, ``islanded_machine_buses``: `islanded_machines`), CCT (s
+        (``islanded_machines``, ``islanded_machine_buses``: `islanded_machines`), what
+        the stable run the verdict rests on (cleared at the CCT, or at the limit) ends with
+        off a normal operating point and when (``end_concerns``, ``end_t_s``: empty and
+        None when nothing, or in a record written before they were kept), CCT (s
         and cycles) with its numerical error (s), separated machines, simulations
         (``n_simulations``, a verdict's too: None in a record written before verdicts
         counted them), or the error and whether an earlier run recorded it
@@ -298,6 +301,8 @@ def screen(
         row["verdict"] = verdict(rec)
         row["islanded"] = islanded_buses(rec)
         row["islanded_machines"], row["islanded_machine_buses"] = islanded_machines(rec)
+        ended = rec.get("result") or rec  # a CCT's stable end, or a robust fault's run
+        row["end_concerns"], row["end_t_s"] = ended.get("end_concerns", []), ended.get("end_t_s")
         if row["verdict"] == ABOVE:
             row["t_max_s"] = search.t_max
         if row["verdict"] == INSECURE:

@@ -758,3 +758,22 @@ def test_a_stable_run_that_ends_far_from_a_normal_operating_point_says_so(tmp_pa
     assert "stable by the angle criterion, yet no normal operating point" in text.stdout
     normal = run("simulate", "kundur", "--fault", 3, "--far-bus", 101, "--clear-cycles", 6)
     assert normal.exit_code == 0 and "note: at the end" not in normal.stdout
+
+
+def test_a_cct_whose_stable_run_ends_off_a_normal_operating_point_says_so():
+    """`cct`'s verdict rests on a stable run (cleared at the CCT, or at --t-max for a
+    robust fault) that may end as far from a normal operating point as `simulate` shows
+    (above): line 13-120's trip leaves area 1 at 0.41 pu at bus 13 when cleared at 0.5 s,
+    as `simulate` of that clearing ends; the search records no bus voltage yet says so,
+    in text and in `--json` (`end_concerns`, `end_t_s`)."""
+    sim = run("simulate", "kundur", "--fault", 13, "--far-bus", 120, "--clear-cycles", 30,
+              "--tf", 6, "--json")  # fmt: skip
+    end = json.loads(sim.stdout)["end_state"]
+    said = f"bus {end['lowest_voltage_bus']} at {end['lowest_voltage_pu']:.3f} pu"
+    args = ("cct", "kundur", "--fault", 13, "--far-bus", 120, "--t-max", 0.5, "--tol-ms", 20)
+    res = run(*args)
+    assert res.exit_code == 0, res.output
+    assert f"note: cleared at the limit, at the end (t = 6 s) {said}: stable" in res.stdout
+    d = json.loads(run(*args, "--json").stdout)
+    assert (d["verdict"], d["end_concerns"], d["end_t_s"]) == ("above t_max", [said], 6.0)
+    assert end["concerns"] == [said]

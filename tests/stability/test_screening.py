@@ -253,3 +253,42 @@ def test_a_screening_names_the_generators_its_line_faults_island(tmp_path, capsy
     )
     assert "bus 12 line to 120     islands machine(s) G4 (bus 12) with bus(es) [12]" in text
     assert "2 island load buses (their load shed, counted in the verdicts above), 8 island " in text
+
+
+def test_a_robust_split_whose_rest_ends_off_a_normal_operating_point_says_so(tmp_path, capsys):
+    """Kundur's fault at bus 13 with line 13-120 tripped cuts area 2's machines off; the
+    rest (G1, G2) stays in synchronism when cleared at the search's limit, 0.5 s, so the
+    fault is robust, but it ends at 0.41 pu (bus 13), as does line 13-14's trip (bus 14's
+    1765 MW shed: area 2 at 62 Hz).  The screening's row and record say where each ends,
+    and the lowest bus voltage is the one a run recording every bus's voltage ends with
+    (the search's runs record none); a fault ending normally (3-101) says nothing."""
+    from stabctl.cli.format import print_screening
+    from stabctl.dynamics.results import END_VOLTAGE_PU
+    from stabctl.stability.screening import ABOVE
+
+    rows = screen(
+        "kundur",
+        tmp_path / "s.jsonl",
+        buses=[],
+        lines=True,
+        search=SearchOptions(tol=0.02, t_max=0.5),
+        runner=RunnerOptions(workers=1, progress=False),
+    )
+    by_line = {(r["bus"], r["far_bus"], r["circuit"]): r for r in rows}
+    split, shed, tie = by_line[(13, 120, 1)], by_line[(13, 14, 1)], by_line[(3, 101, 1)]
+    assert split["verdict"] == shed["verdict"] == ABOVE and tie["verdict"] == "cct"
+    assert tie["end_concerns"] == [] and tie["end_t_s"] is None
+    full = Simulator(load_case("kundur")).run(LineFault(13, 120).events(0.5), 6.0)
+    end = full.end_state(60.0)
+    assert end["lowest_voltage_pu"] < END_VOLTAGE_PU
+    said = f"bus {end['lowest_voltage_bus']} at {end['lowest_voltage_pu']:.3f} pu"
+    assert (split["end_concerns"], split["end_t_s"]) == ([said], 6.0)
+    assert said == "bus 13 at 0.412 pu"
+    assert shed["end_concerns"] == ["the machines it judges at 62.14 Hz"]
+    records = [json.loads(line) for line in (tmp_path / "s.jsonl").read_text().splitlines()]
+    assert sum(r.get("end_concerns") == [said] for r in records) == 1  # in its record too
+    capsys.readouterr()
+    print_screening(load_case("kundur"), rows)
+    text = capsys.readouterr().out
+    assert f"bus 13 line to 120     ends off a normal operating point: {said} at t = 6 s" in text
+    assert "; 3 stable by the angle criterion ending off a normal operating point" in text
