@@ -212,6 +212,18 @@ def rest_after_trip_stable(sim, machine, t_clear):
     return np.abs(a - (a @ M / M.sum())[:, None]).max() < np.pi
 
 
+def kundur_line_screening(tmp_path) -> list[dict]:
+    """Every branch fault of Kundur screened at 20 ms up to 0.5 s, in one process."""
+    return screen(
+        "kundur",
+        tmp_path / "s.jsonl",
+        buses=[],
+        lines=True,
+        search=SearchOptions(tol=0.02, t_max=0.5),
+        runner=RunnerOptions(workers=1, progress=False),
+    )
+
+
 def test_a_screening_names_the_generators_its_line_faults_island(tmp_path, capsys):
     """`screen kundur --lines`: a fault on a generator's step-up transformer (1-10, 2-20,
     11-110, 12-120) islands that generator at its bus.  Each row names the machine and
@@ -223,14 +235,7 @@ def test_a_screening_names_the_generators_its_line_faults_island(tmp_path, capsy
     from stabctl.cli.format import print_screening
     from stabctl.stability.screening import ABOVE, INSECURE
 
-    rows = screen(
-        "kundur",
-        tmp_path / "s.jsonl",
-        buses=[],
-        lines=True,
-        search=SearchOptions(tol=0.02, t_max=0.5),
-        runner=RunnerOptions(workers=1, progress=False),
-    )
+    rows = kundur_line_screening(tmp_path)
     by_line = {(r["bus"], r["far_bus"]): r for r in rows}
     expected = {(1, 10): (1, "cct"), (2, 20): (2, INSECURE), (11, 110): (3, INSECURE)}
     expected[(12, 120)] = (4, ABOVE)
@@ -266,14 +271,7 @@ def test_a_robust_split_whose_rest_ends_off_a_normal_operating_point_says_so(tmp
     from stabctl.dynamics.results import END_VOLTAGE_PU
     from stabctl.stability.screening import ABOVE
 
-    rows = screen(
-        "kundur",
-        tmp_path / "s.jsonl",
-        buses=[],
-        lines=True,
-        search=SearchOptions(tol=0.02, t_max=0.5),
-        runner=RunnerOptions(workers=1, progress=False),
-    )
+    rows = kundur_line_screening(tmp_path)
     by_line = {(r["bus"], r["far_bus"], r["circuit"]): r for r in rows}
     split, shed, tie = by_line[(13, 120, 1)], by_line[(13, 14, 1)], by_line[(3, 101, 1)]
     assert split["verdict"] == shed["verdict"] == ABOVE and tie["verdict"] == "cct"
