@@ -432,11 +432,12 @@ def simulate(
     \b
     Units: times s, cycles of the case frequency (60 Hz: 1 cycle = 16.67 ms), speeds pu,
     angles rad (absolute, synchronous frame, as PSTess), pelect pu on the system base,
-    pmech pu on the machine base, efd pu, bus voltages pu and rad.
+    pmech pu on the machine base, efd pu, qelect (PSS/E's QELEC) pu on the system base,
+    bus voltages pu and rad.
 
     \b
     CSV columns: t, speed_pu.G<k>, angle_rad.G<k>, pelect_pu.G<k>, pmech_pu_mbase.G<k>,
-    efd_pu.G<k> per machine k (machine number k; --json's `machine_names` gives each
+    efd_pu.G<k>, qelect_pu.G<k> per machine k (machine number k; --json's `machine_names` gives each
     one's bus, and its ID in a PSS/E case: "G2 (bus 102, id '1')"), vmag_pu.B<n>,
     vang_rad.B<n> per bus n, and with
     --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage

@@ -59,7 +59,8 @@ class Recording(NamedTuple):
     relative to the start, all in pu*s, of the power the network takes;
     `stabctl.dynamics.switching.account`); the
     switching log (rows: time s, device, new mode, relative speed pu; NaN rows unused);
-    the converters' injected P + j Q, S_ibr (n_t, n_ibr) complex pu (system base)."""
+    the converters' injected P + j Q, S_ibr (n_t, n_ibr) complex pu (system base); the
+    machines' reactive power qelect (n_t, n_mac) pu (system base)."""
 
     speed: np.ndarray
     angle: np.ndarray
@@ -71,6 +72,7 @@ class Recording(NamedTuple):
     stats: np.ndarray
     log: np.ndarray
     S_ibr: np.ndarray
+    qelect: np.ndarray
 
 
 #: rows of the switching log of a run (switchings beyond it are counted, not logged)
@@ -104,6 +106,7 @@ def recording(n_t: int, nm: int, nb: int, nd: int, ni: int = 0) -> Recording:
         stats=np.zeros((nd, 5)),
         log=np.full((LOG_ROWS, 4), np.nan),
         S_ibr=np.zeros((n_t, ni), np.complex128),
+        qelect=np.zeros((n_t, nm)),
     )
 
 
@@ -425,6 +428,7 @@ def _record(rec, k, x, out, P):
         rec.angle[k, i] = x[i]
         rec.speed[k, i] = x[nm + i]
     assign(rec.pelect[k], out.pelect)
+    assign(rec.qelect[k], out.qelect)
     assign(rec.pmech[k], out.pmech)
     assign(rec.efd[k], out.efd)
     if rec.V.shape[1] > 0:  # a run that records the bus voltages (`Simulator.run`)

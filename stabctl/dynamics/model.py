@@ -583,7 +583,8 @@ class DynamicModel:
         ``exc.VR.G18``), the PSS/E and ANDES cases read as ANDES solves them within 3e-11.
         A model reproduced as PST has it may start off equilibrium as PST does (PST's
         ``exc_st3`` estimates the field current fed to K_C differently from its
-        initialisation: WECC-179 read with ``conventions="pst"``, 0.040 on ``exc.VR.G1``).
+        initialisation: WECC-179 read with ``conventions="pst"``, 0.040 on ``exc.VR.G1``;
+        the "psse" and "andes" readings of an ESST3A feed it the machine's own).
 
         Parameters
         ----------
@@ -618,11 +619,14 @@ class DynamicModel:
         if off_equilibrium == "warn":
             warnings.warn(text, UserWarning, stacklevel=3)
             return
+        pst_st3 = (self.ep.kind == exc.ST3) & ~self.ep.ifd_machine
         hint = (
-            "; an ESST3A of PSS/E data read with the 'psse' or 'pst' conventions (PST's "
-            "exc_st3) starts off equilibrium with K_C != 0: import the data with "
-            + advice("load_psse(..., conventions='andes')", "import-psse --dyr-conventions andes")
-            if state.startswith("exc.") and np.any(self.ep.kind == exc.ST3)
+            "; an ESST3A of PSS/E data read with the 'pst' conventions (PST's exc_st3, its "
+            "own estimate of the field current) starts off equilibrium with K_C != 0: "
+            "import the data with "
+            + advice("load_psse(..., conventions='psse')", "import-psse --dyr-conventions psse")
+            + " (the default), which reads PSS/E's ESST3A"
+            if state.startswith("exc.") and np.any(pst_st3)
             else ""
         )
         anyway = advice(" (Simulator(off_equilibrium='warn') runs it anyway)")

@@ -215,4 +215,7 @@ def _restore(run, prefix: Prefix) -> None:
 
 def _rows(rec) -> tuple:
     """The per-grid-point arrays of a `stabctl.dynamics.integrator.Recording`."""
-    return (rec.speed, rec.angle, rec.pelect, rec.pmech, rec.efd, rec.V, rec.P, rec.S_ibr)
+    return (
+        rec.speed, rec.angle, rec.pelect, rec.qelect, rec.pmech, rec.efd, rec.V, rec.P,
+        rec.S_ibr,
+    )  # fmt: skip

@@ -3,9 +3,9 @@
 Columns of the CSV: `t` (s), then per machine k (number as in the
 data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess),
 `pelect_pu.G<k>` (system base), `pmech_pu_mbase.G<k>` (machine base, as its name says),
-`efd_pu.G<k>`, per bus n `vmag_pu.B<n>`, `vang_rad.B<n>`, per storage device d
-`pesd_pu.D<d>` (+ absorbs), and per converter c `pibr_pu.C<c>`, `qibr_pu.C<c>` (injected
-P, Q on the system base).
+`efd_pu.G<k>`, `qelect_pu.G<k>` (system base: PSS/E's QELEC), per bus n `vmag_pu.B<n>`,
+`vang_rad.B<n>`, per storage device d `pesd_pu.D<d>` (+ absorbs), and per converter c
+`pibr_pu.C<c>`, `qibr_pu.C<c>` (injected P, Q on the system base).
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ NPZ_UNITS = {
     "speed": "pu (1 = synchronous)",
     "angle": "rad (synchronous frame)",
     "pelect": "pu on the system base",
+    "qelect": "pu on the system base",
     "pmech": "pu on the machine base",
     "efd": "pu",
     "vmag": "pu",
@@ -47,13 +48,14 @@ NPZ_UNITS = {
     "partition_t_s": "s",
 }
 
-SERIES = ("speed", "angle", "pelect", "pmech", "efd")
+SERIES = ("speed", "angle", "pelect", "pmech", "efd", "qelect")
 SERIES_UNITS = {
     "speed": "speed_pu",
     "angle": "angle_rad",
     "pelect": "pelect_pu",
     "pmech": "pmech_pu_mbase",
     "efd": "efd_pu",
+    "qelect": "qelect_pu",
 }
 
 
@@ -174,6 +176,10 @@ class SimulationResult:
         The machines' islands stage by stage (`stabctl.dynamics.partition.Partition`)
         when the run trips machines or splits an island; empty (default) otherwise, every
         machine then judged against `island`'s COI throughout.
+    qelect : ndarray, shape (n_t, n_mac), optional
+        Reactive power out of each machine, pu on the system base (PSS/E's QELEC); None
+        (default) for a result made otherwise than by a run (a test's, a file written
+        before it was kept).
     """
 
     t: np.ndarray
@@ -198,6 +204,7 @@ class SimulationResult:
     separated: list = field(default_factory=list)
     meta: dict = field(default_factory=dict)
     partitions: tuple[Partition, ...] = ()
+    qelect: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.island.size == 0:
@@ -481,9 +488,10 @@ class SimulationResult:
         Returns
         -------
         names : list of str
-            Column names, n_columns = 1 + 5 n_mac + 2 n_bus (+ n_dev with storage, + 2
-            n_ibr with converters): ``t``, then ``speed_pu.G<k>``, ``angle_rad.G<k>``,
-            ``pelect_pu.G<k>``, ``pmech_pu_mbase.G<k>``, ``efd_pu.G<k>`` per machine k,
+            Column names, n_columns = 1 + 6 n_mac + 2 n_bus (+ n_dev with storage, + 2
+            n_ibr with converters; 5 n_mac without `qelect`): ``t``, then
+            ``speed_pu.G<k>``, ``angle_rad.G<k>``, ``pelect_pu.G<k>``,
+            ``pmech_pu_mbase.G<k>``, ``efd_pu.G<k>``, ``qelect_pu.G<k>`` per machine k,
             ``vmag_pu.B<n>`` and ``vang_rad.B<n>`` per bus n, ``pesd_pu.D<d>`` per device
             d, ``pibr_pu.C<c>`` then ``qibr_pu.C<c>`` per converter c (injected, system
             base).
@@ -492,6 +500,8 @@ class SimulationResult:
         """
         names, blocks = ["t"], [self.t[:, None]]
         for s in SERIES:
+            if getattr(self, s) is None:  # qelect of a result not from a run
+                continue
             names += [f"{SERIES_UNITS[s]}.G{int(k)}" for k in self.machines]
             blocks.append(getattr(self, s))
         names += [f"vmag_pu.B{int(n)}" for n in self.buses]

@@ -1334,12 +1334,13 @@ def _without_tr(mapper):
     return without_tr
 
 
-def _esst3a_andes(rec, gen):
-    """ESST3A as ANDES 2.0 solves it: its source voltage from the stator current on the
-    system base (`_source_on_system_base`, ``esst3a.py``); its rectifier
-    loading ``I_N = K_C XadIfd / V_E`` (``esst3a.py`` lines 190-191) the machine's field
-    current, as at initialisation, not PST exc_st3's estimate (exc_con column 25 = 1)."""
-    row = _source_on_system_base(_esst3a)(rec, gen)
+def _esst3a_psse(rec, gen):
+    """ESST3A as the PSS/E Model Library states it: `_esst3a` with its rectifier loading
+    ``I_N = K_C I_FD / V_E`` the machine's own field current (PSS/E's XadIfd; ANDES 2.0
+    ``esst3a.py`` lines 190-191 alike), as at initialisation, not PST exc_st3's estimate
+    (exc_con column 25 = 1): read with the estimate, ANDES's IEEE 14 DYR started off
+    equilibrium (0.03 on a V_R derivative)."""
+    row = _esst3a(rec, gen)
     row[EXCITER.col("ifd_machine") - 1] = 1.0
     return row
 
@@ -1384,7 +1385,9 @@ _ANDES_MAPPERS = {
     "ESDC1A": _without_tr(_dc("ESDC1A", zero_vrmax_unlimited=True, andes=True)),
     "EXAC1": _without_tr(_exc_row),
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, andes=True),
-    "ESST3A": _esst3a_andes,
+    #: ESST3A: as PSS/E, its source voltage from the stator current on the system base
+    #: (`_source_on_system_base`, ``esst3a.py``)
+    "ESST3A": _source_on_system_base(_esst3a_psse),
     "IEEET3": _source_on_system_base(_ieeet3),
     #: ESST4B: ANDES's VGMAX, 20 (its default; stabctl.io.andes_case refuses others)
     "ESST4B": _source_on_system_base(lambda rec, gen: _esst4b(rec, gen, vgmax=20.0)),
@@ -1434,6 +1437,7 @@ _PSSE_MAPPERS = {
     "IEEET2": _dc("IEEET2", psse=True),
     "EXST1": _exst1_psse,
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, psse=True),
+    "ESST3A": _esst3a_psse,
     "HYGOV": lambda rec, gen: _hygov(rec, gen, psse=True),
 }
 #: conventions -> the mappers that replace `_MAPPERS`' for it

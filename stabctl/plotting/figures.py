@@ -451,6 +451,7 @@ def cct_versus_rating(
 _KIND_STYLE = {
     "inter-area": ("tab:red", "s"),
     "local": ("tab:blue", "o"),
+    "common": ("tab:green", "^"),
     "other": ("0.6", "."),
     "angle reference": ("k", "x"),
 }

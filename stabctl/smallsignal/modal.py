@@ -39,6 +39,12 @@ INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
 # Stability and Control, 12.1; Rogers, Power System Oscillations, 1.3): a mode above this
 # is local whatever its area momentum (a swing of neighbours across an area boundary)
 INTER_AREA_MAX_HZ = 1.0
+#: system momentum fraction |sum_k M_k s_k| / sum_k M_k |s_k| above which an
+#: electromechanical mode is "common": every machine swings with the others, the centre of
+#: inertia itself (a governor or exciter mode of the system's frequency), where a swing of
+#: machines against each other keeps the momentum (Kundur, miniWECC: at most 0.24; ANDES's
+#: IEEE 14 read as PSS/E reads it: 0.18 Hz, 0.997)
+COMMON_MOMENTUM = 0.5
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = (
@@ -76,9 +82,11 @@ class ModalAnalysis:
         phi_i scaled so the largest is 1 + 0j; reference_mode: index of the angle-reference
         mode (None where an infinite bus holds the angles); electromechanical: indices of
         the electromechanical modes; areas (g,) area label (0..r-1) of each machine; kind
-        (m,) 'angle reference', 'inter-area' (area momentum fraction above INTER_AREA_ETA
-        at INTER_AREA_MAX_HZ or below), 'local' or 'other'; eta (m,) area-momentum
-        fraction (NaN outside the EM modes).
+        (m,) 'angle reference', 'common' (every machine in phase, the centre of inertia
+        swinging: system momentum fraction above COMMON_MOMENTUM, without an infinite
+        bus), 'inter-area' (area momentum fraction above INTER_AREA_ETA at
+        INTER_AREA_MAX_HZ or below), 'local' or 'other'; eta (m,) area-momentum fraction
+        (NaN outside the EM modes).
     """
 
     eigenvalues: np.ndarray
@@ -155,7 +163,11 @@ class ModalAnalysis:
         lines = [f"{'mode':>5} {'f Hz':>7} {'zeta':>8}  {'kind':<10} machines"]
         for i in em[np.argsort(self.freq_hz[em])]:
             g1, g2 = self.groups(i)
-            against = " ".join(named(k) for k in g2[:6]) or "others (each < 0.2)"
+            against = " ".join(named(k) for k in g2[:6]) or (
+                "none (all in phase: the system's frequency)"
+                if self.kind[i] == "common"
+                else "others (each < 0.2)"
+            )
             areas = f"  [areas {self.area_sides(i)}]" if self.kind[i] == "inter-area" else ""
             lines.append(
                 f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {self.kind[i]:<10} "
@@ -353,6 +365,9 @@ def modal_analysis(
     kind = np.full(lam.size, "other", dtype=object)
     inter = (eta[em] > INTER_AREA_ETA) & (f[em] <= INTER_AREA_MAX_HZ)
     kind[em] = np.where(inter, "inter-area", "local")
+    if ref is not None and speed.size > 1:  # no infinite bus: the swings keep momentum
+        M = np.asarray(inertia, float)[:, None] * shape[:, em]
+        kind[em[np.abs(M.sum(axis=0)) > COMMON_MOMENTUM * np.abs(M).sum(axis=0)]] = "common"
     if ref is not None:
         kind[ref] = "angle reference"
     return ModalAnalysis(

@@ -22,6 +22,7 @@ from stabctl.outdir import output_directory
 from stabctl.parallel import naming
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
+    COMMON_MOMENTUM,
     ModalAnalysis,
     ModeSensitivity,
     modal_analysis,
@@ -166,6 +167,11 @@ def _temp(out: Path, name: str) -> str:
     return path
 
 
+def _nothing_against(kind: str) -> str:
+    """The report's word for a mode without machines swinging against its largest."""
+    return "none, all in phase" if kind == "common" else "others, each < 0.2"
+
+
 def _machines(numbers, most: int = 8, none: str = "-", name=None) -> str:
     """'G1 (bus 1), G2 (bus 2), ...' (at most `most` machines; `name` the case's
     `machine_name`, default 'G<k>'), `none` for none."""
@@ -189,6 +195,8 @@ def report_markdown(
     stats = ma.damping_statistics()
     em = ma.electromechanical
     n_inter = int(np.sum(ma.kind[em] == "inter-area"))
+    n_common = int(np.sum(ma.kind[em] == "common"))
+    common = f", {n_common} common (every machine in phase)" if n_common else ""
     lines = [
         f"# Small-signal modes: {st.case.name}" + (" without PSS" if st.no_pss else ""),
         "",
@@ -206,7 +214,8 @@ def report_markdown(
         "the report holds no run-dependent values).",
         f"- Angle-reference mode (common rotation of all rotor angles, excluded from damping "
         f"statistics): {ref}.",
-        f"- {em.size} electromechanical modes ({n_inter} inter-area, {em.size - n_inter} local): "
+        f"- {em.size} electromechanical modes ({n_inter} inter-area{common}, "
+        f"{em.size - n_inter - n_common} local): "
         f"0.1-2.5 Hz, rotor angle/speed the largest participating state group.",
     ]
     if "electromechanical" in stats:
@@ -248,7 +257,7 @@ def report_markdown(
             f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | {ma.area_sides(i)} | "
             f"{_machines(ma.dominant_machines(i), name=named)} | "
             f"{_machines(g1, name=named)} | "
-            f"{_machines(g2, none='others, each < 0.2', name=named)} | "
+            f"{_machines(g2, none=_nothing_against(ma.kind[i]), name=named)} | "
             f"{bus} ({r:.2e}) |"
         )
     lines += [
@@ -261,7 +270,10 @@ def report_markdown(
         "(states and controls of a machine summed). Groups: speed mode-shape components "
         "of at least 0.2 of the largest, in phase (within 90 degrees) with it or against "
         "it; 'others, each < 0.2' when the machines swinging against it each move less "
-        "(a single machine against the system, or a heavy area against a light one). "
+        "(a single machine against the system, or a heavy area against a light one); "
+        "'none, all in phase' for a common mode, the centre of inertia itself swinging "
+        f"(system momentum fraction above {COMMON_MOMENTUM:g}: a mode of the system's "
+        "frequency). "
         "Best ESD bus: the ESD power input with the largest residue to the "
         "relative speeds.",
         "",

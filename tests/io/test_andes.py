@@ -418,33 +418,41 @@ def ieee14(tmp_path_factory):
     return CASES / "ieee14" / "ieee14.raw", dyr
 
 
-def test_an_esst3a_read_as_pst_reads_it_is_refused_with_the_import_option_that_reads_it(
+def test_an_esst3a_read_as_psse_reads_it_starts_at_equilibrium_and_its_common_mode_is_named(
     ieee14, tmp_path
 ):
-    """ANDES's IEEE 14 RAW + DYR imported with the defaults (psse conventions) starts off
-    equilibrium on its ESST3A (PST's exc_st3 estimate of the field current): the refusal
-    said "read them with --conventions andes", an option `simulate` does not have.  It
-    names the import's own option, with which the case runs."""
-    from stabctl.errors import CaseError
-
-    raw, dyr = ieee14
-    with pytest.raises(CaseError) as err:
-        Simulator(load_psse(raw, dyr), q_limits=False)
-    assert "starts off equilibrium with K_C != 0: import the data with load_psse(" in str(err.value)
+    """ANDES's IEEE 14 RAW + DYR imported with the defaults (psse conventions) started off
+    equilibrium on its ESST3A (0.03 on a V_R derivative), so that no command ran it: the
+    PSS/E Model Library's ESST3A feeds its rectifier loading I_N = K_C I_FD / V_E the
+    machine's field current, not PST exc_st3's estimate of it.  Read so, the case starts
+    at rest (a flat 10 s run moves nothing); read as PST reads it (`pst`) it is refused
+    with the option that reads PSS/E's ESST3A.  Its 0.18 Hz electromechanical mode, every
+    machine in phase (the centre of inertia swinging: the governors' frequency mode), is
+    "common", not "inter-area" (nothing swings against anything)."""
     from click.testing import CliRunner
 
     from stabctl.cli import main
+    from stabctl.io import load_case
 
+    raw, dyr = ieee14
     out = tmp_path / "i14.json"
-    assert (
-        CliRunner().invoke(main, ["import-psse", str(raw), str(dyr), "-o", str(out)]).exit_code == 0
-    )
-    res = CliRunner().invoke(main, ["simulate", str(out), "--tf", "1"])
-    assert res.exit_code == 2 and res.stderr.rstrip().endswith(
-        "starts off equilibrium with K_C != 0: import the data with import-psse "
-        "--dyr-conventions andes"
-    ), res.stderr
-    Simulator(load_psse(raw, dyr, conventions="andes"), q_limits=False)  # runs
+    args = ["import-psse", str(raw), str(dyr), "-o", str(out)]
+    assert CliRunner().invoke(main, args).exit_code == 0
+    sim = Simulator(load_case(str(out)), q_limits=False)
+    assert sim.model_for(()).initial_residual[0] < 1e-9  # measured 1.9e-14
+    flat = sim.run([], 10.0)
+    assert np.max(np.abs(flat.speed - 1.0)) < 1e-12 and np.ptp(flat.efd, axis=0).max() < 1e-9
+    with pytest.raises(CaseError) as err:
+        Simulator(load_psse(raw, dyr, conventions="pst"), q_limits=False)
+    assert "import the data with load_psse(..., conventions='psse') (the default)" in str(err.value)
+    ma = modal_analysis(linearise(Simulator(load_case(str(out)))))
+    em = ma.electromechanical
+    (k,) = em[ma.kind[em] == "common"]
+    assert abs(ma.freq_hz[k] - 0.18) < 0.01  # measured 0.181 Hz
+    assert ma.groups(k)[1] == [] and np.all(np.abs(np.angle(ma.speed_shape[:, k])) < np.pi / 2)
+    M = ma.inertia * ma.speed_shape[:, k]
+    assert abs(M.sum()) > 0.99 * np.abs(M).sum()  # measured 0.997: the COI moves
+    assert "vs none (all in phase: the system's frequency)" in ma.table()
 
 
 def test_ieee14_fault_speeds_and_modes_match_andes(ieee14, ref):

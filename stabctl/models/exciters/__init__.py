@@ -509,7 +509,8 @@ def exciter_params(case: Case) -> ExciterParams:
 
 
 def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
-    """The source term V_B (`source_voltage_of`; PST exc_st3 flag 0 for the ST3) of every
+    """The source term V_B (`source_voltage_of`; PST exc_st3 flag 0 for the ST3 read as PST
+    reads it, its `ExciterParams.ifd_machine` False) of every
     exciter of :data:`SOURCE_KINDS` at the initial point (1 for the other types), (n_exc,):
     V_mac the complex terminal voltages, S_mac the machines' complex generation (system
     base), vex their field voltages (= field currents at rest), all (n_mac,); mp the
@@ -521,8 +522,9 @@ def initial_source_voltage(p: ExciterParams, mp, V_mac, S_mac, vex):
         machine = ST3Machine(
             eterm[m], unit_phasor(V_mac[m]), S_mac.real[m], S_mac.imag[m], mp.mac_pot[m], vex[m]
         )
+        pst = not p.ifd_machine[i]  # PST's F_EX quirk at its flag 0 (`st3._fex`): its reading
         VB[i] = source_voltage_of(
-            p.kind[i], p.KP[i], p.KI[i], p.XL[i], p.KC[i], p.VB_cap[i], machine, True
+            p.kind[i], p.KP[i], p.KI[i], p.XL[i], p.KC[i], p.VB_cap[i], machine, pst
         )
     return VB
 
