@@ -360,6 +360,7 @@ def expected_columns(res):
         + [f"pelect_pu.G{k}" for k in m]
         + [f"pmech_pu_mbase.G{k}" for k in m]
         + [f"efd_pu.G{k}" for k in m]
+        + [f"qelect_pu.G{k}" for k in m]
         + [f"vmag_pu.B{n}" for n in b]
         + [f"vang_rad.B{n}" for n in b]
     )
@@ -383,6 +384,20 @@ def test_csv_export_columns_and_values(case1, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["run.csv"]  # no temporary leftovers
 
 
+def test_machine_reactive_power_starts_at_the_power_flows(kundur, case1):
+    """`qelect` (PSS/E's QELEC, pu on the system base) starts at each machine's reactive
+    generation in the power flow (Kundur: one machine a bus; bus 1's 127.1 Mvar, the data
+    file's own solution 127.4), as `pelect` at its active generation, and moves with the
+    fault."""
+    case = kundur.case
+    rows = [case.bus_index(int(b)) for b in case.machines.bus]
+    op = kundur.op
+    np.testing.assert_allclose(case1.qelect[0], op.S_gen[rows].imag, atol=1e-9)
+    np.testing.assert_allclose(case1.pelect[0], op.S_gen[rows].real, atol=1e-9)
+    assert abs(case1.qelect[0, 0] * case.base_mva - 127.4) < 0.5  # the data's 127.4 Mvar
+    assert np.ptp(case1.qelect[:, 0]) > 1.0  # the fault's reactive swing, pu
+
+
 def test_npz_round_trip(case1, tmp_path):
     path = case1.to_npz(tmp_path / "run.npz")
     back = SimulationResult.from_npz(path)
@@ -395,6 +410,7 @@ def test_npz_round_trip(case1, tmp_path):
         "pelect",
         "pmech",
         "efd",
+        "qelect",
         "vmag",
         "vang",
         "inertia",
