@@ -22,7 +22,7 @@ def main():
         runs.append(res)
         print(
             f"{label}: stable={res.stable}, largest angle from the COI "
-            f"{res.max_angle_spread:.3f} rad"
+            f"{res.max_angle_from_coi:.3f} rad"
         )
     storage_case_figure(*runs, Path("case2.png"), "Case 2, 5 % ESDs", case=case, highlight=(13, 14))
     print("wrote case2.png")

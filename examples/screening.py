@@ -1,5 +1,5 @@
 """Contingency screening: the CCT of a bolted fault at each of four Kundur buses, in
-parallel processes, recorded in screening.jsonl (rerunning resumes), most critical first.
+parallel processes, recorded in screening_kundur.jsonl (rerunning resumes), most critical first.
 
     python examples/screening.py
 """
@@ -12,7 +12,7 @@ from stabctl.stability.screening import screen
 def main():
     rows = screen(
         "kundur",
-        "screening.jsonl",
+        "screening_kundur.jsonl",
         buses=[3, 13, 101, 120],
         search=SearchOptions(t_max=0.5),
         runner=RunnerOptions(workers=2, progress=False),

@@ -29,6 +29,7 @@ import sys
 import threading
 import warnings
 from contextlib import contextmanager
+from pathlib import Path
 
 import click
 
@@ -682,6 +683,30 @@ def out_file_option(default=None, metavar="FILE", help="Output file."):
         metavar=metavar,
         help=f"Output file: {_lower_first(help)}",
     )
+
+
+def records_file(out_path: str | None, case_name: str, kind: str) -> str:
+    """``--out`` of a resumable command, or its default ``KIND_<CASE>.jsonl`` (CASE's file
+    name without ``.json``): one file per case, so that two cases studied in one directory
+    neither refuse nor resume each other's records.
+
+    Parameters
+    ----------
+    out_path : str or None
+        The ``--out`` given, None when not.
+    case_name : str
+        The command's CASE, as given.
+    kind : str
+        ``"screening"`` or ``"sweep"``.
+
+    Returns
+    -------
+    str
+    """
+    if out_path is not None:
+        return out_path
+    name = Path(case_name).name
+    return f"{kind}_{name[:-5] if name.lower().endswith('.json') else name}.jsonl"
 
 
 def out_dir_option(help="Report directory."):

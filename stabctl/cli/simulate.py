@@ -617,7 +617,9 @@ def simulate(
     click.echo(
         f"case {case.name}: {counted(len(case.machines), 'machine')}, "
         f"{counted(case.n_bus, 'bus', 'buses')}; 0-{float(result.t[-1]):g} s, "
-        f"{counted(summary['n_steps'], 'step')} (h = {step_text(h)}, {method}"
+        f"{counted(summary['n_steps'], 'step')} (h = {step_text(h)}"
+        + (", shorter where said below" if result.meta.get("stiff_intervals") else "")
+        + f", {method}"
         + (f" with {sub} exciter(s) in sub-intervals" if sub else "")
         + f", {conventions} conventions), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
@@ -645,7 +647,9 @@ def simulate(
             "in the main grid (its load lost); no stability verdict"
         )
     elif result.stable:
-        click.echo(f"stable: largest angle from the COI {summary['max_angle_spread_rad']:.4f} rad")
+        click.echo(
+            f"stable: largest angle from the COI {summary['max_angle_from_coi_rad']:.4f} rad"
+        )
         if concerns := result.end_concerns(case.freq_hz):
             click.echo(f"  note: {end_note(float(result.t[-1]), concerns)}")
     else:

@@ -45,6 +45,7 @@ from stabctl.cli.options import (
     plot_option,
     q_limits_option,
     read_fault_list,
+    records_file,
     refuse_given,
     reports_errors,
     storage_options,
@@ -348,9 +349,10 @@ def _rating(item: str) -> float | None:
 @storage_options(multiple=True, rating_help=" Every fault runs at every rating.")
 @esd_model_option
 @out_file_option(
-    "results.jsonl",
+    None,
     "FILE.jsonl",
-    "JSON lines, one per finished job; rerunning with it skips the jobs already there.",
+    "JSON lines, one per finished job; rerunning with it skips the jobs already there "
+    "[default: sweep_<CASE>.jsonl, CASE's file name without .json].",
 )
 @parallel_options
 @click.option("--retry-failed", is_flag=True, help="Rerun the jobs recorded as failed.")
@@ -408,6 +410,7 @@ def sweep_cct(
     ctrl = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
+    out_path = records_file(out_path, case_name, "sweep")
     check_suffix(out_path, (".jsonl",), "--out")
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
@@ -469,7 +472,10 @@ def sweep_cct(
 )
 @tol_options(0.5)
 @out_file_option(
-    "screening.jsonl", "FILE.jsonl", "JSON lines, one per finished search (rerunning resumes)."
+    None,
+    "FILE.jsonl",
+    "JSON lines, one per finished search (rerunning resumes) [default: "
+    "screening_<CASE>.jsonl, CASE's file name without .json].",
 )
 @plot_option("network map with buses coloured by CCT")
 @parallel_options
@@ -532,6 +538,7 @@ def screen(
     case = load_case(case_name)
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
+    out_path = records_file(out_path, case_name, "screening")
     check_suffix(out_path, (".jsonl",), "--out")
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault

@@ -256,7 +256,7 @@ class SimulationResult:
         return relative_to_islands(self.speed, self.t, self.inertia, self.island, self.partitions)
 
     @property
-    def max_angle_spread(self) -> float:
+    def max_angle_from_coi(self) -> float:
         """Largest abs(delta_i - delta_COI) over the run, each machine against its
         island's COI (rad); with `partitions`, over the machines the criterion judges
         (`judged_angle`)."""
@@ -431,7 +431,7 @@ class SimulationResult:
         dict
             ``stable`` (bool), ``verdict`` (`verdict`), ``de_energised_s`` (s or None),
             ``t_separation_s`` (s or None), ``separated_machines``
-            (machine numbers), ``max_angle_spread_rad`` (largest abs(delta_i - delta_COI),
+            (machine numbers), ``max_angle_from_coi_rad`` (largest abs(delta_i - delta_COI),
             rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
             then every entry of `meta` but its trajectories (arrays, e.g. the WECC
             batteries' ``pesd_command``: in `meta`, not in a summary).
@@ -442,7 +442,7 @@ class SimulationResult:
             "de_energised_s": self.de_energised_s,
             "t_separation_s": self.t_separation,
             "separated_machines": [int(m) for m in self.separated],
-            "max_angle_spread_rad": self.max_angle_spread,
+            "max_angle_from_coi_rad": self.max_angle_from_coi,
             "t_end_s": float(self.t[-1]),
             "n_steps": int(self.t.size - 1),
             **{k: v for k, v in self.meta.items() if not isinstance(v, np.ndarray)},

@@ -30,7 +30,7 @@ def _run(pc: PaperCase, cycles: float, t_end: float, **kw):
 
 def _verdict(case, res) -> str:
     if res.stable:
-        return f"  verdict: stable (largest angle from the COI {res.max_angle_spread:.3f} rad)"
+        return f"  verdict: stable (largest angle from the COI {res.max_angle_from_coi:.3f} rad)"
     return (
         f"  verdict: loss of synchronism at t = {res.t_separation:.4f} s; machine(s) "
         f"{', '.join(case.machine_name(m) for m in res.separated)} separate from the rest"

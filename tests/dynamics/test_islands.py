@@ -179,7 +179,7 @@ def test_a_tripped_machine_is_out_of_the_loss_of_synchronism_criterion(kundur):
     assert res.stable and res.separated == [] and res.t_separation is None
     assert res.meta["tripped"] == [{"t_s": 1.0, "machines": [4]}]
     assert "islanded" not in res.meta
-    assert res.max_angle_spread == pytest.approx(rest.max(), rel=1e-12)
+    assert res.max_angle_from_coi == pytest.approx(rest.max(), rel=1e-12)
     assert np.all(res.relative_angle[res.t > 1.0, 3] == 0.0)  # alone in its own island
     assert list(res.judged) == [True, True, True, False]
     trapezoid = Simulator(kundur).run([GeneratorTrip(4, 1.0)], 3.0, method="trapezoid")
@@ -258,7 +258,7 @@ def test_islanding_a_generator_judges_the_rest_of_the_system(kundur):
     assert isl.speed[-1, 0] > 1.1  # G1 runs away with no load
     dev = own_coi_deviation(isl, rest)
     assert dev.max() < np.pi and isl.stable and isl.separated == []
-    assert isl.max_angle_spread == pytest.approx(dev.max(), rel=1e-12)
+    assert isl.max_angle_from_coi == pytest.approx(dev.max(), rel=1e-12)
     assert isl.meta["islanded"] == [{"t_s": 1.1, "buses": [1], "machines": [1]}]
     assert "tripped" not in isl.meta and trip.meta["tripped"] == [{"t_s": 1.1, "machines": [1]}]
     assert trip.stable and trip.separated == []
@@ -343,7 +343,7 @@ def test_a_partitioned_result_keeps_its_islands_in_npz(kundur, tmp_path):
     back = SimulationResult.from_npz(res.to_npz(tmp_path / "r.npz"))
     assert len(back.partitions) == len(res.partitions) == 2
     assert list(back.judged) == list(res.judged) and back.stable
-    assert back.max_angle_spread == res.max_angle_spread
+    assert back.max_angle_from_coi == res.max_angle_from_coi
     assert np.array_equal(back.relative_angle, res.relative_angle)
 
 

@@ -137,7 +137,7 @@ def test_custom_criterion_sees_whole_runs(kundur_pstess):
 
     def within_1rad(result):
         seen.append(float(result.t[-1]))
-        return result.max_angle_spread < 1.0
+        return result.max_angle_from_coi < 1.0
 
     res = critical_clearing_time(kundur, CASE1, SearchOptions(criterion=within_1rad))
     assert res.criterion == "within_1rad"

@@ -1,5 +1,6 @@
 """Contingency screening: CCT of a fault at every bus, resumable, with a map."""
 
+import dataclasses
 import json
 
 from click.testing import CliRunner
@@ -290,3 +291,25 @@ def test_a_robust_split_whose_rest_ends_off_a_normal_operating_point_says_so(tmp
     text = capsys.readouterr().out
     assert f"bus 13 line to 120     ends off a normal operating point: {said} at t = 6 s" in text
     assert "; 3 stable by the angle criterion ending off a normal operating point" in text
+
+
+def test_two_cases_screened_in_one_directory_keep_their_own_records(tmp_path, monkeypatch):
+    """Without --out, `screen` wrote screening.jsonl whatever the case: a second case's
+    screening in the same directory was refused ("another case's records") and a first
+    case's resumed from an example's file.  Each case now has its own default records
+    file, screening_<CASE>.jsonl (a case file's name without .json)."""
+    from stabctl.io.pst import write_case_json
+
+    monkeypatch.chdir(tmp_path)
+    case = load_case("kundur")
+    write_case_json(dataclasses.replace(case, name="k2"), "k2.json")
+    scr = ["--buses", "3", "--t-max", "0.2", "--workers", "1"]
+    for name in ("kundur", "k2.json"):
+        res = CliRunner().invoke(main, ["screen", name, *scr])
+        assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in tmp_path.glob("*.jsonl")) == [
+        "screening_k2.jsonl",
+        "screening_kundur.jsonl",
+    ]
+    again = CliRunner().invoke(main, ["screen", "kundur", *scr])
+    assert "0 run now, 1 already in screening_kundur.jsonl" in again.stdout
