@@ -75,7 +75,7 @@ def _case_info(name: str) -> dict:
     "buses",
     is_flag=True,
     help="List CASE's buses (number, type, kV, V, angle, generation, load and "
-    "shunt in MW and Mvar, machines).",
+    "shunt in MW and Mvar, machines and converters).",
 )
 @click.option(
     "--line-table",
@@ -150,13 +150,17 @@ def _cell(v, width: int) -> str:
 def _bus_rows(case) -> list[dict]:
     """One dict per bus: number, type, kV, |V| and angle of the data, generation, load and
     shunt in MW and Mvar (the shunt's at 1 pu, capacitive positive, as PSS/E's bus data),
-    the machines there named as every output names them (``G3``)."""
+    the machines there named as every output names them (``G3``), and in a case with
+    converters theirs (``C17``: the ``pibr_pu.C17`` columns of `simulate --out`)."""
     from stabctl.case import PQ, PV, SWING
 
     b, kinds, base = case.buses, {SWING: "swing", PV: "PV", PQ: "PQ"}, case.base_mva
     at: dict[int, list[str]] = {}
     for k, bus in enumerate(case.machines.bus):
         at.setdefault(int(bus), []).append(f"G{int(case.machines.number[k])}")
+    ibr: dict[int, list[str]] = {}
+    for k, bus in enumerate(case.converters.bus):
+        ibr.setdefault(int(bus), []).append(f"C{int(case.converters.number[k])}")
     return [
         {
             "bus": int(b.number[i]),
@@ -171,6 +175,11 @@ def _bus_rows(case) -> list[dict]:
             "G_shunt_MW": float(b.gshunt[i] * base),
             "B_shunt_Mvar": float(b.bshunt[i] * base),
             "machines": ",".join(at.get(int(b.number[i]), [])) or None,
+            **(
+                {"converters": ",".join(ibr.get(int(b.number[i]), [])) or None}
+                if len(case.converters)
+                else {}
+            ),
         }
         for i in range(case.n_bus)
     ]

@@ -446,7 +446,7 @@ def simulate(
     (absorb, idle, inject), mode_code (+1, 0, -1), rel_speed_hz (machine minus COI speed
     seen by the controller)} (`switchings`).  A case with converters (ANDES PVD1, ESD1;
     docs/ibr.md) adds pibr_pu.C<c> and qibr_pu.C<c>, the P and Q each injects (system
-    base).
+    base; --json's `converter_names` and `cases CASE --bus-table` give each one's bus).
 
     \b
     Examples:
@@ -609,6 +609,16 @@ def simulate(
                 "machine_names": {
                     str(int(k)): case.machine_name(int(k)) for k in case.machines.number
                 },
+                **(
+                    {
+                        "converter_names": {
+                            str(int(k)): f"C{int(k)} (bus {int(b)})"
+                            for k, b in zip(case.converters.number, case.converters.bus)
+                        }
+                    }
+                    if len(case.converters)
+                    else {}
+                ),
                 "files": written,
                 **({} if halved is None else {"step_check": halved}),
             }

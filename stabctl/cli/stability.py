@@ -334,6 +334,11 @@ def _ratings(values) -> list:
     """
     out = comma_list(values or ("none",), "--esd-pct", _rating, "a number or 'none'")
     for v in out:
+        if v == 0:  # a rating of 0 is the run without storage, which has its own word
+            raise InputError(
+                "--esd-pct 0: a rating must be above 0 % of machine MVA; the run without "
+                "storage is 'none' (--esd-pct none,5)"
+            )
         if v is not None:
             check_number("--esd-pct", v)
     return out

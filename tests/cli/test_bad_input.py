@@ -2541,3 +2541,15 @@ def test_an_empty_path_is_named_as_such_not_as_the_directory_dot(
     res = run(*args)
     assert res.exit_code == 2 and res.stderr == f"error: {needle}\n", res.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_sweep_rating_of_zero_names_the_word_for_no_storage(tmp_path, monkeypatch):
+    """`sweep-cct --esd-pct 0,5` said only "must be in (0, 100]": the baseline without
+    storage is written 'none', which the refusal now names."""
+    monkeypatch.chdir(tmp_path)
+    assert_error(
+        run("sweep-cct", "kundur", "--faults", "DEFAULT", "--esd-pct", "0,5"),
+        "--esd-pct 0: a rating must be above 0 % of machine MVA; the run without storage is "
+        "'none' (--esd-pct none,5)",
+    )
+    assert list(tmp_path.iterdir()) == []

@@ -384,3 +384,31 @@ def test_a_start_refused_at_the_q_limits_names_the_held_buses_and_no_q_limits(na
     with pytest.raises(CaseError, match=r"cannot start") as err:
         Simulator(limited, background_compile=False)
     assert "Q limit" not in str(err.value) and "q_limits" not in str(err.value)
+
+
+def test_converter_columns_are_named_with_their_buses(tmp_path, monkeypatch):
+    """`simulate --out` writes a converter's P and Q as pibr_pu.C<k>, qibr_pu.C<k>, which
+    nothing mapped to its plant: `simulate --json` now gives each one's bus
+    (`converter_names`) and `cases --bus-table` lists them at theirs, as the case's own
+    converter table places them (ANDES's ieee14_pvd1: ten PVD1 at bus 4)."""
+    from stabctl.io.pst import write_case_json
+
+    monkeypatch.chdir(tmp_path)
+    case = read_andes_case(andes.get_case(PVD1)).case
+    write_case_json(case, "p.json")
+    expected = {
+        str(int(k)): f"C{int(k)} (bus {int(b)})"
+        for k, b in zip(case.converters.number, case.converters.bus)
+    }
+    assert expected
+    res = CliRunner().invoke(
+        main, ["simulate", "p.json", "--tf", "0.05", "--no-q-limits", "--json"]
+    )
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["converter_names"] == expected
+    table = CliRunner().invoke(main, ["cases", "p.json", "--bus-table", "--json"])
+    at = {r["bus"]: r["converters"] for r in json.loads(table.stdout)["buses"] if r["converters"]}
+    placed: dict[int, list[str]] = {}
+    for k, b in zip(case.converters.number, case.converters.bus):
+        placed.setdefault(int(b), []).append(f"C{int(k)}")
+    assert at == {b: ",".join(names) for b, names in placed.items()} and len(placed[4]) == 10
