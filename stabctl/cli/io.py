@@ -208,6 +208,20 @@ def _line_rows(case) -> list[dict]:
     return out
 
 
+def _refuse_swapped(first, dyr, name: str) -> None:
+    """Refuse a DYR file given where the RAW goes (with the RAW after it, or alone): the RAW
+    reader's "malformed record" at line 1 did not say that the files were swapped."""
+    if Path(first).suffix.lower() != ".dyr":
+        return
+    if dyr is not None and Path(dyr).suffix.lower() == ".raw":
+        raise InputError(
+            f"{name} {first} is a DYR file and DYR {dyr} a RAW file: give the RAW first, "
+            "then the DYR"
+        )
+    if dyr is None:
+        raise InputError(f"{name} {first} is a DYR file: give the RAW file first, then it")
+
+
 def _dyr_and_out(func):
     """The optional DYR argument and the --out option of the import commands."""
     func = click.option(
@@ -431,6 +445,7 @@ def import_psse(
     from stabctl.io.psse import import_psse as run_import
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
+    _refuse_swapped(raw_path, dyr_path, "RAW")
     if dyr_path is None:
         refuse_given(
             ("conventions", "net_unmodelled"),
@@ -604,6 +619,7 @@ def import_andes(
     from stabctl.io.andes_case import read_andes_case
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
+    _refuse_swapped(case_path, dyr_path, "CASE")
     if conventions is None:
         conventions = "psse" if dyr_path is not None else "andes"
     imported = read_andes_case(

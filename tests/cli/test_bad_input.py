@@ -2553,3 +2553,20 @@ def test_a_sweep_rating_of_zero_names_the_word_for_no_storage(tmp_path, monkeypa
         "'none' (--esd-pct none,5)",
     )
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["import-psse", "import-andes"])
+def test_a_raw_and_dyr_given_the_other_way_round_are_named_as_swapped(tmp_path, command):
+    """`import-psse X.dyr Y.raw -o c.json` said "X.dyr:1: malformed record ... expected
+    IBUS 'MODEL' ID parameters /" (the DYR read as a RAW): the files are named as swapped,
+    before either is read, and nothing is written."""
+    raw, dyr = tmp_path / "g.raw", tmp_path / "g.dyr"
+    raw.write_text("0, 100.0, 33 /\n")
+    dyr.write_text("1 'GENCLS' 1 3.0 0.0 /\n")
+    out = tmp_path / "c.json"
+    assert_error(
+        run(command, dyr, raw, "-o", out),
+        f"is a DYR file and DYR {raw} a RAW file: give the RAW first, then the DYR",
+    )
+    assert_error(run(command, dyr, "-o", out), "is a DYR file: give the RAW file first")
+    assert not out.exists()
