@@ -1,5 +1,6 @@
-"""Case 1's critical clearing time without storage and with ESDs of 5 and 10 % of each
-generator's MVA: the CCT gain the paper's Table 4 reports.
+"""Case 1's critical clearing time (Kundur) without storage and with ESDs of 5 and 10 % of
+each generator's MVA: the CCT gain, which the paper's Table 4 reports for miniWECC's
+Case 2 (`stabctl paper` runs that table).
 
     python examples/cct_gain.py
 """

@@ -1582,6 +1582,16 @@ class Case:
 
     # -- lookup -----------------------------------------------------------------------
 
+    def __repr__(self) -> str:
+        """One line: name, sizes, base and frequency (the tables would print thousands of
+        lines for a planning case; `stabctl cases CASE` and its tables show them)."""
+        return (
+            f"Case({self.name!r}: {self.n_bus} buses, {len(self.branches)} branches, "
+            f"{len(self.machines)} machines, {len(self.exciters)} exciters, "
+            f"{len(self.governors)} governors, {len(self.converters)} converters, "
+            f"{self.base_mva:g} MVA, {self.freq_hz:g} Hz)"
+        )
+
     @property
     def n_bus(self) -> int:
         """Number of buses."""

@@ -588,3 +588,15 @@ def test_converter_shares_of_a_bus_s_generation_must_not_exceed_it(tmp_path):
     )
     with pytest.raises(CaseError, match=f"^{re.escape(expected)}$"):
         load_case(tmp_path / "edited.json")
+
+
+def test_a_case_prints_as_one_line_of_its_sizes():
+    """`print(load_case(...))` printed every table (about 2 900 lines for the 240-bus WECC
+    case): a case prints as one line of its name, sizes, base and frequency."""
+    from stabctl.io import load_case
+
+    case = load_case("kundur")
+    assert repr(case) == str(case) == (
+        "Case('kundur': 13 buses, 14 branches, 4 machines, 4 exciters, 4 governors, "
+        "0 converters, 100 MVA, 60 Hz)"
+    )
