@@ -596,7 +596,11 @@ def test_a_case_prints_as_one_line_of_its_sizes():
     from stabctl.io import load_case
 
     case = load_case("kundur")
-    assert repr(case) == str(case) == (
-        "Case('kundur': 13 buses, 14 branches, 4 machines, 4 exciters, 4 governors, "
-        "0 converters, 100 MVA, 60 Hz)"
+    assert (
+        repr(case)
+        == str(case)
+        == (
+            "Case('kundur': 13 buses, 14 branches, 4 machines, 4 exciters, 4 governors, "
+            "0 converters, 100 MVA, 60 Hz)"
+        )
     )
