@@ -608,15 +608,41 @@ def compile_differences(model: DynamicModel) -> None:
     _differences.compile(tuple(typeof(a) for a in args))
 
 
+#: the owners of states, by their names' first part (`DynamicModel.state_name`), in words
+_BLOCKS = {
+    "mac": "machine",
+    "exc": "exciter",
+    "pss": "stabiliser",
+    "tg": "governor",
+    "ibr": "converter",
+}
+
+
 def _what(model, kind, index, c) -> str:
-    names = {
-        ESD: "ESD power at kept bus",
-        VREF: "Vref of exciter row",
-        PREF: "Pref of governor row",
-    }
+    """A perturbed column in a planner's words: whose state or set-point it is, its
+    machine named as every output names it (``governor state tg.valve.G4 of G4 (bus 6,
+    id '1')``, ``Pref of the governor of G4 (bus 6, id '1')``)."""
+    case, k = model.case, int(index[c])
     if kind[c] == STATE:
-        return f"state {model.state_name(int(index[c]))}"
-    return f"{names[int(kind[c])]} {int(index[c]) + 1}"
+        name = model.state_name(k)
+        block, owner = name.split(".", 1)[0], name.rsplit(".", 1)[-1]
+        return f"{_BLOCKS.get(block, block)} state {name} of {_owner(case, owner)}"
+    if kind[c] == ESD:
+        return f"ESD power at kept bus {k + 1}"
+    mac = model.ep.mac if kind[c] == VREF else model.gp.mac
+    what = "Vref of the exciter" if kind[c] == VREF else "Pref of the governor"
+    return f"{what} of {case.machine_name(int(case.machines.number[int(mac[k])]))}"
+
+
+def _owner(case, owner: str) -> str:
+    """``G4`` or ``C17`` (a state name's last part) as outputs name them."""
+    if owner[1:].isdigit() and owner[0] == "G":
+        return case.machine_name(int(owner[1:]))
+    if owner[1:].isdigit() and owner[0] == "C":
+        rows = np.flatnonzero(case.converters.number == int(owner[1:]))
+        if rows.size:
+            return f"{owner} (bus {int(case.converters.bus[rows[0]])})"
+    return owner
 
 
 @njit(cache=True)

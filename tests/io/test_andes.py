@@ -2307,11 +2307,11 @@ def test_ieee14_regca1_modes_match_andes(regca1_alone, ref):
 #: ANDES's IEEE 14 cases with converters, and the limit each operating point sits on that
 #: linearise names (docs/modal.md, Limiters)
 CONVERTER_MODE_CASES = {
-    "ieee14/ieee14_solar.xlsx": "tg.valve.G3 (free)",
-    "ieee14/ieee14_pvd1.xlsx": "Pref of governor row 4 (free)",
-    "ieee14/ieee14_esd1.xlsx": "Pref of governor row 4 (free)",
-    "ieee14/ieee14_wt3.xlsx": "ibr.PIw_pitch.C1 (held, frozen: left out)",
-    "ieee14/ieee14_wt3n.xlsx": "ibr.PIc_pitch.C1",
+    "ieee14/ieee14_solar.xlsx": "governor state tg.valve.G3 of G3 (bus 6) (free)",
+    "ieee14/ieee14_pvd1.xlsx": "Pref of the governor of G4 (bus 8) (free)",
+    "ieee14/ieee14_esd1.xlsx": "Pref of the governor of G4 (bus 8) (free)",
+    "ieee14/ieee14_wt3.xlsx": "ibr.PIw_pitch.C1 of C1 (bus 8) (held, frozen: left out)",
+    "ieee14/ieee14_wt3n.xlsx": "converter state ibr.PIc_pitch.C1 of C1 (bus 8)",
 }
 
 
@@ -2336,7 +2336,7 @@ def test_ieee14_converter_cases_modes_match_andes(name, tmp_path, ref):
     assert CONVERTER_MODE_CASES[name] in said
     assert not any("ill-conditioned" in str(w.message) for w in seen)  # modal.eigen
     if "frozen" in CONVERTER_MODE_CASES[name]:  # not a state of the model
-        frozen = re.findall(r"state (\S+) \(held, frozen", said)
+        frozen = re.findall(r"state (\S+) of [^()]*\([^)]*\) \(held, frozen", said)
         assert frozen and not {f.replace(".", "_") for f in frozen} & set(sys_.state_labels)
     f = lam.imag / (2 * np.pi)
     ours = lam[(f >= 0.1) & (f <= 3.0)]
