@@ -1385,7 +1385,8 @@ _ANDES_MAPPERS = {
     "ESDC1A": _without_tr(_dc("ESDC1A", zero_vrmax_unlimited=True, andes=True)),
     "EXAC1": _without_tr(_exc_row),
     "ESST1A": lambda rec, gen: _esst1a(rec, gen, andes=True),
-    #: ESST3A: as PSS/E, its source voltage from the stator current on the system base
+    #: ESST3A: PSS/E's (the machine's field current, `_esst3a_psse`) with its source
+    #: voltage from the stator current on the system base, as ANDES 2.0 solves it
     #: (`_source_on_system_base`, ``esst3a.py``)
     "ESST3A": _source_on_system_base(_esst3a_psse),
     "IEEET3": _source_on_system_base(_ieeet3),
