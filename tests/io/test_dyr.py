@@ -182,8 +182,9 @@ def test_wecc_ieeeg1_sums_hp_and_lp():
 def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently():
     """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
     output limits and rate feedback, docs/pst_models.md 12.6), gives its DC exciters
-    (ESDC2A) PSS/E's quadratic saturation through their own points (next tests) and
-    leaves every other exciter, PSS and governor column as "pst" reads it."""
+    (ESDC2A) PSS/E's quadratic saturation through their own points (next tests), its
+    ESST3A the machine's field current (ifd_machine = 1, as PSS/E's I_N = K_C I_FD / V_E)
+    and leaves every other exciter, PSS and governor column as "pst" reads it."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     pst = dyr_tables(recs, gens, on_unsupported="skip", conventions="pst")
@@ -196,8 +197,12 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
     dc = np.isin(pst.exc_con[:, 0], (exc.DC1, exc.DC2))
     assert dc.sum() == 8 and np.all(psse.exc_con[dc, 22] == 1)  # dc_sat: the quadratic
     sat = [11, 12, 13, 14, 22]  # E1 SE1 E2 SE2 dc_sat (columns 12-15, 23)
+    ifd = ExciterTable.columns().index("ifd_machine")
+    st3 = pst.exc_con[:, 0] == exc.ST3
+    assert st3.sum() == 4 and np.all(psse.exc_con[st3, ifd] == 1)
+    assert np.all(psse.exc_con[~st3, ifd] == 0) and np.all(pst.exc_con[:, ifd] == 0)
     others = (np.arange(pst.exc_con.shape[1]) != col) & ~np.isin(
-        np.arange(pst.exc_con.shape[1]), sat
+        np.arange(pst.exc_con.shape[1]), [*sat, ifd]
     )
     np.testing.assert_array_equal(pst.exc_con[:, others], psse.exc_con[:, others])
     np.testing.assert_array_equal(pst.exc_con[~dc][:, sat], psse.exc_con[~dc][:, sat])
@@ -281,7 +286,8 @@ def test_andes_conventions_change_only_what_andes_reads_differently():
     assert dc2.sum() == 8 and np.all(e.TR[dc2] == 0) and np.all(e.dc_sat[dc2] == 1)
     st3 = e.type == exc.ST3  # WECC's 4 ESST3A: I_N from the machine's I_fd
     assert st3.sum() == 4 and np.all(e.ifd_machine[st3] == 1) and np.all(e.ifd_machine[~st3] == 0)
-    assert np.all(ExciterTable.from_matrix(dyr_tables(recs, gens).exc_con).ifd_machine == 0)
+    pst_tables = dyr_tables(recs, gens, conventions="pst")  # PST's exc_st3 estimate
+    assert np.all(ExciterTable.from_matrix(pst_tables.exc_con).ifd_machine == 0)
     assert (g_pst.Uo[0], g_pst.Uc[0]) == (1.0, -1.0)
     assert (g_andes.Uo[0], g_andes.Uc[0]) == (0.25, -0.25)
     with pytest.raises(CaseError, match="conventions"):
@@ -1205,13 +1211,14 @@ def test_power_input_stabiliser_starts_at_rest_with_armature_resistance(dyr_kund
 
 
 def test_start_off_equilibrium_is_refused_naming_the_state():
-    """WECC's ESST3A read as PST's exc_st3 with K_C = 0.2 on Kundur's machines: PST's
-    exc_st3 feeds K_C a field current estimated differently from the one of its
-    initialisation, so the start is off equilibrium (as in PST): refused, with the state
-    and the value; ``off_equilibrium="warn"`` runs it with a warning."""
+    """WECC's ESST3A read as PST's exc_st3 (``conventions="pst"``) with K_C = 0.2 on
+    Kundur's machines: PST's exc_st3 feeds K_C a field current estimated differently
+    from the one of its initialisation, so the start is off equilibrium (as in PST):
+    refused, with the state and the value; ``off_equilibrium="warn"`` runs it with a
+    warning.  Read as PSS/E reads it (the default) it starts at rest."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
-    t = dyr_tables(recs, gens, on_unsupported="skip")
+    t = dyr_tables(recs, gens, on_unsupported="skip", conventions="pst")
     n3 = next(g["number"] for g in gens if g["bus"] == 3)
     e = np.tile(t.exc_con[t.exc_con[:, 1] == n3], (4, 1))
     e[:, 1] = [1, 2, 3, 4]
@@ -1222,6 +1229,10 @@ def test_start_off_equilibrium_is_refused_naming_the_state():
     with pytest.warns(UserWarning, match=r"\|dexc\.VR\.G\d/dt\|"):
         sim = Simulator(case, off_equilibrium="warn")
     assert sim.model.initial_residual[0] > 1e-3
+    ifd = ExciterTable.columns().index("ifd_machine")
+    e[:, ifd] = 1.0  # as conventions="psse" reads ESST3A: the machine's field current
+    psse = case.replace(exciters=ExciterTable.from_matrix(e))
+    assert Simulator(psse).model.initial_residual[0] < 1e-9
     assert Simulator(load_case("kundur")).model.initial_residual[0] < 1e-12  # 2.7e-13
     assert Simulator(load_case("miniwecc")).model.initial_residual[0] < 1e-11  # 1.9e-12
 
