@@ -133,9 +133,32 @@ def _end(signum: int) -> None:
     sys.exit(128 + signum)
 
 
+def _hold_closed_stderr() -> None:
+    """A process started with descriptor 2 closed (``2>&-``, a daemon) has no
+    ``sys.stderr`` (None), or one on whatever file took the free descriptor before Python
+    started (pyenv's shim script, read-only): the progress bars of `screen` and
+    `sweep-cct` failed on it, exit status 1, nothing written or said.  The descriptor is
+    then held by /dev/null, so that no file the command opens takes it (a records file
+    written into by every warning), and ``sys.stderr`` writes there: the command runs,
+    its messages go nowhere, as asked."""
+    import fcntl
+
+    try:
+        if fcntl.fcntl(2, fcntl.F_GETFL) & os.O_ACCMODE != os.O_RDONLY:
+            return  # a stream that takes writes
+    except OSError:  # closed
+        pass
+    null = os.open(os.devnull, os.O_WRONLY)
+    if null != 2:
+        os.dup2(null, 2)
+        os.close(null)
+    sys.stderr = open(2, "w", closefd=False)  # noqa: SIM115 - the process's own stream
+
+
 def main() -> None:
     """Run the `stabctl` command line with signals handled from the start (module
     docstring)."""
+    _hold_closed_stderr()
     install()
     try:
         try:

@@ -108,8 +108,8 @@ class Fault:
         first branch row joining them); default 1.
     r, x : float, optional
         Fault resistance and reactance, pu on the system base; ``r = x = 0`` (default) is
-        PST's bolted fault (shunt susceptance -1e7 pu at the bus).  A negative `x` is
-        taken as 0.
+        PST's bolted fault (shunt susceptance -1e7 pu at the bus); each finite and >= 0
+        (`check_values`, when a run starts).
     """
 
     bus: int
@@ -124,10 +124,10 @@ class Fault:
     @property
     def admittance(self) -> complex:
         """Fault shunt admittance (pu, system base): ``-1j * 1e7`` for a bolted fault, else
-        ``1 / (r + j max(x, 0))``."""
+        ``1 / (r + j x)``."""
         if self.r == 0 and self.x == 0:
             return -1j * FAULT_B
-        return 1.0 / complex(self.r, max(self.x, 0.0))
+        return 1.0 / complex(self.r, self.x)
 
     def times(self):
         """The event's times that are set.
@@ -607,7 +607,8 @@ def _amount(ev) -> complex | float:
 
 
 def check_values(case: Case, ev) -> None:
-    """Check the size of a load, VREF or PREF step against its bound in ``case``.
+    """Check the size of a load, VREF or PREF step against its bound in ``case``, and a
+    fault's impedance.
 
     Parameters
     ----------
@@ -621,8 +622,16 @@ MotorSwitch or Playback
     ------
     InputError
         A step that is not a finite number or of size 0 (it would do nothing), or one
-        beyond `step_limit`: the message names the event, its size, the bound and why.
+        beyond `step_limit`: the message names the event, its size, the bound and why; a
+        fault's r or x negative or not a finite number (x = inf was no fault at all).
     """
+    if isinstance(ev, Fault):
+        if not all(math.isfinite(v) and v >= 0 for v in (ev.r, ev.x)):
+            raise InputError(
+                f"{ev}: fault impedance r = {ev.r:g}, x = {ev.x:g} pu: each must be a finite "
+                "number >= 0 (r = x = 0: a bolted fault)"
+            )
+        return
     if not isinstance(ev, (LoadStep, VrefStep, PrefStep)):
         return
     size, limit = abs(_amount(ev)), step_limit(case, ev)

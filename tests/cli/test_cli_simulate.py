@@ -670,6 +670,36 @@ def test_output_that_cannot_reach_stdout_is_an_error(where, args):
     assert said == [f"error: cannot write to standard output (stdout): {reason}"], proc.stderr
 
 
+@pytest.mark.parametrize("how", ["closed", "read-only"])
+@pytest.mark.parametrize("command", ["screen", "sweep-cct"])
+def test_a_study_runs_with_stderr_closed(tmp_path, how, command):
+    """stderr closed (``2>&-``, a daemon; or, through pyenv's shim, descriptor 2 left on
+    the shim's script, read-only): `screen` and `sweep-cct` stopped at their first
+    progress bar, exit status 1, no records and no word.  The study runs: its records
+    written, its table on stdout, exit status 0."""
+    import os
+    import subprocess
+    import sys
+
+    def stderr_gone():
+        if how == "closed":
+            os.close(2)
+        else:
+            fd = os.open(sys.executable, os.O_RDONLY)
+            os.dup2(fd, 2)
+            os.close(fd)
+
+    # bus 3's fault; Kundur's two default line faults
+    study, n = {"screen": (["--buses", "3"], 1), "sweep-cct": (["--faults", "DEFAULT"], 2)}[command]
+    out = tmp_path / "r.jsonl"
+    cmd = [sys.executable, "-m", "stabctl.cli", command, "kundur", *study]
+    cmd += ["--tol-ms", "20", "--t-max", "0.3", "--workers", "1", "--out", str(out)]
+    proc = subprocess.run(cmd, stdout=subprocess.PIPE, text=True, preexec_fn=stderr_gone)
+    assert proc.returncode == 0, proc.stdout
+    assert len(out.read_text().splitlines()) == n
+    assert "0 failed" in proc.stdout
+
+
 def test_a_trapezoid_step_above_one_cycle_is_a_warning():
     """`simulate --method trapezoid --step 0.25` (the finding: a stable fault reported
     unstable with angles of 13-26 rad, exit 0, no word): at 0.1 s Kundur's bus-3 fault

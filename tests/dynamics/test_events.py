@@ -180,3 +180,18 @@ def test_step_sizes_are_bounded_where_the_events_are_checked():
         with pytest.raises(InputError, match=needle):
             validate(case, events, 2.0)
     validate(case, [PrefStep(2, 1.0, 0.6), PrefStep(2, 1.5, -0.6)], 2.0)  # back: fine
+
+
+@pytest.mark.parametrize(
+    "r, x", [(0.0, -0.05), (0.0, -1e-3), (0.0, np.inf), (np.nan, 0.0), (-0.01, 0.05)]
+)
+def test_a_fault_impedance_that_is_no_impedance_is_refused_by_name(kundur, r, x):
+    """`Fault(3, 1.0, 1.1, x=-0.05)` stopped with ZeroDivisionError (its docstring read a
+    negative x as 0 but its admittance divided by j0), and x = inf ran as no fault at
+    all, without a word: r and x must be finite and >= 0 (r = x = 0 is bolted)."""
+    with pytest.raises(InputError, match=r"fault impedance r = .* each must be a finite number"):
+        kundur.run([Fault(3, 1.0, 1.1, r=r, x=x)], t_end=1.5)
+    # an impedance fault is a fault: bus 3 sags to r + jx's share (about 0.4 pu)
+    run = kundur.run([Fault(3, 1.0, 1.1, x=0.05)], t_end=1.5)
+    k = np.searchsorted(run.t, 1.05)
+    assert 0.05 < run.vmag[k, run.bus(3)] < 0.9
