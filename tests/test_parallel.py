@@ -1675,6 +1675,20 @@ def _cct_record(**result):
             {**_cct_record(), "inputs": {"t_max": 1.0, "guess_s": 2.0}},
             r"not a clearing time in \[0, 1\]",
         ),
+        # a record relabelled by hand (key and inputs of 13-101, result of 3-101's
+        # search) or whose inputs were edited (a 20 ms bracket taken for a 10 ms search)
+        (
+            {**_cct_record(fault={"bus": 3, "far_bus": 101}), "inputs": {"bus": 13}},
+            r"result\.fault\.bus 3 is not the record's inputs\.bus 13: a result of another",
+        ),
+        (
+            {**_cct_record(tol_s=0.02), "inputs": {"t_max": 1.0, "tol": 0.01}},
+            r"result\.tol_s 0\.02 is not the record's inputs\.tol 0\.01",
+        ),
+        (
+            {**_cct_record(t_max_s=0.5), "inputs": {"t_max": 1.0}},
+            r"result\.t_max_s 0\.5 is not the record's inputs\.t_max 1\.0",
+        ),
     ],
 )
 def test_the_schema_of_cct_records_refuses_what_no_search_writes(rec, why):

@@ -1617,6 +1617,8 @@ def cct_record_problem(rec: dict) -> str | None:
                 f"result.separated_machines {shown(r.get('separated_machines'))} is not a "
                 "list of machine numbers"
             )
+        if other := _other_search(rec.get("inputs") or {}, r):
+            return other
     islanded = r.get("islanded") if status == "ok" else rec.get("islanded")
     if islanded is not None and not (
         isinstance(islanded, list)
@@ -1629,6 +1631,34 @@ def cct_record_problem(rec: dict) -> str | None:
     ):
         field = "result.islanded" if status == "ok" else "islanded"
         return f"{field} {shown(islanded)} is not a list of islanding stages with their buses"
+    return None
+
+
+#: a CCT result's fields that repeat its job's inputs (result name, inputs name)
+_REPEATED = (
+    ("fault.bus", "bus"),
+    ("fault.far_bus", "far_bus"),
+    ("fault.circuit", "circuit"),
+    ("fault.t_fault_s", "t_fault"),
+    ("tol_s", "tol"),
+    ("t_max_s", "t_max"),
+)
+
+
+def _other_search(inputs: dict, r: dict) -> str | None:
+    """What of a CCT result says it was found for other inputs than its record's (a
+    record relabelled or edited by hand: another fault's CCT shown as this one's, a 20
+    ms bracket taken for a 10 ms search), or None."""
+    for name, given in _REPEATED:
+        if given not in inputs:  # (an older record's inputs)
+            continue
+        head, _, tail = name.partition(".")
+        value = (r.get(head) or {}).get(tail) if tail else r.get(head)
+        if value is not None and value != inputs[given]:
+            return (
+                f"result.{name} {value!r} is not the record's inputs.{given} "
+                f"{inputs[given]!r}: a result of another search"
+            )
     return None
 
 
