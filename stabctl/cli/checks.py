@@ -49,7 +49,7 @@ def check_writable(path, option: str, directory: bool = False) -> None:
     if not directory and str(path).endswith((os.sep, "/")):  # Path("x.csv/") is x.csv
         raise InputError(f"{option} {path}: a name ending in / is a directory's; give a file")
     p = Path(path)
-    _leads_somewhere(p, option)
+    _leads_somewhere(p, option, "directory" if directory else "file")
     if directory:
         if p.exists() and not p.is_dir():
             raise InputError(f"{option} {path}: not a directory")
@@ -64,6 +64,8 @@ def check_writable(path, option: str, directory: bool = False) -> None:
             )
         where = p.parent
     where = where if str(where) else Path(".")
+    if where.exists() and not where.is_dir():  # x.csv/r.jsonl with x.csv a file
+        raise InputError(f"{option} {path}: {where} is a file, not a directory")
     if not where.is_dir():
         raise InputError(
             f"{option} {path}: directory {where} does not exist (create it "
@@ -83,10 +85,10 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         not_an_input(p, option)
 
 
-def _leads_somewhere(path: Path, option: str) -> None:
+def _leads_somewhere(path: Path, option: str, kind: str) -> None:
     """An output given as a symbolic link must lead to something that exists (a file
     written through it, a directory written into): a broken link or a loop of links is
-    refused, naming it."""
+    refused, naming it and the `kind` ("file" or "directory") to give instead."""
     if not path.is_symlink():
         return
     try:
@@ -94,11 +96,11 @@ def _leads_somewhere(path: Path, option: str) -> None:
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise InputError(
-                f"{option} {path}: a looping symbolic link (it leads back to itself); give a file"
+                f"{option} {path}: a looping symbolic link (it leads back to itself); give a {kind}"
             ) from None
         raise InputError(
             f"{option} {path}: a broken symbolic link (to {os.readlink(path)}, "
-            f"{exc.strerror or exc}); give a file, or create what it points to"
+            f"{exc.strerror or exc}); give a {kind}, or create what it points to"
         ) from None
 
 

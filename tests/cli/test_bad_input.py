@@ -2570,3 +2570,22 @@ def test_a_raw_and_dyr_given_the_other_way_round_are_named_as_swapped(tmp_path, 
     )
     assert_error(run(command, dyr, "-o", out), "is a DYR file: give the RAW file first")
     assert not out.exists()
+
+
+def test_output_paths_through_a_file_or_a_broken_link_are_named_for_what_they_are(
+    tmp_path, monkeypatch
+):
+    """`--out x.csv/r.jsonl` with x.csv a file said "directory x.csv does not exist", and
+    `paper --out-dir` on a broken link ended "give a file" for a directory option."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "x.csv").write_text("")
+    (tmp_path / "dl").symlink_to("nowhere")
+    assert_error(
+        run("sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "x.csv/r.jsonl"),
+        "--out x.csv/r.jsonl: x.csv is a file, not a directory",
+    )
+    assert_error(
+        run("paper", "--out-dir", "dl", "--only", "analytic"),
+        "--out-dir dl: a broken symbolic link (to nowhere, ",
+        "give a directory, or create what it points to",
+    )
