@@ -9,6 +9,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
 
+import numpy as np
+
 #: "cli" while a command of stabctl's command line runs (`on_command_line`), else
 #: "library": which of its words a message's advice takes (`advice`)
 _FRONT: ContextVar[str] = ContextVar("stabctl_front", default="library")
@@ -71,6 +73,31 @@ def on_command_line() -> Iterator[None]:
         yield
     finally:
         _FRONT.reset(token)
+
+
+def require_flag(value, name: str) -> bool:
+    """``value`` when it is a bool (numpy's too), else InputError naming ``name``: a text
+    such as ``"no"`` or ``"False"`` is true to Python and turned the setting on.
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        How to name it (``"Simulator(q_limits)"``).
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    InputError
+        Not a bool.
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 class StabctlError(Exception):

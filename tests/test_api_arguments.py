@@ -7,6 +7,7 @@ from __future__ import annotations
 import pytest
 
 import stabctl
+from stabctl.errors import InputError
 
 
 @pytest.fixture(scope="module")
@@ -98,3 +99,43 @@ def test_a_run_names_events_and_storage_of_the_wrong_kind(kundur, kw, said):
 def test_an_omib_parameter_that_is_no_number_is_named():
     with pytest.raises(TypeError, match="OMIB: not a number: H = '3'"):
         stabctl.OMIB(H="3", Pm=0.5, Pmax_pre=1.0, Pmax_fault=0.0, Pmax_post=1.0)
+
+
+@pytest.mark.parametrize(
+    "call, said",
+    [
+        # a text is true to Python: "no" turned the Q limits and the stop on
+        (lambda c, s: stabctl.Simulator(c, q_limits="no"), r"Simulator\(q_limits\) must be True"),
+        (
+            lambda c, s: s.run([], t_end=1.0, stop_at_separation="no"),
+            r"run\(stop_at_separation\) must be True or False, got 'no'",
+        ),
+        # "13" recorded buses 1 and 3
+        (lambda c, s: s.run([], t_end=1.0, voltages="13"), r"got the text '13'"),
+        # any other value than "hv" put the devices at the terminals
+        (lambda c, s: stabctl.uniform_fleet(c, 5, at="foo"), r"'hv' or 'terminal', got 'foo'"),
+        # a Simulator keeps its own conventions, but "foo" is none
+        (lambda c, s: stabctl.linearise(s, conventions="foo"), r"conventions must be one of"),
+        (
+            lambda c, s: stabctl.StorageDevice(3, None, float("inf")),
+            r"rating must be a finite number > 0 MW, got inf",
+        ),
+    ],
+)
+def test_a_value_that_would_mean_something_else_is_refused(kundur, call, said):
+    """Values taken without a word though they meant another setting than the one given."""
+    with pytest.raises(InputError, match=said):
+        call(kundur, stabctl.Simulator(kundur))
+
+
+def test_modal_weights_must_be_one_finite_weight_per_machine(kundur):
+    """NaN among the weights went on into the area momentum (NaN eta); too few broadcast
+    in numpy."""
+    import numpy as np
+
+    sys_ = stabctl.linearise(stabctl.Simulator(kundur))
+    for weights in (np.array([1.0, np.nan, 1.0, 1.0]), np.ones(2), -np.ones(4)):
+        with pytest.raises(InputError, match=r"4 finite weights >= 0"):
+            stabctl.modal_analysis(sys_, inertia=weights)
+    ma = stabctl.modal_analysis(sys_, inertia=np.ones(4))
+    assert ma.kind[ma.electromechanical[0]] == "inter-area"  # Kundur's 0.61 Hz mode

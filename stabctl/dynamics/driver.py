@@ -76,6 +76,7 @@ from stabctl.errors import (
     SimulationError,
     StabctlError,
     advice,
+    require_flag,
     run_on_suspect_starts,
 )
 from stabctl.models import converters as conv
@@ -251,7 +252,9 @@ class Simulator:
         self.suspect_starts = suspect_starts
         self.suspect: tuple[str, ...] = ()
         self.conventions = check_conventions(conventions)
-        self.q_limits = bool(q_limits)
+        self.q_limits = require_flag(q_limits, "Simulator(q_limits)")
+        require_flag(background_compile, "Simulator(background_compile)")
+        require_flag(subintervals, "Simulator(subintervals)")
         given, held = case, np.zeros(0, int)
         if op is None:
             from stabctl.network.powerflow import solve_powerflow
@@ -490,6 +493,7 @@ class Simulator:
         semantics = self._semantics(semantics)
         _check_method(method, semantics, storage)
         self.check_separation_limit(separation_limit)
+        require_flag(stop_at_separation, "run(stop_at_separation)")
         if monitor is not None and method != "heun":
             raise InputError(f"a run monitor needs the heun method, got {method!r}")
         if method == "trapezoid":  # no storage (`_check_method`): this simulator's run
@@ -1562,9 +1566,13 @@ def voltage_rows(case: Case, voltages) -> np.ndarray | None:
     ------
     UnknownBusError
         A number that is no bus of the case.
+    InputError
+        A text (``"13"`` was read as buses 1 and 3).
     """
     if isinstance(voltages, (bool, np.bool_)):
         return None if voltages else np.zeros(0, np.int64)
+    if isinstance(voltages, (str, bytes)):
+        raise InputError(f"run(voltages): True, False or bus numbers, got the text {voltages!r}")
     rows = np.unique([case.bus_index(int(b)) for b in voltages]).astype(np.int64)
     return None if rows.size == case.n_bus else rows
 

@@ -53,11 +53,12 @@ from stabctl.dynamics.model import (
     StageConfig,
     active_states,
     call_evaluate,
+    check_conventions,
     evaluate_address,
     kernel_network,
     kernel_outputs,
 )
-from stabctl.errors import InputError, SimulationError
+from stabctl.errors import InputError, SimulationError, require_flag
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -212,6 +213,8 @@ def linearise(
     """
     from stabctl.dynamics.driver import Simulator
 
+    check_conventions(conventions)  # a Simulator keeps its own, but no other value is one
+    require_flag(q_limits, "linearise(q_limits)")
     if not isinstance(target, Simulator):
         target = require_case(target, "linearise(target)", " or Simulator")
     sim = (

@@ -316,7 +316,7 @@ def modal_analysis(
     ------
     InputError
         A model without machine speed states, n_areas out of range, areas missing a
-        machine.
+        machine, inertia not one finite weight >= 0 per machine.
     TypeError
         `sys` not a state-space model with state names (a bare A matrix).
 
@@ -344,6 +344,12 @@ def modal_analysis(
         inertia = sys.C[sys.output_labels.index("omega_coi"), speed]
         if not np.any(inertia):  # the COI is an infinite bus: no weight on the others
             inertia = np.ones(speed.size)
+    inertia = np.asarray(inertia, float)
+    if inertia.shape != (speed.size,) or not np.all(np.isfinite(inertia) & (inertia >= 0)):
+        raise InputError(
+            f"modal_analysis(inertia): {speed.size} finite weights >= 0 (H * MVA, one per "
+            f"machine in the order of the speed states) are needed, got {inertia!r}"
+        )
     lam, right, left = eigen(np.asarray(sys.A))
     P = participation_factors(right, left)
     shape = _normalised(right[speed])

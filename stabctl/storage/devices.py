@@ -131,9 +131,10 @@ class StorageDevice:
     soc0: float = 0.5
 
     def __post_init__(self):
-        if not self.pmax_mw > 0:
+        if not 0 < self.pmax_mw < float("inf"):
             raise InputError(
-                f"storage at bus {self.bus}: rating must be > 0 MW, got {self.pmax_mw}"
+                f"storage at bus {self.bus}: rating must be a finite number > 0 MW, got "
+                f"{self.pmax_mw}"
             )
         if self.lag_s < 0 or self.ramp_mw_s <= 0 or self.energy_mj <= 0 or not 0 <= self.soc0 <= 1:
             raise InputError(
@@ -273,7 +274,7 @@ def uniform_fleet(
         The fleet's control law; None (default): `BangBangCOI()` (paper Table 3).
     at : str, optional
         ``"hv"`` (default): the generator's high-voltage bus (`hv_bus`: the neighbour of
-        its terminal bus with the highest rated kV); any other value: the terminal bus.
+        its terminal bus with the highest rated kV); ``"terminal"``: the terminal bus.
     model : {"ideal", "wecc"}, optional
         The devices' model (`StorageFleet.model`); default "ideal".
 
@@ -286,7 +287,8 @@ def uniform_fleet(
     Raises
     ------
     InputError
-        `pct` not in (0, MAX_ESD_PCT], or an unknown model.
+        `pct` not in (0, MAX_ESD_PCT], an unknown model, or `at` neither "hv" nor
+        "terminal".
     TypeError
         `case` is not a `Case`, or `pct` not a number.
 
@@ -307,12 +309,14 @@ def uniform_fleet(
         raise InputError(
             f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {pct}"
         )
+    if at not in ("hv", "terminal"):
+        raise InputError(f"uniform_fleet(at) must be 'hv' or 'terminal', got {at!r}")
     devs = []
     infinite = case.infinite_buses()  # the rest of the system: no site
     for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
         if int(num) in infinite:
             continue
-        b = hv_bus(case, int(num)) if at == "hv" else int(bus)
+        b = hv_bus(case, int(num)) if at == "hv" else int(bus)  # `at` checked above
         devs.append(StorageDevice(bus=b, machine=int(num), pmax_mw=pct / 100.0 * mva))
     return StorageFleet(tuple(devs), controller or BangBangCOI(), model=model)
 
