@@ -401,7 +401,9 @@ def read_records(
 
 
 def set_aside_damaged(
-    path: str | Path, check: Callable[[dict], str | None] | None = None
+    path: str | Path,
+    check: Callable[[dict], str | None] | None = None,
+    remedy: str = "give another file or remove it",
 ) -> list[int]:
     """Move the lines of an output file that are not sweep records (a last line cut by a
     kill, a damaged line, a record whose fields its job cannot have written: `check`, the
@@ -411,7 +413,7 @@ def set_aside_damaged(
     file renamed over it).  Raises InputError for a file `read_records` refuses (not a
     regular file, above the size cap, a line longer than MAX_RECORD_LINE), or a file of
     more than one line none of which is a record (another file given as the output:
-    nothing moved)."""
+    nothing moved; the message ends with `remedy`)."""
     path = Path(path)
     if not path.exists():
         return []
@@ -427,7 +429,7 @@ def set_aside_damaged(
     if not good and len(bad) > 1:
         raise InputError(
             f"{path}: none of its {len(bad)} lines is a sweep record: not the records of an "
-            "earlier run (left as it is); give another file or remove it"
+            f"earlier run (left as it is); {remedy}"
         )
     aside = path.with_name(path.name + ".damaged")
     with naming(aside), aside.open("a") as f:

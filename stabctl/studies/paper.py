@@ -24,7 +24,7 @@ import numpy as np
 from stabctl.errors import InputError
 from stabctl.locking import exclusive
 from stabctl.outdir import output_directory
-from stabctl.parallel import naming, read_records, write_reproducible
+from stabctl.parallel import naming, read_records, set_aside_damaged, write_reproducible
 from stabctl.plotting import figures as plotting
 from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
 from stabctl.smib.feedback import PAPER_LAWS, settling_time
@@ -409,6 +409,11 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
         elif not any(work.glob(pattern)):
             for f in out.glob(pattern):
                 shutil.copyfile(f, work / f.name)
+        if resume:  # every part's records looked at before any part runs
+            for f in sorted(work.glob(pattern)):
+                set_aside_damaged(
+                    f, remedy="remove it (its part runs again) or run without --resume"
+                )
     t_start = time.perf_counter()
     log: dict[str, Any] = {
         "command": "stabctl paper",

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from stabctl.parallel import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
+from stabctl.errors import InputError
 from stabctl.studies import paper
 
 
@@ -268,3 +269,22 @@ def test_placement_report_counts_units_and_empty_tables(tmp_path, monkeypatch):
         in (tmp_path / "placement_miniwecc.md").read_text()
     )
     assert "None: every contingency is stable without storage." in md  # Kundur
+
+
+def test_resume_refuses_a_damaged_work_file_before_any_part_runs(tmp_path, fake_parts):
+    """`paper --resume` with a work file none of whose lines is a record ran the other
+    parts first (miniWECC's Table 4, some 15 s) and then refused with "give another
+    file", an option paper lacks.  It refuses at once, with the remedies paper has."""
+    ran = []
+    monkeypatch_parts = {"first": (lambda fig_dir: ran.append(1) or "## first",)}
+    paper.PARTS.update(monkeypatch_parts)
+    work = tmp_path / paper.WORK_DIR
+    work.mkdir()
+    (work / "fake_squares.jsonl").write_text("garbage\n{\n")
+    with pytest.raises(InputError) as err:
+        paper.write_paper_report(
+            tmp_path, progress=lambda m: None, only=["first", "fake"], resume=True
+        )
+    assert ran == [] and str(err.value).endswith(
+        "remove it (its part runs again) or run without --resume"
+    )
