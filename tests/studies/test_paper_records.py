@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from stabctl.parallel import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
 from stabctl.errors import InputError
+from stabctl.parallel import Job, natural_key, run_sweep, strip_run_dependent, write_reproducible
 from stabctl.studies import paper
 
 
