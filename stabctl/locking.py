@@ -13,6 +13,7 @@ file is removed when the writer ends.
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import os
 import time
 from collections.abc import Iterator
@@ -21,11 +22,41 @@ from pathlib import Path
 
 from stabctl.errors import InputError
 
-__all__ = ["exclusive", "lock_path"]
+__all__ = ["beside", "exclusive", "lock_path"]
 
 #: a holder writes its pid just after it takes the lock: a refused writer reads it this
 #: many times, 1 ms apart, before calling the holder unknown
 PID_READS = 100
+
+
+#: the longest file name most file systems take (ext4, xfs, tmpfs: 255 bytes)
+NAME_MAX = 255
+#: room kept in a helper file's name for what tempfile.mkstemp adds (8 random characters)
+_RANDOM = 10
+
+
+def beside(name: str, suffix: str) -> str:
+    """The hidden name of a helper file of output file ``name`` (its lock, its temporary
+    copy): ``.<name><suffix>``, or, when that would pass NAME_MAX bytes with the random
+    part a temporary file adds, ``.<the name's start>-<a hash of it><suffix>``: a legal
+    output name of 245-255 bytes was refused ("File name too long") for its helper's.
+
+    Parameters
+    ----------
+    name : str
+        The output file's name (no directory).
+    suffix : str
+        What follows it (``".lock"``, ``"."``).
+
+    Returns
+    -------
+    str
+    """
+    full = f".{name}{suffix}"
+    if len(os.fsencode(full)) + _RANDOM <= NAME_MAX:
+        return full
+    digest = hashlib.sha256(os.fsencode(name)).hexdigest()[:16]
+    return f".{os.fsencode(name)[:100].decode(errors='ignore')}-{digest}{suffix}"
 
 
 def lock_path(path: str | os.PathLike) -> Path:
@@ -33,7 +64,9 @@ def lock_path(path: str | os.PathLike) -> Path:
     symbolic links followed (``<name>.lock`` for a name that is already hidden), so that
     two names of one file (a link to it, ``./x`` and an absolute path) take one lock."""
     path = Path(os.path.realpath(path))
-    return path.with_name(("" if path.name.startswith(".") else ".") + path.name + ".lock")
+    if path.name.startswith("."):
+        return path.with_name(beside(path.name, ".lock")[1:])
+    return path.with_name(beside(path.name, ".lock"))
 
 
 @contextmanager

@@ -72,7 +72,7 @@ from typing import Any, TypeGuard
 
 from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
 from stabctl.jsontext import input_file, parse_json
-from stabctl.locking import exclusive
+from stabctl.locking import beside, exclusive
 from stabctl.progress import bar as progress_bar
 
 _log = logging.getLogger(__name__)
@@ -494,7 +494,9 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
                     write(f)
             return given
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+        fd, tmp = tempfile.mkstemp(
+            dir=path.parent, prefix=beside(path.name, "."), suffix=path.suffix
+        )
         try:
             with naming(given, tmp):
                 if mode is None:

@@ -1848,3 +1848,19 @@ def test_screen_says_a_failure_is_an_earlier_run_s_and_retry_failed_reruns_it(tm
     res = CliRunner().invoke(main, [*args, "--out", str(out), "--retry-failed"])
     assert res.exit_code == 0 and "1 CCT(s) found" in res.stdout, res.output
     assert "recorded before" not in res.stdout
+
+
+def test_an_output_name_near_the_file_system_s_limit_gets_helper_files_that_fit(tmp_path):
+    """A legal 255-byte output name was refused for its lock's or temporary copy's name
+    (".<name>.lock": File name too long): helpers of such a name are shortened with a
+    hash, one per name, and the sweep writes it."""
+    from stabctl.locking import NAME_MAX, lock_path
+
+    a, b = "a" * 249 + ".jsonl", "a" * 248 + "b.jsonl"
+    locks = {lock_path(tmp_path / n).name for n in (a, b)}
+    assert len(locks) == 2 and all(len(x) + 10 <= NAME_MAX for x in locks)
+    assert lock_path(tmp_path / "r.jsonl").name == ".r.jsonl.lock"  # short names as before
+    jobs = [Job(f"square/{x}", square, {"x": x}) for x in (2, 3)]
+    rep = run_sweep(jobs, tmp_path / a, workers=1, progress=False)
+    assert rep.ran == 2 and len((tmp_path / a).read_text().splitlines()) == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == [a]  # no helper left

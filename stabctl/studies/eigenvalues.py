@@ -18,6 +18,7 @@ import numpy as np
 
 from stabctl.case import Case, PssTable
 from stabctl.dynamics.coi import machine_inertia
+from stabctl.locking import beside
 from stabctl.outdir import output_directory
 from stabctl.parallel import naming
 from stabctl.smallsignal.linearise import linearise
@@ -162,7 +163,7 @@ def write_report(
 
 
 def _temp(out: Path, name: str) -> str:
-    fd, path = tempfile.mkstemp(dir=out, prefix=f".{name}.", suffix=Path(name).suffix)
+    fd, path = tempfile.mkstemp(dir=out, prefix=beside(name, "."), suffix=Path(name).suffix)
     os.close(fd)
     return path
 
