@@ -26,14 +26,15 @@ from stabctl.errors import InputError
     type=click.Choice(
         ["analytic", "cases", "convergence", "table4", "wecc", "estimation", "placement"]
     ),
-    help="Build only these parts (repeatable, each part once; times on 2 cores): analytic = "
+    help="Build only these parts (repeatable, each part once; wall times on 2 quiet cores, "
+    "kernels compiled (`stabctl compile`, once)): analytic = "
     "Sections 2-4 (seconds); cases = Cases 1 and 2 (under a minute, with the "
     "first compilation); table4 = CCT sweeps (15 s); wecc = Case 2 and Table 4 with "
     "WECC batteries beside ideal ESDs; estimation = "
     "estimator Monte Carlo and in-the-loop CCTs (under 2 minutes); placement = "
     "the planner's ESD sizing and placement studies (about 4.5 minutes); "
     "convergence = CCT against the step under both conventions (half a "
-    "minute).  All: about 8 minutes. "
+    "minute).  All: about 8 minutes (7.6 min, 10.3 CPU-min, measured 2026-11-30). "
     "Default: all; with --only, paper.md holds only those parts.",
 )
 @reports_errors

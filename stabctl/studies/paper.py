@@ -512,7 +512,7 @@ def _verdicts(records: Path) -> dict:
 def run_summary(log: dict) -> str:
     """The end-of-run summary of `stabctl paper` from its run log (`RUN_LOG`): seconds per
     section, jobs and simulations per sweep record file, the total."""
-    lines = [f"{'seconds':>8}  section"]
+    lines = [f"{'wall s':>8}  section"]
     lines += [f"{s['seconds']:8.1f}  {s['section']}" for s in log["sections"]]
     lines += [
         f"{'':8}  {name}: {r['jobs']} jobs ("
@@ -521,7 +521,7 @@ def run_summary(log: dict) -> str:
         + f"{r.get('failures', r['failed'])} failed), {r['simulations']} simulations"
         for name, r in log["records"].items()
     ]
-    lines.append(f"{log['total_s']:8.1f}  in all, on {log['cores']} cores")
+    lines.append(f"{log['total_s']:8.1f}  in all (wall), on {log['cores']} cores")
     return "\n".join(lines)
 
 
