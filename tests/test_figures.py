@@ -106,3 +106,17 @@ def test_a_figure_written_twice_is_the_same_bytes(suffix, tmp_path, monkeypatch)
         figures.save_figure(draw(), path)
         written.append(path.read_bytes())
     assert written[0] == written[1] == written[2]
+
+
+def test_screening_map_labels_of_buses_drawn_on_one_another_are_joined():
+    """A subset's map drew 1002 and 1032 of the 240-bus WECC case on one another (the
+    layout puts them 1e-3 of its extent apart): buses within 3 % of the drawing share a
+    label, the others keep their own."""
+    import numpy as np
+
+    from stabctl.plotting.figures import _label_groups
+
+    pts = np.array([[0.0, 0.0], [1e-3, 0.0], [0.5, 0.5], [1.0, 1.0]])
+    groups = _label_groups(pts, [1002, 1032, 1001, 2130], pts)
+    assert [names for _, names in groups] == ["1002, 1032", "1001", "2130"]
+    assert np.array_equal(groups[0][0], pts[0])

@@ -648,13 +648,41 @@ def screening_map(case, rows, path: Path) -> None:
     if above.any() or failed.any() or subset:
         ax.legend(loc="lower right", fontsize=8)
     labelled = len(idx) if len(idx) <= LABEL_ALL else 10
-    for k in np.argsort(np.where(ok, cct, np.inf))[:labelled]:
-        ax.annotate(str(int(case.buses.number[idx[k]])), xy[idx[k]], fontsize=7)
+    zoom = subset and len(idx) < SUBSET_ZOOM * case.n_bus
+    shown = xy[idx] if zoom else xy
+    order = np.argsort(np.where(ok, cct, np.inf))[:labelled]
+    for at, names in _label_groups(xy[idx[order]], case.buses.number[idx[order]], shown):
+        ax.annotate(names, at, fontsize=7, xytext=(3, 3), textcoords="offset points")
     fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")
     where = f"each of {len(idx)} of {case.n_bus} buses" if subset else "each bus"
     ax.set(title=f"{case.name}: critical clearing time of a fault at {where}", xticks=[], yticks=[])
-    if subset and len(idx) < SUBSET_ZOOM * case.n_bus:
+    if zoom:
         lo, hi = xy[idx].min(axis=0), xy[idx].max(axis=0)
         pad = 0.15 * np.maximum(hi - lo, 0.05 * np.ptp(xy, axis=0))
         ax.set(xlim=(lo[0] - pad[0], hi[0] + pad[0]), ylim=(lo[1] - pad[1], hi[1] + pad[1]))
     save_figure(fig, path)
+
+
+#: buses closer than this fraction of the drawing's extent share one label (`_label_groups`)
+LABEL_MERGE = 0.03
+
+
+def _label_groups(points: np.ndarray, numbers, shown: np.ndarray) -> list[tuple]:
+    """The labels of `points` (k, 2) with their bus `numbers`, in order: those within
+    LABEL_MERGE of the extent of `shown` (the points drawn) of an earlier one join its
+    label ("1002, 1032"), which two numbers drawn on one another made unreadable.
+
+    Returns
+    -------
+    list of (ndarray, str)
+        Each label's anchor (the first point of its group) and its text.
+    """
+    tol = LABEL_MERGE * max(float(np.ptp(shown, axis=0).max()), 1e-12)
+    groups: list[tuple[np.ndarray, list[str]]] = []
+    for p, n in zip(points, numbers):
+        near = next((g for g in groups if np.hypot(*(g[0] - p)) < tol), None)
+        if near is None:
+            groups.append((p, [str(int(n))]))
+        else:
+            near[1].append(str(int(n)))
+    return [(p, ", ".join(names)) for p, names in groups]
