@@ -311,6 +311,12 @@ def print_cct(case, rating, d) -> None:
         f"{d['t_unstable_cycles']:.{c}f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
         f"step {step_text(d['step_s'])}"
         + (
+            f" ({step_text(d['stiff_step_s'])} in intervals where a machine's subtransient "
+            "time constant is shorter)"
+            if d.get("stiff_step_s")
+            else ""
+        )
+        + (
             f" with {d['sub_stepped_exciters']} exciter(s) in sub-intervals"
             if d.get("sub_stepped_exciters")
             else ""

@@ -312,6 +312,9 @@ class CCTResult:
     #: None: none
     end_concerns: tuple[str, ...] = ()
     end_t_s: float | None = None
+    #: the shortest step of the runs at the step h, s, where an interval was cut for a
+    #: machine's short subtransient time constant (`Simulator.stiff_substeps`); None: none
+    stiff_step_s: float | None = None
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -365,6 +368,7 @@ class CCTResult:
             "islanded": list(self.islanded),
             "end_concerns": list(self.end_concerns),
             "end_t_s": self.end_t_s,
+            "stiff_step_s": self.stiff_step_s,
             "probes": [[t, ok] for t, ok in self.probes],
             "half_step_probes": [[t, ok] for t, ok in self.half_step_probes],
         }
@@ -615,6 +619,7 @@ def critical_clearing_time(
         probes=tuple(probe.probes[h]),
         separated=probe.separated.get(k_hi, ()),
         islanded=tuple(probe.islanded),
+        stiff_step_s=probe.stiff_step,
         end_t_s=probe.ends.get(k_lo, (None, ()))[0],
         end_concerns=probe.ends.get(k_lo, (None, ()))[1],
         cct_half_step_s=half,
@@ -748,6 +753,8 @@ class _Probes:
         #: the whole stable runs at the step ending off a normal operating point, by
         #: lattice index: (end time s, `SimulationResult.end_concerns`)
         self.ends: dict[int, tuple[float, tuple[str, ...]]] = {}
+        #: the shortest step of an interval cut in the runs at the step (None: none)
+        self.stiff_step: float | None = None
         #: the step's verdicts by lattice index; the provisional ones; their runs kept
         #: (handle, grid points reached)
         self.verdicts: dict[int, bool] = {}
@@ -889,6 +896,8 @@ class _Probes:
             self.islanded.extend(res.meta.get("islanded", []))
         if step != self.h:
             return ok
+        for cut in getattr(res, "meta", {}).get("stiff_intervals", ()):
+            self.stiff_step = min(cut["step_s"], self.stiff_step or np.inf)
         self.verdicts[k] = ok
         if ok and provisional:
             self.provisional.add(k)

@@ -84,6 +84,22 @@ def test_a_run_at_half_the_step_halves_the_stiff_intervals_steps_too(ieee39):
     assert steps[1].max() == pytest.approx(steps[0].max() / 2, rel=1e-6)
 
 
+def test_a_cct_search_says_the_shortest_step_its_runs_took(ieee39):
+    """`cct` printed "step 8.333 ms" where its runs stepped at about 4.1 ms throughout
+    (G5's 7.5 ms time constant in IEEE 39's own network): the result gives the shortest
+    step of an interval cut (`stiff_step_s`), the grids' own."""
+    from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
+
+    sim = Simulator(ieee39)
+    fault = LineFault(26, 29)
+    res = critical_clearing_time(sim, fault, SearchOptions(tol=0.02, error_check=False))
+    run = sim.run(fault.events(res.cct_s), t_end=fault.t_fault + 5.0)
+    shortest = min(c["step_s"] for c in run.meta["stiff_intervals"])
+    # the search's shortest over all its runs: at most this run's; each cut in two here
+    assert sim.default_h / 3 < res.stiff_step_s <= shortest < sim.default_h / 2 + 1e-12
+    assert res.to_dict()["stiff_step_s"] == res.stiff_step_s
+
+
 @pytest.mark.parametrize("name, bus", [("kundur", 1), ("miniwecc", 83)])
 def test_cases_whose_time_constants_the_step_respects_keep_their_grid(name, bus):
     """Kundur and miniWECC (their shortest short-circuit subtransient time constants
