@@ -942,10 +942,44 @@ def run_sweep(
     if scheduler is not None:
         check_scheduler(scheduler)
     out = Path(out)
+    if out.is_file() and not os.access(out, os.W_OK):  # an archive: shown, nothing written
+        return _sweep_read_only(jobs, out, retry_failed)
     with ExitStack() as held:
         with naming(out):  # the pid written in the lock file on a full disk names `out`
             held.enter_context(exclusive(out))
         return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool, stage)
+
+
+def _sweep_read_only(jobs, out: Path, retry_failed: bool) -> SweepReport:
+    """`run_sweep` of an `out` that cannot be written (read-only, or on a read-only mount:
+    an archived study, a colleague's directory): its records shown when they hold every
+    job (nothing to run, nothing written, no lock taken), else InputError naming how
+    many jobs remain."""
+    check = _schema(jobs)
+    done = read_records(out, check=check)
+    _check_jobs(jobs, done, out)
+    todo = [
+        j
+        for j in jobs
+        if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
+    ]
+    if todo:
+        raise InputError(
+            f"{out}: the file is not writable and {len(todo)} of {len(jobs)} job(s) are not "
+            "in it (or are to run again): give a file that can be written"
+        )
+    failed_keys = tuple(j.key for j in jobs if done[j.key]["status"] == "failed")
+    return SweepReport(
+        out=out,
+        records={j.key: done[j.key] for j in jobs},
+        ran=0,
+        skipped=len(jobs),
+        failed=0,
+        wall_time_s=0.0,
+        failed_before=len(failed_keys),
+        failed_before_keys=failed_keys,
+        ran_keys=(),
+    )
 
 
 def _sweep_locked(

@@ -1864,3 +1864,28 @@ def test_an_output_name_near_the_file_system_s_limit_gets_helper_files_that_fit(
     rep = run_sweep(jobs, tmp_path / a, workers=1, progress=False)
     assert rep.ran == 2 and len((tmp_path / a).read_text().splitlines()) == 2
     assert sorted(p.name for p in tmp_path.iterdir()) == [a]  # no helper left
+
+
+def test_a_finished_study_s_records_that_cannot_be_written_are_shown_read_only(
+    tmp_path, monkeypatch
+):
+    """Showing a finished study again from records that cannot be written (an archive, a
+    read-only mount) was refused ("the file is not writable") though nothing was to be
+    written: they are read without a lock and shown; with jobs left, the refusal says how
+    many.  (Root writes any file: the check is the one `os.access` answers.)"""
+    out = tmp_path / "r.jsonl"
+    jobs = [Job(f"square/{x}", square, {"x": x}) for x in (2, 3)]
+    run_sweep(jobs, out, workers=1, progress=False)
+    before = out.read_bytes()
+    real = os.access
+    monkeypatch.setattr(
+        os,
+        "access",
+        lambda p, mode, **kw: real(p, mode, **kw) and not (Path(p) == out and mode & os.W_OK),
+    )
+    rep = run_sweep(jobs, out, workers=1, progress=False)
+    assert (rep.ran, rep.skipped) == (0, 2) and rep.records["square/3"]["result"] == {"y": 9}
+    assert out.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["r.jsonl"]
+    more = [*jobs, Job("square/4", square, {"x": 4})]
+    with pytest.raises(InputError, match=r"not writable and 1 of 3 job\(s\) are not in it"):
+        run_sweep(more, out, workers=1, progress=False)

@@ -16,7 +16,7 @@ import click
 from stabctl.errors import InputError
 
 
-def check_writable(path, option: str, directory: bool = False) -> None:
+def check_writable(path, option: str, directory: bool = False, records: bool = False) -> None:
     """Check, before any work, that an output file or directory can be written.
 
     Parameters
@@ -28,6 +28,10 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         The option named in the error message.
     directory : bool
         ``path`` is a directory.
+    records : bool
+        ``path`` is a resumable study's records file: an existing one that cannot be
+        written is let through (`stabctl.parallel.run_sweep` shows a finished study's
+        records read-only, and refuses when jobs remain).
 
     Raises
     ------
@@ -50,6 +54,8 @@ def check_writable(path, option: str, directory: bool = False) -> None:
         raise InputError(f"{option} {path}: a name ending in / is a directory's; give a file")
     p = Path(path)
     _leads_somewhere(p, option, "directory" if directory else "file")
+    if records and p.is_file() and not os.access(p, os.W_OK):
+        return
     if directory:
         if p.exists() and not p.is_dir():
             raise InputError(f"{option} {path}: not a directory")
@@ -168,7 +174,7 @@ OUT_SUFFIXES = (".csv", ".npz")
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
-def check_suffix(path, allowed, option) -> Path | None:
+def check_suffix(path, allowed, option, records: bool = False) -> Path | None:
     """The output file ``path`` (None: none) once its suffix and writability are checked.
 
     Parameters
@@ -178,6 +184,8 @@ def check_suffix(path, allowed, option) -> Path | None:
         Allowed suffixes, lower case with the dot.
     option : str
         The option named in error messages.
+    records : bool, optional
+        A resumable study's records file (`check_writable`); default False.
 
     Returns
     -------
@@ -197,7 +205,7 @@ def check_suffix(path, allowed, option) -> Path | None:
         raise InputError(f"{option} {path}: the file name must end in {' or '.join(allowed)}")
     if p.exists() and p.is_dir():
         raise InputError(f"{option} {path} is a directory")
-    check_writable(path, option)
+    check_writable(path, option, records=records)
     return p
 
 

@@ -416,7 +416,7 @@ def sweep_cct(
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
     out_path = records_file(out_path, case_name, "sweep")
-    check_suffix(out_path, (".jsonl",), "--out")
+    check_suffix(out_path, (".jsonl",), "--out", records=True)
     case = load_case(case_name)
     ratings = _ratings(esd_pct)
     check_storage_given(next((p for p in ratings if p is not None), None))
@@ -544,7 +544,7 @@ def screen(
     bus_list = None if buses is None else _bus_list(buses)
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
     out_path = records_file(out_path, case_name, "screening")
-    check_suffix(out_path, (".jsonl",), "--out")
+    check_suffix(out_path, (".jsonl",), "--out", records=True)
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault
     check_step_given(case, model, screening.T_FAULT + T_AFTER_FAULT)
