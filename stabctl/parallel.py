@@ -950,6 +950,16 @@ def run_sweep(
         return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool, stage)
 
 
+def _to_run(jobs, done: dict, retry_failed: bool) -> list:
+    """The jobs of a sweep its records `done` do not hold (or hold failed, with
+    `retry_failed`), in order."""
+    return [
+        j
+        for j in jobs
+        if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
+    ]
+
+
 def _sweep_read_only(jobs, out: Path, retry_failed: bool) -> SweepReport:
     """`run_sweep` of an `out` that cannot be written (read-only, or on a read-only mount:
     an archived study, a colleague's directory): its records shown when they hold every
@@ -958,11 +968,7 @@ def _sweep_read_only(jobs, out: Path, retry_failed: bool) -> SweepReport:
     check = _schema(jobs)
     done = read_records(out, check=check)
     _check_jobs(jobs, done, out)
-    todo = [
-        j
-        for j in jobs
-        if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
-    ]
+    todo = _to_run(jobs, done, retry_failed)
     if todo:
         raise InputError(
             f"{out}: the file is not writable and {len(todo)} of {len(jobs)} job(s) are not "
@@ -990,11 +996,7 @@ def _sweep_locked(
     set_aside_damaged(out, check)
     done = read_records(out, check=check)
     _check_jobs(jobs, done, out)
-    todo = [
-        j
-        for j in jobs
-        if j.key not in done or (retry_failed and done[j.key].get("status") == "failed")
-    ]
+    todo = _to_run(jobs, done, retry_failed)
     rerun = {j.key for j in todo}
     failed_keys = tuple(
         j.key for j in jobs if j.key not in rerun and done[j.key]["status"] == "failed"
