@@ -1685,6 +1685,11 @@ def _cct_record(**result):
             {**_cct_record(tol_s=0.02), "inputs": {"t_max": 1.0, "tol": 0.01}},
             r"result\.tol_s 0\.02 is not the record's inputs\.tol 0\.01",
         ),
+        (_cct_record(end_concerns=5), r"end_concerns 5 is not a list of phrases"),
+        (
+            _cct_record(end_concerns=["bus 3 at 0.5 pu"], end_t_s="6"),
+            r"end_t_s \"6\" is not a time in s",
+        ),
         (
             {**_cct_record(t_max_s=0.5), "inputs": {"t_max": 1.0}},
             r"result\.t_max_s 0\.5 is not the record's inputs\.t_max 1\.0",

@@ -1628,6 +1628,14 @@ def cct_record_problem(rec: dict) -> str | None:
             )
         if other := _other_search(rec.get("inputs") or {}, r):
             return other
+    ended = r if status == "ok" else rec
+    concerns, t_end = ended.get("end_concerns"), ended.get("end_t_s")
+    if concerns is not None and not (
+        isinstance(concerns, list) and all(isinstance(c, str) for c in concerns)
+    ):
+        return f"end_concerns {shown(concerns)} is not a list of phrases"
+    if concerns and not (is_number(t_end) and t_end >= 0):
+        return f"end_t_s {shown(t_end)} is not a time in s"
     islanded = r.get("islanded") if status == "ok" else rec.get("islanded")
     if islanded is not None and not (
         isinstance(islanded, list)
