@@ -128,6 +128,9 @@ class Verdict(StabctlError):
     #: time it ended, s (set by the search; empty and None: none)
     end_concerns: tuple = ()
     end_t_s: float | None = None
+    #: what the verdict answers (a CCT job's fault and storage rating, recorded with it
+    #: and checked against its inputs on resume); empty: not said
+    searched: dict = {}  # noqa: RUF012 - a class default, replaced, never mutated
 
 
 class AboveSearchLimit(InputError, Verdict):

@@ -182,6 +182,7 @@ def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
             rec["n_simulations"] = exc.n_simulations
         if exc.end_concerns:
             rec["end_concerns"], rec["end_t_s"] = list(exc.end_concerns), exc.end_t_s
+        rec.update(exc.searched)
     except Exception as exc:  # noqa: BLE001 - every failure is recorded with its reason
         rec = _failure_fields(exc)
     return {

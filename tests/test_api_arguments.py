@@ -120,6 +120,21 @@ def test_an_omib_parameter_that_is_no_number_is_named():
             lambda c, s: stabctl.StorageDevice(3, None, float("inf")),
             r"rating must be a finite number > 0 MW, got inf",
         ),
+        # a text bus list was read one character a bus, True as bus 1
+        (
+            lambda c, s: stabctl.linearise(s, esd_buses="13"),
+            r"linearise\(esd_buses\): bus numbers, got the text '13'",
+        ),
+        (
+            lambda c, s: stabctl.Simulator(c, injection_buses="13"),
+            r"Simulator\(injection_buses\): bus numbers, got the text '13'",
+        ),
+        (
+            lambda c, s: s.run([stabctl.Fault(True, 1.0, 1.1)], t_end=2.0),
+            r"a bus number is needed, got True",
+        ),
+        # "a run to nan s needs nan steps, more than the limit"
+        (lambda c, s: s.run([], t_end=float("nan")), r"run\(t_end\): a finite time in s"),
     ],
 )
 def test_a_value_that_would_mean_something_else_is_refused(kundur, call, said):

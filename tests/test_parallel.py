@@ -1679,13 +1679,29 @@ def _cct_record(**result):
         # search) or whose inputs were edited (a 20 ms bracket taken for a 10 ms search)
         (
             {**_cct_record(fault={"bus": 3, "far_bus": 101}), "inputs": {"bus": 13}},
-            r"result\.fault\.bus 3 is not the record's inputs\.bus 13: a result of another",
+            r"result\.fault\.bus 3 is not the record's inputs\.bus 13: the answer of another",
         ),
         (
             {**_cct_record(tol_s=0.02), "inputs": {"t_max": 1.0, "tol": 0.01}},
             r"result\.tol_s 0\.02 is not the record's inputs\.tol 0\.01",
         ),
         (_cct_record(end_concerns=5), r"end_concerns 5 is not a list of phrases"),
+        # the record without storage relabelled as the 5 % one, and a verdict's
+        (
+            {**_cct_record(esd_pct=None), "inputs": {"t_max": 1.0, "esd_pct": 5}},
+            r"result\.esd_pct None is not the record's inputs\.esd_pct 5",
+        ),
+        (
+            {
+                "key": "k",
+                "inputs": {"bus": 3, "esd_pct": None},
+                "status": "verdict",
+                "verdict": "above t_max",
+                "fault": {"bus": 13},
+                "esd_pct": None,
+            },
+            r"^fault\.bus 13 is not the record's inputs\.bus 3: the answer of another search",
+        ),
         (
             _cct_record(end_concerns=["bus 3 at 0.5 pu"], end_t_s="6"),
             r"end_t_s \"6\" is not a time in s",

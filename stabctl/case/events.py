@@ -626,6 +626,8 @@ MotorSwitch or Playback
         fault's r or x negative or not a finite number (x = inf was no fault at all).
     """
     if isinstance(ev, Fault):
+        if isinstance(ev.bus, bool) or isinstance(ev.far_bus, bool):  # True was bus 1
+            raise InputError(f"{ev}: a bus number is needed, got {ev.bus!r}")
         if not all(math.isfinite(v) and v >= 0 for v in (ev.r, ev.x)):
             raise InputError(
                 f"{ev}: fault impedance r = {ev.r:g}, x = {ev.x:g} pu: each must be a finite "

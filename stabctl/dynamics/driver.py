@@ -23,10 +23,12 @@ raises SimulationError; both carry the trajectory up to that point.
 from __future__ import annotations
 
 import functools
+import math
 import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 
@@ -247,6 +249,10 @@ class Simulator:
         subintervals: bool = True,
     ):
         case = require_case(case, "Simulator(case)")
+        if isinstance(injection_buses, (str, bytes)):  # "13" was buses 1 and 3
+            raise InputError(
+                f"Simulator(injection_buses): bus numbers, got the text {injection_buses!r}"
+            )
         if suspect_starts not in ("refuse", "run"):
             raise InputError(f"suspect_starts must be 'refuse' or 'run', got {suspect_starts!r}")
         self.suspect_starts = suspect_starts
@@ -676,6 +682,8 @@ class Simulator:
         against the recording of the buses bus_rows, `voltage_rows`, None: every bus)."""
         if semantics not in ("pst", "exact"):
             raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
+        if isinstance(t_end, bool) or not (isinstance(t_end, Real) and math.isfinite(t_end)):
+            raise InputError(f"run(t_end): a finite time in s is needed, got {t_end!r}")
         events = list(events)
         ev_.validate(self.case, events, t_end)
         h = self.default_h if h is None else h

@@ -214,6 +214,9 @@ def linearise(
     from stabctl.dynamics.driver import Simulator
 
     check_conventions(conventions)  # a Simulator keeps its own, but no other value is one
+    for name, buses in (("esd_buses", esd_buses), ("extra_buses", extra_buses)):
+        if isinstance(buses, (str, bytes)):  # "13" was buses 1 and 3
+            raise InputError(f"linearise({name}): bus numbers, got the text {buses!r}")
     require_flag(q_limits, "linearise(q_limits)")
     if not isinstance(target, Simulator):
         target = require_case(target, "linearise(target)", " or Simulator")

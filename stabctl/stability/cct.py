@@ -340,10 +340,8 @@ class CCTResult:
 
     def to_dict(self) -> dict:
         """JSON-ready summary (times in s, cycles of the case frequency)."""
-        fault = asdict(self.fault)
-        fault["t_fault_s"] = fault.pop("t_fault")  # its unit in its name, as every time's
         return {
-            "fault": fault,
+            "fault": _fault_dict(self.fault),
             "cct_s": self.cct_s,
             "cct_cycles": self.cct_cycles,
             "numerical_error_s": self.numerical_error_s,
@@ -372,6 +370,13 @@ class CCTResult:
             "probes": [[t, ok] for t, ok in self.probes],
             "half_step_probes": [[t, ok] for t, ok in self.half_step_probes],
         }
+
+
+def _fault_dict(fault: LineFault) -> dict:
+    """A fault as records and `--json` give it: its fields, ``t_fault`` as ``t_fault_s``."""
+    d = asdict(fault)
+    d["t_fault_s"] = d.pop("t_fault")  # its unit in its name, as every time's
+    return d
 
 
 @dataclass(frozen=True)
@@ -1547,13 +1552,19 @@ def cct_job(inputs: dict) -> dict:
         As `critical_clearing_time` and `storage_fleet`.
     """
     sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
-    res = critical_clearing_time(
-        sim,
-        fault_of_inputs(inputs),
-        SearchOptions.from_inputs(inputs),
-        storage=storage_fleet(sim.case, inputs.get("esd_pct")),
-    )
-    return res.to_dict()
+    fault = fault_of_inputs(inputs)
+    searched = {"esd_pct": inputs.get("esd_pct")}  # the result's own, checked on resume
+    try:
+        res = critical_clearing_time(
+            sim,
+            fault,
+            SearchOptions.from_inputs(inputs),
+            storage=storage_fleet(sim.case, inputs.get("esd_pct")),
+        )
+    except Verdict as exc:  # recorded with the fault and rating it answers (`run_job`)
+        exc.searched = {"fault": _fault_dict(fault), **searched}
+        raise
+    return {**res.to_dict(), **searched}
 
 
 def cct_record_problem(rec: dict) -> str | None:
@@ -1626,9 +1637,10 @@ def cct_record_problem(rec: dict) -> str | None:
                 f"result.separated_machines {shown(r.get('separated_machines'))} is not a "
                 "list of machine numbers"
             )
-        if other := _other_search(rec.get("inputs") or {}, r):
-            return other
     ended = r if status == "ok" else rec
+    where = "result." if status == "ok" else ""
+    if status != "failed" and (other := _other_search(rec.get("inputs") or {}, ended, where)):
+        return other
     concerns, t_end = ended.get("end_concerns"), ended.get("end_t_s")
     if concerns is not None and not (
         isinstance(concerns, list) and all(isinstance(c, str) for c in concerns)
@@ -1651,8 +1663,10 @@ def cct_record_problem(rec: dict) -> str | None:
     return None
 
 
-#: a CCT result's fields that repeat its job's inputs (result name, inputs name)
+#: a CCT result's (or a verdict record's) fields that repeat its job's inputs (its name,
+#: the inputs' name)
 _REPEATED = (
+    ("esd_pct", "esd_pct"),
     ("fault.bus", "bus"),
     ("fault.far_bus", "far_bus"),
     ("fault.circuit", "circuit"),
@@ -1662,19 +1676,19 @@ _REPEATED = (
 )
 
 
-def _other_search(inputs: dict, r: dict) -> str | None:
-    """What of a CCT result says it was found for other inputs than its record's (a
-    record relabelled or edited by hand: another fault's CCT shown as this one's, a 20
-    ms bracket taken for a 10 ms search), or None."""
+def _other_search(inputs: dict, r: dict, where: str) -> str | None:
+    """What of a CCT result (or a verdict record) `r` says it answers other inputs than
+    its record's (a record relabelled or edited by hand: another fault's CCT or verdict
+    shown as this one's, another storage rating's, a 20 ms bracket taken for a 10 ms
+    search), or None; `where` prefixes the fields' names (``"result."``).  A field a
+    record of older code lacks is not compared."""
     for name, given in _REPEATED:
-        if given not in inputs:  # (an older record's inputs)
-            continue
         head, _, tail = name.partition(".")
-        value = (r.get(head) or {}).get(tail) if tail else r.get(head)
-        if value is not None and value != inputs[given]:
+        value = (r.get(head) or {}).get(tail, _ABSENT) if tail else r.get(head, _ABSENT)
+        if given in inputs and value is not _ABSENT and value != inputs[given]:
             return (
-                f"result.{name} {value!r} is not the record's inputs.{given} "
-                f"{inputs[given]!r}: a result of another search"
+                f"{where}{name} {value!r} is not the record's inputs.{given} "
+                f"{inputs[given]!r}: the answer of another search"
             )
     return None
 
