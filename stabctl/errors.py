@@ -100,6 +100,28 @@ def require_flag(value, name: str) -> bool:
     return bool(value)
 
 
+def refuse_text(value, name: str, wanted: str = "bus numbers") -> None:
+    """InputError naming ``name`` when ``value`` is a text where a list goes (``"13"``
+    was read one character an item: buses 1 and 3).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        How to name it (``"run(voltages)"``).
+    wanted : str, optional
+        What goes there; default "bus numbers".
+
+    Raises
+    ------
+    InputError
+        ``value`` is a str or bytes.
+    """
+    if isinstance(value, (str, bytes)):
+        raise InputError(f"{name}: {wanted}, got the text {value!r}")
+
+
 class StabctlError(Exception):
     """Base class of all stabctl errors (the CLI turns these into exit status 2)."""
 

@@ -78,6 +78,7 @@ from stabctl.errors import (
     SimulationError,
     StabctlError,
     advice,
+    refuse_text,
     require_flag,
     run_on_suspect_starts,
 )
@@ -249,10 +250,7 @@ class Simulator:
         subintervals: bool = True,
     ):
         case = require_case(case, "Simulator(case)")
-        if isinstance(injection_buses, (str, bytes)):  # "13" was buses 1 and 3
-            raise InputError(
-                f"Simulator(injection_buses): bus numbers, got the text {injection_buses!r}"
-            )
+        refuse_text(injection_buses, "Simulator(injection_buses)")
         if suspect_starts not in ("refuse", "run"):
             raise InputError(f"suspect_starts must be 'refuse' or 'run', got {suspect_starts!r}")
         self.suspect_starts = suspect_starts
@@ -1579,8 +1577,7 @@ def voltage_rows(case: Case, voltages) -> np.ndarray | None:
     """
     if isinstance(voltages, (bool, np.bool_)):
         return None if voltages else np.zeros(0, np.int64)
-    if isinstance(voltages, (str, bytes)):
-        raise InputError(f"run(voltages): True, False or bus numbers, got the text {voltages!r}")
+    refuse_text(voltages, "run(voltages)", "True, False or bus numbers")
     rows = np.unique([case.bus_index(int(b)) for b in voltages]).astype(np.int64)
     return None if rows.size == case.n_bus else rows
 

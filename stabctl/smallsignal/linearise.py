@@ -58,7 +58,7 @@ from stabctl.dynamics.model import (
     kernel_network,
     kernel_outputs,
 )
-from stabctl.errors import InputError, SimulationError, require_flag
+from stabctl.errors import InputError, SimulationError, refuse_text, require_flag
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -214,9 +214,8 @@ def linearise(
     from stabctl.dynamics.driver import Simulator
 
     check_conventions(conventions)  # a Simulator keeps its own, but no other value is one
-    for name, buses in (("esd_buses", esd_buses), ("extra_buses", extra_buses)):
-        if isinstance(buses, (str, bytes)):  # "13" was buses 1 and 3
-            raise InputError(f"linearise({name}): bus numbers, got the text {buses!r}")
+    refuse_text(esd_buses, "linearise(esd_buses)")
+    refuse_text(extra_buses, "linearise(extra_buses)")
     require_flag(q_limits, "linearise(q_limits)")
     if not isinstance(target, Simulator):
         target = require_case(target, "linearise(target)", " or Simulator")
