@@ -5,9 +5,11 @@ CLI can print it and exit non-zero without a traceback; `counted` puts a count a
 noun in agreement in every message and report ("1 contingency", "2 contingencies").
 """
 
+import dataclasses
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
+from numbers import Integral, Real
 
 import numpy as np
 
@@ -76,7 +78,7 @@ def on_command_line() -> Iterator[None]:
 
 
 def require_flag(value, name: str) -> bool:
-    """``value`` when it is a bool (numpy's too), else InputError naming ``name``: a text
+    """``value`` when it is a bool (numpy's too), else `WrongTypeError` naming ``name``: a text
     such as ``"no"`` or ``"False"`` is true to Python and turned the setting on.
 
     Parameters
@@ -92,12 +94,144 @@ def require_flag(value, name: str) -> bool:
 
     Raises
     ------
-    InputError
+    WrongTypeError
         Not a bool.
     """
     if not isinstance(value, (bool, np.bool_)):
-        raise InputError(f"{name} must be True or False, got {value!r}")
+        raise WrongTypeError(f"{name} must be True or False, got {value!r}")
     return bool(value)
+
+
+def is_number(value) -> bool:
+    """True for a real number (Python's or numpy's int or float), False for a bool, a
+    text, None, a complex number or an array.
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+
+    Returns
+    -------
+    bool
+    """
+    return isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
+
+
+def is_whole_number(value) -> bool:
+    """True for a number with no fraction (``3``, numpy's ``int64(3)``, ``3.0`` as the
+    case tables hold bus numbers), False otherwise (a bool, a text, ``3.5``, NaN).
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+
+    Returns
+    -------
+    bool
+    """
+    if isinstance(value, Integral):
+        return not isinstance(value, (bool, np.bool_))
+    return is_number(value) and float(value).is_integer()
+
+
+def require_number(value, name: str, unit: str = "") -> float:
+    """``float(value)`` when it is a real number, else `WrongTypeError` naming ``name``
+    (a text ``'0.005'`` failed deep inside with "'<' not supported between instances of
+    'int' and 'str'").  The range is the caller's to check.
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        How to name it (``"Simulator(step)"``).
+    unit : str, optional
+        Its unit, said in the message (``"s"``).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    WrongTypeError
+        Not a real number (a bool, a text, None, an array).
+    """
+    if not is_number(value):
+        of = f" of {unit}" if unit else ""
+        raise WrongTypeError(f"{name}: a number{of} is needed, got {_shown(value)}")
+    return float(value)
+
+
+def require_items(value, name: str, wanted: str) -> list:
+    """The items of ``value`` as a list when it is a collection (a list, a tuple, an array,
+    a generator), else `WrongTypeError` naming ``name``: a text was read one character an
+    item, a number failed with "'int' object is not iterable".
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    name : str
+        How to name it (``"run(events)"``).
+    wanted : str
+        What goes there (``"a list of events"``).
+
+    Returns
+    -------
+    list
+
+    Raises
+    ------
+    WrongTypeError
+        A text, bytes, a mapping or anything that is not iterable.
+    """
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__iter__"):
+        raise WrongTypeError(f"{name}: {wanted} is needed, got {_shown(value)}")
+    return list(value)
+
+
+def check_fields(obj) -> None:
+    """`WrongTypeError` naming the class and the field when a field of the dataclass
+    ``obj`` annotated ``int``, ``float`` or ``bool`` (or one of them ``| None``) holds
+    another type: ``Fault('3', 1.0)`` ran as bus 3, ``LineFault(3, 101, '1')`` failed
+    in the search with a numpy message.  An ``int`` field takes a number with no fraction
+    (``3.0``: the case tables hold bus numbers as floats); a ``float`` field any real
+    number.  Other fields are not checked here.
+
+    Parameters
+    ----------
+    obj : dataclass instance
+        The object, from its ``__post_init__``; its annotations are text (``from
+        __future__ import annotations``) or types.
+
+    Raises
+    ------
+    WrongTypeError
+        A field holding another type than its annotation's.
+    """
+    for f in dataclasses.fields(obj):
+        ann = f.type if isinstance(f.type, str) else getattr(f.type, "__name__", str(f.type))
+        kinds = {k.strip() for k in ann.split("|")}
+        value = getattr(obj, f.name)
+        if value is None and "None" in kinds:
+            continue
+        name = f"{type(obj).__name__}({f.name})"
+        if "bool" in kinds:
+            require_flag(value, name)
+        elif "int" in kinds and not is_whole_number(value):
+            raise WrongTypeError(f"{name}: a whole number is needed, got {_shown(value)}")
+        elif "float" in kinds:
+            require_number(value, name)
+
+
+def _shown(value) -> str:
+    """A value as a message shows it: its repr (cut at 60 characters) and its type."""
+    text = repr(value)
+    text = text if len(text) <= 60 else text[:57] + "..."
+    return f"{text} ({type(value).__name__})"
 
 
 def refuse_text(value, name: str, wanted: str = "bus numbers") -> None:
@@ -128,6 +262,12 @@ class StabctlError(Exception):
 
 class InputError(StabctlError, ValueError):
     """A parameter is out of its physical range (negative H, Pm above Pmax, ...)."""
+
+
+class WrongTypeError(InputError, TypeError):
+    """An argument of another type than its parameter's (a text where a number goes, a
+    number where a list goes), named with its function or class; a `TypeError` as Python
+    has it and an `InputError` as the CLI has it."""
 
 
 class Verdict(StabctlError):

@@ -7,7 +7,8 @@ from __future__ import annotations
 import pytest
 
 import stabctl
-from stabctl.errors import InputError
+from stabctl.errors import CaseError, InputError, UnknownBusError
+from stabctl.stability.cct import SearchOptions
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +85,7 @@ def test_a_power_flow_s_settings_out_of_range_are_named(kundur, kw):
 @pytest.mark.parametrize(
     "kw, said",
     [
-        ({"events": "3"}, r"run\(events\): each event is a Fault, .* got str '3'"),
+        ({"events": "3"}, r"run\(events\): a list of events .* got '3' \(str\)"),
         ({"events": [None]}, r"run\(events\): .* got NoneType None"),
         ({"storage": "5%"}, r"run\(storage\): a StorageFleet is needed .* got str"),
     ],
@@ -131,7 +132,7 @@ def test_an_omib_parameter_that_is_no_number_is_named():
         ),
         (
             lambda c, s: s.run([stabctl.Fault(True, 1.0, 1.1)], t_end=2.0),
-            r"a bus number is needed, got True",
+            r"Fault\(bus\): a whole number is needed, got True \(bool\)",
         ),
         # "a run to nan s needs nan steps, more than the limit"
         (lambda c, s: s.run([], t_end=float("nan")), r"run\(t_end\): a finite time in s"),
@@ -154,3 +155,95 @@ def test_modal_weights_must_be_one_finite_weight_per_machine(kundur):
             stabctl.modal_analysis(sys_, inertia=weights)
     ma = stabctl.modal_analysis(sys_, inertia=np.ones(4))
     assert ma.kind[ma.electromechanical[0]] == "inter-area"  # Kundur's 0.61 Hz mode
+
+
+def _sim(kundur):
+    return stabctl.Simulator(kundur, background_compile=False)
+
+
+@pytest.mark.parametrize(
+    "call, said",
+    [
+        # a text where a number goes: failed in numpy or in a comparison, unnamed
+        (lambda c: stabctl.solve_powerflow(c, tol="1e-8"), r"solve_powerflow\(tol\): a number"),
+        (lambda c: stabctl.Simulator(c, step="0.005"), r"Simulator\(step\): a number of s"),
+        (lambda c: stabctl.Fault(3, "1.0"), r"Fault\(t\): a number"),
+        (lambda c: stabctl.LineFault(3, 101, "1.0"), r"LineFault\(t_fault\): a number"),
+        (lambda c: stabctl.StorageDevice(3, None, "5"), r"StorageDevice\(pmax_mw\): a number"),
+        (lambda c: SearchOptions(tol="0.001"), r"SearchOptions\(tol\): a number"),
+        (lambda c: stabctl.BangBangCOI(deadband_hz="0.1"), r"BangBangCOI\(deadband_hz\)"),
+        (
+            lambda c: stabctl.fault_with_clearing(c, 3, 101, 1.0, "6"),
+            r"fault_with_clearing\(clear_cycles\): a number of cycles",
+        ),
+        (lambda c: stabctl.coi_speed("x", [1.0]), r"coi_speed: speed and inertia must be"),
+        # a text where a bus number goes: Fault('3', ...) ran as bus 3
+        (lambda c: stabctl.Fault("3", 1.0, 1.1), r"Fault\(bus\): a whole number is needed"),
+        (lambda c: stabctl.Fault(3.5, 1.0, 1.1), r"Fault\(bus\): a whole number .* 3.5"),
+        (lambda c: stabctl.LineFault(3, "101"), r"LineFault\(far_bus\): a whole number"),
+        (lambda c: stabctl.StorageDevice("3", None, 5.0), r"StorageDevice\(bus\): a whole"),
+        (lambda c: stabctl.LineTrip(3, 101, None), r"LineTrip\(t\): a number .* \(NoneType\)"),
+        # a number or a text where a list goes
+        (lambda c: stabctl.solve_powerflow(c, drop=5), r"solve_powerflow\(drop\): a list of"),
+        (lambda c: stabctl.solve_powerflow(c, drop="3-101"), r"solve_powerflow\(drop\): a list"),
+        (
+            lambda c: stabctl.solve_powerflow(c, drop=[(3, 101)]),
+            r"solve_powerflow\(drop\): 0-based rows .* case.circuit_row",
+        ),
+        (lambda c: stabctl.LineFault(3, 101, trips="1-2"), r"LineFault\(trips\): a list of"),
+        (lambda c: stabctl.LineFault(3, 101, trips=[(1, 2, 3)]), r"LineFault\(trips\): each"),
+        (lambda c: stabctl.StorageFleet(devices=(1, 2)), r"StorageFleet\(devices\): each a"),
+        (lambda c: stabctl.StorageFleet(devices=5), r"StorageFleet\(devices\): a list of"),
+        (lambda c: stabctl.BangBangCOI(coi="critical", critical="12"), r"BangBangCOI\(critical\)"),
+        # another object where a settings object or a function goes
+        (lambda c: stabctl.Simulator(c, op="x"), r"Simulator\(op\): an OperatingPoint"),
+        (lambda c: stabctl.StorageFleet(controller="bangbang"), r"StorageFleet\(controller\)"),
+        (lambda c: stabctl.uniform_fleet(c, 5, controller="x"), r"uniform_fleet\(controller\)"),
+        (lambda c: SearchOptions(criterion=5), r"SearchOptions\(criterion\): a func"),
+        (lambda c: stabctl.fault_with_clearing("kundur", 3, 101, 1.0, 6), r"\(case\): a stab"),
+    ],
+)
+def test_an_argument_of_another_type_is_refused_naming_it(kundur, call, said):
+    """A text where a number goes, a number where a list goes, another object where a
+    settings object goes: each refused naming its function or class and the argument
+    (round-27 probes; before, numpy's or Python's own words, or a silent run)."""
+    with pytest.raises(TypeError, match=said) as caught:
+        call(kundur)
+    assert isinstance(caught.value, InputError)  # the CLI's clean exit too
+
+
+def test_a_run_and_a_search_name_their_arguments_of_another_type(kundur):
+    sim = _sim(kundur)
+    fault = stabctl.Fault(3, 1.0, 1.1, far_bus=101)
+    with pytest.raises(TypeError, match=r"run\(events\): a list of events"):
+        sim.run(5, t_end=2)
+    with pytest.raises(TypeError, match=r"run\(monitor\): a function or None"):
+        sim.run([fault], t_end=2, monitor=5)
+    with pytest.raises(TypeError, match=r"run\(h\): a number of s"):
+        sim.run([fault], t_end=2, h="0.005")
+    with pytest.raises(TypeError, match=r"critical_clearing_time\(search\): SearchOptions"):
+        stabctl.critical_clearing_time(sim, stabctl.LineFault(3, 101), "bisection")
+
+
+def test_fault_with_clearing_checks_its_fault_against_the_case(kundur):
+    """It takes the case: an unknown bus, a missing circuit or a time that is not finite
+    was accepted there and refused only when a run started."""
+    with pytest.raises(UnknownBusError, match="999"):
+        stabctl.fault_with_clearing(kundur, 999, 101, 1.0, 6)
+    with pytest.raises(UnknownBusError, match="999"):
+        stabctl.fault_with_clearing(kundur, 3, 999, 1.0, 6)
+    with pytest.raises(CaseError, match="circuit 9"):
+        stabctl.fault_with_clearing(kundur, 3, 101, 1.0, 6, circuit=9)
+    with pytest.raises(InputError, match="clear_cycles"):
+        stabctl.fault_with_clearing(kundur, 3, 101, 1.0, float("nan"))
+    with pytest.raises(InputError, match="not a finite number"):
+        stabctl.fault_with_clearing(kundur, 3, 101, float("nan"), 6)
+    fault = stabctl.fault_with_clearing(kundur, 3, 101, 1.0, 6, far_clear_cycles=9)
+    assert (fault.clear_near, fault.clear_far) == pytest.approx((1.1, 1.15))  # 60 Hz
+
+
+def test_bus_numbers_held_as_floats_by_the_case_tables_stay_accepted(kundur):
+    """The case tables hold bus numbers as float64: a fault built from them is bus 3."""
+    bus = kundur.buses.number[kundur.bus_indices([3])[0]]
+    assert isinstance(bus, float) or bus.dtype.kind == "f"
+    assert stabctl.LineFault(bus, 101).describe().startswith("fault at bus 3")

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import CaseError, InputError, check_fields
 
 if TYPE_CHECKING:
     from stabctl.case.system import Case
@@ -64,6 +64,9 @@ class _AtOneTime:
 
     t: float  # each subclass's field (a plain annotation: no field of this base)
 
+    def __post_init__(self):
+        check_fields(self)  # a text bus or time named here, not deep in a run
+
     def times(self):
         """The event's times.
 
@@ -87,7 +90,10 @@ class Fault:
     PST's fault type 0.  With equal near and far times the zero-length interval between
     the two openings is kept, as PSTess does.  The times are checked against the case when the
     run starts (`Simulator.run`): InputError for a clearing before the fault or a far end
-    before the near end, CaseError / UnknownBusError for an unknown bus or line.
+    before the near end, CaseError / UnknownBusError for an unknown bus or line.  A field
+    of another type (a bus given as text, a time as a bool) is refused when the fault is
+    made (`stabctl.errors.WrongTypeError`, `stabctl.errors.check_fields`), as it is by every
+    event class.
 
     Attributes
     ----------
@@ -120,6 +126,9 @@ class Fault:
     circuit: int = 1
     r: float = 0.0
     x: float = 0.0
+
+    def __post_init__(self):
+        check_fields(self)  # Fault('3', 1.0) ran as bus 3
 
     @property
     def admittance(self) -> complex:
@@ -381,6 +390,9 @@ class Playback:
     dV: tuple
     df: tuple
 
+    def __post_init__(self):
+        check_fields(self)
+
     def times(self):
         """The times the targets change.
 
@@ -626,8 +638,6 @@ MotorSwitch or Playback
         fault's r or x negative or not a finite number (x = inf was no fault at all).
     """
     if isinstance(ev, Fault):
-        if isinstance(ev.bus, bool) or isinstance(ev.far_bus, bool):  # True was bus 1
-            raise InputError(f"{ev}: a bus number is needed, got {ev.bus!r}")
         if not all(math.isfinite(v) and v >= 0 for v in (ev.r, ev.x)):
             raise InputError(
                 f"{ev}: fault impedance r = {ev.r:g}, x = {ev.x:g} pu: each must be a finite "

@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, ClassVar, Self
 import numpy as np
 
 from stabctl.case.events import events_of_records
-from stabctl.errors import CaseError, UnknownBusError
+from stabctl.errors import CaseError, UnknownBusError, WrongTypeError, is_number
 from stabctl.models import converters as _converters
 from stabctl.models import exciters as _exciters
 from stabctl.models import governors as _governors
@@ -1391,6 +1391,11 @@ class Case:
         for fname, cls in TABLES.items():
             if not isinstance(getattr(self, fname), cls):
                 raise CaseError(f"case '{self.name}': {fname} must be a {cls.__name__}")
+        for scalar in ("base_mva", "freq_hz"):  # a text '100' failed in numpy, unnamed
+            if not is_number(getattr(self, scalar)):
+                raise CaseError(
+                    f"case '{self.name}': {scalar} must be a number, got {getattr(self, scalar)!r}"
+                )
         if not (np.isfinite(self.base_mva) and self.base_mva > 0):
             raise CaseError(f"case '{self.name}': base_mva must be > 0, got {self.base_mva}")
         lo, hi = FREQ_HZ_RANGE
@@ -1940,13 +1945,15 @@ def require_case(case, where: str, also: str = "") -> Case:
 
     Raises
     ------
-    TypeError
-        `case` is not a `Case`; a str is pointed to `stabctl.io.load_case`.
+    WrongTypeError
+        `case` is not a `Case` (a TypeError); a str is pointed to `stabctl.io.load_case`.
     """
     if isinstance(case, Case):
         return case
     hint = f" (load it first: stabctl.load_case({case!r}))" if isinstance(case, str) else ""
-    raise TypeError(f"{where}: a stabctl Case{also} is needed, got {type(case).__name__}{hint}")
+    raise WrongTypeError(
+        f"{where}: a stabctl Case{also} is needed, got {type(case).__name__}{hint}"
+    )
 
 
 def _check_events(events) -> tuple:

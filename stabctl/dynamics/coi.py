@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from stabctl.errors import WrongTypeError
 from stabctl.storage.control import coi_value, island_coi
 
 __all__ = [
@@ -157,8 +158,15 @@ def coi_speed(speed: np.ndarray, inertia: np.ndarray) -> np.ndarray:
         `inertia` not one finite weight >= 0 per machine of `speed`'s last axis, or all 0
         (a zero total divided by zero; a negative weight gave a speed outside the
         machines').
+    WrongTypeError
+        `speed` or `inertia` not numbers (a text; a TypeError and a ValueError).
     """
-    speed, inertia = np.asarray(speed, float), np.asarray(inertia, float)
+    try:
+        speed, inertia = np.asarray(speed, float), np.asarray(inertia, float)
+    except (TypeError, ValueError) as exc:  # a text: "could not convert string to float"
+        raise WrongTypeError(
+            f"coi_speed: speed and inertia must be arrays of numbers ({exc})"
+        ) from None
     if inertia.ndim != 1 or speed.shape[-1:] != inertia.shape:
         raise ValueError(
             f"coi_speed: inertia of shape {inertia.shape} for speeds of shape {speed.shape}: "

@@ -77,9 +77,12 @@ from stabctl.errors import (
     NumericalInstabilityError,
     SimulationError,
     StabctlError,
+    WrongTypeError,
     advice,
     refuse_text,
     require_flag,
+    require_items,
+    require_number,
     run_on_suspect_starts,
 )
 from stabctl.models import converters as conv
@@ -229,7 +232,9 @@ class Simulator:
     PowerFlowError
         The power flow (when `op` is None) did not converge.
     TypeError
-        `case` is not a `Case` (`stabctl.case.require_case`).
+        `case` is not a `Case` (`stabctl.case.require_case`); `op` not an
+        `OperatingPoint`, `step` not a number, a flag not a bool
+        (`stabctl.errors.WrongTypeError`).
     """
 
     #: `run` takes a monitor that can end a run early and runs without bus voltages (the
@@ -259,6 +264,13 @@ class Simulator:
         self.q_limits = require_flag(q_limits, "Simulator(q_limits)")
         require_flag(background_compile, "Simulator(background_compile)")
         require_flag(subintervals, "Simulator(subintervals)")
+        if step is not None:
+            require_number(step, "Simulator(step)", "s")
+        if op is not None and not isinstance(op, OperatingPoint):
+            raise WrongTypeError(
+                "Simulator(op): an OperatingPoint (OperatingPoint.from_bus_matrix(pf."
+                f"bus_matrix()) of a solved power flow) or None is needed, got {op!r}"
+            )
         given, held = case, np.zeros(0, int)
         if op is None:
             from stabctl.network.powerflow import solve_powerflow
@@ -492,12 +504,15 @@ class Simulator:
             the partial result as ``.result``.
         TypeError
             An event that is no event class (a str, None), `storage` not a
-            `StorageFleet`.
+            `StorageFleet`; `events` not a list, `h` not a number or `monitor` not a
+            function (`stabctl.errors.WrongTypeError`).
         """
         semantics = self._semantics(semantics)
         _check_method(method, semantics, storage)
         self.check_separation_limit(separation_limit)
         require_flag(stop_at_separation, "run(stop_at_separation)")
+        if monitor is not None and not callable(monitor):
+            raise WrongTypeError(f"run(monitor): a function or None is needed, got {monitor!r}")
         if monitor is not None and method != "heun":
             raise InputError(f"a run monitor needs the heun method, got {method!r}")
         if method == "trapezoid":  # no storage (`_check_method`): this simulator's run
@@ -682,9 +697,9 @@ class Simulator:
             raise InputError(f"semantics must be 'pst' or 'exact', got {semantics!r}")
         if isinstance(t_end, bool) or not (isinstance(t_end, Real) and math.isfinite(t_end)):
             raise InputError(f"run(t_end): a finite time in s is needed, got {t_end!r}")
-        events = list(events)
+        events = require_items(events, "run(events)", "a list of events (Fault, LineTrip, ...)")
         ev_.validate(self.case, events, t_end)
-        h = self.default_h if h is None else h
+        h = self.default_h if h is None else require_number(h, "run(h)", "s")
         m = self.model_for(storage.buses if storage is not None else ())
         xslot = None
         if self.battery_rows is not None:
@@ -797,7 +812,9 @@ class Simulator:
             [n.faulted for n in nets],
         )
 
-    def check_separation_limit(self, limit: float, name: str = "separation limit") -> None:
+    def check_separation_limit(
+        self, limit: float, name: str = "separation limit (separation_limit)"
+    ) -> None:
         """Refuse a loss-of-synchronism limit not above every machine's angle from its
         island's COI at the power-flow point: every run would report the separation of
         that machine at t = 0, whatever its disturbance.

@@ -14,9 +14,11 @@ change of VREF and of PREF, the PSS/E Program Operation Manual's ``change_vref``
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from stabctl.case import Case
+from stabctl.case import Case, require_case
 from stabctl.case.events import EVENT_KINDS as EVENT_KINDS
 from stabctl.case.events import (
     Fault,
@@ -34,7 +36,7 @@ from stabctl.case.events import (
 )
 from stabctl.case.events import as_record as as_record
 from stabctl.dynamics.model import StageConfig
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import CaseError, InputError, advice, require_number
 
 #: the classes an event of a run may be (a case's own records' and a playback source)
 EVENT_TYPES = (*EVENT_KINDS.values(), Playback)
@@ -293,27 +295,41 @@ def fault_with_clearing(
     -------
     Fault
         With ``clear_near = t_fault + clear_cycles / freq_hz`` and ``clear_far = t_fault +
-        far_clear_cycles / freq_hz`` (s).  Buses and lines are checked when the run starts.
+        far_clear_cycles / freq_hz`` (s), checked against the case as a run checks it
+        (`validate`).
 
     Raises
     ------
     InputError
-        `clear_cycles` negative, or `far_clear_cycles` below `clear_cycles`.
+        `clear_cycles` negative or not finite, `far_clear_cycles` below `clear_cycles`, a
+        fault time that is negative or not finite.
+    UnknownBusError, CaseError
+        No bus `bus`, or no circuit `circuit` between `bus` and `far_bus`.
+    TypeError
+        `case` not a `Case`; a number of another type (`stabctl.errors.WrongTypeError`).
     """
-    if clear_cycles < 0 or (far_clear_cycles is not None and far_clear_cycles < clear_cycles):
+    case = require_case(case, "fault_with_clearing(case)")
+    near = require_number(clear_cycles, "fault_with_clearing(clear_cycles)", "cycles")
+    far = near if far_clear_cycles is None else far_clear_cycles
+    far = require_number(far, "fault_with_clearing(far_clear_cycles)", "cycles")
+    if not (0 <= near < math.inf and near <= far < math.inf):
         raise InputError(
-            "clearing cycles must be >= 0 and the far end no earlier than the near end"
+            "clearing cycles must be finite and >= 0 and the far end no earlier than the near "
+            f"end, got {near:g} and {far:g}"
+            + advice(" (clear_cycles, far_clear_cycles)", " (--clear-cycles, --far-clear-cycles)")
         )
     cyc = 1.0 / case.freq_hz
-    far = clear_cycles if far_clear_cycles is None else far_clear_cycles
-    return Fault(
+    t_fault = require_number(t_fault, "fault_with_clearing(t_fault)", "s")
+    fault = Fault(
         bus=bus,
         t=t_fault,
-        clear_near=t_fault + clear_cycles * cyc,
+        clear_near=t_fault + near * cyc,
         clear_far=t_fault + far * cyc,
         far_bus=far_bus,
         circuit=circuit,
     )
+    validate(case, [fault], math.inf)
+    return fault
 
 
 def from_case(case: Case) -> list:

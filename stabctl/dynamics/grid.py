@@ -22,7 +22,7 @@ import numpy as np
 
 from stabctl.case import Case
 from stabctl.dynamics.model import check_conventions
-from stabctl.errors import InputError
+from stabctl.errors import InputError, advice
 
 
 @dataclass(frozen=True)
@@ -169,7 +169,8 @@ def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> N
     separation that is the step's (Kundur's bus-3 fault at 0.0185 s, stable at 1 ms)."""
     T, where = fastest
     if not 0 < h < np.inf:
-        raise InputError(f"step must be a positive number of seconds, got {h}")
+        where = advice("run(h), Simulator(step)", "--step")
+        raise InputError(f"the step ({where}) must be a positive number of seconds, got {h}")
     if explicit and h >= 2 * T:
         raise InputError(
             f"step {h} s is too large (--step): the fastest time constant is {T} s "

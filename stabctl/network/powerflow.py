@@ -46,7 +46,15 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from stabctl.case import PQ, PV, SWING, Case, require_case
-from stabctl.errors import InputError, PowerFlowError, advice
+from stabctl.errors import (
+    InputError,
+    PowerFlowError,
+    WrongTypeError,
+    advice,
+    is_whole_number,
+    require_items,
+    require_number,
+)
 from stabctl.network import switched_shunts as sws
 from stabctl.network.topology import OPEN_X, bus_islands, dead_buses
 from stabctl.network.ybus import add_shunts, branch_flows, build_ybus
@@ -415,6 +423,19 @@ def _fail(case, it, dp, dq, what):
     )
 
 
+def _branch_rows(case: Case, drop) -> tuple:
+    """`drop` as a tuple of ints: 0-based rows of ``case.branches`` (WrongTypeError for a
+    text, a number or an item that is no whole number, such as a (from, to) pair)."""
+    rows = require_items(drop, "solve_powerflow(drop)", "a list of 0-based branch rows")
+    odd = [r for r in rows if not is_whole_number(r)]
+    if odd:
+        raise WrongTypeError(
+            f"solve_powerflow(drop): 0-based rows of the branch table (ints; a line by its "
+            f"buses: case.circuit_row(from_bus, to_bus)), got {odd[0]!r}"
+        )
+    return tuple(int(r) for r in rows)
+
+
 def _check_islands(case: Case, drop=()) -> None:
     """PowerFlowError naming the buses without a path to a swing bus (an island of the
     case data, or left by the dropped branches): the Newton step would only report a
@@ -598,7 +619,8 @@ def solve_powerflow(
     InputError
         ``tol`` not in (0, 1) or ``max_iter`` not an int >= 1.
     TypeError
-        ``case`` is not a `Case` (`stabctl.case.require_case`).
+        ``case`` is not a `Case` (`stabctl.case.require_case`); ``tol`` not a number or
+        ``drop`` not a list of row numbers (`stabctl.errors.WrongTypeError`).
 
     Warns
     -----
@@ -615,12 +637,13 @@ def solve_powerflow(
     PST manual section 1.4.
     """
     case = require_case(case, "solve_powerflow(case)")
+    require_number(tol, "solve_powerflow(tol)", "pu")
     if not (0 < tol < 1 and isinstance(max_iter, Integral) and max_iter >= 1):
         raise InputError(  # max_iter 0 was "no convergence within 0 iterations"
             f"solve_powerflow: tol must be in (0, 1) pu and max_iter an int >= 1, got tol "
             f"{tol!r}, max_iter {max_iter!r}"
         )
-    drop = tuple(int(d) for d in drop)
+    drop = _branch_rows(case, drop)
     _check_islands(case, drop)
     _note_shared_swing(case)
     taps = case.branches.tap.copy()

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as la
 
-from stabctl.errors import InputError
+from stabctl.errors import InputError, advice
 
 F_MIN_HZ, F_MAX_HZ = 0.1, 2.5  # electromechanical band
 INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
@@ -496,7 +496,8 @@ def coherent_areas(
         n_areas = min(1 + _slow_mode_count(freq_hz[em]), g)  # one machine: one area
     if not 1 <= n_areas <= min(em.size + 1, g):
         raise AreaCountError(
-            f"the number of areas must be between 1 and {min(em.size + 1, g)} "
+            f"the number of areas ({advice('n_areas', '--areas')}) must be between 1 and "
+            f"{min(em.size + 1, g)} "
             f"(electromechanical modes + 1, at most the machines), got {n_areas}"
         )
     if n_areas == 1:

@@ -123,6 +123,10 @@ from stabctl.errors import (
     NumericalInstabilityError,
     SimulationError,
     Verdict,
+    WrongTypeError,
+    check_fields,
+    is_whole_number,
+    require_items,
 )
 from stabctl.io.inputs import CsvRow, iter_csv, number
 from stabctl.network.ybus import circuit_row
@@ -203,6 +207,21 @@ class LineFault:
     t_fault: float = 1.0
     circuit: int = 1
     trips: tuple[tuple[int, int], ...] = ()
+
+    def __post_init__(self):
+        check_fields(self)  # LineFault('3', 101) searched bus 3; a text time failed in numpy
+        trips = require_items(self.trips, "LineFault(trips)", "a list of (from_bus, to_bus)")
+        for pair in trips:
+            if not (
+                hasattr(pair, "__len__")
+                and not isinstance(pair, (str, bytes))
+                and len(pair) == 2
+                and all(is_whole_number(b) for b in pair)
+            ):
+                raise WrongTypeError(
+                    f"LineFault(trips): each a (from_bus, to_bus) pair of bus numbers, got {pair!r}"
+                )
+        object.__setattr__(self, "trips", tuple(tuple(pair) for pair in trips))
 
     def events(self, t_clear: float) -> list:
         """The run's events for one clearing time.
@@ -453,6 +472,14 @@ class SearchOptions:
     provisional_s: float | None = PROVISIONAL_S
     guess_s: float | None = None
 
+    def __post_init__(self):
+        check_fields(self)  # SearchOptions(tol='0.001') failed in the search, unnamed
+        if self.criterion is not None and not callable(self.criterion):
+            raise WrongTypeError(
+                f"SearchOptions(criterion): a function of a SimulationResult or None, got "
+                f"{self.criterion!r}"
+            )
+
     def to_inputs(self) -> dict:
         """Fields of a sweep job's recorded inputs: tol, t_max, t_end, error_check when
         off, method when not the default, early_stop when on, provisional_s when not the
@@ -546,7 +573,7 @@ def critical_clearing_time(
         The network fails while the fault is on.
     TypeError
         `sim` not a simulator (a `Simulator`, `cached_simulator`'s), `fault` not a
-        `LineFault`.
+        `LineFault`, `search` not `SearchOptions` (`stabctl.errors.WrongTypeError`).
 
     Notes
     -----
@@ -573,6 +600,11 @@ def critical_clearing_time(
         raise TypeError(
             "critical_clearing_time(fault): a LineFault is needed (LineFault(bus=3, "
             f"far_bus=101, t_fault=1.0)), got {type(fault).__name__}"
+        )
+    if search is not None and not isinstance(search, SearchOptions):
+        raise WrongTypeError(
+            "critical_clearing_time(search): SearchOptions(...) or None is needed (the "
+            f"method as SearchOptions(method='sime')), got {search!r}"
         )
     o = SearchOptions() if search is None else search
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end

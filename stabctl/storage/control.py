@@ -34,7 +34,14 @@ from typing import ClassVar, NamedTuple, Protocol, runtime_checkable
 import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
-from stabctl.errors import InputError, advice
+from stabctl.errors import (
+    InputError,
+    WrongTypeError,
+    advice,
+    check_fields,
+    is_whole_number,
+    require_items,
+)
 
 #: largest voltage gate of the bang-bang law (pu)
 MAX_V_GATE_PU = 2.0
@@ -123,6 +130,9 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
     InputError
         Any value outside its range; `critical` empty with coi="critical" or given with
         another coi.
+    WrongTypeError
+        A field of another type (a text where a number goes, `critical` not machine
+        numbers).
     """
 
     deadband_hz: float = 0.1
@@ -133,14 +143,18 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
     kind: ClassVar[int] = BANG_BANG
 
     def __post_init__(self):
+        check_fields(self)
         if self.coi not in COI_CHOICES:
             raise InputError(f"coi must be one of {COI_CHOICES}, got {self.coi!r}")
-        if (self.coi == "critical") != bool(self.critical):
+        critical = require_items(self.critical, "BangBangCOI(critical)", "machine numbers")
+        if (self.coi == "critical") != bool(critical):
             raise InputError(
-                "coi='critical' needs the critical machines (critical=(...)), "
-                "and only it takes them"
+                "coi='critical' needs the critical machines (critical=(...)), and only it "
+                f"takes them: got coi={self.coi!r}, critical={tuple(critical)!r}"
             )
-        object.__setattr__(self, "critical", tuple(int(m) for m in self.critical))
+        if not all(is_whole_number(m) for m in critical):
+            raise WrongTypeError(f"BangBangCOI(critical): machine numbers, got {critical!r}")
+        object.__setattr__(self, "critical", tuple(int(m) for m in critical))
         if not (
             0 <= self.deadband_hz < float("inf") and 0 <= self.hysteresis_hz <= self.deadband_hz
         ):
@@ -151,7 +165,8 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
             )
         if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
             raise InputError(
-                f"voltage gate must be in [0, {MAX_V_GATE_PU:g}] pu, got {self.v_gate_pu}"
+                f"voltage gate ({advice('v_gate_pu', '--v-gate')}) must be in "
+                f"[0, {MAX_V_GATE_PU:g}] pu, got {self.v_gate_pu}"
             )
 
     def packed(self, f0: float) -> LawConstants:
@@ -203,6 +218,9 @@ class LinearFeedback:  # fields of a dataclass: numpydoc ignore=PR02
     v_gate_pu: float = 0.0
     kind: ClassVar[int] = LINEAR
 
+    def __post_init__(self):
+        check_fields(self)
+
     def packed(self, f0: float) -> LawConstants:
         """Gains per pu speed (times 2 pi f0), the gate, the COI."""
         ws = 2 * np.pi * f0
@@ -226,6 +244,9 @@ class ExternalCommands:  # fields of a dataclass: numpydoc ignore=PR02
 
     v_gate_pu: float = 0.8
     kind: ClassVar[int] = EXTERNAL
+
+    def __post_init__(self):
+        check_fields(self)
 
     def packed(self, f0: float) -> LawConstants:
         """Only the gate."""

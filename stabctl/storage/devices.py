@@ -16,6 +16,7 @@ The control laws a fleet shares are in `stabctl.storage.control` (re-exported by
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from numbers import Real
 from typing import NamedTuple
@@ -24,7 +25,14 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.case import Case, require_case
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import (
+    CaseError,
+    InputError,
+    WrongTypeError,
+    advice,
+    check_fields,
+    require_items,
+)
 from stabctl.models import converters as conv
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
 
@@ -120,6 +128,8 @@ class StorageDevice:
     InputError
         A rating that is not > 0, a negative lag, a ramp limit or energy that is not > 0,
         or soc0 outside [0, 1].
+    WrongTypeError
+        A field of another type (a bus given as text, a rating as a bool).
     """
 
     bus: int
@@ -131,6 +141,7 @@ class StorageDevice:
     soc0: float = 0.5
 
     def __post_init__(self):
+        check_fields(self)
         if not 0 < self.pmax_mw < float("inf"):
             raise InputError(
                 f"storage at bus {self.bus}: rating must be a finite number > 0 MW, got "
@@ -169,6 +180,9 @@ class StorageFleet:
     InputError
         An unknown model, a battery field that is not an ibr_con field, or battery fields
         with model "ideal".
+    WrongTypeError
+        `devices` not a list of `StorageDevice`, `controller` no control law, `battery`
+        no dict.
     """
 
     devices: tuple = ()
@@ -177,6 +191,23 @@ class StorageFleet:
     battery: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        devices = require_items(self.devices, "StorageFleet(devices)", "a list of StorageDevice")
+        odd = [d for d in devices if not isinstance(d, StorageDevice)]
+        if odd:
+            raise WrongTypeError(
+                f"StorageFleet(devices): each a StorageDevice (StorageDevice(bus, machine, "
+                f"pmax_mw)), got {odd[0]!r} ({type(odd[0]).__name__})"
+            )
+        object.__setattr__(self, "devices", tuple(devices))
+        if not callable(getattr(self.controller, "packed", None)):
+            raise WrongTypeError(
+                "StorageFleet(controller): a control law (BangBangCOI(), LinearFeedback(), "
+                f"ExternalCommands()) is needed, got {self.controller!r}"
+            )
+        if not isinstance(self.battery, Mapping):
+            raise WrongTypeError(
+                f"StorageFleet(battery): a dict of ibr_con fields, got {self.battery!r}"
+            )
         if self.model not in ESD_MODELS:
             raise InputError(
                 f"storage model must be one of {', '.join(ESD_MODELS)}, got {self.model!r}"
@@ -290,7 +321,8 @@ def uniform_fleet(
         `pct` not in (0, MAX_ESD_PCT], an unknown model, or `at` neither "hv" nor
         "terminal".
     TypeError
-        `case` is not a `Case`, or `pct` not a number.
+        `case` is not a `Case`, `pct` not a number, or `controller` no control law
+        (`stabctl.errors.WrongTypeError`).
 
     Examples
     --------
@@ -303,11 +335,17 @@ def uniform_fleet(
     [(10, 1, 45.0), (20, 2, 45.0), (110, 3, 45.0), (120, 4, 45.0)]
     """
     case = require_case(case, "uniform_fleet(case)")
+    if controller is not None and not callable(getattr(controller, "packed", None)):
+        raise WrongTypeError(
+            "uniform_fleet(controller): a control law (BangBangCOI(), LinearFeedback()) or "
+            f"None is needed, got {controller!r}"
+        )
     if not isinstance(pct, Real) or isinstance(pct, bool):
         raise TypeError(f"uniform_fleet(pct): a number of % is needed, got {type(pct).__name__}")
     if not 0 < pct <= MAX_ESD_PCT:
         raise InputError(
-            f"storage rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {pct}"
+            f"{advice('uniform_fleet(pct)', '--esd-pct')}: storage rating must be in (0, "
+            f"{MAX_ESD_PCT:g}] % of machine MVA, got {pct}"
         )
     if at not in ("hv", "terminal"):
         raise InputError(f"uniform_fleet(at) must be 'hv' or 'terminal', got {at!r}")
