@@ -170,11 +170,11 @@ def read_dyr(path) -> list[DyrRecord]:
     Returns:
         list of DyrRecord.
     Raises:
-        CaseError "{file}:{line}: ..." for an unreadable file, a record not ended by '/'
-        or without a quoted model name after the bus, a record after another's '/' on
-        one line (a comment in PSS/E, so never read), and, for the models stabctl maps, a
-        non-integer bus or a parameter that is not a number (other models' records are
-        kept, with bus 0 and NaN parameters there, for the unsupported report);
+        CaseError "{file}:{line}: ..." for an unreadable file, a quote not closed, a record
+        not ended by '/' or without a quoted model name after the bus, a record after
+        another's '/' on one line (a comment in PSS/E, so never read), and, for the models
+        stabctl maps, a non-integer bus or a parameter that is not a number (other models'
+        records are kept, with bus 0 and NaN parameters there, for the unsupported report);
         "{file}: ..." for a file without any record (empty, or comments only).
     """
     path = input_file(path, "DYR file")
@@ -186,6 +186,12 @@ def read_dyr(path) -> list[DyrRecord]:
     tokens: list = []
     start = 0
     for n, line in enumerate(text.splitlines(), 1):
+        col = _stray_quote(line)
+        if col is not None:  # the tokens skip it: 'GENROU read as GENROU, unnamed
+            raise CaseError(
+                f"{path.name}:{n}: the quote ' at column {col + 1} is not closed: "
+                f"{line.strip()[:72]!r}"
+            )
         for m in _TOKEN.finditer(line):
             tok = m.group()
             if tok == "/":
@@ -207,6 +213,22 @@ def read_dyr(path) -> list[DyrRecord]:
             "model; give the case's DYR file, or none for a power-flow case"
         )
     return records
+
+
+def _stray_quote(line: str) -> int | None:
+    """The 0-based column of a quote of a DYR line's data (before its '/' comment) that
+    opens no closed string, None if every quote does."""
+    quoted, end = [], len(line)
+    for m in _TOKEN.finditer(line):
+        if m.group() == "/":
+            end = m.start()
+            break
+        if m.group()[0] == "'":
+            quoted.append(m.span())
+    for i in (i for i, ch in enumerate(line[:end]) if ch == "'"):
+        if not any(a <= i < b for a, b in quoted):
+            return i
+    return None
 
 
 #: a DYR record's start: a bus number and a quoted model name

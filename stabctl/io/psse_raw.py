@@ -380,6 +380,32 @@ def split_fields(text: str, double_quotes: bool = False) -> list[str]:
     return fields
 
 
+def unclosed_quote(text: str, double_quotes: bool = False) -> int | None:
+    """The 0-based column of a quote that opens a string and is not closed before the end
+    of the line (or of its data, at a ``/`` comment), None if every string is closed:
+    such a name runs to the end of the line and takes the fields after it with it.
+
+    Parameters
+    ----------
+    text : str
+        One RAW data line.
+    double_quotes : bool, optional
+        RAW v34 and later: ``"..."`` strings too (as `split_fields`).
+
+    Returns
+    -------
+    int or None
+    """
+    quotes = "'\"" if double_quotes else "'"
+    for m in (_TOKEN_34 if double_quotes else _TOKEN).finditer(text):
+        tok = m.group()
+        if tok == "/":
+            return None
+        if tok[0] in quotes and (len(tok) == 1 or tok[-1] != tok[0]):
+            return m.start()
+    return None
+
+
 _INTEGER = re.compile(r"[+-]?\d+")
 
 
@@ -806,6 +832,12 @@ def _records(lines: list[str], path: Path, version: int, start: int):
             continue
         last = lineno
         fields = split_fields(text, double_quotes=version >= 34)
+        col = unclosed_quote(text, double_quotes=version >= 34)
+        if col is not None:
+            raise CaseError(
+                f"{path.name}:{lineno}: the quote {text[col]} at column {col + 1} is not "
+                f"closed (a name or ID would take the rest of the line): {text.strip()[:72]!r}"
+            )
         if pending is not None:
             pending.lines.append(fields)
             pending.at.append(lineno)

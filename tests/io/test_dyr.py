@@ -456,6 +456,9 @@ def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
         ("1 'GENCLS' 1 3.0 0.0\n", r"t.dyr:1: record not terminated by '/'"),
         ("\n1 'GENCLS' 1 3.0 x0 /\n", r"t.dyr:2 GENCLS \(bus 1, id 1\): D = 'x0': not a number"),
         ("1 GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: malformed record"),
+        # the tokens skipped a quote that opens no string: 'GENCLS was read as GENCLS
+        ("1 'GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: the quote ' at column 3 is not closed"),
+        ("1 'GENCLS' 1 3.0 0.0 ' /\n", r"t.dyr:1: the quote ' at column 22 is not closed"),
         (
             "B1 'GENCLS' 1 3.0 0.0 /\n",
             r"t.dyr:1 GENCLS \(bus B1, id 1\): IBUS = 'B1': not an integer",

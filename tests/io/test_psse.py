@@ -19,7 +19,7 @@ from stabctl.errors import CaseError
 from stabctl.io import load_case
 from stabctl.io.andes import _andes
 from stabctl.io.psse import import_psse, load_psse
-from stabctl.io.psse_raw import ZERO_Q_LIMIT, read_raw, split_fields
+from stabctl.io.psse_raw import ZERO_Q_LIMIT, read_raw, split_fields, unclosed_quote
 from stabctl.network.powerflow import solve_powerflow
 from stabctl.network.ybus import branch_admittances, branch_stamp
 
@@ -210,6 +210,20 @@ def test_a_double_quoted_name_in_a_v33_file_is_said_to_be_the_cause(tmp_path):
         "(the record holds double quotes: before v34 a RAW file quotes its names with ' "
         "only, so a double-quoted name is split at its blanks)"
     )
+
+
+def test_a_name_whose_quote_is_not_closed_is_named(tmp_path):
+    """A bus name without its closing quote took the rest of the line: refused as "2
+    field(s), the v33 layout has 9 to 13", the quote unmentioned."""
+    text = V33.read_text().replace("'LOAD        '", "'LOAD        ", 1)
+    path = tmp_path / "q33.raw"
+    path.write_text(text)
+    with pytest.raises(CaseError, match=r"q33.raw:5: the quote ' at column \d+ is not closed"):
+        read_raw(path)
+    # a quote in the comment after '/' is no string
+    assert unclosed_quote("1,'A', 2 / it's a comment") is None
+    assert unclosed_quote('1,"A, 2', double_quotes=True) == 2
+    assert unclosed_quote('1,"A, 2') is None  # before v34 '"' is no quote
 
 
 def test_parallel_circuits_whose_ids_are_not_their_file_order_are_named(tmp_path):
