@@ -33,7 +33,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 from stabctl.parallel import RunnerOptions, read_records  # noqa: E402
-from stabctl.stability.cct import SearchOptions  # noqa: E402
+from stabctl.stability.cct import T_AFTER_FAULT, SearchOptions  # noqa: E402
 from stabctl.stability.screening import screen  # noqa: E402
 
 #: (case name or file stem, branch faults too): the target and what it is judged on
@@ -64,6 +64,18 @@ def _runs(recs: list) -> str:
     """Simulations a CCT (mean) and how many CCTs."""
     n = [r["result"]["n_simulations"] for r in recs]
     return f"{statistics.mean(n):.2f} ({len(n)} CCTs)" if n else "-"
+
+
+def _full_runs(recs: list) -> str:
+    """A CCT's cost in whole runs at its step (mean): its searches' time steps (a run cut
+    short by a verdict counts its steps only, one at half the step twice its steps)
+    over the steps of one run from 0 to the search's run end."""
+    n = []
+    for r in recs:
+        res, inputs = r["result"], r["inputs"]
+        t_end = inputs.get("t_end") or inputs.get("t_fault", 1.0) + T_AFTER_FAULT
+        n.append(res["n_steps"] / round(t_end / res["step_s"]))
+    return f"{statistics.mean(n):.2f}" if n else "-"
 
 
 def _runs_a_search(recs: list) -> str:
@@ -130,6 +142,11 @@ def main(argv=None):
     print(
         f"simulations a CCT: {_runs(ok)} in all; bus faults {_runs(bus)}; branch faults "
         f"from their bus fault's CCT {_runs(guessed)}, the others {_runs(other)}"
+    )
+    print(
+        f"whole runs' worth of steps a CCT: {_full_runs(ok)} in all (bus faults "
+        f"{_full_runs(bus)}): runs ended by their verdict count their steps, the half-step "
+        "reruns twice theirs"
     )
     every = [recs[r["key"]] for r in rows]
     print(
