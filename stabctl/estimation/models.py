@@ -10,6 +10,7 @@ and relative speeds each ESD controller needs from the machine estimates (`coi_s
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,7 +18,7 @@ import scipy.linalg
 
 from stabctl.case import Case
 from stabctl.dynamics.coi import coi_weights
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import InputError
 from stabctl.models.machines import SUB, TRA, machine_params
 from stabctl.network.topology import machine_islands
 
@@ -92,26 +93,19 @@ class Governors:
 
     @classmethod
     def from_case(cls, case: Case) -> Governors:
-        """The case's tg_con governors (none: every machine inactive); raises CaseError
-        for a governor other than PST tg (type 1), which this linear model does not hold."""
+        """The case's tg_con governors (none: every machine inactive).  A governor other
+        than PST tg (type 1: a PSS/E TGOV1, IEEEG1, GAST, HYGOV ...), which this linear
+        model does not hold, leaves its machine inactive: its mechanical power held at the
+        start, the filter's random walk dPm taking what the governor moves, and a
+        UserWarning names each such machine with its model."""
         other = np.nonzero(case.governors.type != 1)[0]
         if other.size:
-            from stabctl.models.governors import TYPES
-
-            r, g = int(other[0]), case.governors
-            kind = int(g.type[r])
-            model = "/".join(m.name for m in getattr(TYPES.get(kind), "DYR", ())) or "?"
-            raise CaseError(
-                f"the governor of {case.machine_name(int(g.machine[r]))} (tg_con row {r + 1}) "
-                f"is a {model} (type {kind}): the estimators' linear model holds PST's "
-                "simplified turbine-governor (tg, type 1) only; estimate on a case without "
-                "governors or with that model"
-            )
+            warnings.warn(_held_governors(case, other), UserWarning, stacklevel=2)
         n = len(case.machines)
         A, b, c, gu = np.zeros((n, 3, 3)), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
         wf, invR, Tmax, active = np.ones(n), np.zeros(n), np.full(n, np.inf), np.zeros(n, bool)
         g = case.governors
-        for r in range(len(g)):
+        for r in np.nonzero(g.type == 1)[0]:
             k = case.machine_index(g.machine[r])
             Ts, Tc, T3, T4, T5 = g.Ts[r], g.Tc[r], g.T3[r], g.T4[r], g.T5[r]
             A[k] = [
@@ -128,6 +122,27 @@ class Governors:
     def output(self, g: np.ndarray) -> np.ndarray:
         """Mechanical power (machine base), (n,); 0 for inactive machines."""
         return np.einsum("ni,ni->n", self.c, g)
+
+
+def _held_governors(case: Case, rows: np.ndarray) -> str:
+    """The warning of the governors (tg_con rows, 0-based) the estimators' model holds at
+    their start: each machine with its model, a few named and the rest counted."""
+    from stabctl.models.governors import TYPES
+
+    g = case.governors
+    named = []
+    for r in rows[:5]:
+        kind = int(g.type[r])
+        model = "/".join(m.name for m in getattr(TYPES.get(kind), "DYR", ())) or f"type {kind}"
+        named.append(f"{case.machine_name(int(g.machine[r]))} ({model})")
+    more = f" and {rows.size - 5} more" if rows.size > 5 else ""
+    return (
+        f"the estimators' model holds the mechanical power of {rows.size} machine(s) at its "
+        f"start: {', '.join(named)}{more} have governors other than PST's tg, which the "
+        "filters' linear turbine model does not hold; their random walk dPm takes what "
+        "those governors move (the simulation itself runs them in full; docs/estimation.md "
+        "section 7)"
+    )
 
 
 @dataclass(frozen=True, eq=False)

@@ -333,8 +333,12 @@ def phasor_truth(
     A repeated time point (a zero-length interval at an event) keeps its last value.  The
     check of generator currents against pelect leaves out the run's last point, whose
     pelect and voltages the simulator may take from different evaluations (storage
-    switching in the last step).  Raises UnknownBusError / CaseError for unknown buses or
-    machines, InputError for a device not in the result or not at the PMU's bus, or a
+    switching in the last step).  A PMU at a machine's terminal measures the machine's own
+    current, conj((pelect + j qelect) / V) (a load or shunt at the bus is not in it); one at
+    its HV bus the step-up branch's.  Raises UnknownBusError / CaseError for unknown buses
+    or machines, InputError for a device not in the result or not at the PMU's bus, a PMU
+    at an HV bus whose step-up is not the machine's only connection (a load, shunt,
+    machine or other branch at the terminal bus), or (a result without qelect) a
     generator current that cannot be reconstructed (P from the phasors differs from the
     simulated pelect by more than 1e-6 pu: load at the terminal bus, or a branch there
     tripped or faulted).
@@ -357,6 +361,8 @@ def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep
         return np.full(n, np.nan + 0j)
     k = case.machine_index(pmu.machine)
     term = case.bus_index(int(case.machines.bus[k]))
+    if b == term and result.qelect is not None:  # the machine's own: S = V conj(I)
+        return np.conj((result.pelect + 1j * result.qelect)[keep, k] / V[:, term])
     ba = branch_admittances(case)
     if b == term:  # Kirchhoff at the terminal bus: everything leaving it into the network
         cur = V[:, term] * (case.buses.gshunt[term] + 1j * case.buses.bshunt[term])
@@ -380,6 +386,7 @@ def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep
             f"PMU at bus {pmu.bus}: no branch joins it to the terminal bus "
             f"{int(case.machines.bus[k])} of machine {pmu.machine}"
         )
+    _check_step_up(case, pmu, term, b, ba)
     cur = np.zeros(n, complex)
     for j in rows:  # current into bus b = minus the current injected into the branch at b
         cur -= (
@@ -388,6 +395,35 @@ def _current(case: Case, result: SimulationResult, pmu: PMU, V: np.ndarray, keep
             else (ba.yff[j] * V[:, b] + ba.yft[j] * V[:, term])
         )
     return cur
+
+
+def _check_step_up(case: Case, pmu: PMU, term: int, b: int, ba) -> None:
+    """InputError unless the machine's current all flows from its terminal bus (row term)
+    to the PMU's bus (row b): a load, a shunt, another machine or another branch at the
+    terminal bus takes part of it, and the current the PMU measures is not the machine's
+    (the estimators would read the rotor from it through the step-up's impedance)."""
+    other = {int(x) for x in np.r_[ba.t[ba.f == term], ba.f[ba.t == term]]} - {b}
+    k = case.machine_index(pmu.machine)
+    what = [
+        name
+        for name, there in (
+            ("load", case.buses.pload[term] != 0 or case.buses.qload[term] != 0),
+            ("shunt", case.buses.gshunt[term] != 0 or case.buses.bshunt[term] != 0),
+            ("another machine", np.count_nonzero(case.machines.bus == case.machines.bus[k]) > 1),
+            (
+                f"branches to bus(es) {sorted(int(case.buses.number[x]) for x in other)}",
+                bool(other),
+            ),
+        )
+        if there
+    ]
+    if what:
+        raise InputError(
+            f"PMU at bus {pmu.bus}: the terminal bus {int(case.machines.bus[k])} of "
+            f"{case.machine_name(pmu.machine)} also has {' and '.join(what)}, so the current "
+            f"from it to bus {pmu.bus} is not the machine's; put the PMU at the terminal "
+            "(--pmu-at terminal), which measures the machine's own current"
+        )
 
 
 def _device_current(result: SimulationResult, pmu: PMU, v: np.ndarray, keep) -> np.ndarray:
