@@ -28,6 +28,7 @@ import signal
 import sys
 import threading
 import warnings
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -878,13 +879,37 @@ def check_option_events(case, given) -> None:
         bus, line, machine or motor missing, or the step's size, the bound and why.
     """
     from stabctl.case.events import check_event
-    from stabctl.errors import CaseError
 
     for option, ev in given:
-        try:
+        with named_option(option):
             check_event(case, ev)
-        except (CaseError, InputError) as exc:
-            raise InputError(f"{option}: {exc}") from None
+
+
+@contextmanager
+def named_option(option: str) -> Iterator[None]:
+    """Refuse what the block refuses (a CaseError or an InputError: an unknown bus or
+    line, a value out of range) as an InputError naming the option that gave it first.
+
+    Parameters
+    ----------
+    option : str
+        The option as given (``"--fault 3 --far-bus 13"``).
+
+    Yields
+    ------
+    None
+
+    Raises
+    ------
+    InputError
+        ``"{option}: {the block's message}"``.
+    """
+    from stabctl.errors import CaseError
+
+    try:
+        yield
+    except (CaseError, InputError) as exc:
+        raise InputError(f"{option}: {exc}") from None
 
 
 def refuse_fault_of_no_length(ev, given: str, hint: str = "") -> None:

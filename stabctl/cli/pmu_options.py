@@ -16,6 +16,7 @@ from stabctl.cli.options import (
     clear_cycles_option,
     fault_options,
     fault_text,
+    named_option,
     refuse_fault_of_no_length,
     tf_option,
 )
@@ -234,7 +235,8 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
     if not tf > 0:
         raise InputError(f"--tf must be > 0, got {tf:g}")
     case = load_case(case_name)
-    ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
+    with named_option(fault_text(fault, far_bus)):
+        ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
     refuse_fault_of_no_length(
         ev,
         f"{fault_text(fault, far_bus)} --clear-cycles {clear_cycles:g}",

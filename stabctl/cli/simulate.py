@@ -36,6 +36,7 @@ from stabctl.cli.options import (
     fault_text,
     json_option,
     model_options,
+    named_option,
     out_file_option,
     plot_option,
     q_limits_option,
@@ -176,9 +177,10 @@ def _build_events(
             raise InputError(f"--far-clear-cycles must be >= 0, got {far_clear_cycles:g}")
         if t_fault < 0:
             raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
-        ev = fault_with_clearing(
-            case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
-        )
+        with named_option(fault_text(fault, far_bus, circuit)):
+            ev = fault_with_clearing(
+                case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
+            )
         far = "" if far_clear_cycles is None else f" --far-clear-cycles {far_clear_cycles:g}"
         refuse_fault_of_no_length(
             ev,

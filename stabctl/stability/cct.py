@@ -200,6 +200,12 @@ class LineFault:
         Further lines (from_bus, to_bus), circuit 1 of each, opened at the clearing
         instant; default none.  Both circuits of a double line: ``circuit=2`` and
         ``trips=((bus, far_bus),)``.
+
+    Raises
+    ------
+    WrongTypeError
+        A field of another type: a bus or circuit that is no whole number, a time that is
+        no number, `trips` not a list of bus pairs (`stabctl.errors.check_fields`).
     """
 
     bus: int
