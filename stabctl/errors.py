@@ -234,26 +234,38 @@ def _shown(value) -> str:
     return f"{text} ({type(value).__name__})"
 
 
-def refuse_text(value, name: str, wanted: str = "bus numbers") -> None:
-    """InputError naming ``name`` when ``value`` is a text where a list goes (``"13"``
-    was read one character an item: buses 1 and 3).
+def bus_numbers(value, name: str, wanted: str = "bus numbers") -> list[int]:
+    """The bus numbers of a list argument as ints, else `WrongTypeError` naming ``name``: a
+    text (``"13"`` was read one character an item: buses 1 and 3), a number or a 0-d
+    array where a list goes, or an item with a fraction (``3.5`` was bus 3).
 
     Parameters
     ----------
     value : object
-        The argument.
+        The argument: a list, tuple, array or other collection of whole numbers.
     name : str
         How to name it (``"run(voltages)"``).
     wanted : str, optional
         What goes there; default "bus numbers".
 
+    Returns
+    -------
+    list of int
+
     Raises
     ------
-    InputError
-        ``value`` is a str or bytes.
+    WrongTypeError
+        Not a collection of whole numbers.
     """
     if isinstance(value, (str, bytes)):
-        raise InputError(f"{name}: {wanted}, got the text {value!r}")
+        raise WrongTypeError(f"{name}: {wanted}, got the text {value!r}")
+    if isinstance(value, np.ndarray) and value.ndim != 1:  # a 0-d array cannot be iterated
+        raise WrongTypeError(f"{name}: {wanted} (one row), got {_shown(value)}")
+    items = require_items(value, name, f"a list of {wanted}")
+    odd = [b for b in items if not is_whole_number(b)]
+    if odd:
+        raise WrongTypeError(f"{name}: {wanted}, got {_shown(odd[0])} among them")
+    return [int(b) for b in items]
 
 
 class StabctlError(Exception):

@@ -4,6 +4,7 @@ inside ("'str' object has no attribute 'branches'")."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import stabctl
@@ -247,3 +248,65 @@ def test_bus_numbers_held_as_floats_by_the_case_tables_stay_accepted(kundur):
     bus = kundur.buses.number[kundur.bus_indices([3])[0]]
     assert isinstance(bus, float) or bus.dtype.kind == "f"
     assert stabctl.LineFault(bus, 101).describe().startswith("fault at bus 3")
+
+
+@pytest.mark.parametrize(
+    "call, error, said",
+    [
+        # round-28 probes: numpy's scalars and arrays, NaN, values out of their range
+        (lambda c, s: s.run([], t_end=1.0, separation_limit="3.14"), TypeError, "a number of rad"),
+        (
+            lambda c, s: s.run([], t_end=1.0, separation_limit=np.bool_(True)),
+            TypeError,
+            r"separation limit \(separation_limit\): a number",
+        ),
+        (
+            lambda c, s: stabctl.StorageDevice(3, None, 10.0, lag_s=float("nan")),
+            InputError,
+            "lag >= 0",
+        ),
+        (lambda c, s: stabctl.LineFault(3, 101, float("nan")), InputError, r"LineFault\(t_fault\)"),
+        (
+            lambda c, s: stabctl.linearise(s, esd_buses=np.array(3)),
+            TypeError,
+            r"linearise\(esd_buses\): bus numbers \(one row\)",
+        ),
+        (
+            lambda c, s: stabctl.linearise(s, esd_buses=[10, 20.5]),
+            TypeError,
+            r"linearise\(esd_buses\): bus numbers, got 20.5 \(float\) among them",
+        ),
+        (
+            lambda c, s: s.run([], t_end=1.0, voltages=[3.5]),
+            TypeError,
+            r"run\(voltages\): True, False or bus numbers, got 3.5",
+        ),
+        (
+            lambda c, s: stabctl.modal_analysis(None, n_areas=np.bool_(True)),
+            TypeError,
+            r"modal_analysis\(n_areas\): a whole number",
+        ),
+        (lambda c, s: stabctl.modal_analysis(None, areas="1,2"), TypeError, r"\(areas\): a dict"),
+        (lambda c, s: stabctl.OMIB(3.5, 0.8, 1.5, 0.0, 1.2, k_C=-1), InputError, r"k_C must be"),
+        (lambda c, s: stabctl.load_case(b"/x.json"), TypeError, r"load_case\(name_or_path\)"),
+        (
+            lambda c, s: stabctl.Playback(1, np.zeros((2, 2)), (0, 0), (0, 0)),
+            TypeError,
+            r"Playback\(at\): a number",
+        ),
+        (lambda c, s: stabctl.Playback(1, "abc", "abc", "abc"), TypeError, r"Playback\(at\)"),
+        (
+            lambda c, s: stabctl.Playback(1, (0.0, 1.0, 0.5), (0, 0, 0), (0, 0, 0)),
+            InputError,
+            r"the times \(at\) must rise",
+        ),
+        (
+            lambda c, s: stabctl.Playback(1, (0.0, 1.0), (0.0,), (0.0, 0.0)),
+            InputError,
+            r"one dV and one df per time, at least one \(at 2, dV 1, df 2\)",
+        ),
+    ],
+)
+def test_numpy_scalars_nan_and_ranges_are_refused_naming_the_argument(kundur, call, error, said):
+    with pytest.raises(error, match=said):
+        call(kundur, stabctl.Simulator(kundur, background_compile=False))

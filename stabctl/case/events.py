@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from stabctl.errors import CaseError, InputError, check_fields
+from stabctl.errors import CaseError, InputError, check_fields, require_items, require_number
 
 if TYPE_CHECKING:
     from stabctl.case.system import Case
@@ -383,6 +383,13 @@ class Playback:
         Times of the values, s, rising, >= 0.
     dV, df : tuple of float
         The targets' changes from those times on, pu (as many as `at`).
+
+    Raises
+    ------
+    InputError
+        Values that are not one per time, no time, or times that do not rise.
+    WrongTypeError
+        A field of another type (a text, an item that is no number).
     """
 
     machine: int
@@ -392,6 +399,17 @@ class Playback:
 
     def __post_init__(self):
         check_fields(self)
+        for name in ("at", "dV", "df"):  # one number a time, as tuples (hashable)
+            items = require_items(getattr(self, name), f"Playback({name})", "a list of numbers")
+            values = tuple(require_number(v, f"Playback({name})") for v in items)
+            object.__setattr__(self, name, values)
+        if not len(self.at) == len(self.dV) == len(self.df) or not self.at:
+            raise InputError(
+                f"playback of machine {self.machine}: one dV and one df per time, at least one "
+                f"(at {len(self.at)}, dV {len(self.dV)}, df {len(self.df)})"
+            )
+        if not all(b > a for a, b in zip(self.at, self.at[1:])):  # NaN too
+            raise InputError(f"playback of machine {self.machine}: the times (at) must rise")
 
     def times(self):
         """The times the targets change.

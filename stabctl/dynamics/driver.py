@@ -79,7 +79,7 @@ from stabctl.errors import (
     StabctlError,
     WrongTypeError,
     advice,
-    refuse_text,
+    bus_numbers,
     require_flag,
     require_items,
     require_number,
@@ -255,7 +255,7 @@ class Simulator:
         subintervals: bool = True,
     ):
         case = require_case(case, "Simulator(case)")
-        refuse_text(injection_buses, "Simulator(injection_buses)")
+        injection_buses = bus_numbers(injection_buses, "Simulator(injection_buses)")
         if suspect_starts not in ("refuse", "run"):
             raise InputError(f"suspect_starts must be 'refuse' or 'run', got {suspect_starts!r}")
         self.suspect_starts = suspect_starts
@@ -832,6 +832,7 @@ class Simulator:
             Naming the limit and the machine farthest from the COI at the start, with
             its angle.
         """
+        require_number(limit, name, "rad")
         widest = self._widest_start
         if widest is not None and not limit > widest[1]:
             i, dev = widest
@@ -1594,8 +1595,8 @@ def voltage_rows(case: Case, voltages) -> np.ndarray | None:
     """
     if isinstance(voltages, (bool, np.bool_)):
         return None if voltages else np.zeros(0, np.int64)
-    refuse_text(voltages, "run(voltages)", "True, False or bus numbers")
-    rows = np.unique([case.bus_index(int(b)) for b in voltages]).astype(np.int64)
+    buses = bus_numbers(voltages, "run(voltages)", "True, False or bus numbers")
+    rows = np.unique([case.bus_index(b) for b in buses]).astype(np.int64)
     return None if rows.size == case.n_bus else rows
 
 

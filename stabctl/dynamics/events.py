@@ -140,15 +140,11 @@ def _controlled(case: Case, ev) -> None:
 
 
 def _check_playback(case: Case, ev: Playback) -> None:
-    """CaseError if ``ev``'s machine is not a playback source; InputError for values that
-    are not one per time or times that do not rise."""
+    """CaseError if ``ev``'s machine is not a playback source (its values and times are
+    checked when it is made, `Playback`)."""
     m = case.machine_index(ev.machine)
     if case.machines.playback[m] != 1:
         raise CaseError(f"machine {ev.machine} is not a playback source (mac_con playback 0)")
-    if not len(ev.at) == len(ev.dV) == len(ev.df) or not len(ev.at):
-        raise InputError(f"playback of machine {ev.machine}: one dV and one df per time")
-    if np.any(np.diff(ev.at) <= 0):
-        raise InputError(f"playback of machine {ev.machine}: the times must rise")
 
 
 def _circuit(case: Case, row: int) -> str:

@@ -6,11 +6,12 @@ PSS/E RAW and DYR, and ANDES's cases (cross-validation).
 
 from __future__ import annotations
 
+import os
 import warnings
 from pathlib import Path
 
 from stabctl.case import CASE_DIR, Case
-from stabctl.errors import CaseError, InputError
+from stabctl.errors import CaseError, InputError, WrongTypeError
 from stabctl.io import pst as pstio
 from stabctl.io.inputs import input_file
 
@@ -54,6 +55,8 @@ def load_case(name_or_path: str | Path) -> Case:
     CaseError
         The name is neither a built-in nor an existing file, the path is not a regular
         file of bounded size (`stabctl.io.inputs.input_file`), or the file is malformed.
+    WrongTypeError
+        `name_or_path` neither a str nor a path (bytes, a number).
 
     Warns
     -----
@@ -68,6 +71,11 @@ def load_case(name_or_path: str | Path) -> Case:
     >>> case.n_bus, len(case.machines), case.base_mva, case.freq_hz
     (13, 4, 100.0, 60.0)
     """
+    if not isinstance(name_or_path, (str, os.PathLike)):  # bytes: "should be a str object"
+        raise WrongTypeError(
+            f"load_case(name_or_path): a case name or a path (str or pathlib.Path), got "
+            f"{name_or_path!r}"
+        )
     case = _read_case(name_or_path)
     why = case.none_can_swing()
     if why:

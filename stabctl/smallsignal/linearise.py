@@ -58,7 +58,7 @@ from stabctl.dynamics.model import (
     kernel_network,
     kernel_outputs,
 )
-from stabctl.errors import InputError, SimulationError, refuse_text, require_flag
+from stabctl.errors import InputError, SimulationError, bus_numbers, require_flag
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -214,8 +214,9 @@ def linearise(
     from stabctl.dynamics.driver import Simulator
 
     check_conventions(conventions)  # a Simulator keeps its own, but no other value is one
-    refuse_text(esd_buses, "linearise(esd_buses)")
-    refuse_text(extra_buses, "linearise(extra_buses)")
+    if esd_buses is not None:
+        esd_buses = bus_numbers(esd_buses, "linearise(esd_buses)")
+    extra_buses = bus_numbers(extra_buses, "linearise(extra_buses)")
     require_flag(q_limits, "linearise(q_limits)")
     if not isinstance(target, Simulator):
         target = require_case(target, "linearise(target)", " or Simulator")

@@ -25,13 +25,13 @@ Conventions (docs/modal.md):
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as la
 
-from stabctl.errors import InputError, advice
+from stabctl.errors import InputError, WrongTypeError, advice, is_whole_number
 
 F_MIN_HZ, F_MAX_HZ = 0.1, 2.5  # electromechanical band
 INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
@@ -318,7 +318,8 @@ def modal_analysis(
         A model without machine speed states, n_areas out of range, areas missing a
         machine, inertia not one finite weight >= 0 per machine.
     TypeError
-        `sys` not a state-space model with state names (a bare A matrix).
+        `sys` not a state-space model with state names (a bare A matrix); `n_areas` not a
+        whole number or `areas` not a dict (`stabctl.errors.WrongTypeError`).
 
     Examples
     --------
@@ -331,6 +332,12 @@ def modal_analysis(
     >>> round(float(ma.freq_hz[k]), 3), str(ma.kind[k])
     (0.612, 'inter-area')
     """
+    if n_areas is not None and not is_whole_number(n_areas):
+        raise WrongTypeError(f"modal_analysis(n_areas): a whole number or None, got {n_areas!r}")
+    if areas is not None and not isinstance(areas, Mapping):
+        raise WrongTypeError(
+            f"modal_analysis(areas): a dict machine number -> area label or None, got {areas!r}"
+        )
     if not hasattr(sys, "state_labels"):  # a matrix: no state names to find machines by
         raise TypeError(
             "modal_analysis(sys): a control.StateSpace with named states is needed "

@@ -52,7 +52,8 @@ class OMIB:
     ------
     InputError
         A parameter that is not a finite number, H or f0 not positive, Pm, D or a Pmax
-        negative, or Pm >= Pmax of the pre- or post-fault network (no equilibrium).
+        negative, k_C outside [0, 1], or Pm >= Pmax of the pre- or post-fault network (no
+        equilibrium).
     TypeError
         A parameter that is no number (a str).
     """
@@ -81,6 +82,11 @@ class OMIB:
             raise InputError(f"nominal frequency must be positive, got f0 = {self.f0} Hz")
         if self.Pm < 0:
             raise InputError(f"mechanical power must be >= 0, got Pm = {self.Pm} pu")
+        if not 0 <= self.k_C <= 1:
+            raise InputError(
+                f"storage share k_C must be in [0, 1] (1 for the OMIB, H_rest / (H1 + H_rest) "
+                f"for the two-machine equivalent), got k_C = {self.k_C}"
+            )
         if min(self.Pmax_pre, self.Pmax_post, self.Pmax_fault) < 0 or self.D < 0:
             raise InputError("Pmax of every stage and damping D must be >= 0")
         for stage in ("pre", "post"):

@@ -206,6 +206,8 @@ class LineFault:
     WrongTypeError
         A field of another type: a bus or circuit that is no whole number, a time that is
         no number, `trips` not a list of bus pairs (`stabctl.errors.check_fields`).
+    InputError
+        A fault time that is negative or not finite.
     """
 
     bus: int
@@ -216,6 +218,8 @@ class LineFault:
 
     def __post_init__(self):
         check_fields(self)  # LineFault('3', 101) searched bus 3; a text time failed in numpy
+        if not 0 <= self.t_fault < math.inf:
+            raise InputError(f"LineFault(t_fault): a fault time >= 0 s, got {self.t_fault}")
         trips = require_items(self.trips, "LineFault(trips)", "a list of (from_bus, to_bus)")
         for pair in trips:
             if not (

@@ -147,7 +147,9 @@ class StorageDevice:
                 f"storage at bus {self.bus}: rating must be a finite number > 0 MW, got "
                 f"{self.pmax_mw}"
             )
-        if self.lag_s < 0 or self.ramp_mw_s <= 0 or self.energy_mj <= 0 or not 0 <= self.soc0 <= 1:
+        if not (
+            self.lag_s >= 0 and self.ramp_mw_s > 0 and self.energy_mj > 0 and 0 <= self.soc0 <= 1
+        ):  # NaN is none of these (a NaN lag was taken)
             raise InputError(
                 f"storage at bus {self.bus}: lag >= 0, ramp > 0, energy > 0 and "
                 "0 <= soc0 <= 1 are required"
