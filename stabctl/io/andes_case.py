@@ -1082,6 +1082,59 @@ def _violated(p, v: float) -> str:
     return ""
 
 
+#: the rows a sheet of an xlsx case may hold, and the bytes of its XML unpacked: a
+#: planning case of 100 000 buses has a few 100 000 rows and tens of MB; a sheet of 3
+#: million empty rows (78 MB of XML packed into 0.2 MB) kept pandas and ANDES busy for
+#: minutes before any check
+MAX_XLSX_ROWS = 1_000_000
+MAX_XLSX_SHEET_BYTES = 1 << 30
+
+
+def check_xlsx_size(path: Path) -> None:
+    """Refuse an xlsx case whose sheets hold more than MAX_XLSX_ROWS rows or unpack to more
+    than MAX_XLSX_SHEET_BYTES, before any reader parses it: the rows are counted in the
+    sheet's XML as it unpacks (``<row`` tags), nothing is parsed.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The xlsx file.
+
+    Raises
+    ------
+    InputError
+        A sheet beyond a bound, named with the file, the sheet's part and its size; a file
+        that is no zip archive (an xlsx is one).
+    """
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            for info in z.infolist():
+                if not info.filename.startswith("xl/worksheets/"):
+                    continue
+                if info.file_size > MAX_XLSX_SHEET_BYTES:
+                    raise InputError(
+                        f"{path.name}: {info.filename} unpacks to {info.file_size} bytes, more "
+                        f"than a case's sheet holds (at most {MAX_XLSX_SHEET_BYTES} bytes)"
+                    )
+                rows, tail = 0, b""
+                with z.open(info) as sheet:
+                    while chunk := sheet.read(1 << 20):
+                        rows += (tail + chunk).count(b"<row") - tail.count(b"<row")
+                        tail = chunk[-3:]
+                        if rows > MAX_XLSX_ROWS:
+                            raise InputError(
+                                f"{path.name}: {info.filename} holds more than {MAX_XLSX_ROWS} "
+                                "rows, more than any case's sheet (a planning case of 100 000 "
+                                "buses holds a few 100 000): refused before reading it"
+                            )
+    except (zipfile.BadZipFile, OSError) as exc:
+        raise InputError(
+            f"{path.name}: not an xlsx workbook (an xlsx is a zip archive: {exc})"
+        ) from None
+
+
 def _row_list(rows: list[int]) -> str:
     """1, 2, 3, 7 -> '1-3, 7'."""
     return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in number_ranges(rows))
@@ -1096,6 +1149,8 @@ def _load(path: Path, dyr, said: list):
     for file, what in ((path, "case file"), (dyr, "DYR file")):
         if file is not None:  # missing, a pipe, a device, a directory or too large: named
             input_file(file, what)
+    if path.suffix.lower() == ".xlsx":
+        check_xlsx_size(path)
     kw = {} if dyr is None else {"addfile": str(dyr)}
     try:
         with warnings.catch_warnings():  # ANDES's own deprecation notices

@@ -437,3 +437,32 @@ def test_a_json_value_that_is_no_number_is_refused_naming_model_row_and_field(
         read_andes_case(path, on_unsupported="skip")
     res = run_cli("import-andes", path, "-o", "out.json", "--skip-unsupported", cwd=tmp_path)
     assert res.returncode == 2 and not (tmp_path / "out.json").exists()
+
+
+def test_an_xlsx_beyond_any_case_s_size_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    """A sheet of 3 million empty rows (78 MB of XML packed into 0.2 MB) kept pandas and
+    ANDES busy for minutes: the rows are counted in the XML as it unpacks, and the file
+    refused naming the sheet; a file that is no zip archive is named as such."""
+    import zipfile
+
+    from stabctl.io import andes_case
+
+    path = tmp_path / "rows.xlsx"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr(
+            "xl/worksheets/sheet1.xml", "<sheetData>" + '<row r="1"/>' * 1001 + "</sheetData>"
+        )
+    monkeypatch.setattr(andes_case, "MAX_XLSX_ROWS", 1000)
+    with pytest.raises(
+        InputError, match=r"rows.xlsx: xl/worksheets/sheet1.xml holds more than 1000 rows"
+    ):
+        andes_case.check_xlsx_size(path)
+    monkeypatch.setattr(andes_case, "MAX_XLSX_ROWS", 1001)
+    andes_case.check_xlsx_size(path)  # 1001 rows: at the bound
+    monkeypatch.setattr(andes_case, "MAX_XLSX_SHEET_BYTES", 100)
+    with pytest.raises(InputError, match=r"sheet1.xml unpacks to \d+ bytes"):
+        andes_case.check_xlsx_size(path)
+    text = tmp_path / "text.xlsx"
+    text.write_text("bus,name\n1,a\n")
+    with pytest.raises(InputError, match=r"text.xlsx: not an xlsx workbook"):
+        andes_case.check_xlsx_size(text)
