@@ -122,7 +122,8 @@ def _check_switchings(what: str, sw: list) -> None:
         if not closing and last is not None:
             raise InputError(
                 f"{what} is tripped twice, by {last[2]} and by {ev}: the second would do "
-                "nothing (close it between with LineClose, or give it once)"
+                f"nothing (close it between with {advice('LineClose', '--close')}, or give "
+                f"{advice('it', 'each --trip and --fault')} once)"
             )
         last = None if closing else (t, _done, ev)
 
