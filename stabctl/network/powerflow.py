@@ -765,8 +765,8 @@ def scale_load(case: Case, factor: float, *, q_limits: bool = True) -> Case:
         solve_powerflow(scaled, q_limits=q_limits)
     except PowerFlowError as exc:
         raise PowerFlowError(
-            f"load level {factor:g} ({100 * factor:g} % of the base load "
-            f"of case '{case.name}'): {exc}"
+            f"{advice('load level', '--load-levels')} {factor:g} ({100 * factor:g} % of the "
+            f"base load of case '{case.name}'): {exc}"
         ) from None
     return scaled
 
