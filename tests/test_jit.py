@@ -2,6 +2,8 @@
 them, and how they compile (`stabctl._jit`)."""
 
 import inspect
+import os
+from pathlib import Path
 
 import numba
 import pytest
@@ -456,3 +458,21 @@ def test_a_compiling_child_dies_with_its_parent():
         timeout=60,
     )
     assert child.returncode == 1 and child.stderr == b""  # told its parent is pid 1: gone
+
+
+def test_the_cache_check_takes_no_fifo_device_or_damaged_overload_for_an_entry(tmp_path):
+    """`compile --check` called a cache warm whose entry of a loaded kernel had one data
+    file damaged (another overload's whole), a FIFO for an index (whose read blocks) or
+    a device (whose read never ends): each is no entry; nothing is unpickled."""
+    import pickle
+
+    from stabctl._jit.cache import _whole_data, _whole_pickles
+
+    whole, cut = tmp_path / "a.1.nbc", tmp_path / "a.2.nbc"
+    whole.write_bytes(pickle.dumps((1, 2)))
+    cut.write_bytes(pickle.dumps((1, 2))[:-3])
+    assert _whole_data([whole]) and not _whole_data([whole, cut]) and not _whole_data([])
+    fifo = tmp_path / "a.nbi"
+    os.mkfifo(fifo)
+    assert not _whole_pickles(fifo, 2)  # returns at once
+    assert not _whole_pickles(Path("/dev/zero"), 2)

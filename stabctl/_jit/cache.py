@@ -238,9 +238,15 @@ def cached(dispatcher) -> bool:
     stem = f"{Path(py.__code__.co_filename).stem}.{py.__qualname__}-"
     return any(
         _whole_pickles(index, 2)  # numba's version, then (source stamp, overloads)
-        and any(_whole_pickles(d, 1) for d in index.parent.glob(f"{index.stem}.*.nbc"))
+        and _whole_data(sorted(index.parent.glob(f"{index.stem}.*.nbc")))
         for index in Path(dispatcher.stats.cache_path).glob(stem + "*.nbi")
     )
+
+
+def _whole_data(files: list[Path]) -> bool:
+    """Whether an index's data files (one per overload) are there and each is one whole
+    pickle: a damaged overload is compiled again when it is called."""
+    return bool(files) and all(_whole_pickles(d, 1) for d in files)
 
 
 def _whole_pickles(path: Path, count: int) -> bool:
@@ -248,6 +254,8 @@ def _whole_pickles(path: Path, count: int) -> bool:
     more, read as opcodes (`pickletools.genops`: nothing is unpickled, no code runs)."""
     import pickletools
 
+    if not path.is_file():  # a FIFO would block the read, a device never end
+        return False
     try:
         with open(path, "rb") as f:
             for _ in range(count):

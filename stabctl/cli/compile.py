@@ -39,7 +39,7 @@ def _kernels() -> dict[str, list]:
     filters and storage control, and the converters' set-up, which the first case with
     converters compiles)."""
     from stabctl.dynamics.integrator import integrate
-    from stabctl.dynamics.model import evaluate_kernel
+    from stabctl.dynamics.model import evaluate_kernel, kernel_outputs
     from stabctl.models.converters import derivatives_at
     from stabctl.models.converters.pvd1 import commands
     from stabctl.smallsignal.linearise import _differences
@@ -47,7 +47,7 @@ def _kernels() -> dict[str, list]:
     from stabctl.studies.estimation import _count_actions
 
     return {
-        "model evaluation": [evaluate_kernel],
+        "model evaluation": [evaluate_kernel, kernel_outputs],  # each run allocates by it
         "filters": _filter_kernels(),
         "storage control": [desired_modes, _count_actions],
         "linearisation": [_differences],
