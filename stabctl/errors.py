@@ -227,6 +227,23 @@ def check_fields(obj) -> None:
             require_number(value, name)
 
 
+def number_text(x: float) -> str:
+    """A number as a message gives it: short (``:g``) unless that rounds it, then all its
+    digits (``--rate 59.9999999`` was said as "--rate 60: must be one of ..., 60").
+
+    Parameters
+    ----------
+    x : float
+        The number.
+
+    Returns
+    -------
+    str
+    """
+    short = f"{x:g}"
+    return short if float(short) == x else repr(float(x))
+
+
 def _shown(value) -> str:
     """A value as a message shows it: its repr (cut at 60 characters) and its type."""
     text = repr(value)

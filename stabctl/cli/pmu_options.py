@@ -20,7 +20,7 @@ from stabctl.cli.options import (
     refuse_fault_of_no_length,
     tf_option,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, number_text
 from stabctl.estimation.settings import RATES
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 
@@ -178,8 +178,8 @@ def pmu_settings(
     naming --rate for a rate C37.118.1 does not list."""
     if rate not in RATES:
         raise InputError(
-            f"--rate {rate:g}: must be one of {', '.join(f'{r:g}' for r in RATES)} frames/s "
-            "(C37.118.1 reporting rates at 60 Hz)"
+            f"--rate {number_text(rate)}: must be one of "
+            f"{', '.join(f'{r:g}' for r in RATES)} frames/s (C37.118.1 reporting rates at 60 Hz)"
         )
     return _PMU(
         rate=rate,

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from stabctl.errors import InputError
+from stabctl.errors import InputError, number_text
 
 RATES = (10.0, 12.0, 15.0, 20.0, 30.0, 60.0, 120.0)  # frames/s at 60 Hz (C37.118.1 5.3)
 
@@ -46,7 +46,7 @@ class PMUSettings:
         if self.rate not in RATES:
             raise InputError(
                 f"PMU rate must be one of {', '.join(f'{r:g}' for r in RATES)} "
-                f"frames/s, got {self.rate:g}"
+                f"frames/s, got {number_text(self.rate)}"
             )
         limits = (self.tve, self.fe_hz, self.rfe_hz_s, self.latency_s)
         if not (all(0 <= v < float("inf") for v in limits) and 0 < self.k_sigma < float("inf")):
