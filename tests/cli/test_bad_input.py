@@ -2519,6 +2519,16 @@ def test_place_load_levels_outside_their_range_are_refused_before_any_work(
     )
 
 
+def test_place_takes_no_more_load_levels_than_a_plan_can_hold(no_simulation):
+    """`place --load-levels` with 5000 levels solved their power flows for minutes before
+    saying a word: more than MAX_LOAD_LEVELS (20) are refused before any work."""
+    levels = ",".join(f"{0.5 + k / 1000:g}" for k in range(21))
+    assert_error(
+        run(*PLACE, "--load-levels", levels),
+        "--load-levels: 21 load levels, more than the 20 a plan takes",
+    )
+
+
 @pytest.mark.parametrize(
     "args, needle",
     [
