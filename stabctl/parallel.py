@@ -1928,12 +1928,21 @@ def _on_worker(digest: str, func: Callable, *args) -> Any:
     return func(*args)
 
 
+#: seconds a Dask worker may go without a heartbeat reaching the scheduler before a
+#: sweep names it (stopped, hung or cut off: its job waits for it until the scheduler
+#: drops it, after its ``distributed.scheduler.worker-ttl``, 5 min by default)
+SILENT_WORKER_S = 30.0
+
+
 class _DaskWorkers:
     """The worker count of a Dask sweep's cluster, asked at most once a second: a lost
     worker is said (log warning: its running job goes to another worker), a cluster
     without a worker for DASK_NO_WORKER_S after it had one raises `_NoWorker`, and one
     that has had none for DASK_NO_WORKER_YET_S since the sweep began is said once (log
-    warning: the sweep waits for a worker to join)."""
+    warning: the sweep waits for a worker to join).  Every STALL_CHECK_S the workers'
+    heartbeats are looked at: one whose last heartbeat has not moved for
+    SILENT_WORKER_S is named once (log warning; a SIGSTOPped worker kept a sweep waiting
+    without a word)."""
 
     def __init__(self, client):
         self.client = client
@@ -1943,6 +1952,11 @@ class _DaskWorkers:
         self.next_check = 0.0
         self.began = time.monotonic()
         self.said_none_yet = False
+        self.next_heartbeats = self.began
+        #: worker address -> (its last heartbeat as the scheduler saw it, when this
+        #: process saw that value first); the silent workers named
+        self.heard: dict[str, tuple[Any, float]] = {}
+        self.named: set[str] = set()
 
     def check(self, force: bool = False) -> None:
         """Ask the scheduler (if a second has passed, or `force`)."""
@@ -1978,3 +1992,27 @@ class _DaskWorkers:
             self.none_since = None
         self.seen = self.seen or n > 0
         self.count = n
+        if now >= self.next_heartbeats:
+            self.next_heartbeats = now + STALL_CHECK_S
+            self.name_silent(now)
+
+    def name_silent(self, now: float) -> None:
+        """Log a warning of each worker whose heartbeat (the scheduler's ``last_seen``)
+        has not moved for SILENT_WORKER_S of this process's time, once per worker."""
+        workers = self.client.scheduler_info(n_workers=-1).get("workers", {})
+        for address, info in workers.items():
+            beat = info.get("last_seen")
+            before = self.heard.get(address)
+            if before is None or before[0] != beat:
+                self.heard[address] = (beat, now)
+                continue
+            if now - before[1] >= SILENT_WORKER_S and address not in self.named:
+                self.named.add(address)
+                _log.warning(
+                    "Dask worker %s has sent no heartbeat for %.0f s (stopped, hung or cut "
+                    "off): its running job waits for it until the scheduler drops it "
+                    "(distributed.scheduler.worker-ttl, 5 min by default) and runs it on "
+                    "another worker; Ctrl-C stops the sweep, keeping its finished records",
+                    address,
+                    now - before[1],
+                )

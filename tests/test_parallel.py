@@ -1910,3 +1910,35 @@ def test_a_finished_study_s_records_that_cannot_be_written_are_shown_read_only(
     more = [*jobs, Job("square/4", square, {"x": 4})]
     with pytest.raises(InputError, match=r"not writable and 1 of 3 job\(s\) are not in it"):
         run_sweep(more, out, workers=1, progress=False)
+
+
+def test_a_dask_worker_whose_heartbeats_stop_is_named_once(monkeypatch, caplog):
+    """A SIGSTOPped worker of `--scheduler local` kept a sweep waiting 7 min without a
+    word: a worker whose heartbeat (the scheduler's last_seen) has not moved for
+    SILENT_WORKER_S is named once, by address; one whose heartbeats go on is not."""
+    from stabctl import parallel
+
+    class Client:  # the scheduler's view: worker a beats, worker b has stopped
+        beats = 0.0
+
+        def scheduler_info(self, n_workers=-1):
+            Client.beats += 1.0
+            return {
+                "n_workers": 2,
+                "workers": {
+                    "tcp://a:1": {"last_seen": Client.beats},
+                    "tcp://b:2": {"last_seen": 5.0},
+                },
+            }
+
+    watch = parallel._DaskWorkers(Client())
+    caplog.set_level("WARNING", logger=parallel._log.name)
+    for now in (0.0, 10.0, 20.0, 29.0):
+        watch.name_silent(now)
+    assert "sent no heartbeat" not in caplog.text  # b silent for 29 s only
+    for now in (30.0, 40.0, 50.0):
+        watch.name_silent(now)
+    said = [r.getMessage() for r in caplog.records if "heartbeat" in r.getMessage()]
+    assert len(said) == 1 and said[0].startswith(
+        "Dask worker tcp://b:2 has sent no heartbeat for 30 s"
+    )
