@@ -476,3 +476,18 @@ def test_the_cache_check_takes_no_fifo_device_or_damaged_overload_for_an_entry(t
     os.mkfifo(fifo)
     assert not _whole_pickles(fifo, 2)  # returns at once
     assert not _whole_pickles(Path("/dev/zero"), 2)
+
+
+def test_a_cache_dir_this_process_may_not_write_is_said(tmp_path):
+    """A read-only NUMBA_CACHE_DIR (a read-only mount, /proc/self) was passed over by
+    numba without a word (the kernels cached elsewhere or compiled in every run): each
+    command says it; a writable or unset one says nothing, a file is refused apart."""
+    from stabctl._jit.environment import cache_dir_note, environment_problem
+
+    note = cache_dir_note({"NUMBA_CACHE_DIR": "/proc/self/stabctl"})
+    assert note.startswith("NUMBA_CACHE_DIR='/proc/self/stabctl' in the environment: this ")
+    assert "may not write in /proc/self, so numba does not use it" in note
+    assert cache_dir_note({"NUMBA_CACHE_DIR": str(tmp_path / "new")}) == ""
+    assert cache_dir_note({}) == ""
+    assert cache_dir_note({"NUMBA_CACHE_DIR": "/dev/null"}) == ""  # refused instead:
+    assert "is not a directory" in environment_problem({"NUMBA_CACHE_DIR": "/dev/null"})

@@ -65,6 +65,35 @@ def _not_a_directory(value: str) -> str:
     return ""
 
 
+def cache_dir_note(environ: Mapping[str, str] | None = None) -> str:
+    """A warning when ``NUMBA_CACHE_DIR`` names a directory this process may not write
+    (a read-only mount, another user's, ``/proc/self``), or a path that cannot be made
+    for that reason: numba passes over it without a word and caches the kernels in the
+    package's ``__pycache__`` directories, or compiles them in every run.  '' otherwise
+    (unset, writable, or not a directory: `environment_problem` refuses that).
+
+    Parameters
+    ----------
+    environ : mapping, optional
+        The environment (default ``os.environ``).
+
+    Returns
+    -------
+    str
+    """
+    cache = (os.environ if environ is None else environ).get("NUMBA_CACHE_DIR")
+    if not cache or _not_a_directory(cache):
+        return ""
+    place = next(p for p in (Path(cache), *Path(cache).parents) if p.exists())
+    if os.access(place, os.W_OK | os.X_OK):
+        return ""
+    return (
+        f"NUMBA_CACHE_DIR={cache!r} in the environment: this process may not write in "
+        f"{place}, so numba does not use it: the kernels are cached in the package's "
+        "__pycache__ directories if it may write there, else compiled in every run"
+    )
+
+
 def environment_problem(environ: Mapping[str, str] | None = None) -> str:
     """What is wrong with numba's settings in the environment, in one line ('' if nothing).
 

@@ -120,6 +120,10 @@ def main(ctx):
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
     _log_to_stderr()
+    from stabctl._jit.environment import cache_dir_note
+
+    if note := cache_dir_note():
+        click.echo(f"warning: {note}", err=True)
     if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
         from stabctl._jit.notify import on_first_compile
 
