@@ -28,6 +28,7 @@ whose cache that compile never filled.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 
@@ -36,6 +37,20 @@ import pytest
 import stabctl
 from stabctl.dynamics.driver import Simulator
 from stabctl.io import load_case
+
+
+@pytest.fixture(autouse=True)
+def _signal_dispositions_restored():
+    """Each test leaves SIGINT, SIGTERM and SIGHUP as it found them: a command run in the
+    test's process ends by ignoring a signal that comes after it (`stabctl.__main__`,
+    `stabctl.cli.options.reports_errors`: right for a process about to exit), and a Dask
+    worker started in it ignores SIGINT; left so, they made later tests of the same
+    worker process and the children they start ignore the signals under test."""
+    kept = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    yield
+    for sig, handler in kept.items():
+        if signal.getsignal(sig) is not handler and handler is not None:
+            signal.signal(sig, handler)
 
 
 @pytest.hookimpl(tryfirst=True)

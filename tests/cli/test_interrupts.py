@@ -84,11 +84,28 @@ def _wait_for(cond, timeout: float) -> bool:
 
 
 def _default_sigint():
-    """In the child before exec: SIGINT back to its default.  A process started with SIGINT
-    ignored (pytest run by nohup, as a background job of a non-interactive shell, by some
-    CI runners) passes SIG_IGN on to its children, and Python then installs no
-    KeyboardInterrupt handler: the Ctrl-C under test would be ignored."""
+    """In the child before exec: SIGINT and SIGHUP back to their defaults.  A process
+    started with them ignored (pytest as a background job of a non-interactive shell, by
+    some CI runners: SIGINT; under nohup: SIGHUP) passes SIG_IGN on to its children, and
+    Python then installs no KeyboardInterrupt handler, stabctl no hangup handler: the
+    signal under test would be ignored."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
+@pytest.fixture(autouse=True)
+def _signals_at_their_defaults():
+    """The in-process tests (CliRunner) under the dispositions a terminal gives: SIGINT
+    raising KeyboardInterrupt, SIGHUP its default, whatever pytest was started with (a
+    background job ignores SIGINT, nohup SIGHUP); the pytest process's own restored after."""
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGHUP)}
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
 
 
 def _start(args, tmp_path):
