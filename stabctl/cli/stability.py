@@ -40,6 +40,7 @@ from stabctl.cli.options import (
     faults_option,
     json_option,
     model_options,
+    named_option,
     out_file_option,
     parallel_options,
     plot_option,
@@ -542,6 +543,9 @@ def screen(
         refuse_given(("guess",), "without --lines (only branch faults start from a guess)")
     case = load_case(case_name)
     bus_list = None if buses is None else _bus_list(buses)
+    if bus_list is not None:
+        with named_option(f"--buses {buses}" if len(buses) <= 40 else "--buses"):
+            case.bus_indices(bus_list)  # an unknown bus named before any work
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
     out_path = records_file(out_path, case_name, "screening")
     check_suffix(out_path, (".jsonl",), "--out", records=True)

@@ -2519,6 +2519,11 @@ def test_place_load_levels_outside_their_range_are_refused_before_any_work(
     )
 
 
+def test_screen_names_an_unknown_bus_of_buses_before_any_work(no_simulation):
+    """`screen --buses -3` said "bus -3 is not in case 'kundur'", not naming --buses."""
+    assert_error(run("screen", "kundur", "--buses", "1,-3"), "--buses 1,-3: bus -3 is not in case")
+
+
 def test_place_takes_no_more_load_levels_than_a_plan_can_hold(no_simulation):
     """`place --load-levels` with 5000 levels solved their power flows for minutes before
     saying a word: more than MAX_LOAD_LEVELS (20) are refused before any work."""
