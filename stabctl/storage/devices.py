@@ -201,11 +201,7 @@ class StorageFleet:
                 f"pmax_mw)), got {odd[0]!r} ({type(odd[0]).__name__})"
             )
         object.__setattr__(self, "devices", tuple(devices))
-        if not callable(getattr(self.controller, "packed", None)):
-            raise WrongTypeError(
-                "StorageFleet(controller): a control law (BangBangCOI(), LinearFeedback(), "
-                f"ExternalCommands()) is needed, got {self.controller!r}"
-            )
+        _require_law(self.controller, "StorageFleet(controller)")
         if not isinstance(self.battery, Mapping):
             raise WrongTypeError(
                 f"StorageFleet(battery): a dict of ibr_con fields, got {self.battery!r}"
@@ -224,6 +220,16 @@ class StorageFleet:
     def buses(self) -> list[int]:
         """Bus numbers of the devices, in device order (kept in the reduced network)."""
         return [d.bus for d in self.devices]
+
+
+def _require_law(law, name: str) -> None:
+    """WrongTypeError naming `name` unless `law` is a control law (it packs its constants:
+    `stabctl.storage.control.ControlLaw`)."""
+    if not callable(getattr(law, "packed", None)):
+        raise WrongTypeError(
+            f"{name}: a control law (BangBangCOI(), LinearFeedback(), ExternalCommands()) is "
+            f"needed, got {law!r}"
+        )
 
 
 def hv_bus(case: Case, machine: int) -> int:
@@ -337,11 +343,8 @@ def uniform_fleet(
     [(10, 1, 45.0), (20, 2, 45.0), (110, 3, 45.0), (120, 4, 45.0)]
     """
     case = require_case(case, "uniform_fleet(case)")
-    if controller is not None and not callable(getattr(controller, "packed", None)):
-        raise WrongTypeError(
-            "uniform_fleet(controller): a control law (BangBangCOI(), LinearFeedback()) or "
-            f"None is needed, got {controller!r}"
-        )
+    if controller is not None:
+        _require_law(controller, "uniform_fleet(controller)")
     if not isinstance(pct, Real) or isinstance(pct, bool):
         raise TypeError(f"uniform_fleet(pct): a number of % is needed, got {type(pct).__name__}")
     if not 0 < pct <= MAX_ESD_PCT:
