@@ -739,18 +739,7 @@ class _RestartedPool:
             if not lost:
                 return [results[k] for k in range(len(jobs))]
             restarts += 1
-            if restarts > POOL_RESTARTS:
-                raise SweepIncomplete(
-                    f"{len(lost)} of {len(jobs)} jobs not run: worker processes died "
-                    f"{restarts} times (killed, or out of memory)"
-                )
-            warnings.warn(
-                f"a worker process died (killed, or out of memory): the {len(lost)} job(s) "
-                f"not finished run again (pool restart {restarts} of at most "
-                f"{POOL_RESTARTS})",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+            _restart_or_stop(restarts, len(lost), len(jobs), "run again")
             stop_pool(self.pool)
             self.pool = self.stack.enter_context(pooled(self.workers))
             left = lost
@@ -1357,21 +1346,15 @@ def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, 
             if not left:
                 return
             restarts += 1
-            if restarts > POOL_RESTARTS:
-                keys = [j.key for j in left]
-                more = f" and {len(keys) - 3} more" if len(keys) > 3 else ""
-                raise SweepIncomplete(
-                    f"{len(left)} of {len(jobs)} jobs not run: worker processes died "
-                    f"{restarts} times (killed, or out of memory; not run: "
-                    f"{', '.join(keys[:3])}{more}); the finished records are kept, and the "
-                    "same command runs the rest"
-                )
-            warnings.warn(
-                f"a worker process died (killed, or out of memory): {len(left)} job(s) not "
-                f"finished run again, the {len(running)} then running each alone first "
-                f"(pool restart {restarts} of at most {POOL_RESTARTS})",
-                RuntimeWarning,
-                stacklevel=2,
+            keys = [j.key for j in left]
+            more = f" and {len(keys) - 3} more" if len(keys) > 3 else ""
+            _restart_or_stop(
+                restarts,
+                len(left),
+                len(jobs),
+                f"run again, the {len(running)} then running each alone first",
+                f" (not run: {', '.join(keys[:3])}{more}); the finished records are kept, "
+                "and the same command runs the rest",
             )
             for j in running:
                 with pooled(1) as alone:
@@ -1379,6 +1362,24 @@ def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, 
                 if again:
                     yield _lost(j, BrokenProcessPool(_DIED_ALONE))
             left = [j for j in left if not any(j is r for r in running)]
+
+
+def _restart_or_stop(restarts: int, n_left: int, n_jobs: int, how: str, stopped: str = "") -> None:
+    """The accounting of a process pool replaced after a worker's death (`_RestartedPool`,
+    `_local`): restart number `restarts` of a map or sweep of `n_jobs` jobs whose `n_left`
+    were not finished is warned of (RuntimeWarning, saying `how` they go on), or, beyond
+    `POOL_RESTARTS`, raised as `SweepIncomplete` (`stopped` added to its message)."""
+    if restarts > POOL_RESTARTS:
+        raise SweepIncomplete(
+            f"{n_left} of {n_jobs} jobs not run: worker processes died {restarts} times "
+            f"(killed, or out of memory){stopped}"
+        )
+    warnings.warn(
+        f"a worker process died (killed, or out of memory): {n_left} job(s) not finished "
+        f"{how} (pool restart {restarts} of at most {POOL_RESTARTS})",
+        RuntimeWarning,
+        stacklevel=3,
+    )
 
 
 #: why a job is recorded failed when its worker dies again running it alone (`_local`)

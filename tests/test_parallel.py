@@ -1312,7 +1312,9 @@ def test_worker_pool_on_processes_loses_no_job_when_a_worker_is_killed(tmp_path)
 
     jobs = [{"x": k, "dir": str(tmp_path)} for k in range(6)]
     with worker_pool(2) as run_map:
-        with pytest.warns(RuntimeWarning, match=r"a worker process died .*: the \d+ job\(s\) "):
+        with pytest.warns(
+            RuntimeWarning, match=r"a worker process died .*: \d+ job\(s\) not finished run again"
+        ):
             got = run_map(killed_once, jobs)
         assert got == [{"y": k} for k in range(6)]
         assert run_map(killed_once, jobs[:2]) == [{"y": 0}, {"y": 1}]  # the new pool, kept
