@@ -1137,9 +1137,10 @@ def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
                     "stream at another rate than its CFG-2 says",
                 )
             )
-    if (bad := np.flatnonzero(np.diff(stamps) <= 0)).size:
+    slot = _instants(stamps, base, rate)
+    if (bad := np.flatnonzero(np.diff(slot) <= 0)).size:
         k = int(bad[0]) + 1
-        how = "repeats" if stamps[k] == stamps[k - 1] else "goes back from"
+        how, note = _order_fault(stamps, slot, k, base, number if numbers is None else None)
         # flagged, yet not one inserted second (`leap_offsets` reads those across)
         leap = any(d[10] & (LEAP_PENDING | LEAP_OCCURRED) for d in data[max(k - 1, 0) : k + 1])
         why = (
@@ -1154,12 +1155,43 @@ def order_faults(data, cfg2, what: str, numbers=None) -> list[tuple[int, str]]:
         faults.append(
             (
                 k,
-                f"{lead}data frame {number[k]} {how} the time stamp of frame "
-                f"{number[k - 1]} ({frame_time(data[k - 1], cfg2):.6f} s, UNIX)"
-                f"{many(bad.size)}{why}",
+                f"{lead}data frame {number[k]} {how} frame {number[k - 1]} "
+                f"({frame_time(data[k - 1], cfg2):.6f} s, UNIX){note}{many(bad.size)}{why}",
             )
         )
     return faults
+
+
+def _instants(stamps: np.ndarray, base: int, rate: int) -> np.ndarray:
+    """The reporting instant each time stamp (FRACSEC counts since the epoch, a
+    TIME_BASE `base` a second) stands for, numbered in frames of DATA_RATE `rate` since
+    the epoch (negative rate: whole seconds): the stamp rounded as `reporting_instant`
+    rounds it, in integers (no int64 overflow at a TIME_BASE of 2**24)."""
+    soc, counts = stamps // base, stamps % base
+    if rate < 0:
+        return soc + (2 * counts >= base)
+    return soc * rate + (2 * counts * rate + base) // (2 * base)
+
+
+def _order_fault(stamps, slot, k: int, base: int, number) -> tuple[str, str]:
+    """How frame k's time stamp fails to follow frame k - 1's (`order_faults`), and a
+    note: the same stamp, another on the same reporting instant (within a FRACSEC count
+    of it: its data would replace the other's), or one going back; with the frames'
+    `number` (a whole stream), a frame k - 1 ahead of both its neighbours is named in the
+    note as the one out of place."""
+    if stamps[k] == stamps[k - 1]:
+        return "repeats the time stamp of", ""
+    if slot[k] == slot[k - 1]:
+        return "is on the reporting instant of", (
+            f", {(stamps[k] - stamps[k - 1]) / base:.6g} s after it, within one FRACSEC "
+            "count: its data would replace that frame's"
+        )
+    if number is not None and k >= 2 and slot[k] > slot[k - 2]:
+        return "goes back from the time stamp of", (
+            f"; frame {number[k - 1]} is the one out of order, ahead of both its "
+            f"neighbours by {(stamps[k - 1] - stamps[k]) / base:.6g} s or more"
+        )
+    return "goes back from the time stamp of", ""
 
 
 def next_frame_fault(data, frame: bytes, cfg2) -> str | None:

@@ -323,6 +323,56 @@ def test_recordings_whose_time_stamps_repeat_or_go_back_are_refused(
         sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
 
 
+def _restamped(frame: bytes, soc: int, count: int) -> bytes:
+    """A data frame's bytes with SOC and FRACSEC's count replaced, its CRC-CCITT redone
+    (C37.118.2-2011 Table 2, Annex B)."""
+    out = bytearray(frame)
+    out[6:10], out[11:14] = soc.to_bytes(4, "big"), count.to_bytes(3, "big")
+    crc = 0xFFFF
+    for byte in out[:-2]:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
+    out[-2:] = crc.to_bytes(2, "big")
+    return bytes(out)
+
+
+@pytest.mark.parametrize(
+    "edit, needle",
+    [
+        (
+            "one count later",
+            r"data frame 11 is on the reporting instant of frame 10 \(\d+\.\d+ s, UNIX\), "
+            r"1e-06 s after it, within one FRACSEC count: its data would replace that frame's",
+        ),
+        (
+            "a day ahead",
+            r"data frame 12 goes back from the time stamp of frame 11 .*; frame 11 is the one "
+            r"out of order, ahead of both its neighbours",
+        ),
+    ],
+)
+def test_a_frame_on_another_s_reporting_instant_is_refused_and_one_ahead_is_named(
+    kundur_stream, tmp_path, edit, needle
+):
+    """A frame stamped one FRACSEC count after the one before (the finding: it passed the
+    order check, being later, then was read on that frame's reporting instant, replacing
+    its data, and its own instant was reported as a gap) is refused as a repeat is; a
+    frame stamped a day ahead is named as the one out of order, not the frame after it."""
+    case, pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    soc, count = int.from_bytes(data[9][6:10], "big"), int.from_bytes(data[9][11:14], "big")
+    data[10] = (
+        _restamped(data[10], soc, count + 1)
+        if edit == "one count later"
+        else _restamped(data[10], soc + 86400, int.from_bytes(data[10][11:14], "big"))
+    )
+    path = tmp_path / "r.c37"
+    path.write_bytes(cfg2.convert2bytes() + b"".join(data))
+    with pytest.raises(InputError, match=needle):
+        sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
+
+
 def test_replay_refuses_what_a_reader_refuses_and_a_configuration_alone(kundur_stream, tmp_path):
     """`pmu replay` of a recording with a repeated time stamp served it (paced by stamps
     that go back) until a reader refused it; one with the CFG-2 alone was tracked as 0
