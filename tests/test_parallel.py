@@ -1658,6 +1658,22 @@ def _cct_record(**result):
         (_cct_record(n_simulations=True), r"result\.n_simulations true"),
         (_cct_record(separated_machines="x"), r"result\.separated_machines \"x\""),
         (_cct_record(islanded=[{"buses": "4"}]), r"result\.islanded"),
+        # edited by hand within its numbers' ranges (round 29): a CCT inside its own
+        # bracket, cycles not its seconds, a bracket its probes never ran
+        (_cct_record(cct_s=0.15), r"^result\.cct_s 0\.15 is not its t_stable_s 0\.14"),
+        (_cct_record(cct_cycles=99), r"^result\.cct_cycles 99 is not its cct_s 0\.14 at 60 Hz"),
+        (_cct_record(tol_s=0.01), r"^result bracket 0\.14-0\.16 s is not its tol_s 0\.01 wide"),
+        (
+            _cct_record(
+                cct_s=0.18,
+                t_stable_s=0.18,
+                t_unstable_s=0.2,
+                cct_cycles=10.8,
+                t_unstable_cycles=12.0,
+                probes=[[1.0, False], [0.14, True], [0.16, False]],
+            ),
+            r"^result\.probes have no stable run at 0\.18 s, the bracket's stable end",
+        ),
         (
             {"key": "k", "status": "verdict", "verdict": "robust"},
             r"verdict \"robust\" is none of a CCT search's",

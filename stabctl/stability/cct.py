@@ -1679,6 +1679,8 @@ def cct_record_problem(rec: dict) -> str | None:
                 f"result.separated_machines {shown(r.get('separated_machines'))} is not a "
                 "list of machine numbers"
             )
+        if other := _unlike_its_bracket(r, slack):
+            return other
     ended = r if status == "ok" else rec
     where = "result." if status == "ok" else ""
     if status != "failed" and (other := _other_search(rec.get("inputs") or {}, ended, where)):
@@ -1702,6 +1704,36 @@ def cct_record_problem(rec: dict) -> str | None:
     ):
         field = "result.islanded" if status == "ok" else "islanded"
         return f"{field} {shown(islanded)} is not a list of islanding stages with their buses"
+    return None
+
+
+def _unlike_its_bracket(r: dict, slack: float) -> str | None:
+    """What of a CCT result `r` (its numbers checked) disagrees with its own bracket, or
+    None: its t_stable_s and cct_s differ, its bracket is not tol_s wide, its cycles are
+    not its seconds at the frequency its unstable end gives (rounded to 0.01 cycle), or
+    its probes lack a stable run at its CCT or an unstable one at its unstable end (a
+    record edited by hand: a search writes them together, `CCTResult.to_dict`).  A field
+    a record of older code lacks is not compared."""
+    from stabctl.parallel import is_number
+
+    cct, t_u, tol = r["cct_s"], r["t_unstable_s"], r.get("tol_s")
+    t_s = r.get("t_stable_s")
+    if t_s is not None and abs(t_s - cct) > slack:
+        return f"result.cct_s {cct!r} is not its t_stable_s {t_s!r}"
+    if is_number(tol) and abs(t_u - cct - tol) > slack:
+        return f"result bracket {cct!r}-{t_u!r} s is not its tol_s {tol!r} wide"
+    u_cycles = r.get("t_unstable_cycles")
+    if is_number(u_cycles) and abs(r["cct_cycles"] - cct * u_cycles / t_u) > 0.005 + slack:
+        return (
+            f"result.cct_cycles {r['cct_cycles']!r} is not its cct_s {cct!r} at "
+            f"{u_cycles / t_u:g} Hz (its t_unstable_cycles)"
+        )
+    probes = r.get("probes")
+    if isinstance(probes, list) and probes:
+        ran = [p for p in probes if isinstance(p, list) and len(p) == 2 and is_number(p[0])]
+        for t, ok, end in ((cct, True, "stable"), (t_u, False, "unstable")):
+            if not any(abs(p[0] - t) <= slack and p[1] is ok for p in ran):
+                return f"result.probes have no {end} run at {t!r} s, the bracket's {end} end"
     return None
 
 
