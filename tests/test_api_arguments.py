@@ -4,6 +4,8 @@ inside ("'str' object has no attribute 'branches'")."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -239,6 +241,11 @@ def test_fault_with_clearing_checks_its_fault_against_the_case(kundur):
         stabctl.fault_with_clearing(kundur, 3, 101, 1.0, float("nan"))
     with pytest.raises(InputError, match="not a finite number"):
         stabctl.fault_with_clearing(kundur, 3, 101, float("nan"), 6)
+    # as the CLI refuses them (round 29): a fault of no length, a circuit of a bus fault
+    with pytest.raises(InputError, match="a fault of no length would do nothing"):
+        stabctl.fault_with_clearing(kundur, 3, 101, 1.0, 0)
+    with pytest.raises(InputError, match=r"circuit 2 given without far_bus"):
+        stabctl.fault_with_clearing(kundur, 3, None, 1.0, 6, circuit=2)
     fault = stabctl.fault_with_clearing(kundur, 3, 101, 1.0, 6, far_clear_cycles=9)
     assert (fault.clear_near, fault.clear_far) == pytest.approx((1.1, 1.15))  # 60 Hz
 
@@ -310,3 +317,29 @@ def test_bus_numbers_held_as_floats_by_the_case_tables_stay_accepted(kundur):
 def test_numpy_scalars_nan_and_ranges_are_refused_naming_the_argument(kundur, call, error, said):
     with pytest.raises(error, match=said):
         call(kundur, stabctl.Simulator(kundur, background_compile=False))
+
+
+def test_a_fleet_built_for_another_case_is_refused(kundur):
+    """A fleet carried no case: Kundur's uniform fleet ran on miniWECC without a word, its
+    devices on miniWECC's buses 10, 20, 110 and 120 driven by its machines 1-4 (round
+    29).  Its machines' buses are kept (`StorageFleet.machines_at`) and checked."""
+    wecc = stabctl.load_case("miniwecc")
+    fault = stabctl.fault_with_clearing(wecc, 83, 33, 1.0, 6)
+    with pytest.raises(CaseError, match=r"fleet built for a case whose machine 2 is at bus 2"):
+        stabctl.Simulator(wecc).run([fault], t_end=1.2, storage=stabctl.uniform_fleet(kundur, 5))
+    own = stabctl.uniform_fleet(wecc, 5)
+    assert own.machines_at[:2] == ((1, 1), (2, 3))
+    assert stabctl.Simulator(wecc).run([fault], t_end=1.2, storage=own).stable
+
+
+def test_a_run_ending_with_its_fault_still_on_is_warned_of(kundur):
+    """`run(t_end=1.05)` of a fault cleared at 1.1 s reported "stable" without a word, a
+    verdict of the fault held on (round 29; the CLI refuses it).  A warning says so; a
+    fault never cleared (no clearing time) is meant so and is not warned of."""
+    sim = stabctl.Simulator(kundur)
+    with pytest.warns(RuntimeWarning, match=r"run ends at 1\.05 s with a fault still on"):
+        sim.run([stabctl.fault_with_clearing(kundur, 3, 101, 1.0, 6)], t_end=1.05)
+    held = stabctl.Fault(bus=3, t=1.0)  # never cleared
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.run([held], t_end=1.05)

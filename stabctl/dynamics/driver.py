@@ -699,6 +699,7 @@ class Simulator:
             raise InputError(f"run(t_end): a finite time in s is needed, got {t_end!r}")
         events = require_items(events, "run(events)", "a list of events (Fault, LineTrip, ...)")
         ev_.validate(self.case, events, t_end)
+        ev_.warn_unfinished(events, t_end)
         h = self.default_h if h is None else require_number(h, "run(h)", "s")
         m = self.model_for(storage.buses if storage is not None else ())
         xslot = None

@@ -15,6 +15,7 @@ change of VREF and of PREF, the PSS/E Program Operation Manual's ``change_vref``
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -98,6 +99,23 @@ def validate(case: Case, events, t_end: float) -> None:
     for row, sw in switchings.items():
         _check_switchings(_circuit(case, row), sw)
     check_totals(case, events)
+
+
+def warn_unfinished(events, t_end: float) -> None:
+    """Warn (RuntimeWarning) of the first fault that has begun before `t_end` (s) and is
+    cleared at or after it: the run ends with it still on, and its verdict is of the
+    fault held on, not of its clearing (the CLI refuses such a run, `simulate --tf`).
+    A fault never cleared (no clearing time) is meant so: no warning.
+    `stabctl.stability.cct.fault_on_failure` holds a fault on to the end on purpose."""
+    for ev in events:
+        if isinstance(ev, Fault) and ev.t < t_end and any(t >= t_end for t in ev.times()):
+            warnings.warn(
+                f"run ends at {t_end:g} s with a fault still on (a clearing at or after the "
+                f"end does not happen; its verdict is of the fault held on): {ev}",
+                RuntimeWarning,
+                stacklevel=5,
+            )
+            return
 
 
 def _check_switchings(what: str, sw: list) -> None:
@@ -298,8 +316,9 @@ def fault_with_clearing(
     Raises
     ------
     InputError
-        `clear_cycles` negative or not finite, `far_clear_cycles` below `clear_cycles`, a
-        fault time that is negative or not finite.
+        `clear_cycles` negative or not finite, `far_clear_cycles` below `clear_cycles`, both
+        0 (a fault of no length), a `circuit` other than 1 without `far_bus`, a fault time
+        that is negative or not finite.
     UnknownBusError, CaseError
         No bus `bus`, or no circuit `circuit` between `bus` and `far_bus`.
     TypeError
@@ -314,6 +333,17 @@ def fault_with_clearing(
             "clearing cycles must be finite and >= 0 and the far end no earlier than the near "
             f"end, got {near:g} and {far:g}"
             + advice(" (clear_cycles, far_clear_cycles)", " (--clear-cycles, --far-clear-cycles)")
+        )
+    if far == 0:
+        raise InputError(
+            "fault_with_clearing(clear_cycles): 0 cycles at both ends, cleared as it starts: "
+            "a fault of no length would do nothing (a line trip alone is "
+            "LineTrip(t, from_bus, to_bus))"
+        )
+    if far_bus is None and circuit != 1:
+        raise InputError(
+            f"fault_with_clearing(circuit): circuit {circuit} given without far_bus (a bus "
+            "fault loses no line)"
         )
     cyc = 1.0 / case.freq_hz
     t_fault = require_number(t_fault, "fault_with_clearing(t_fault)", "s")

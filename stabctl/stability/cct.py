@@ -103,6 +103,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -1470,7 +1471,11 @@ def fault_on_failure(sim, fault: LineFault, t_on: float) -> str | None:
     """
     t_end = fault.t_fault + t_on + sim.default_h
     try:
-        _outcome(fault, t_on, lambda: sim.run(fault.events(t_on), t_end, stop_at_separation=True))
+        with warnings.catch_warnings():  # the fault held on to its clearing, on purpose
+            warnings.filterwarnings("ignore", "run ends at .* still on", RuntimeWarning)
+            _outcome(
+                fault, t_on, lambda: sim.run(fault.events(t_on), t_end, stop_at_separation=True)
+            )
     except SimulationError as exc:
         return str(exc)
     return None

@@ -176,6 +176,10 @@ class StorageFleet:
     battery : dict, optional
         ibr_con fields of the WECC batteries replacing `WECC_BATTERY`'s or the table's
         defaults (e.g. ``{"Imax": 1.2}``); only with model "wecc".
+    machines_at : tuple of (int, int), optional
+        (machine number, terminal bus) of the devices' machines in the case the fleet was
+        built for (`uniform_fleet` sets it); a run on a case whose machines sit elsewhere
+        is refused (`pack`).  Default none: not checked.
 
     Raises
     ------
@@ -191,6 +195,7 @@ class StorageFleet:
     controller: ControlLaw = field(default_factory=BangBangCOI)
     model: str = "ideal"
     battery: dict = field(default_factory=dict)
+    machines_at: tuple = field(default=(), compare=False)
 
     def __post_init__(self):
         devices = require_items(self.devices, "StorageFleet(devices)", "a list of StorageDevice")
@@ -354,14 +359,17 @@ def uniform_fleet(
         )
     if at not in ("hv", "terminal"):
         raise InputError(f"uniform_fleet(at) must be 'hv' or 'terminal', got {at!r}")
-    devs = []
+    devs, sites = [], []
     infinite = case.infinite_buses()  # the rest of the system: no site
     for num, bus, mva in zip(case.machines.number, case.machines.bus, case.machines.mva):
         if int(num) in infinite:
             continue
         b = hv_bus(case, int(num)) if at == "hv" else int(bus)  # `at` checked above
         devs.append(StorageDevice(bus=b, machine=int(num), pmax_mw=pct / 100.0 * mva))
-    return StorageFleet(tuple(devs), controller or BangBangCOI(), model=model)
+        sites.append((int(num), int(bus)))
+    return StorageFleet(
+        tuple(devs), controller or BangBangCOI(), model=model, machines_at=tuple(sites)
+    )
 
 
 def energy_excursion(t, p_mw) -> dict:
@@ -441,10 +449,18 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray, xslot=None)
     (`stabctl.models.converters.PLANT_PREF_SLOT` of its converter; None: ideal devices).
 
     Raises CaseError when a device bus is not kept (build the Simulator with the fleet's
-    buses as injection buses) or names an unknown machine.
+    buses as injection buses), names an unknown machine, or the fleet was built for a
+    case whose machines sit elsewhere (`StorageFleet.machines_at`).
     """
     base, f0 = case.base_mva, case.freq_hz
     devs = () if fleet is None else fleet.devices
+    for num, at in () if fleet is None else fleet.machines_at:
+        if int(case.machines.bus[case.machine_index(num)]) != at:
+            raise CaseError(
+                f"storage fleet built for a case whose machine {num} is at bus {at}: case "
+                f"'{case.name}' has it at bus {int(case.machines.bus[case.machine_index(num)])}"
+                "; build the fleet from this case (uniform_fleet(case, pct))"
+            )
     bus = np.array([case.bus_index(d.bus) for d in devs], np.int64)
     pos = np.array(
         [int(np.nonzero(nc_idx == b)[0][0]) if np.any(nc_idx == b) else -1 for b in bus], np.int64
