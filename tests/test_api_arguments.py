@@ -105,6 +105,25 @@ def test_an_omib_parameter_that_is_no_number_is_named():
         stabctl.OMIB(H="3", Pm=0.5, Pmax_pre=1.0, Pmax_fault=0.0, Pmax_post=1.0)
 
 
+def test_an_omib_whose_fault_raises_the_transfer_capability_is_refused():
+    """Pmax_fault 2.0 above Pmax_pre 1.5 was accepted (round 29): no fault does that."""
+    with pytest.raises(InputError, match=r"Pmax_fault = 2\.0 pu above Pmax_pre = 1\.5 pu"):
+        stabctl.OMIB(H=3.5, Pm=0.8, Pmax_pre=1.5, Pmax_fault=2.0, Pmax_post=1.2)
+
+
+def test_a_file_that_is_no_result_is_named_not_read_as_a_pickle(tmp_path):
+    """`SimulationResult.from_npz` of a text file gave numpy's "contains pickled (object)
+    data ... load it unsafely" (round 29), inviting allow_pickle, naming no file."""
+    from stabctl.dynamics.results import SimulationResult
+
+    text, array = tmp_path / "r.npz", tmp_path / "a.npy"
+    text.write_text("hello")
+    np.save(array, np.arange(3))
+    for path, why in ((text, "not an npz archive"), (array, "one .npy array")):
+        with pytest.raises(InputError, match=rf"{path.name}: not a result .* \({why}"):
+            SimulationResult.from_npz(path)
+
+
 @pytest.mark.parametrize(
     "call, said",
     [

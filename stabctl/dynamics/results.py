@@ -11,6 +11,7 @@ data) `speed_pu.G<k>`, `angle_rad.G<k>` (absolute, synchronous frame, as PSTess)
 from __future__ import annotations
 
 import os
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,6 +24,7 @@ from stabctl.dynamics.partition import (
     relative_to_islands,
     stage_at,
 )
+from stabctl.errors import InputError
 from stabctl.parallel import atomic_write
 
 #: the `Partition` fields written to a .npz (`SimulationResult.to_npz`), in its order
@@ -578,9 +580,34 @@ class SimulationResult:
         -------
         SimulationResult
             The arrays and verdict as written; `meta` is empty (it is not stored).
+
+        Raises
+        ------
+        InputError
+            `path` is no npz archive (numpy's words about pickled data invited an unsafe
+            load), or one without the arrays `to_npz` writes; each naming the file.
+        OSError
+            The file cannot be read.
         """
-        with np.load(path) as z:
+        try:
+            z = np.load(path)
+        except (ValueError, zipfile.BadZipFile, EOFError):  # numpy's words invite a pickle
+            raise InputError(
+                f"{path}: not a result written by SimulationResult.to_npz (not an npz archive)"
+            ) from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise InputError(
+                f"{path}: not a result written by SimulationResult.to_npz (one .npy array, "
+                "not an npz archive)"
+            )
+        with z:
             d = {k: z[k] for k in z.files}
+        missing = [k for k in ("t", "verdict", "separated") if k not in d]
+        if missing:
+            raise InputError(
+                f"{path}: not a result written by SimulationResult.to_npz (no "
+                f"{', '.join(missing)} array)"
+            )
         d.pop("units", None)  # (files written before it have none)
         stable, tsep = d.pop("verdict")
         sep = list(d.pop("separated"))

@@ -52,8 +52,8 @@ class OMIB:
     ------
     InputError
         A parameter that is not a finite number, H or f0 not positive, Pm, D or a Pmax
-        negative, k_C outside [0, 1], or Pm >= Pmax of the pre- or post-fault network (no
-        equilibrium).
+        negative, k_C outside [0, 1], Pm >= Pmax of the pre- or post-fault network (no
+        equilibrium), or Pmax_fault above Pmax_pre.
     TypeError
         A parameter that is no number (a str).
     """
@@ -89,6 +89,11 @@ class OMIB:
             )
         if min(self.Pmax_pre, self.Pmax_post, self.Pmax_fault) < 0 or self.D < 0:
             raise InputError("Pmax of every stage and damping D must be >= 0")
+        if self.Pmax_fault > self.Pmax_pre:
+            raise InputError(
+                f"Pmax_fault = {self.Pmax_fault} pu above Pmax_pre = {self.Pmax_pre} pu: a fault "
+                "lowers the transfer capability, it never raises it"
+            )
         for stage in ("pre", "post"):
             pmax = getattr(self, f"Pmax_{stage}")
             if self.Pm >= pmax:
