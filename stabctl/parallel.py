@@ -1449,14 +1449,25 @@ def check_scheduler(address: str) -> str:
     ------
     InputError
         An empty or blank address (it is no scheduler: local processes are had by
-        leaving --scheduler out), 'local' with a port (a local cluster has none), another
+        leaving --scheduler out), 'local' in other letters ('LOCAL') or with a port (a
+        local cluster has none), an inproc:// address not of Dask's form, another
         scheme (tls:// and ucx:// need a configuration stabctl does not pass), no host, a
         port out of range, or text that is no URL (``tcp://[::1``).
     """
     from urllib.parse import urlsplit
 
-    if address == "local" or address.startswith("inproc://"):  # inproc: this process's
-        return address
+    if address == "local" or re.fullmatch(r"inproc://[^/\s]+/\d+/\d+", address):
+        return address  # inproc: a cluster of this process (Dask's inproc://HOST/PID/N)
+    if address.startswith("inproc://"):
+        raise InputError(
+            f"--scheduler {address}: not an address of a Dask cluster in this process "
+            f"(inproc://HOST/PID/N, as Dask gives it); {_SCHEDULER_FORMS}"
+        )
+    if address.strip().lower() == "local":
+        raise InputError(
+            f"--scheduler {address!r}: give 'local' (in lower case) for a local Dask cluster, "
+            f"or tcp://{address.strip()}:8786 for a scheduler on a host of that name"
+        )
     if not address.strip():
         raise InputError(
             f"--scheduler {address!r}: an empty address; {_SCHEDULER_FORMS}, or leave "
@@ -1612,9 +1623,10 @@ def _connect(scheduler: str, workers: int, timeout: float):
             _handshake(address, timeout)
         return _started_client(address, timeout=timeout)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
+        kind = "" if type(exc) in (ConnectionError, TimeoutError) else f"{type(exc).__name__}: "
         raise InputError(
             f"no Dask scheduler answers at {address} within {timeout:g} s "
-            f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
+            f"({kind}{' '.join(str(exc).split())[:200]})"
         ) from None
 
 
@@ -1636,8 +1648,10 @@ def _handshake(address: str, timeout: float) -> None:
     ------
     TimeoutError
         No handshake within `timeout` s (said so in its message).
+    ConnectionError
+        Nothing listens at the address, or its host is not known (said so).
     OSError
-        No connection (Dask's own errors: refused, timed out).
+        No connection (Dask's other errors).
 
     Notes
     -----
@@ -1672,7 +1686,7 @@ def _handshake(address: str, timeout: float) -> None:
     # to connect" (an OSError) or asyncio's wait ends first (a TimeoutError): either way
     # whether anything listens is asked of the port itself
     if isinstance(ended[0], OSError) and (why := _no_listener(address)):
-        raise ConnectionRefusedError(
+        raise ConnectionError(
             f"{why}, through the {timeout:g} s a starting scheduler is waited for"
         )
     if isinstance(ended[0], TimeoutError):
@@ -1689,6 +1703,8 @@ def _no_listener(address: str) -> str:
     parts = urlsplit(address)
     try:
         socket.create_connection((parts.hostname, parts.port), timeout=1.0).close()
+    except socket.gaierror as exc:
+        return f"the host {parts.hostname} is not known here ({exc.strerror or exc})"
     except OSError as exc:
         return f"nothing listens there ({exc.strerror or type(exc).__name__})"
     return ""

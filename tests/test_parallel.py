@@ -577,6 +577,9 @@ def test_scheduler_addresses_are_checked_before_any_contact(tmp_path, address, n
         ("  ", "--scheduler '  ': an empty address"),
         ("tcp://[::1", "--scheduler tcp://[::1: not an address (Invalid IPv6 URL)"),
         ("local:4", "--scheduler local:4: 'local' takes no port"),
+        # round 29: a host named LOCAL looked up, Dask's ValueError of a bare inproc://
+        ("LOCAL", "--scheduler 'LOCAL': give 'local' (in lower case)"),
+        ("inproc://x", "--scheduler inproc://x: not an address of a Dask cluster in this"),
     ],
 )
 def test_a_scheduler_that_is_no_address_is_refused_not_run_locally(tmp_path, address, needle):
@@ -675,9 +678,12 @@ def test_a_scheduler_address_nothing_listens_at_is_said_so(tmp_path, monkeypatch
     with socket.socket() as s:  # a port free a moment ago, nothing listening
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    with pytest.raises(InputError, match=r"nothing listens there \(Connection refused\)"):
+    with pytest.raises(InputError, match=r"\(nothing listens there \(Connection refused\)"):
         run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler=f"tcp://127.0.0.1:{port}")
     assert not (tmp_path / "d.jsonl").exists()
+    # a host no name service knows was "nothing listens there" too (round 29)
+    with pytest.raises(InputError, match=r"\(the host no-such-host\.invalid is not known here"):
+        run_sweep(jobs_of(square, 1), tmp_path / "d.jsonl", scheduler="no-such-host.invalid")
     assert_no_dask_client_left()
 
 
