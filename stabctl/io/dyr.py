@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl.errors import CaseError, advice
-from stabctl.io.inputs import input_file, plain_float
+from stabctl.io.inputs import case_text, input_file, plain_float
 from stabctl.io.provenance import Origin, Written
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
@@ -179,7 +179,7 @@ def read_dyr(path) -> list[DyrRecord]:
     """
     path = input_file(path, "DYR file")
     try:
-        text = path.read_text(encoding="utf-8-sig", errors="replace")  # a BOM as RAW's
+        text = case_text(path, "DYR file")
     except OSError as exc:
         raise CaseError(f"{path}: cannot read DYR file: {exc.strerror or exc}") from None
     records: list = []

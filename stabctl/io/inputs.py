@@ -28,7 +28,7 @@ from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from stabctl.errors import InputError
+from stabctl.errors import CaseError, InputError
 from stabctl.jsontext import MAX_INPUT_BYTES, input_file, parse_json
 
 __all__ = [
@@ -42,6 +42,40 @@ __all__ = [
     "plain_number",
     "read_csv",
 ]
+
+
+def case_text(path, what: str) -> str:
+    """The text of a PSS/E RAW or DYR file (`path`, checked by `input_file`): ASCII or
+    UTF-8 (a byte-order mark dropped; bytes that are neither read as U+FFFD, which no
+    number or name check takes).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    what : str
+        What it is, for messages (``"RAW file"``).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    CaseError
+        A file in UTF-16 or UTF-32 (its byte-order mark, or NUL bytes among its first
+        bytes: an editor's "Unicode" save, read as "SBASE = ' ': not a number"), naming
+        the file and what to do.
+    OSError
+        The file cannot be read.
+    """
+    data = path.read_bytes()
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in data[:4096]:
+        raise CaseError(
+            f"{path}: the {what} is in UTF-16 or UTF-32 (a byte-order mark or NUL bytes at its "
+            "start), not text PSS/E reads: save it as ASCII or UTF-8"
+        )
+    return data.decode("utf-8-sig", errors="replace")
 
 
 def number_ranges(numbers) -> list[tuple[int, int]]:

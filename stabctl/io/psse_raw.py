@@ -135,7 +135,7 @@ import numpy as np
 
 from stabctl.case import PQ, PV, SWING
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file, plain_float
+from stabctl.io.inputs import case_text, input_file, plain_float
 
 __all__ = ["RawSource", "Held", "Generator", "RawData", "read_raw", "split_fields"]
 
@@ -1715,7 +1715,7 @@ def read_raw(
         raise CaseError(f"loads must be 'raw' or 'impedance', got {loads!r}")
     path = input_file(path, "RAW file")
     try:
-        lines = path.read_text(encoding="utf-8-sig", errors="replace").splitlines()
+        lines = case_text(path, "RAW file").splitlines()
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
     base, version, freq, first = _header(lines, path)

@@ -983,6 +983,23 @@ def test_a_case_json_with_a_byte_order_mark_is_read(tmp_path):
     assert load_case(bom).equals(load_case(out))
 
 
+def test_a_raw_or_dyr_saved_as_utf_16_is_named_so(tmp_path):
+    """A RAW saved in UTF-16 (an editor's "Unicode") was refused as "SBASE = ' ': not a
+    number" (round 29); the RAW and the DYR name their encoding and what to do."""
+    from stabctl.io.psse import load_psse
+
+    dyr = tmp_path / "c.dyr"
+    dyr.write_text("\n".join([record("GENROU"), INFINITE]) + "\n")
+    for kind, raw, dyr_file in (
+        ("RAW", tmp_path / "u16.raw", dyr),
+        ("DYR", RAW, tmp_path / "u16.dyr"),
+    ):
+        source = RAW if kind == "RAW" else dyr
+        (raw if kind == "RAW" else dyr_file).write_bytes(source.read_text().encode("utf-16"))
+        with pytest.raises(CaseError, match=rf"the {kind} file is in UTF-16 or UTF-32 .* save it"):
+            load_psse(raw, dyr_file)
+
+
 def test_advice_is_in_the_callers_words():
     """A library caller is advised Python arguments, a command's user its options, and
     nothing where the command line has no such option."""
