@@ -488,6 +488,9 @@ def test_a_cache_dir_this_process_may_not_write_is_said(tmp_path):
     assert note.startswith("NUMBA_CACHE_DIR='/proc/self/stabctl' in the environment: this ")
     assert "may not write in /proc/self, so numba does not use it" in note
     assert cache_dir_note({"NUMBA_CACHE_DIR": str(tmp_path / "new")}) == ""
+    # a leading blank (round 29): a relative path, the cache under each working directory
+    blank = cache_dir_note({"NUMBA_CACHE_DIR": f" {tmp_path}"})
+    assert "has blanks around it" in blank and "under the directory each command" in blank
     assert cache_dir_note({}) == ""
     assert cache_dir_note({"NUMBA_CACHE_DIR": "/dev/null"}) == ""  # refused instead:
     assert "is not a directory" in environment_problem({"NUMBA_CACHE_DIR": "/dev/null"})

@@ -69,8 +69,11 @@ def cache_dir_note(environ: Mapping[str, str] | None = None) -> str:
     """A warning when ``NUMBA_CACHE_DIR`` names a directory this process may not write
     (a read-only mount, another user's, ``/proc/self``), or a path that cannot be made
     for that reason: numba passes over it without a word and caches the kernels in the
-    package's ``__pycache__`` directories, or compiles them in every run.  '' otherwise
-    (unset, writable, or not a directory: `environment_problem` refuses that).
+    package's ``__pycache__`` directories, or compiles them in every run; or a path with
+    blanks around it (a leading blank makes a relative path: the cache moves with the
+    working directory).
+    '' otherwise (unset, writable, or not a directory: `environment_problem` refuses
+    that).
 
     Parameters
     ----------
@@ -84,6 +87,12 @@ def cache_dir_note(environ: Mapping[str, str] | None = None) -> str:
     cache = (os.environ if environ is None else environ).get("NUMBA_CACHE_DIR")
     if not cache or _not_a_directory(cache):
         return ""
+    if cache != cache.strip():
+        return (
+            f"NUMBA_CACHE_DIR={cache!r} in the environment has blanks around it: numba "
+            f"caches the kernels in {os.path.abspath(cache)!r}, blanks included"
+            + ("" if os.path.isabs(cache) else ", under the directory each command runs in")
+        )
     place = next(p for p in (Path(cache), *Path(cache).parents) if p.exists())
     if os.access(place, os.W_OK | os.X_OK):
         return ""
