@@ -55,6 +55,7 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     stream_controller,
     stream_idcodes,
+    write_recording,
 )
 from stabctl.errors import InputError
 
@@ -593,8 +594,9 @@ def track(
     missing values, after a longer one the estimator starts again.  Interrupted (Ctrl-C,
     SIGTERM) while estimating, the frames estimated so far are written likewise, as a
     partial estimate (exit status 130, 143), and said; interrupted before (a TCP stream is
-    estimated once received), no frame is estimated and nothing is written, and it says
-    how many frames had come.
+    estimated once received), no frame is estimated and no CSV is written: it says how
+    many frames had come, and writes each stream's frames received beside OUT as a
+    partial recording, STEM.received.c37, to track with --source.
 
     \b
     Example:
@@ -633,12 +635,13 @@ def track(
         law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
         ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
         got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end, idcode=codes)
-    except KeyboardInterrupt as exc:  # said with what had come, and that it is not tracked
+    except KeyboardInterrupt as exc:  # said with what had come, kept as a recording
         left = "left as it was" if Path(out_path).exists() else "not written"
         received = getattr(exc, "received", "")
         exc.kept = (  # type: ignore[attr-defined]
-            f"nothing is tracked: the {received} had come, short of {end}; a stream "
-            f"is tracked once received, so they are lost ({out_path} {left})"
+            f"nothing is tracked ({out_path} {left}): the {received} had come, short of "
+            f"{end}, and a stream is tracked once received; "
+            + _keep_received(out_path, getattr(exc, "recordings", []), case_name)
             if received and not received.startswith("0 ")
             else f"no frame was estimated: none had come from {src} yet, so nothing is "
             f"kept ({out_path} {left})"
@@ -686,6 +689,35 @@ def track(
     )
     if got.short:
         fail_short(out_path, at, why, kept)
+
+
+def _keep_received(out_path, recordings: list, case_name: str) -> str:
+    """What an `estimate track` interrupted while receiving keeps of its TCP streams,
+    for its ``interrupted:`` line: each stream's CFG-2 and data frames (`recordings`:
+    (server, CFG-2 bytes, data frames), `sources.read_frames`) written beside --out as a
+    partial recording, ``STEM.received.c37`` (``STEM.received-K.c37`` for stream K of
+    several; `keep_interrupted`: beside a file already there), to be tracked with
+    ``--source`` that file."""
+    out = Path(out_path)
+    said = []
+    for k, (server, cfg2, frames) in enumerate(recordings, 1):
+        tag = "received" if len(recordings) == 1 else f"received-{k}"
+        at = out.with_name(f"{out.stem}.{tag}.c37")
+        said.append(
+            keep_interrupted(
+                at,
+                f"{server} sent them",
+                len(frames),
+                "data frame received" if len(frames) == 1 else "data frames received",
+                "a partial recording",
+                lambda to, cfg2=cfg2, frames=frames: write_recording(to, cfg2, frames),
+            )
+        )
+    if not said:
+        return "they are lost"
+    return (
+        "; ".join(said) + f" (track it: stabctl estimate track {case_name} --source FILE --out ...)"
+    )
 
 
 def _instants(got) -> str:

@@ -46,6 +46,7 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     stream_controller,
     stream_idcodes,
+    write_recording,
 )
 from stabctl.errors import InputError, counted
 
@@ -488,7 +489,7 @@ def record(address, out, frames, idcode):
     cfg2 = c37.read_config(got.cfg2, "the CFG-2")
     data, why, kept = got.data, f"{address}: {got.short}", f"{len(got.data)} received"
     at = kept_at(out) if got.short else out
-    _write_recording(at, got.cfg2, data)
+    write_recording(at, got.cfg2, data)
     if got.short:
         fail_short(out, at, why, kept)
     gaps = stream_gaps(data, cfg2)
@@ -500,13 +501,6 @@ def record(address, out, frames, idcode):
         + (f"; {gaps}" if gaps else "")
         + (f"; {flagged}" if flagged else "")
     )
-
-
-def _write_recording(out, cfg2: bytes, data) -> None:
-    """OUT written atomically: the CFG-2, then the data frames."""
-    from stabctl.parallel import atomic_write
-
-    atomic_write(out, lambda f: f.write(cfg2 + b"".join(data)), mode="wb")
 
 
 def _keep_interrupted(out, address: str, stream) -> str:
@@ -527,7 +521,7 @@ def _keep_interrupted(out, address: str, stream) -> str:
         n,
         "received",
         "a partial recording",
-        lambda at: _write_recording(at, stream.cfg2, stream.data),
+        lambda at: write_recording(at, stream.cfg2, stream.data),
     )
 
 

@@ -293,6 +293,24 @@ def stream_controller(case, estimator, settings, esd_pct, law, pmu_at):
     return ctrl
 
 
+def write_recording(out, cfg2: bytes, data) -> None:
+    """A C37.118.2 recording written atomically to `out`: the CFG-2 frame, then the data
+    frames (`pmu record`; what `estimate track` had received when interrupted).
+
+    Parameters
+    ----------
+    out : str or Path
+        The file.
+    cfg2 : bytes
+        The stream's CFG-2 frame.
+    data : sequence of bytes
+        Its data frames, in order.
+    """
+    from stabctl.parallel import atomic_write
+
+    atomic_write(out, lambda f: f.write(cfg2 + b"".join(data)), mode="wb")
+
+
 def kept_at(out) -> Path:
     """Where a stream cut short keeps what it brought: `out` itself when no file is there,
     else a sibling ``STEM.partial.SUFFIX`` (``STEM.partial-2.SUFFIX``, ... when that is

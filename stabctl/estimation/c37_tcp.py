@@ -1042,6 +1042,7 @@ def receive(
     timeout: float | None = None,
     data: list | None = None,
     max_bytes: int = MAX_STREAM_BYTES,
+    config: list | None = None,
 ) -> Stream:
     """The CFG-2 frame and the data frames of the C37.118.2 stream at host:port: command
     frames (pyc37's) 'cfg2', then 'start', then 'stop' once `end` is reached, each
@@ -1061,7 +1062,8 @@ def receive(
 
     `data`, if given, is the list the data frames are appended to as they come: the
     caller's, which holds what came whatever ends the receive (a thread's receive that
-    the caller stops waiting for).
+    the caller stops waiting for); `config`, if given, the list the CFG-2 frame (bytes)
+    is appended to once it is read (with `data`, a recording of what came).
 
     Raises
     ------
@@ -1102,10 +1104,12 @@ def receive(
                     f"serves another stream than IDCODE {idcode}, which these commands "
                     f"addressed (its messages say which)"
                 )
-            config = c37.read_config(cfg2, "its CFG-2")
-            most = most_frames(config, max_bytes, end)
+            cfg = c37.read_config(cfg2, "its CFG-2")
+            if config is not None:
+                config.append(cfg2)
+            most = most_frames(cfg, max_bytes, end)
             conn.sendall(CommandFrame(idcode, "start").convert2bytes())
-            short, refused = _data_frames(conn, config, end, data, timeout, most)
+            short, refused = _data_frames(conn, cfg, end, data, timeout, most)
         except FrameTimeout as exc:
             raise InputError(f"{where}: sent {exc}, before any data frame") from None
         except TimeoutError:

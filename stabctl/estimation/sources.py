@@ -368,7 +368,9 @@ def read_frames(
     ------
     KeyboardInterrupt
         Ctrl-C or a termination while TCP streams are received, raised on with its
-        ``received`` attribute saying how many data frames had come from which server.
+        ``received`` attribute saying how many data frames had come from which server,
+        and ``recordings``: (server, its CFG-2 bytes, its data frames) of each stream
+        that had sent data frames, a recording of what came (`estimate track` writes it).
     InputError
         As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
         ``--source``); more TCP servers than PMUs; a stream at another rate or nominal
@@ -398,12 +400,20 @@ def read_frames(
             )
         got: list[Stream | Exception | None] = [None] * len(source.servers)
         came: list[list] = [[] for _ in source.servers]  # each stream's data frames so far
+        configs: list[list] = [[] for _ in source.servers]  # each stream's CFG-2, once read
         n_servers = len(source.servers)  # sharing what one stream may hold, as a recording
 
         def fetch(k, host, port):
             try:
                 got[k] = receive(
-                    host, port, end, codes[k], timeout, came[k], MAX_STREAM_BYTES // n_servers
+                    host,
+                    port,
+                    end,
+                    codes[k],
+                    timeout,
+                    came[k],
+                    MAX_STREAM_BYTES // n_servers,
+                    configs[k],
                 )
             except (InputError, OSError) as exc:  # handed to the caller
                 got[k] = exc
@@ -418,8 +428,13 @@ def read_frames(
             for t in threads:
                 while t.is_alive():  # a join with a time-out lets Ctrl-C through
                     t.join(0.2)
-        except KeyboardInterrupt as exc:  # said with what had come
+        except KeyboardInterrupt as exc:  # said with what had come, kept by the caller
             exc.received = _came(source, came)  # type: ignore[attr-defined]
+            exc.recordings = [  # type: ignore[attr-defined]
+                (hostport(h, p), cfg[0], list(frames))
+                for (h, p), cfg, frames in zip(source.servers, configs, came)
+                if cfg and frames
+            ]
             raise
         if errors := [g for g in got if isinstance(g, Exception)]:
             raise InputError(f"--source {source}: {errors[0]}") from None

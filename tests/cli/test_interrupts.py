@@ -346,9 +346,11 @@ def test_sigint_or_sigterm_ends_estimate_track_of_an_endless_stream(
 ):
     """`estimate track --until 100` of a server that sends a frame each 0.1 s and never
     closes, so the command waits on the stream: SIGINT or SIGTERM ends it within 10 s with
-    exit status 130 or 143 and one line saying how many data frames had come and that
-    they are not tracked (it said only "nothing is kept"), no traceback, nothing on stdout
-    and no e.csv, not even in part (outputs are written whole or not at all)."""
+    exit status 130 or 143 and one line saying how many data frames had come, that they
+    are not tracked (it said only "nothing is kept") and where they are kept: written as
+    a partial recording beside --out (round 29: they were lost), which tracks; no
+    traceback, nothing on stdout and no e.csv, not even in part (outputs are written
+    whole or not at all)."""
     with endless_server(*kundur_on_the_wire) as (port, streaming):
         args = ["estimate", "track", "kundur", "--source", f"tcp://127.0.0.1:{port}"]
         args += ["--until", "100", "--out", "e.csv"]
@@ -372,14 +374,27 @@ def test_sigint_or_sigterm_ends_estimate_track_of_an_endless_stream(
                 proc.communicate()
     assert proc.returncode == status, err
     said = re.fullmatch(
-        rf"interrupted: nothing is tracked: the (\d+) data frames from tcp://127.0.0.1:{port} "
-        r"had come, short of t = 100 s; a stream is tracked once received, so they are "
-        r"lost \(e.csv not written\); run again with: stabctl " + re.escape(" ".join(args)),
+        rf"interrupted: nothing is tracked \(e.csv not written\): the (\d+) data frames from "
+        rf"tcp://127.0.0.1:{port} had come, short of t = 100 s, and a stream is tracked once "
+        rf"received; 127.0.0.1:{port} sent them; the (\d+) data frames received are in "
+        r"e.received.c37, a partial recording \(track it: stabctl estimate track kundur "
+        r"--source FILE --out ...\); run again with: stabctl " + re.escape(" ".join(args)),
         err.strip().splitlines()[-1],
     )
-    assert said and int(said[1]) >= 1, err
+    assert said and int(said[1]) >= 1 and int(said[2]) >= int(said[1]), err
     assert "Traceback" not in err and out == ""
-    assert list(tmp_path.iterdir()) == []
+    assert [p.name for p in tmp_path.iterdir()] == ["e.received.c37"]
+    res = subprocess.run(
+        [sys.executable, "-m", "stabctl", "estimate", "track", "kundur", "--source"]
+        + ["e.received.c37", "--out", "r.csv"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert res.returncode == 0 and f"tracked {said[2]} frames from e.received.c37" in res.stdout, (
+        res.stderr
+    )
 
 
 @pytest.mark.parametrize(
