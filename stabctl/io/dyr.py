@@ -188,9 +188,10 @@ def read_dyr(path) -> list[DyrRecord]:
     for n, line in enumerate(text.splitlines(), 1):
         col = _stray_quote(line)
         if col is not None:  # the tokens skip it: 'GENROU read as GENROU, unnamed
-            raise CaseError(
+            raise CaseError(  # a comment whose record lacks its '/' is read as data
                 f"{path.name}:{n}: the quote ' at column {col + 1} is not closed: "
-                f"{line.strip()[:72]!r}"
+                f"{line.strip()[:72]!r}; if it is in a comment, the record before it is "
+                "not terminated by '/' (what follows a record's '/' is a comment)"
             )
         for m in _TOKEN.finditer(line):
             tok = m.group()

@@ -459,6 +459,13 @@ def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
         # the tokens skipped a quote that opens no string: 'GENCLS was read as GENCLS
         ("1 'GENCLS 1 3.0 0.0 /\n", r"t.dyr:1: the quote ' at column 3 is not closed"),
         ("1 'GENCLS' 1 3.0 0.0 ' /\n", r"t.dyr:1: the quote ' at column 22 is not closed"),
+        # a comment's apostrophe where the record lacks its '/' (round 29: the message
+        # pointed at the apostrophe only, not at the '/' missing)
+        (
+            "1 'GENCLS' 1 3.0 0.0 the paper's machine\n",
+            r"t.dyr:1: the quote ' at column 31 is not closed: .*; if it is in a comment, the "
+            r"record before it is not terminated by '/'",
+        ),
         (
             "B1 'GENCLS' 1 3.0 0.0 /\n",
             r"t.dyr:1 GENCLS \(bus B1, id 1\): IBUS = 'B1': not an integer",
