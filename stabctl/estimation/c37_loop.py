@@ -257,7 +257,8 @@ class PlantLink:
             raise InputError(f"speed must be > 0, got {speed}")
         self.ctrl, self.cfg, self.timeout = controller, cfg, float(timeout)
         self.guard = Guard(tuple(allow), float(timeout))
-        #: peers dropped before a controller took the loop, each with the reason
+        #: peers dropped, each with the reason: before a controller took the loop, and
+        #: those whose handshake ended after it did
         self.refused: list[str] = []
         self.speed, self._start = float(speed), None
         self.cfg2 = c37.config_frame(cfg)
@@ -349,8 +350,12 @@ class PlantLink:
                 conn.close()
                 return
             with lock:
-                if won:  # another peer took the loop first
+                if won:  # another peer took the loop first: dropped, and named
                     conn.close()
+                    if won[0] is not None:
+                        self.refused.append(
+                            f"{hostport(*peer[:2])}: another peer took the loop first"
+                        )
                 else:
                     won.append(conn)
 

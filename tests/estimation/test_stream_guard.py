@@ -244,6 +244,28 @@ def _plant(case, timeout, allow=()):
     return ctrl, cfg, c37_loop.PlantLink(ctrl, cfg, timeout=timeout, allow=allow)
 
 
+def test_a_peer_whose_handshake_ends_after_the_controller_s_is_dropped_and_named():
+    """Two peers handshake at once: the one that says 'start' first takes the loop, and the
+    other, closed when its own 'start' came, was dropped without a word (round 29: the
+    summary named no second peer).  It is named among the dropped peers."""
+    from pyc37.frame import CommandFrame
+
+    case = stabctl.load_case("kundur")
+    partial = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 7)], t_end=0.1)
+    ctrl, cfg, link = _plant(case, timeout=60)  # the handshakes' deadline: a first compile
+    with link, socket.create_connection(link.address, timeout=5) as late:
+        late.sendall(CommandFrame(1, "cfg2").convert2bytes())  # its handshake begun
+        threading.Thread(
+            target=lambda: c37_loop.serve_controller(ctrl, cfg, *link.address, timeout=60),
+            daemon=True,
+        ).start()
+        link(0.05, partial)  # answered: the controller took the loop
+        late.sendall(CommandFrame(1, "start").convert2bytes())
+        me = f"127.0.0.1:{late.getsockname()[1]}"
+        said = f"{me}: another peer took the loop first"
+        assert _until(lambda: said in link.refused), link.refused
+
+
 def test_a_plant_takes_no_stranger_as_controller():
     """The first peer of the plant is a stranger that never says 'start': it is dropped and
     the controller that connects next runs the loop; a peer not allowed is closed; an
