@@ -706,7 +706,7 @@ def _keep_received(out_path, recordings: list, case_name: str) -> str:
         said.append(
             keep_interrupted(
                 at,
-                f"{server} sent them",
+                f"{server} sent {'it' if len(frames) == 1 else 'them'}",
                 len(frames),
                 "data frame received" if len(frames) == 1 else "data frames received",
                 "a partial recording",
