@@ -455,11 +455,12 @@ def pack(fleet: StorageFleet | None, case: Case, nc_idx: np.ndarray, xslot=None)
     base, f0 = case.base_mva, case.freq_hz
     devs = () if fleet is None else fleet.devices
     for num, at in () if fleet is None else fleet.machines_at:
-        if int(case.machines.bus[case.machine_index(num)]) != at:
+        here = int(case.machines.bus[case.machine_index(num)])
+        if here != at:
             raise CaseError(
                 f"storage fleet built for a case whose machine {num} is at bus {at}: case "
-                f"'{case.name}' has it at bus {int(case.machines.bus[case.machine_index(num)])}"
-                "; build the fleet from this case (uniform_fleet(case, pct))"
+                f"'{case.name}' has it at bus {here}; build the fleet from this case "
+                "(uniform_fleet(case, pct))"
             )
     bus = np.array([case.bus_index(d.bus) for d in devs], np.int64)
     pos = np.array(
