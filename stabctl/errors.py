@@ -59,17 +59,6 @@ def advice(library: str, cli: str = "") -> str:
     return cli if _FRONT.get() == "cli" else library
 
 
-def from_command_line() -> bool:
-    """Whether stabctl runs a command of its command line (`on_command_line`): a check a
-    command makes in its options' words is then left to it.
-
-    Returns
-    -------
-    bool
-    """
-    return _FRONT.get() == "cli"
-
-
 @contextmanager
 def on_command_line() -> Iterator[None]:
     """Within this block errors advise command-line options, not Python arguments

@@ -933,16 +933,45 @@ def refuse_fault_of_no_length(ev, given: str, hint: str = "") -> None:
         names `given`, the time and why.
     """
     if ev.clear_near is not None and ev.far_clear == ev.t:
-        raise InputError(
-            f"{given}: cleared at {ev.t:g} s, as it starts: a fault of no length would do "
-            f"nothing{hint}"
-        )
+        raise InputError(_no_length(given, ev.t, hint))
     if ev.clear_near is not None and ev.far_clear - ev.t < SHORTEST_FAULT_S:
         raise InputError(
             f"{given}: cleared {ev.far_clear - ev.t:.3g} s after it starts, under "
             f"{SHORTEST_FAULT_S:g} s: no step of a run is that short, so it would do "
             f"nothing{hint}"
         )
+
+
+def refuse_cycles_of_no_length(
+    near: float, far: float | None, t_fault: float, given: str, hint: str = ""
+) -> None:
+    """Refuse clearing cycles of 0 at both ends before the fault is built
+    (`stabctl.dynamics.events.fault_with_clearing`, which refuses them in its arguments'
+    words), as `refuse_fault_of_no_length` says it.
+
+    Parameters
+    ----------
+    near, far : float, float or None
+        The near- and far-end clearing cycles (``--clear-cycles``, ``--far-clear-cycles``;
+        None: with the near end).
+    t_fault : float
+        The fault's start, s.
+    given : str
+        The options that gave it, as given.
+    hint : str, optional
+        What to give instead, completing the message.
+
+    Raises
+    ------
+    InputError
+        Both ends cleared at 0 cycles: the message names `given`, the time and why.
+    """
+    if (near if far is None else far) == 0:
+        raise InputError(_no_length(given, t_fault, hint))
+
+
+def _no_length(given: str, t: float, hint: str) -> str:
+    return f"{given}: cleared at {t:g} s, as it starts: a fault of no length would do nothing{hint}"
 
 
 #: the shortest fault a command runs, s: a microsecond, the resolution of the time stamps

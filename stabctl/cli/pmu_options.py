@@ -17,6 +17,7 @@ from stabctl.cli.options import (
     fault_options,
     fault_text,
     named_option,
+    refuse_cycles_of_no_length,
     refuse_fault_of_no_length,
     tf_option,
 )
@@ -235,13 +236,11 @@ def fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf):
     if not tf > 0:
         raise InputError(f"--tf must be > 0, got {tf:g}")
     case = load_case(case_name)
+    given = f"{fault_text(fault, far_bus)} --clear-cycles {clear_cycles:g}"
+    refuse_cycles_of_no_length(clear_cycles, None, t_fault, given, ": give --clear-cycles > 0")
     with named_option(fault_text(fault, far_bus)):
         ev = fault_with_clearing(case, fault, far_bus, t_fault, clear_cycles)
-    refuse_fault_of_no_length(
-        ev,
-        f"{fault_text(fault, far_bus)} --clear-cycles {clear_cycles:g}",
-        ": give --clear-cycles > 0",
-    )
+    refuse_fault_of_no_length(ev, given, ": give --clear-cycles > 0")
     check_option_events(case, [(fault_text(fault, far_bus), ev)])
     if late := [t for t in ev.times() if t >= tf]:
         what = "starts" if late[0] == min(ev.times()) else "is cleared"

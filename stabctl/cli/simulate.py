@@ -40,6 +40,7 @@ from stabctl.cli.options import (
     out_file_option,
     plot_option,
     q_limits_option,
+    refuse_cycles_of_no_length,
     refuse_fault_of_no_length,
     refuse_given,
     reports_errors,
@@ -177,23 +178,21 @@ def _build_events(
             raise InputError(f"--far-clear-cycles must be >= 0, got {far_clear_cycles:g}")
         if t_fault < 0:
             raise InputError(f"--t-fault must be >= 0 s, got {t_fault:g}")
+        far = "" if far_clear_cycles is None else f" --far-clear-cycles {far_clear_cycles:g}"
+        named = f"{fault_text(fault, far_bus, circuit)} --clear-cycles {clear_cycles:g}{far}"
+        hint = ": give --clear-cycles > 0" + (
+            ""
+            if far_bus is None
+            else f" (the line's trip alone: --trip {fault} {far_bus}"
+            + ("" if circuit == 1 else f":{circuit}")
+            + ")"
+        )
+        refuse_cycles_of_no_length(clear_cycles, far_clear_cycles, t_fault, named, hint)
         with named_option(fault_text(fault, far_bus, circuit)):
             ev = fault_with_clearing(
                 case, fault, far_bus, t_fault, clear_cycles, far_clear_cycles, circuit=circuit
             )
-        far = "" if far_clear_cycles is None else f" --far-clear-cycles {far_clear_cycles:g}"
-        refuse_fault_of_no_length(
-            ev,
-            f"{fault_text(fault, far_bus, circuit)} --clear-cycles {clear_cycles:g}{far}",
-            ": give --clear-cycles > 0"
-            + (
-                ""
-                if far_bus is None
-                else f" (the line's trip alone: --trip {fault} {far_bus}"
-                + ("" if circuit == 1 else f":{circuit}")
-                + ")"
-            ),
-        )
+        refuse_fault_of_no_length(ev, named, hint)
         check_option_events(case, [(fault_text(fault, far_bus, circuit), ev)])
         events.append(ev)
     if trips:

@@ -37,7 +37,7 @@ from stabctl.case.events import (
 )
 from stabctl.case.events import as_record as as_record
 from stabctl.dynamics.model import StageConfig
-from stabctl.errors import CaseError, InputError, advice, from_command_line, require_number
+from stabctl.errors import CaseError, InputError, advice, require_number
 
 #: the classes an event of a run may be (a case's own records' and a playback source)
 EVENT_TYPES = (*EVENT_KINDS.values(), Playback)
@@ -334,7 +334,7 @@ def fault_with_clearing(
             f"end, got {near:g} and {far:g}"
             + advice(" (clear_cycles, far_clear_cycles)", " (--clear-cycles, --far-clear-cycles)")
         )
-    if far == 0 and not from_command_line():  # a command says it in its options' words
+    if far == 0:
         raise InputError(
             "fault_with_clearing(clear_cycles): 0 cycles at both ends, cleared as it starts: "
             "a fault of no length would do nothing (a line trip alone is "
