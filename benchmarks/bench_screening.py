@@ -9,7 +9,8 @@ judged on the CPU time of the command and its workers divided by the workers (th
 time moves with other work on the machine).  Each run starts from an empty records file
 (nothing resumed); the times include starting the workers and loading their kernels.
 Printed: the settings, the verdicts, the simulations a CCT (bus and branch faults apart,
-the branch faults searched from their bus fault's CCT apart again), the simulations a
+the branch faults searched from their bus fault's CCT apart again), the bus faults'
+probes after their first bracket beside a plain bisection's of it, the simulations a
 search with the verdicts' runs counted too (a robust fault's one run) and, with --compare,
 how many faults have the same verdict, 1 ms cell and half-step CCT as an earlier records
 file (matched by key).
@@ -90,6 +91,33 @@ def _runs_a_search(recs: list) -> str:
     return f"{statistics.mean(n):.2f} ({len(n)} searches)" if n else "-"
 
 
+def _refining(recs: list) -> str:
+    """Probes at the step a CCT's search ran after its first (stable, unstable) bracket
+    (mean), beside the probes a plain bisection of that bracket to the same 1 ms cell
+    would run (counted from the CCT found, verdicts taken to be monotone in the clearing
+    time): what SIME's margins save or cost once the doubling has bracketed the CCT."""
+    ran, bisected = [], []
+    for rec in recs:
+        r = rec["result"]
+        tol, probes = r["tol_s"], [round(t / r["tol_s"]) for t, _ in r["probes"]]
+        lo, hi = (round(t / tol) for t in r["search_bracket_s"])
+        cct = round(r["t_stable_s"] / tol)
+        if lo not in probes or hi not in probes:  # a bracket closed from a guess
+            continue
+        ran.append(len(probes) - 1 - max(probes.index(lo), probes.index(hi)))
+        n = 0
+        while hi - lo > 1:
+            mid, n = (lo + hi) // 2, n + 1
+            lo, hi = (mid, hi) if mid <= cct else (lo, mid)
+        bisected.append(n)
+    if not ran:
+        return "-"
+    return (
+        f"{statistics.mean(ran):.2f} after the bracket against {statistics.mean(bisected):.2f} "
+        f"by bisection ({len(ran)} CCTs)"
+    )
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", default="miniwecc", help="built-in case name or case file")
@@ -148,6 +176,7 @@ def main(argv=None):
         f"{_full_runs(bus)}): runs ended by their verdict count their steps, the half-step "
         "reruns twice theirs"
     )
+    print(f"bus faults' probes at the step {_refining(bus)}")
     every = [recs[r["key"]] for r in rows]
     print(
         f"simulations a search, verdicts included: {_runs_a_search(every)}; bus faults "
