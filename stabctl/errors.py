@@ -198,8 +198,9 @@ def check_fields(obj) -> None:
     ``obj`` annotated ``int``, ``float`` or ``bool`` (or one of them ``| None``) holds
     another type: ``Fault('3', 1.0)`` ran as bus 3, ``LineFault(3, 101, '1')`` failed
     in the search with a numpy message.  An ``int`` field takes a number with no fraction
-    (``3.0``: the case tables hold bus numbers as floats); a ``float`` field any real
-    number.  Other fields are not checked here.
+    (``3.0``: the case tables hold bus numbers as floats) and holds it as an int from then
+    on, so that it reads "bus 3" where it is shown, not "bus 3.0"; a ``float`` field any
+    real number.  Other fields are not checked here.
 
     Parameters
     ----------
@@ -221,8 +222,10 @@ def check_fields(obj) -> None:
         name = f"{type(obj).__name__}({f.name})"
         if "bool" in kinds:
             require_flag(value, name)
-        elif "int" in kinds and not is_whole_number(value):
-            raise WrongTypeError(f"{name}: a whole number is needed, got {_shown(value)}")
+        elif "int" in kinds:
+            if not is_whole_number(value):
+                raise WrongTypeError(f"{name}: a whole number is needed, got {_shown(value)}")
+            object.__setattr__(obj, f.name, int(value))
         elif "float" in kinds:
             require_number(value, name)
 

@@ -270,10 +270,15 @@ def test_fault_with_clearing_checks_its_fault_against_the_case(kundur):
 
 
 def test_bus_numbers_held_as_floats_by_the_case_tables_stay_accepted(kundur):
-    """The case tables hold bus numbers as float64: a fault built from them is bus 3."""
+    """The case tables hold bus numbers as float64: a fault built from them is bus 3, held
+    and shown as an integer ("bus 3.0" and "line 3.0-101" were shown, round 29)."""
     bus = kundur.buses.number[kundur.bus_indices([3])[0]]
     assert isinstance(bus, float) or bus.dtype.kind == "f"
-    assert stabctl.LineFault(bus, 101).describe().startswith("fault at bus 3")
+    fault = stabctl.LineFault(bus, np.float64(101), trips=[(13.0, 14.0)])
+    assert fault.describe() == "fault at bus 3 on line 3-101 at 1 s, 13-14 also opened"
+    assert [type(v) for v in (fault.bus, fault.far_bus, *fault.trips[0])] == [int] * 4
+    event = stabctl.fault_with_clearing(kundur, 3.0, 101.0, 1.0, 5)
+    assert str(event).startswith("3-phase fault at bus 3 at 1 s on line 3-101 (circuit 1)")
 
 
 @pytest.mark.parametrize(

@@ -232,7 +232,7 @@ class LineFault:
                 raise WrongTypeError(
                     f"LineFault(trips): each a (from_bus, to_bus) pair of bus numbers, got {pair!r}"
                 )
-        object.__setattr__(self, "trips", tuple(tuple(pair) for pair in trips))
+        object.__setattr__(self, "trips", tuple((int(a), int(b)) for a, b in trips))
 
     def events(self, t_clear: float) -> list:
         """The run's events for one clearing time.
