@@ -45,7 +45,7 @@ from typing import TYPE_CHECKING, ClassVar, Self
 import numpy as np
 
 from stabctl.case.events import events_of_records
-from stabctl.errors import CaseError, UnknownBusError, WrongTypeError, is_number
+from stabctl.errors import CaseError, InputError, UnknownBusError, WrongTypeError, is_number
 from stabctl.models import converters as _converters
 from stabctl.models import exciters as _exciters
 from stabctl.models import governors as _governors
@@ -1711,6 +1711,24 @@ class Case:
         """
         m = self.machines
         return {int(k) for k, h in zip(m.number, m.H) if h == 0}
+
+    def require_machines(self, need: str) -> None:
+        """Refuse a case without machines (a static case: `stabctl import-andes --static`,
+        a RAW without DYR) for work that needs them.
+
+        Parameters
+        ----------
+        need : str
+            What needs them, completing the message ("a dynamic run or linearisation
+            needs at least one").
+
+        Raises
+        ------
+        InputError
+            No machine: the message names the case and `need`.
+        """
+        if len(self.machines) == 0:
+            raise InputError(f"case '{self.name}' has no machines (mac_con is empty): {need}")
 
     def machine_name(self, number) -> str:
         """How outputs name machine ``number``: its number and its bus, ``"G14 (bus 3)"``,

@@ -321,8 +321,9 @@ def model_settings(conventions: str, step, q_limits: bool = True):
 
 def check_power_flow(case, model) -> None:
     """Solve the base case's power flow before a batch dispatches any job: a case whose
-    power flow does not converge is refused once (every job ran and failed with the same
-    error, the batch exited 0 with a file of failures).
+    power flow does not converge, or that has no machines (a static case), is refused
+    once (every job ran and failed with the same error, the batch exited 0 with a file of
+    failures).
 
     Parameters
     ----------
@@ -337,9 +338,12 @@ def check_power_flow(case, model) -> None:
     PowerFlowError
         The power flow does not converge (names the case, the iterations and the worst
         mismatch bus).
+    InputError
+        The case has no machines.
     """
     from stabctl.network.powerflow import solve_powerflow
 
+    case.require_machines("a CCT search needs at least one")
     solve_powerflow(case, q_limits=model.q_limits)
 
 

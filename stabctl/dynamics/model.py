@@ -1393,11 +1393,7 @@ def _warn_netted(case: Case, has_mac: np.ndarray, S_free: np.ndarray) -> None:
 
 def _check_machines(stage: Case) -> Case:
     """The stage; InputError for a case without machines."""
-    if len(stage.machines) == 0:
-        raise InputError(
-            f"case '{stage.name}' has no machines (mac_con is empty): a dynamic "
-            "run or linearisation needs at least one"
-        )
+    stage.require_machines("a dynamic run or linearisation needs at least one")
     return stage
 
 

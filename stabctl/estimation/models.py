@@ -239,6 +239,7 @@ def machine_models(case: Case, pmus) -> MachineModels:
     infinite bus (H = 0: no swing to filter), or the machines lie in several islands (the
     estimated COI, `coi_speed`, is the whole system's; the simulator's is each island's,
     `stabctl.dynamics.coi.coi_of_islands`)."""
+    case.require_machines("the speed estimators filter each machine's swing and need one")
     mp = machine_params(case)
     infinite = case.machines.number[mp.H == 0].astype(int).tolist()
     if infinite:

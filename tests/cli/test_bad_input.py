@@ -317,8 +317,19 @@ def test_case_without_machines_says_so(tmp_path):
         d["tables"][t]["rows"] = []
     path = tmp_path / "nomac.json"
     path.write_text(json.dumps(d))
-    for args in (("simulate", path, "--tf", 1), ("eig", path)):
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    for args in (
+        ("simulate", path, "--tf", 1),
+        ("eig", path),
+        # round 30: the estimators' models crashed (a traceback), the batches ran and
+        # recorded one failure per job
+        ("pmu", "control", path, "127.0.0.1:1", "--esd-pct", 5),
+        ("screen", path, "--out", tmp_path / "s.jsonl", "--workers", 1),
+        ("sweep-cct", path, "--faults", faults, "--out", tmp_path / "w.jsonl", "--workers", 1),
+    ):
         assert_error(run(*args), "has no machines (mac_con is empty)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv", "nomac.json"]
 
 
 def test_case_file_without_tables_or_bases_names_what_is_missing(tmp_path):
