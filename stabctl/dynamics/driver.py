@@ -707,7 +707,7 @@ class Simulator:
             start = m.layout.blocks["ibr"][0].start
             xslot = start + int(conv.PLANT_PREF_SLOT) * m.cp.n + self.battery_rows
         sa = st.pack(storage, self.case, m.nc_idx, xslot)
-        check_step(self.fastest, h, explicit=method == "heun")
+        check_step(self.fastest, h, explicit=method == "heun", freq_hz=self.case.freq_hz)
         n_buses = None if bus_rows is None else bus_rows.size
         check_step_count(t_end, h, self.case, n_buses)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)

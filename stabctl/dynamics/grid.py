@@ -148,25 +148,28 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
     return min(cands) if cands else (np.inf, "")
 
 
-#: largest trapezoid step run without a warning, s: one cycle at 60 Hz (PSS/E's default
-#: is half a cycle, ANDES's two).  The trapezoid is A-stable, so a larger step runs, but a
-#: 1-2 Hz swing is then sampled a few dozen times a period or less and a verdict near the
-#: CCT is the step's (Kundur's bus-3 fault cleared in 6 cycles, stable, is unstable at
-#: 0.25 s: angles of 13-26 rad; cleared in 9.2 cycles, 1.2 ms below its CCT, it is stable
-#: at 5 and 10 ms and unstable at 20 ms).
-TRAPEZOID_TRUSTED_STEP = 1 / 60
+#: largest trapezoid step run without a warning, in cycles of the case's frequency (one:
+#: 1/60 s at 60 Hz, 0.02 s at 50 Hz; PSS/E's default is half a cycle, ANDES's two).  The
+#: trapezoid is A-stable, so a larger step runs, but a 1-2 Hz swing is then sampled a few
+#: dozen times a period or less and a verdict near the CCT is the step's (Kundur's bus-3
+#: fault cleared in 6 cycles, stable, is unstable at 0.25 s: angles of 13-26 rad; cleared
+#: in 9.2 cycles, 1.2 ms below its CCT, it is stable at 5 and 10 ms and unstable at 20 ms).
+TRAPEZOID_TRUSTED_CYCLES = 1.0
 
 
-def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> None:
+def check_step(
+    fastest: tuple[float, str], h: float, explicit: bool = True, freq_hz: float = 60.0
+) -> None:
     """Raise InputError when h is not a positive finite step or, for the explicit
     predictor-corrector (explicit), exceeds twice the fastest time constant
     (`fastest_time_constant`): it is unstable there (its stability interval is h/T < 2).
-    The implicit trapezoid (explicit False) is A-stable: above TRAPEZOID_TRUSTED_STEP it
-    runs with a warning (UserWarning) to halve the step and compare.  The
-    predictor-corrector between once and twice the fastest time constant runs with such a
-    warning too: a lag alone is stable there, but a fast loop closed around it (an
-    exciter's high gain) can swing at the step's own period, and a run then ends in a
-    separation that is the step's (Kundur's bus-3 fault at 0.0185 s, stable at 1 ms)."""
+    The implicit trapezoid (explicit False) is A-stable: above TRAPEZOID_TRUSTED_CYCLES
+    cycles of `freq_hz` (Hz, the case's) it runs with a warning (UserWarning) to halve
+    the step and compare.  The predictor-corrector between once and twice the fastest
+    time constant runs with such a warning too: a lag alone is stable there, but a fast
+    loop closed around it (an exciter's high gain) can swing at the step's own period, and
+    a run then ends in a separation that is the step's (Kundur's bus-3 fault at 0.0185 s,
+    stable at 1 ms)."""
     T, where = fastest
     if not 0 < h < np.inf:
         where = advice("run(h), Simulator(step)", "--step")
@@ -184,9 +187,10 @@ def check_step(fastest: tuple[float, str], h: float, explicit: bool = True) -> N
             "halve the step and compare (--check-step)",
             stacklevel=3,
         )
-    if not explicit and h > TRAPEZOID_TRUSTED_STEP * (1 + 1e-9):
+    trusted = TRAPEZOID_TRUSTED_CYCLES / freq_hz
+    if not explicit and h > trusted * (1 + 1e-9):
         warnings.warn(
-            f"trapezoid step {h:g} s is above {TRAPEZOID_TRUSTED_STEP:.4g} s (one cycle): "
+            f"trapezoid step {h:g} s is above {trusted:.4g} s (one cycle at {freq_hz:g} Hz): "
             "the swings are sampled too coarsely to trust the verdict; halve the step and "
             "compare",
             stacklevel=3,

@@ -2,6 +2,7 @@
 the CLI, and bad input (exit status 2, one `error:` line, no file written)."""
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -710,7 +711,7 @@ def test_a_trapezoid_step_above_one_cycle_is_a_warning():
     args = ["simulate", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "3"]
     coarse = run(*args, "--method", "trapezoid", "--step", "0.1")
     assert coarse.exit_code == 0, coarse.output
-    assert "warning: trapezoid step 0.1 s is above 0.01667 s (one cycle)" in coarse.stderr
+    assert "warning: trapezoid step 0.1 s is above 0.01667 s (one cycle at 60 Hz)" in coarse.stderr
     assert "halve the step and compare" in coarse.stderr
     fine = run(*args, "--method", "trapezoid", "--step", str(1 / 60))
     assert fine.exit_code == 0 and "warning" not in fine.stderr
@@ -718,7 +719,19 @@ def test_a_trapezoid_step_above_one_cycle_is_a_warning():
     at = {h: json.loads(run(*near, "--step", h).stdout)["stable"] for h in ("0.005", "0.01")}
     assert at == {"0.005": True, "0.01": True}
     coarse = run(*near, "--step", "0.02")
-    assert "warning: trapezoid step 0.02 s is above 0.01667 s (one cycle)" in coarse.stderr
+    assert "warning: trapezoid step 0.02 s is above 0.01667 s (one cycle at 60 Hz)" in coarse.stderr
+
+
+def test_the_trapezoid_s_one_cycle_is_the_case_s_frequency_s():
+    """Round 30: a 50 Hz case's trapezoid step of 0.019 s, within its cycle of 0.02 s, was
+    warned of as above 0.01667 s (a 60 Hz cycle)."""
+    from stabctl.dynamics.grid import check_step
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_step((1.0, "none"), 0.019, explicit=False, freq_hz=50.0)
+    with pytest.warns(UserWarning, match=r"above 0.02 s \(one cycle at 50 Hz\)"):
+        check_step((1.0, "none"), 0.021, explicit=False, freq_hz=50.0)
 
 
 def test_tripping_every_machine_is_reported_as_de_energised_not_stable(tmp_path):
