@@ -457,8 +457,8 @@ class Simulator:
             Heun only: ``monitor(partial) -> str or None`` is called every
             `MONITOR_EVERY_S` of simulated time with the trajectory so far (a
             SimulationResult without verdict, arrays are views); a string ends the run
-            there and is kept as ``meta["early_verdict"]`` (the partial's vmag and vang
-            are empty; e.g.
+            there and is kept as ``meta["early_verdict"]``, the run's verdict then
+            ``STOPPED`` unless it separated (the partial's vmag and vang are empty; e.g.
             `stabctl.stability.sime.EarlyVerdict`).  The trajectory up to the stop equals
             the unmonitored run's.  None (default): no monitor.
         voltages : bool or sequence of int, optional
@@ -504,8 +504,9 @@ class Simulator:
             the partial result as ``.result``.
         TypeError
             An event that is no event class (a str, None), `storage` not a
-            `StorageFleet`; `events` not a list, `h` not a number or `monitor` not a
-            function (`stabctl.errors.WrongTypeError`).
+            `StorageFleet`; `events` not a list, `h` not a number, `monitor` not a
+            function or returning neither None nor a string
+            (`stabctl.errors.WrongTypeError`).
         """
         semantics = self._semantics(semantics)
         _check_method(method, semantics, storage)
@@ -1050,6 +1051,11 @@ def _advance_monitored(run: _Run, monitor) -> str | None:
         if run.status != ig.OK:
             return None
         verdict = monitor(run.partial(run.k, np.inf, voltages=False))
+        if verdict is not None and not isinstance(verdict, str):
+            raise WrongTypeError(
+                "run(monitor): a monitor returns None (run on) or a string (stop here, its "
+                f"early verdict), got {verdict!r} ({type(verdict).__name__})"
+            )
         if verdict is not None:
             return verdict
     return None

@@ -65,6 +65,10 @@ SERIES_UNITS = {
 LOSS_OF_SYNCHRONISM = "loss of synchronism"
 #: the verdict of a run whose events left no machine in service (`de_energised_at`)
 DE_ENERGISED = "de-energised"
+#: the verdict of a run its monitor ended before its end without a separation
+#: (`stabctl.dynamics.driver.Simulator.run`'s `monitor`; its own word in
+#: ``meta["early_verdict"]``): undecided
+STOPPED = "stopped by its monitor"
 
 
 def de_energised_at(partitions, t_end: float) -> float | None:
@@ -222,12 +226,15 @@ class SimulationResult:
     @property
     def verdict(self) -> str:
         """The run's verdict, a label: ``"stable"``, ``"loss of synchronism"`` (some rotor
-        angle left the COI by more than the limit: `t_separation`) or ``DE_ENERGISED``
-        (no machine left in service: `de_energised_s`)."""
+        angle left the COI by more than the limit: `t_separation`), ``DE_ENERGISED``
+        (no machine left in service: `de_energised_s`) or ``STOPPED`` (ended by a run
+        monitor before its end, neither of those seen by then: undecided)."""
         if self.t_separation is not None:
             return LOSS_OF_SYNCHRONISM
         if self.de_energised_s is not None:
             return DE_ENERGISED
+        if self.stable and "early_verdict" in self.meta:
+            return STOPPED
         return "stable" if self.stable else LOSS_OF_SYNCHRONISM
 
     # -- centre of inertia (paper eq. 40) ----------------------------------------------
@@ -431,16 +438,18 @@ class SimulationResult:
         Returns
         -------
         dict
-            ``stable`` (bool), ``verdict`` (`verdict`), ``de_energised_s`` (s or None),
+            ``stable`` (bool; None for a run its monitor stopped undecided, `STOPPED`),
+            ``verdict`` (`verdict`), ``de_energised_s`` (s or None),
             ``t_separation_s`` (s or None), ``separated_machines``
             (machine numbers), ``max_angle_from_coi_rad`` (largest abs(delta_i - delta_COI),
             rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
             then every entry of `meta` but its trajectories (arrays, e.g. the WECC
             batteries' ``pesd_command``: in `meta`, not in a summary).
         """
+        verdict = self.verdict
         return {
-            "stable": self.stable,
-            "verdict": self.verdict,
+            "stable": None if verdict == STOPPED else self.stable,
+            "verdict": verdict,
             "de_energised_s": self.de_energised_s,
             "t_separation_s": self.t_separation,
             "separated_machines": [int(m) for m in self.separated],

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.results import LOSS_OF_SYNCHRONISM, STOPPED
 from stabctl.errors import InputError, SimulationError
 from stabctl.io import load_case
 from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
@@ -72,6 +73,16 @@ def test_monitored_run_is_the_same_trajectory_up_to_its_stop(kundur):
     n = stopped.t.size
     assert stopped.meta["early_verdict"] == "stable" and 2 < stopped.t[-1] < 2.2
     assert np.array_equal(stopped.angle, full.angle[:n])
+    # round 30: a run its monitor stopped read "stable" (a 30-cycle fault, unstable, stopped
+    # at 1.5 s); a monitor's 5 or 0 stopped the run as a string does
+    long_fault = kundur.run(
+        fault.events(0.5), 6.0, monitor=lambda r: "stop" if r.t[-1] > 1.5 else None
+    )
+    assert long_fault.verdict == STOPPED and long_fault.summary()["stable"] is None
+    assert kundur.run(fault.events(0.5), 6.0).verdict == LOSS_OF_SYNCHRONISM
+    for odd in (5, 0, b"stop"):
+        with pytest.raises(TypeError, match=r"run\(monitor\): a monitor returns None .* got"):
+            kundur.run(fault.events(0.1), 2.0, monitor=lambda r, odd=odd: odd)
 
 
 def test_early_verdicts_equal_full_runs_on_kundurs_screening():
