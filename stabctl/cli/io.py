@@ -620,6 +620,8 @@ def import_andes(
 
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
     _refuse_swapped(case_path, dyr_path, "CASE")
+    if static:
+        refuse_given(("conventions",), "with --static (a power-flow-only case has no models)")
     if conventions is None:
         conventions = "psse" if dyr_path is not None else "andes"
     imported = read_andes_case(

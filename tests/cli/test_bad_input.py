@@ -2176,6 +2176,17 @@ def test_import_psse_refuses_options_without_effect(tmp_path, args, needle):
     assert not out.exists()
 
 
+def test_import_andes_refuses_conventions_for_a_power_flow_only_case(tmp_path):
+    """Round 30: `import-andes CASE --static --dyr-conventions pst` was accepted (exit 0),
+    where import-psse refuses the same pair."""
+    andes = pytest.importorskip("andes")
+    out = tmp_path / "s.json"
+    case5 = andes.get_case("matpower/case5.m")
+    res = run("import-andes", case5, "--static", "--dyr-conventions", "pst", "-o", out)
+    assert_error(res, "--dyr-conventions given with --static")
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("args", [("-c", 6, "-c", 6), ("6", "12", "-c", "6.0")])
 def test_omib_refuses_a_duration_given_twice(args):
     """`omib -c 6 -c 6` printed the 6-cycle row twice."""
