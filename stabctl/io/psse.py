@@ -353,6 +353,27 @@ def _without_machine(records):
     return net
 
 
+def _refuse_second_source(records, taken: frozenset) -> None:
+    """CaseError for a machine model record (GENCLS, GENROU, ...) of a generator that a
+    converter or compensator record already models (`taken`: their (bus, id)): PSS/E
+    gives a generator one source model.  Without it the machine record read as one for
+    no generator in service (the converter had taken it)."""
+    from stabctl.io.dyr import has_machine_model, maps_machine
+
+    first: dict = {}
+    for r in sorted(records, key=lambda r: not has_machine_model(r)):  # REGCA1 before REECA1
+        if (r.bus, r.id) in taken and not maps_machine(r):
+            first.setdefault((r.bus, r.id), r)
+    for r in records:
+        if maps_machine(r) and (r.bus, r.id) in first:
+            other = first[(r.bus, r.id)]
+            raise CaseError(
+                f"{r.label()}: second source model for this generator (first at "
+                f"{other.where()}, {other.model}): PSS/E models a generator by one machine, "
+                "converter or compensator model"
+            )
+
+
 def _dynamic_tables(
     raw: RawData, records, conventions
 ) -> tuple[dict, list[str], list[str], tuple, dict, dict[int, str]]:
@@ -375,6 +396,7 @@ def _dynamic_tables(
     for g in gens:  # a machine sharing its bus with a plant: its own share (PSS/E's)
         if int(g["bus"]) in plant_buses:
             g["pfrac"], g["qfrac"] = shares(gens, g)
+    _refuse_second_source(records, conv.replaced | svc.replaced)
     gens = [g for g, key in zip(gens, keys) if key not in conv.replaced | lost | svc.replaced]
     for number, g in enumerate(gens, 1):
         g["number"] = number

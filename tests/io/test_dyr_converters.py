@@ -370,6 +370,16 @@ def test_two_converter_interfaces_leave_the_plant_out(tmp_path):
     )
 
 
+def test_a_machine_model_beside_a_converter_of_one_generator_is_named(tmp_path):
+    """Round 30: RENA's GENCLS at bus 102 with a REGCA1 for that generator too was said
+    to match "no generator in service (none at bus 102)": the converter had taken it."""
+    regca1 = next(r for r in read_dyr(DYR) if r.model == "REGCA1")
+    dyr = _dyr(tmp_path, [DYR.read_text(), _text(regca1).replace("103 ", "102 ", 1)])
+    for how in ("error", "skip"):
+        with pytest.raises(CaseError, match=r"GENCLS .*102.*: second source model for this "):
+            import_psse(RAW, dyr, on_unsupported=how)
+
+
 #: REECD1's own CONs in the plant of `_reecd1_plant`: VDL1 (Iq) flat at Imax, VDL2 (Ip)
 #: rising from 0 at 0.2 pu to Imax at 0.5 pu (the rest of each table 0: unused), no
 #: compensation, Tr1 0.02 s, Ke 1 (storage), no blocking band
