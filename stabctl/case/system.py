@@ -703,6 +703,12 @@ class BranchTable(Table):
         )
 
 
+#: the least inertia constant of a machine that swings, s: no rotor is lighter (a small
+#: motor's H is about 0.1 s); below it a run's first step already moves the rotor by
+#: round-off (ANDES GENCLS M = 1e-9 imported, then refused as "not an equilibrium")
+LIGHTEST_H_S = 1e-3
+
+
 @_declared(MACHINE)
 class MachineTable(Table):
     """Synchronous machine data: PST ``mac_con`` (PST manual section 3.22 Table 10), plus
@@ -737,10 +743,18 @@ class MachineTable(Table):
         self._unique("number", "machine number")
         self._require(self.mva > 0, "mva", "machine base must be > 0")
         self._require(
-            (self.H > 0) | ((self.H == 0) & (self.xd == 0) & (self.xdp > 0)),
+            (self.H >= LIGHTEST_H_S) | ((self.H == 0) & (self.xd == 0) & (self.xdp > 0)),
             "H",
-            "inertia constant must be > 0 s (H = 0, an infinite bus, only for a classical "
-            "machine, x_d = 0, with x'd > 0)",
+            f"inertia constant must be >= {LIGHTEST_H_S:g} s (H = 0, an infinite bus, only "
+            "for a classical machine, x_d = 0, with x'd > 0)",
+        )
+        # every machine is a source behind a reactance (x'd: classical and transient; x"d:
+        # subtransient, and x"d <= x'd below): 0 makes the network singular
+        self._require(
+            self.xdp > 0,
+            "xdp",
+            "x'd must be > 0 pu: the machine's source reactance (0 would join its ideal "
+            "source to the network: singular)",
         )
         # the open-circuit time constants a machine's model divides by (x_d = 0: classical,
         # none; x"d = 0: transient, T'do; else subtransient, T'do and T"do); T'qo, T"qo of 0

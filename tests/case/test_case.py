@@ -235,7 +235,7 @@ def test_machine_index():
         ),
         (
             dict(mac=modified(MAC, 1, 15, -6.5)),
-            r"mac_con row 2 \(machine 2\), field 'H': inertia constant must be > 0 s "
+            r"mac_con row 2 \(machine 2\), field 'H': inertia constant must be >= 0.001 s "
             r"\(H = 0, an infinite bus, only for a classical machine, x_d = 0, with x'd > 0\), "
             r"got -6.5",
         ),

@@ -221,7 +221,7 @@ def _set(d, table, field, value, row=0):
             "machines",
             "H",
             0.0,
-            "table 'machines' row 1 (machine 1), field 'H': inertia constant must be > 0",
+            "table 'machines' row 1 (machine 1), field 'H': inertia constant must be >= 0.001 s",
         ),
         (
             "machines",
@@ -252,6 +252,10 @@ def _set(d, table, field, value, row=0):
         ("machines", "H", "6.5", "'machines' row 1, column 'H': \"6.5\" is not a number"),
         ("machines", "xd", 0.2, "field 'xd': x_d must be >= x'd"),
         ("machines", "xdpp", 0.35, "field 'xdp': x'd must be >= x\"d"),
+        # round 30 (ANDES GENCLS): x'd = 0 imported, then "singular network ... infs or
+        # NaNs" in every command; M = 1e-9 refused as "not an equilibrium"
+        ("machines", "xdp", 0.0, "field 'xdp': x'd must be > 0 pu: the machine's source"),
+        ("machines", "H", 5e-10, "field 'H': inertia constant must be >= 0.001 s"),
         # reported as power-flow non-convergence
         ("buses", "qmin", 99.0, "field 'qmax': generator Q limits: qmax must be >= qmin"),
         ("buses", "vmin", 1.6, "field 'vmax': voltage limits: vmax must be >= vmin"),
