@@ -524,6 +524,17 @@ class _Formula(str):
     program that does not compute formulas): read by pandas, and so ANDES, as empty."""
 
 
+class _ErrorCell(str):
+    """A spreadsheet cell holding an error value (``#VALUE!``, ``#DIV/0!``, ``#N/A``, ...:
+    a formula that failed): read by pandas, and so ANDES, as empty."""
+
+
+#: the error values a spreadsheet cell can hold (openpyxl's ``ERROR_CODES``)
+_ERROR_VALUES = frozenset(
+    ("#NULL!", "#DIV/0!", "#VALUE!", "#REF!", "#NAME?", "#NUM!", "#N/A", "#GETTING_DATA")
+)
+
+
 class _NaText(float):
     """A spreadsheet cell holding text that pandas, and so ANDES, reads as NaN ("NaN",
     "N/A", "null", ...): NaN, with the text kept to say so (`_how_left_out`)."""
@@ -664,7 +675,13 @@ def _input_rows(path: Path) -> tuple[dict, dict[str, list[int]]]:
             for (i, col), text in texts.get(name, {}).items():
                 row = rows[name][at[i]] if i in at else {}
                 if col in row and pd.isna(row[col]):  # pandas kept no value of it
-                    row[col] = _Formula(text) if text.startswith("=") else _NaText(text)
+                    row[col] = (
+                        _Formula(text)
+                        if text.startswith("=")
+                        else _ErrorCell(text)
+                        if text in _ERROR_VALUES
+                        else _NaText(text)
+                    )
         return rows, {name: [int(i) + 2 for i in df.index] for name, df in kept.items()}
     return {}, {}
 
@@ -712,7 +729,8 @@ def _cell_texts(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
                 (i, col): v
                 for i, row in enumerate(rows)
                 for col, v in zip(header, row)
-                if isinstance(v, str) and (v.startswith("=") or v in _NA_TEXTS)
+                if isinstance(v, str)
+                and (v.startswith("=") or v in _NA_TEXTS or v in _ERROR_VALUES)
             }
         return found
     finally:
@@ -935,14 +953,19 @@ def _holds(ss, name: str) -> bool:
 
 
 def _check_row(where: str, model: str, row: dict) -> None:
-    """CaseError for a formula without a stored value in any column of a case file's row,
-    a connection status ``u`` other than 0 or 1 (ANDES multiplies by it), or a Line of zero
-    impedance."""
+    """CaseError for a formula without a stored value or a spreadsheet error value
+    (`_ErrorCell`) in any column of a case file's row, a connection status ``u`` other
+    than 0 or 1 (ANDES multiplies by it), or a Line of zero impedance."""
     for name, v in row.items():
         if isinstance(v, _Formula):
             raise CaseError(
                 f"{where}: {name} is a formula ({v}) whose value the file does not hold "
                 "(saved without computing it: ANDES would read it as empty)"
+            )
+        if isinstance(v, _ErrorCell):
+            raise CaseError(
+                f"{where}: {name} is the spreadsheet error {v} (a formula that failed: "
+                "ANDES would read it as empty and run its default)"
             )
     u = row.get("u")
     if u is not None and u == u and u not in (0, 1):

@@ -62,6 +62,16 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             "EXDC2 row 1 (idx 1; spreadsheet row 2)"
             ": TA is a formula (=1/0) whose value the file does not hold",
         ),
+        # round 30: a spreadsheet error value, read as empty and run at ANDES's default
+        # (REECA1 Imax #VALUE! at 999 pu, said as "empty in the file")
+        (
+            [("EXDC2", 2, "TA", "#DIV/0!")],
+            "EXDC2 row 1 (idx 1; spreadsheet row 2): TA is the spreadsheet error #DIV/0!",
+        ),
+        (
+            [("GENROU", 2, "u", "#N/A")],
+            "GENROU row 1 (idx 1; spreadsheet row 2): u is the spreadsheet error #N/A",
+        ),
         (
             [("GENROU", 2, "u", 0.5)],
             "GENROU row 1 (idx 1; spreadsheet row 2): u = 0.5: the connection status",
