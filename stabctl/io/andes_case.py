@@ -788,6 +788,7 @@ def _file_inputs(path: Path, ss) -> _Given:
         )
         dynamic = m.group in _DYNAMIC_GROUPS
         lines = sheet_rows.get(sheet, [])
+        _check_unique_idx(path.name, sheet, rows, lines)
         for k, row in enumerate(rows, start=1):
             line = f"; spreadsheet row {lines[k - 1]}" if k <= len(lines) else ""
             where = f"{path.name}: {sheet} row {k} (idx {row.get('idx')}{line})"
@@ -950,6 +951,28 @@ def _holds(ss, name: str) -> bool:
     if name in ss.models:
         return ss.models[name].n > 0
     return name in ss.groups and any(k.n for k in ss.groups[name].models.values())
+
+
+def _check_unique_idx(file: str, sheet: str, rows: list, lines: list) -> None:
+    """CaseError for an idx two rows of one sheet give: ANDES renames the second (with a
+    warning) and a device linked to that idx (a Toggle's line, a control's machine) then
+    reaches the first, whichever the file meant."""
+    seen: dict = {}
+    for k, row in enumerate(rows, start=1):
+        idx = row.get("idx")
+        if idx is None or (isinstance(idx, float) and idx != idx):
+            continue
+        key = int(idx) if isinstance(idx, float) and idx.is_integer() else idx
+        if key in seen:
+            at = [
+                f"row {j}" + (f" (spreadsheet row {lines[j - 1]})" if j <= len(lines) else "")
+                for j in (seen[key], k)
+            ]
+            raise CaseError(
+                f"{file}: {sheet} {at[0]} and {at[1]} both give idx {key!r}: ANDES would "
+                "rename the second, and a device linked to that idx reach the first"
+            )
+        seen[key] = k
 
 
 def _check_row(where: str, model: str, row: dict) -> None:

@@ -72,6 +72,12 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             [("GENROU", 2, "u", "#N/A")],
             "GENROU row 1 (idx 1; spreadsheet row 2): u is the spreadsheet error #N/A",
         ),
+        # round 30: an idx given twice (the Toggle of line Line_8 reached row 3's line)
+        (
+            [("Line", 4, "idx", "Line_8")],
+            "Line row 3 (spreadsheet row 4) and row 9 (spreadsheet row 10) both give idx "
+            "'Line_8': ANDES would rename the second",
+        ),
         (
             [("GENROU", 2, "u", 0.5)],
             "GENROU row 1 (idx 1; spreadsheet row 2): u = 0.5: the connection status",
