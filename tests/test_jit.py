@@ -444,6 +444,25 @@ def test_a_cache_others_may_write_into_is_not_used(tmp_path):
     assert run.stdout.strip() == str(shared) and "numba cache" not in run.stderr
 
 
+def test_cache_directories_are_made_private_whatever_the_umask(tmp_path):
+    """Round 30: under umask 000 the first run made NUMBA_CACHE_DIR and its kernels'
+    directories 0777; the next run found them writable by others, moved the cache away
+    and compiled everything again.  A directory that exists keeps its mode."""
+    kept = tmp_path / "kept"
+    kept.mkdir(mode=0o755)
+    os.chmod(kept, 0o755)
+    old = os.umask(0)
+    try:
+        jc.make_private_dirs(kept / "nb" / "dynamics_0a1b")
+    finally:
+        os.umask(old)
+    modes = [
+        oct(p.stat().st_mode & 0o777) for p in (kept, kept / "nb", kept / "nb" / "dynamics_0a1b")
+    ]
+    assert modes == ["0o755", "0o700", "0o700"]
+    assert jc.unsafe_reason(kept / "nb") == ""
+
+
 def test_a_compiling_child_dies_with_its_parent():
     """A background compile's child started by a parent that is then SIGKILLed (the
     finding: the child outlived it): the kernel kills the child with its parent (prctl

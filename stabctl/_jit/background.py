@@ -24,7 +24,7 @@ from pathlib import Path
 
 from numba.core import event
 
-from stabctl._jit.cache import cached, stamp_cache
+from stabctl._jit.cache import cached, make_private_dirs, stamp_cache
 
 #: compiles under way in child processes (`compile_in_background`), by dispatcher name
 _BACKGROUND: dict[str, tuple[subprocess.Popen, object]] = {}
@@ -36,7 +36,7 @@ def _name(dispatcher) -> str:
 
 def _writable(directory: Path) -> bool:
     try:
-        directory.mkdir(parents=True, exist_ok=True)
+        make_private_dirs(directory)
         with tempfile.TemporaryFile(dir=directory):
             return True
     except OSError:

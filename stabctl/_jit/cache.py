@@ -281,6 +281,32 @@ def _could_make(directory: str) -> None:
         raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
 
 
+def make_private_dirs(directory) -> None:
+    """Make the missing directories of `directory` (and it) with mode 0700 whatever the
+    umask: numba's own ``os.makedirs`` gives them the umask's mode (0777 under umask
+    000), which `unsafe_reason` then refuses, moving the cache away and compiling again.
+    Directories that exist are left as they are.
+
+    Parameters
+    ----------
+    directory : str or Path
+        The directory.
+
+    Raises
+    ------
+    OSError
+        As ``os.mkdir``: a parent that is no directory, no permission.
+    """
+    path, missing = Path(directory), []
+    while not path.exists() and path.parent != path:
+        missing.append(path)
+        path = path.parent
+    for made in reversed(missing):
+        with contextlib.suppress(FileExistsError):  # made by another process meanwhile
+            made.mkdir(mode=0o700)
+            os.chmod(made, 0o700)
+
+
 class _LooksFirst:
     """Mixin of a numba cache locator whose first ``ensure_cache_path`` (numba's choice of
     a locator when a kernel is declared) only checks that the cache directory could be
@@ -292,6 +318,7 @@ class _LooksFirst:
     def ensure_cache_path(self):
         """Check (the first call) or make (later ones) the cache directory."""
         if self.__dict__.get("_chosen"):
+            make_private_dirs(self.get_cache_path())  # type: ignore[attr-defined]
             return super().ensure_cache_path()  # type: ignore[misc]
         self._chosen = True
         _could_make(self.get_cache_path())  # type: ignore[attr-defined]
@@ -578,7 +605,7 @@ def stamp_cache() -> None:
     stamp = _stamp()
     tmp = stamp.with_name(f".{stamp.name}.{os.getpid()}.tmp")
     try:
-        stamp.parent.mkdir(parents=True, exist_ok=True)
+        make_private_dirs(stamp.parent)
         flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
         fd = os.open(tmp, flags, 0o644)
         with os.fdopen(fd, "w") as f:
