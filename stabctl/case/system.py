@@ -703,6 +703,10 @@ class BranchTable(Table):
         )
 
 
+#: the longest case name, characters: every message names the case (a 5 MB name made
+#: each error line 5 MB)
+LONGEST_NAME = 200
+
 #: the least inertia constant of a machine that swings, s: no rotor is lighter (a small
 #: motor's H is about 0.1 s); below it a run's first step already moves the rotor by
 #: round-off (ANDES GENCLS M = 1e-9 imported, then refused as "not an equilibrium")
@@ -1402,6 +1406,13 @@ class Case:
     _mac_map: Mapping[int, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
+        if not isinstance(self.name, str) or len(self.name) > LONGEST_NAME:
+            shown = repr(self.name)[:40] + "..." if isinstance(self.name, str) else repr(self.name)
+            raise CaseError(
+                f"case name {shown}: a text of at most {LONGEST_NAME} characters is needed "
+                "(every message names the case)"
+                + (f", got {len(self.name)}" if isinstance(self.name, str) else "")
+            )
         for fname, cls in TABLES.items():
             if not isinstance(getattr(self, fname), cls):
                 raise CaseError(f"case '{self.name}': {fname} must be a {cls.__name__}")

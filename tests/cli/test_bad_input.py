@@ -336,6 +336,17 @@ def test_case_without_machines_says_so(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv", "nomac.json"]
 
 
+def test_a_case_name_too_long_to_say_is_refused_without_being_said(tmp_path):
+    """Round 30: a case named by 5 MB of 'x' made every error line 5 MB long."""
+    d = _kundur_dict()
+    d["name"] = "x" * 100_000
+    path = tmp_path / "long.json"
+    path.write_text(json.dumps(d))
+    res = run("simulate", path, "--fault", 999)
+    assert_error(res, "a text of at most 200 characters is needed (every message names the case)")
+    assert len(res.stderr) < 400
+
+
 def test_case_file_without_tables_or_bases_names_what_is_missing(tmp_path):
     d = _kundur_dict()
     for key, needle in (
