@@ -946,7 +946,8 @@ def closed_loop_lines(
     )
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
-        f"{r['switchings']:5d}  false actions {r['false_actions']}" + _link_text(r.get("link"))
+        f"{r['switchings']:5d}  false actions {r['false_actions']}  frames acted on "
+        f"{r['frames_formed']} of {r['frames']}" + _link_text(r.get("link"))
         for e, r in rows.items()
     ]
 

@@ -260,8 +260,11 @@ def closed_loop_verdicts(
     -------
     dict
         Per estimator (`stabctl.estimation.closed_loop.ESTIMATORS`): ``stable``,
-        ``switchings``, ``false_actions`` and ``link`` (over TCP the link's figures,
-        `stabctl.estimation.c37_loop.LinkStats.summary`; else None).
+        ``switchings``, ``false_actions``, ``frames`` (the frames the controller acted
+        on), ``frames_formed`` (those whose relative speeds it could form, every
+        machine's speed estimated: dropped frames leave the devices idle) and ``link``
+        (over TCP the link's figures, `stabctl.estimation.c37_loop.LinkStats.summary`;
+        else None).
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import closed_loop as cl
@@ -290,6 +293,8 @@ def closed_loop_verdicts(
             "stable": run.result.stable,
             "switchings": len(run.result.meta.get("switchings", [])),
             "false_actions": cl.false_actions(run, deadband_hz),
+            "frames": int(run.diagnostics.t.size),
+            "frames_formed": int(run.diagnostics.formed.sum()),
             "link": run.link,
         }
     return rows
