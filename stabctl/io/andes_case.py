@@ -619,6 +619,12 @@ def _check_json_layout(path: Path) -> None:
     if not isinstance(data, dict):
         raise InputError(f"{path.name}: holds {_json_kind(data)}, not an ANDES case: {_ANDES_JSON}")
     for key, value in data.items():
+        if isinstance(value, list) and len(value) > MAX_MODEL_ROWS:
+            raise InputError(
+                f"{path.name}: {key} holds {len(value)} records, more than {MAX_MODEL_ROWS} "
+                "(a planning case of 100 000 buses has a few 100 000): not read"
+            )
+    for key, value in data.items():
         bad = (
             value
             if not isinstance(value, list)
@@ -1128,16 +1134,17 @@ def _violated(p, v: float) -> str:
     return ""
 
 
-#: the rows a sheet of an xlsx case may hold, and the bytes of its XML unpacked: a
-#: planning case of 100 000 buses has a few 100 000 rows and tens of MB; a sheet of 3
-#: million empty rows (78 MB of XML packed into 0.2 MB) kept pandas and ANDES busy for
-#: minutes before any check
-MAX_XLSX_ROWS = 1_000_000
+#: the rows a sheet of an xlsx case (the records a model of a json case) may hold, and
+#: the bytes of a sheet's XML unpacked: a planning case of 100 000 buses has a few 100 000
+#: rows and tens of MB; a sheet of 3 million empty rows (78 MB of XML packed into 0.2 MB)
+#: kept pandas and ANDES busy for minutes before any check, as did 1.5 million json Bus
+#: records (50 MB)
+MAX_MODEL_ROWS = 1_000_000
 MAX_XLSX_SHEET_BYTES = 1 << 30
 
 
 def check_xlsx_size(path: Path) -> None:
-    """Refuse an xlsx case whose sheets hold more than MAX_XLSX_ROWS rows or unpack to more
+    """Refuse an xlsx case whose sheets hold more than MAX_MODEL_ROWS rows or unpack to more
     than MAX_XLSX_SHEET_BYTES, before any reader parses it: the rows are counted in the
     sheet's XML as it unpacks (``<row`` tags), nothing is parsed.
 
@@ -1169,9 +1176,9 @@ def check_xlsx_size(path: Path) -> None:
                     while chunk := sheet.read(1 << 20):
                         rows += (tail + chunk).count(b"<row") - tail.count(b"<row")
                         tail = chunk[-3:]
-                        if rows > MAX_XLSX_ROWS:
+                        if rows > MAX_MODEL_ROWS:
                             raise InputError(
-                                f"{path.name}: {info.filename} holds more than {MAX_XLSX_ROWS} "
+                                f"{path.name}: {info.filename} holds more than {MAX_MODEL_ROWS} "
                                 "rows, more than any case's sheet (a planning case of 100 000 "
                                 "buses holds a few 100 000): refused before reading it"
                             )

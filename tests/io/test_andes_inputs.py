@@ -6,6 +6,7 @@ time, a sheet that is no ANDES model, a column that is no parameter of its model
 machine away from its static generator's bus.  Refused naming file, sheet, row, idx,
 parameter and value; ANDES's own log is never shown."""
 
+import json
 import re
 import subprocess
 import sys
@@ -455,6 +456,20 @@ def test_a_json_value_that_is_no_number_is_refused_naming_model_row_and_field(
     assert res.returncode == 2 and not (tmp_path / "out.json").exists()
 
 
+def test_a_json_model_beyond_any_case_s_size_is_refused_before_andes_reads_it(
+    tmp_path, monkeypatch
+):
+    """Round 30: 1.5 million json Bus records (50 MB, under the file cap) kept ANDES busy
+    for minutes (about an hour near the cap) before its error."""
+    from stabctl.io import andes_case
+
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps({"Bus": [{"idx": k, "Vn": 110.0} for k in range(1, 5)]}))
+    monkeypatch.setattr(andes_case, "MAX_MODEL_ROWS", 3)
+    with pytest.raises(InputError, match=r"big.json: Bus holds 4 records, more than 3 \("):
+        read_andes_case(path)
+
+
 def test_an_xlsx_beyond_any_case_s_size_is_refused_before_it_is_read(tmp_path, monkeypatch):
     """A sheet of 3 million empty rows (78 MB of XML packed into 0.2 MB) kept pandas and
     ANDES busy for minutes: the rows are counted in the XML as it unpacks, and the file
@@ -468,12 +483,12 @@ def test_an_xlsx_beyond_any_case_s_size_is_refused_before_it_is_read(tmp_path, m
         z.writestr(
             "xl/worksheets/sheet1.xml", "<sheetData>" + '<row r="1"/>' * 1001 + "</sheetData>"
         )
-    monkeypatch.setattr(andes_case, "MAX_XLSX_ROWS", 1000)
+    monkeypatch.setattr(andes_case, "MAX_MODEL_ROWS", 1000)
     with pytest.raises(
         InputError, match=r"rows.xlsx: xl/worksheets/sheet1.xml holds more than 1000 rows"
     ):
         andes_case.check_xlsx_size(path)
-    monkeypatch.setattr(andes_case, "MAX_XLSX_ROWS", 1001)
+    monkeypatch.setattr(andes_case, "MAX_MODEL_ROWS", 1001)
     andes_case.check_xlsx_size(path)  # 1001 rows: at the bound
     monkeypatch.setattr(andes_case, "MAX_XLSX_SHEET_BYTES", 100)
     with pytest.raises(InputError, match=r"sheet1.xml unpacks to \d+ bytes"):
