@@ -929,7 +929,9 @@ def closed_loop_lines(
     Parameters
     ----------
     rows : dict
-        Estimator -> verdict, `stabctl.studies.estimate.closed_loop_verdicts`.
+        Estimator -> verdict, `stabctl.studies.estimate.closed_loop_verdicts` (a remote
+        controller's row, `pmu plant`'s, has no ``frames``: the plant does not see what
+        the controller formed).
     bus, far_bus : int
     esd_pct : float
     seed : int
@@ -946,8 +948,9 @@ def closed_loop_lines(
     )
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
-        f"{r['switchings']:5d}  false actions {r['false_actions']}  frames acted on "
-        f"{r['frames_formed']} of {r['frames']}" + _link_text(r.get("link"))
+        f"{r['switchings']:5d}  false actions {r['false_actions']}"
+        + (f"  frames acted on {r['frames_formed']} of {r['frames']}" if "frames" in r else "")
+        + _link_text(r.get("link"))
         for e, r in rows.items()
     ]
 

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from stabctl.case.system import LIGHTEST_H_S
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault, LineTrip, fault_with_clearing, from_sw_con
 from stabctl.dynamics.grid import default_step
@@ -327,11 +328,12 @@ def test_a_circuit_or_machine_tripped_twice_is_refused(kundur):
 
 
 def tiny_inertia_case():
-    """Kundur with machine 1's inertia at 1e-5 s: its swing mode is far beyond the explicit
-    integrator's stability limit at the 10 ms step, so the run blows up numerically."""
+    """Kundur with machine 1's inertia at 1 ms, the least a case takes (`LIGHTEST_H_S`): its
+    swing mode is beyond the explicit integrator's stability limit at the default step,
+    so the run blows up numerically."""
     case = load_case("kundur")
     H = case.machines.H.copy()
-    H[0] = 1e-5
+    H[0] = LIGHTEST_H_S
     return case.replace(machines=case.machines.replace(H=H))
 
 
@@ -343,7 +345,7 @@ def test_diverging_run_raises_with_partial_trajectory():
         Simulator(case).run([], t_end=3.0)
     part = info.value.result
     assert isinstance(part, SimulationResult)
-    assert 0.0 < part.t[-1] < 0.5
+    assert 0.0 < part.t[-1] < 1.0
     assert np.all(np.diff(part.t) > 0)
     for name in ("speed", "angle", "pelect", "vmag"):
         arr = getattr(part, name)
