@@ -949,10 +949,18 @@ def closed_loop_lines(
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
         f"{r['switchings']:5d}  false actions {r['false_actions']}"
-        + (f"  frames acted on {r['frames_formed']} of {r['frames']}" if "frames" in r else "")
+        + (_frames_used(r) if "frames" in r else "")
         + _link_text(r.get("link"))
         for e, r in rows.items()
     ]
+
+
+def _frames_used(row: dict) -> str:
+    """How many of the frames due the controller used (every machine's speed estimated),
+    and that the rest were lost or incomplete."""
+    used, due = row["frames_formed"], row["frames"]
+    rest = "" if used == due else f" ({due - used} lost or incomplete: devices idle there)"
+    return f"  frames used {used} of {due}{rest}"
 
 
 def _link_text(link) -> str:

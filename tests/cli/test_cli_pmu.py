@@ -141,10 +141,10 @@ def test_estimate_closed_loop_over_tcp_prints_the_link():
     assert "over TCP: 180 frames, round trip median" in "\n".join(tcp["lines"])
 
 
-def test_estimate_closed_loop_says_how_many_frames_the_controller_acted_on():
+def test_estimate_closed_loop_says_how_many_frames_the_controller_used():
     """Round 30: `estimate closed-loop --drop 0.999` printed "stable switchings 0 false
     actions 0" for each estimator, as if the loop had worked, with nearly every frame
-    lost.  Each row now gives the frames acted on of those due; the ideal estimator reads
+    lost.  Each row now gives the frames used of those due; the ideal estimator reads
     the true speeds and acts on every frame."""
     args = ["estimate", "closed-loop", "kundur", "--fault", "3", "--far-bus", "101"]
     args += ["--clear-cycles", "7", "--tf", "3", "--esd-pct", "10", "--json"]
@@ -155,7 +155,9 @@ def test_estimate_closed_loop_says_how_many_frames_the_controller_acted_on():
     for e in ("raw", "kf", "ekf"):
         assert rows[e]["frames"] == rows["ideal"]["frames"] and rows[e]["frames_formed"] < 10
     lines = json.loads(res.stdout)["lines"]
-    assert f"frames acted on {rows['raw']['frames_formed']} of {rows['raw']['frames']}" in lines[2]
+    used, due = rows["raw"]["frames_formed"], rows["raw"]["frames"]
+    assert f"frames used {used} of {due} ({due - used} lost or incomplete" in lines[2]
+    assert f"frames used {due} of {due}\n" in "\n".join(lines) + "\n"  # ideal
 
 
 def test_plant_and_controller_in_two_processes_close_the_loop():
