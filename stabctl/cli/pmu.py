@@ -622,6 +622,7 @@ def plant(
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation.c37_loop import Listen
     from stabctl.estimation.c37_tcp import hostport
+    from stabctl.studies.estimate import loop_row
 
     if esd_pct is None:
         raise InputError("pmu plant needs --esd-pct")
@@ -642,12 +643,7 @@ def plant(
     run = cl.run_closed_loop(
         sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout, speed or _INF, peers)
     )
-    row = {
-        "stable": run.result.stable,
-        "switchings": len(run.result.meta.get("switchings", [])),
-        "false_actions": cl.false_actions(run, deadband_hz),
-        "link": run.link,
-    }
+    row = loop_row(run, deadband_hz, controller_here=False)
     lines = closed_loop_lines({"remote": row}, fault, far_bus, esd_pct, seed, esd_model)
     out = {"closed_loop": row, "esd_model": esd_model, "lines": lines}
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(lines))

@@ -1051,13 +1051,13 @@ def _advance_monitored(run: _Run, monitor) -> str | None:
         if run.status != ig.OK:
             return None
         verdict = monitor(run.partial(run.k, np.inf, voltages=False))
-        if verdict is not None and not isinstance(verdict, str):
+        if isinstance(verdict, str):
+            return verdict
+        if verdict is not None:
             raise WrongTypeError(
                 "run(monitor): a monitor returns None (run on) or a string (stop here, its "
                 f"early verdict), got {verdict!r} ({type(verdict).__name__})"
             )
-        if verdict is not None:
-            return verdict
     return None
 
 

@@ -624,7 +624,6 @@ def _check_json_layout(path: Path) -> None:
                 f"{path.name}: {key} holds {len(value)} records, more than {MAX_MODEL_ROWS} "
                 "(a planning case of 100 000 buses has a few 100 000): not read"
             )
-    for key, value in data.items():
         bad = (
             value
             if not isinstance(value, list)

@@ -289,15 +289,42 @@ def closed_loop_verdicts(
                 transport="process" if e == "ideal" else transport,
             ),
         )
-        rows[e] = {
-            "stable": run.result.stable,
-            "switchings": len(run.result.meta.get("switchings", [])),
-            "false_actions": cl.false_actions(run, deadband_hz),
+        rows[e] = loop_row(run, deadband_hz)
+    return rows
+
+
+def loop_row(run, deadband_hz: float, controller_here: bool = True) -> dict:
+    """One closed-loop run's row, as `closed_loop_verdicts` gives it.
+
+    Parameters
+    ----------
+    run : stabctl.estimation.closed_loop.ClosedLoopRun
+        The run.
+    deadband_hz : float
+        Deadband of the false-action count (Hz).
+    controller_here : bool, optional
+        Whether the controller ran in this process (its frames counted); False for
+        `pmu plant`, whose controller is remote: the row has no ``frames``.
+
+    Returns
+    -------
+    dict
+        ``stable``, ``switchings``, ``false_actions``, (``frames``, ``frames_formed``)
+        and ``link``, as `closed_loop_verdicts` says.
+    """
+    from stabctl.estimation.closed_loop import false_actions
+
+    row = {
+        "stable": run.result.stable,
+        "switchings": len(run.result.meta.get("switchings", [])),
+        "false_actions": false_actions(run, deadband_hz),
+    }
+    if controller_here:
+        row |= {
             "frames": int(run.diagnostics.t.size),
             "frames_formed": int(run.diagnostics.formed.sum()),
-            "link": run.link,
         }
-    return rows
+    return row | {"link": run.link}
 
 
 def estimator_ccts(
