@@ -103,8 +103,9 @@ def require_flag(value, name: str) -> bool:
 
 
 def is_number(value) -> bool:
-    """True for a real number (Python's or numpy's int or float), False for a bool, a
-    text, None, a complex number or an array.
+    """True for a real number (Python's or numpy's int or float, or a 0-d array of one:
+    ``np.asarray(5.0)``), False for a bool, a text, None, a complex number or an array of
+    one or more axes.
 
     Parameters
     ----------
@@ -115,6 +116,8 @@ def is_number(value) -> bool:
     -------
     bool
     """
+    if isinstance(value, np.ndarray):
+        return value.ndim == 0 and value.dtype.kind in "iuf"
     return isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
 
 
@@ -200,7 +203,7 @@ def check_fields(obj) -> None:
     in the search with a numpy message.  An ``int`` field takes a number with no fraction
     (``3.0``: the case tables hold bus numbers as floats) and holds it as an int from then
     on, so that it reads "bus 3" where it is shown, not "bus 3.0"; a ``float`` field any
-    real number.  Other fields are not checked here.
+    real number (`is_number`), held as Python's float.  Other fields are not checked here.
 
     Parameters
     ----------
@@ -226,8 +229,8 @@ def check_fields(obj) -> None:
             if not is_whole_number(value):
                 raise WrongTypeError(f"{name}: a whole number is needed, got {_shown(value)}")
             object.__setattr__(obj, f.name, int(value))
-        elif "float" in kinds:
-            require_number(value, name)
+        elif "float" in kinds:  # held as Python's float (a 0-d array, numpy's float32)
+            object.__setattr__(obj, f.name, require_number(value, name))
 
 
 def number_text(x: float) -> str:

@@ -70,7 +70,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeGuard
 
-from stabctl.errors import InputError, SimulationError, StabctlError, Verdict
+import numpy as np
+
+from stabctl.errors import (
+    InputError,
+    SimulationError,
+    StabctlError,
+    Verdict,
+    WrongTypeError,
+    is_whole_number,
+    require_flag,
+)
 from stabctl.jsontext import input_file, parse_json
 from stabctl.locking import beside, exclusive
 from stabctl.progress import bar as progress_bar
@@ -117,6 +127,9 @@ class RunnerOptions:
 
     Raises
     ------
+    WrongTypeError
+        workers not a whole number, scheduler not a text, progress neither a bool nor a
+        callable (`check_runner`).
     InputError
         workers < 1, or a scheduler address `check_scheduler` refuses.
     """
@@ -126,10 +139,9 @@ class RunnerOptions:
     progress: bool | Callable = True
 
     def __post_init__(self) -> None:
-        if self.workers is not None and self.workers < 1:
-            raise InputError(f"workers must be >= 1, got {self.workers}")
-        if self.scheduler is not None:
-            check_scheduler(self.scheduler)
+        check_runner(self.workers, self.scheduler, self.progress, "RunnerOptions")
+        if self.workers is not None:  # 2.0 held as 2, as a count is shown
+            object.__setattr__(self, "workers", int(self.workers))
 
 
 @dataclass
@@ -920,6 +932,7 @@ def run_sweep(
             'bus faults'), named in the progress bar after the file's name.
 
     Raises:
+        WrongTypeError: workers, scheduler or progress of another type (`check_runner`).
         InputError: duplicate keys; `out` holds a key with other inputs; workers < 1;
             Dask not installed or its scheduler unreachable; another process is writing
             `out` (its lock, `stabctl.locking.exclusive`, names the holder's pid).
@@ -927,10 +940,9 @@ def run_sweep(
             Whatever ends it, its Dask client and local cluster are closed.
     """
     jobs = list(jobs)
-    if workers is not None and workers < 1:
-        raise InputError(f"workers must be >= 1, got {workers}")
-    if scheduler is not None:
-        check_scheduler(scheduler)
+    check_runner(workers, scheduler, progress, "run_sweep")
+    require_flag(retry_failed, "run_sweep(retry_failed)")
+    workers = None if workers is None else int(workers)
     out = Path(out)
     if out.is_file() and not os.access(out, os.W_OK):  # an archive: shown, nothing written
         return _sweep_read_only(jobs, out, retry_failed)
@@ -1439,6 +1451,51 @@ SCHEDULER_TIMEOUT_S = 10.0
 
 #: how an address is given, for the messages of `check_scheduler`
 _SCHEDULER_FORMS = "give 'local' or a Dask scheduler's tcp://host:port"
+
+
+def check_runner(workers, scheduler, progress, name: str) -> None:
+    """Refuse where a study's runs go when it cannot be meant (`RunnerOptions`,
+    `run_sweep`): ``workers=2.5`` ran on 2 processes, ``nan`` and ``True`` were taken,
+    ``progress="no"`` drew a bar.
+
+    Parameters
+    ----------
+    workers : object
+        None or a whole number >= 1 of processes.
+    scheduler : object
+        None or a scheduler address (`check_scheduler`).
+    progress : object
+        True, False or a callable(done, total).
+    name : str
+        The caller, named in the message (``"RunnerOptions"``).
+
+    Raises
+    ------
+    WrongTypeError
+        Any of them of another type.
+    InputError
+        workers < 1, or an address `check_scheduler` refuses.
+    """
+    if workers is not None:
+        if not is_whole_number(workers):
+            raise WrongTypeError(
+                f"{name}(workers): a whole number of processes >= 1 (or None: one per "
+                f"core) is needed, got {workers!r} ({type(workers).__name__})"
+            )
+        if workers < 1:
+            raise InputError(f"{name}(workers): workers must be >= 1, got {workers}")
+    if scheduler is not None:
+        if not isinstance(scheduler, str):
+            raise WrongTypeError(
+                f"{name}(scheduler): an address ('tcp://host:8786'), 'local' or None is "
+                f"needed, got {scheduler!r} ({type(scheduler).__name__})"
+            )
+        check_scheduler(scheduler)
+    if not (isinstance(progress, (bool, np.bool_)) or callable(progress)):
+        raise WrongTypeError(
+            f"{name}(progress): True (a bar), False (none) or a callable(done, total) is "
+            f"needed, got {progress!r} ({type(progress).__name__})"
+        )
 
 
 def check_scheduler(address: str) -> str:

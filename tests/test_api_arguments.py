@@ -367,3 +367,126 @@ def test_a_run_ending_with_its_fault_still_on_is_warned_of(kundur):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sim.run([held], t_end=1.05)
+
+
+# -- the studies' settings and the screening (probe round 31) ---------------------------
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"workers": 2.5}, r"RunnerOptions\(workers\): a whole number"),  # ran on 2
+        ({"workers": float("nan")}, r"RunnerOptions\(workers\)"),
+        ({"workers": True}, r"RunnerOptions\(workers\)"),
+        ({"workers": "2"}, r"RunnerOptions\(workers\)"),
+        ({"workers": 0}, r"RunnerOptions\(workers\): workers must be >= 1"),
+        ({"scheduler": 8786}, r"RunnerOptions\(scheduler\): an address"),
+        ({"progress": "no"}, r"RunnerOptions\(progress\): True \(a bar\)"),  # drew a bar
+    ],
+)
+def test_runner_options_refuse_what_cannot_be_meant(kw, said):
+    from stabctl.parallel import RunnerOptions
+
+    with pytest.raises(InputError, match=said):
+        RunnerOptions(**kw)
+
+
+def test_runner_options_hold_a_whole_float_as_a_count():
+    from stabctl.parallel import RunnerOptions
+
+    assert RunnerOptions(workers=2.0).workers == 2
+    assert type(RunnerOptions(workers=np.int64(3)).workers) is int
+    assert RunnerOptions(progress=lambda done, total: None).workers is None
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"max_iter": 0}, r"PlaceOptions\(max_iter\): must be >= 1"),
+        ({"max_iter": 2.5}, r"PlaceOptions\(max_iter\): a whole number"),
+        ({"max_sites": -1}, r"PlaceOptions\(max_sites\)"),
+        ({"zeta_min": float("nan")}, r"PlaceOptions\(zeta_min\)"),
+        ({"amplitude_hz": 0.0}, r"PlaceOptions\(amplitude_hz\): the amplitude must be > 0"),
+        ({"rtol": -0.1}, r"PlaceOptions\(rtol\)"),  # ran, as 0 would
+        ({"safety_s": -0.01}, r"PlaceOptions\(safety_s\)"),
+    ],
+)
+def test_place_options_are_checked_when_made(kw, said):
+    from stabctl.placement.loop import PlaceOptions
+
+    with pytest.raises(InputError, match=said):
+        PlaceOptions(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"load_levels": ()}, r"load_levels: load levels must be numbers > 0, got \[\]"),
+        ({"load_levels": (float("nan"),)}, r"load levels must be numbers > 0"),
+        ({"load_levels": "1.0"}, r"load_levels: a list of load levels"),
+        ({"n_active": 0}, r"PlanOptions\(n_active\): must be >= 1"),
+        ({"max_rounds": 0}, r"PlanOptions\(max_rounds\): must be >= 1"),
+        ({"half_step_n": -1}, r"PlanOptions\(half_step_n\)"),
+        ({"margins_tol": 0.0}, r"PlanOptions\(margins_tol\): must be > 0 s"),
+        ({"place": 6}, r"PlanOptions\(place\): PlaceOptions"),
+    ],
+)
+def test_plan_options_are_checked_when_made(kw, said):
+    from stabctl.placement.plan import PlanOptions
+
+    with pytest.raises(InputError, match=said):
+        PlanOptions(**kw)
+
+
+def test_plan_options_hold_each_load_level_once_as_a_float():
+    from stabctl.placement.plan import PlanOptions
+
+    assert PlanOptions(load_levels=[1, 1.0, np.float32(0.5)]).load_levels == (1.0, 0.5)
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"buses": "13"}, r"screen\(buses\): bus numbers, got the text '13'"),  # buses 1, 3
+        ({"buses": [True]}, r"screen\(buses\): bus numbers, got True"),  # bus 1
+        ({"buses": [3, 3]}, r"screen\(buses\): bus 3 given twice"),
+        ({"buses": []}, r"nothing to screen \(buses=\[\] and lines=False\)"),
+        ({"buses": [3], "lines": "no"}, r"screen\(lines\) must be True or False"),  # ran lines
+        ({"buses": [3], "retry_failed": 1}, r"screen\(retry_failed\)"),
+        ({"buses": [3], "search": {"tol": 0.001}}, r"screen\(search\): SearchOptions"),
+        ({"buses": [3], "runner": 1}, r"screen\(runner\): RunnerOptions"),
+    ],
+)
+def test_screen_refuses_arguments_it_cannot_mean_before_any_run(tmp_path, kw, said):
+    from stabctl.stability.screening import screen
+
+    out = tmp_path / "s.jsonl"
+    with pytest.raises(InputError, match=said):
+        screen("kundur", out, **kw)
+    assert not out.exists()
+
+
+def test_screen_refuses_an_output_that_is_no_path():
+    from stabctl.stability.screening import screen
+
+    with pytest.raises(TypeError, match=r"screen\(out\): a file path is needed, got None"):
+        screen("kundur", None, buses=[3])
+
+
+def test_a_search_criterion_must_say_true_or_false(kundur):
+    """A criterion returning None was read as unstable at every clearing: "N-1 insecure,
+    CCT 0" for Kundur's fault 3-101, whose CCT is 0.154 s (the paper's Table 4)."""
+    sim = stabctl.Simulator(kundur)
+    fault = stabctl.LineFault(3, 101, 1.0)
+    with pytest.raises(TypeError, match=r"SearchOptions\(criterion\): <lambda> returned None"):
+        stabctl.critical_clearing_time(sim, fault, SearchOptions(criterion=lambda r: None))
+    said = SearchOptions(criterion=lambda r: np.bool_(r.stable))  # numpy's bool is a bool
+    assert stabctl.critical_clearing_time(sim, fault, said).cct_s == 0.154
+
+
+def test_a_zero_dimensional_array_is_a_number(kundur):
+    fleet = stabctl.uniform_fleet(kundur, np.asarray(5.0))
+    assert [float(d.pmax_mw) for d in fleet.devices] == [45.0] * 4
+    assert type(SearchOptions(t_max=np.asarray(0.5)).t_max) is float
+    with pytest.raises(TypeError, match=r"uniform_fleet\(pct\): a number of %"):
+        stabctl.uniform_fleet(kundur, np.array([5.0]))

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError
+from stabctl.errors import InputError, check_fields
 from stabctl.parallel import RunnerOptions, worker_pool
 from stabctl.placement.evaluation import Contingency, Evaluator, VerifyOptions, cuts_from, verify
 from stabctl.placement.program import (
@@ -232,6 +232,14 @@ class PlaceOptions:
         Allocations simulated at most.
     rtol : float
         Relative saving below which the loop stops once the targets are met.
+
+    Raises
+    ------
+    WrongTypeError
+        A field of another type (`stabctl.errors.check_fields`).
+    InputError
+        A field out of its range, named: zeta_min outside [0, 1), amplitude_hz <= 0,
+        max_sites or max_iter < 1, safety_s < 0, rtol outside [0, 1).
     """
 
     zeta_min: float | None = None
@@ -241,6 +249,30 @@ class PlaceOptions:
     safety_s: float | None = None
     max_iter: int = 10
     rtol: float = 0.02
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        bad = _place_option_problem(self)
+        if bad:
+            raise InputError(f"PlaceOptions({bad}")
+
+
+def _place_option_problem(o: PlaceOptions) -> str | None:
+    """What of `o` is out of range (its field and value), or None."""
+    finite = np.isfinite
+    if o.zeta_min is not None and not 0 <= o.zeta_min < 1:
+        return f"zeta_min): the least damping ratio must be in [0, 1), got {o.zeta_min:g}"
+    if not (finite(o.amplitude_hz) and o.amplitude_hz > 0):
+        return f"amplitude_hz): the amplitude must be > 0 Hz, got {o.amplitude_hz:g}"
+    if o.max_sites is not None and o.max_sites < 1:
+        return f"max_sites): must be >= 1, got {o.max_sites}"
+    if o.safety_s is not None and not (finite(o.safety_s) and o.safety_s >= 0):
+        return f"safety_s): the CCT margin must be >= 0 s, got {o.safety_s:g}"
+    if o.max_iter < 1:
+        return f"max_iter): must be >= 1, got {o.max_iter}"
+    if not (finite(o.rtol) and 0 <= o.rtol < 1):
+        return f"rtol): the relative saving must be in [0, 1), got {o.rtol:g}"
+    return None
 
 
 @dataclass(frozen=True)
@@ -361,7 +393,7 @@ def place(
     wall = time.perf_counter()
     contingencies = tuple(contingencies)
     o, tol = options, study.search.tol
-    _check_settings(contingencies, o.max_iter, tol, study.runner.workers or 1, o.zeta_min)
+    _check_settings(contingencies)
     check_damping_model(o.zeta_min, study.esd_model)
     sim = cached_simulator(case, study.model)
     _check_faults(sim.case, contingencies)
@@ -528,16 +560,14 @@ def check_damping_model(zeta_min: float | None, esd_model: str) -> None:
         )
 
 
-def _check_settings(contingencies, max_iter, tol, workers, zeta_min) -> None:
+def _check_settings(contingencies) -> None:
+    """The contingencies' own checks (PlaceOptions, SearchOptions and RunnerOptions check
+    theirs when made)."""
     if not contingencies:
         raise InputError("no contingency given")
     names = [c.name for c in contingencies]
     if len(set(names)) != len(names):
         raise InputError(f"contingencies must differ, got {names}")
-    if max_iter < 1 or not tol > 0 or workers < 1:
-        raise InputError("need max_iter >= 1, tol > 0 and workers >= 1")
-    if zeta_min is not None and not 0 <= zeta_min < 1:
-        raise InputError(f"zeta_min must be in [0, 1), got {zeta_min:g}")
     bad = [c.name for c in contingencies if not c.target_cct_s > 0]
     if bad:
         raise InputError(f"contingency {', '.join(bad)}: the target CCT must be > 0 s")

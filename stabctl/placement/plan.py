@@ -36,8 +36,12 @@ from stabctl.errors import (
     InputError,
     NumericalInstabilityError,
     SimulationError,
+    WrongTypeError,
     advice,
+    check_fields,
     counted,
+    require_items,
+    require_number,
 )
 from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import mwh_per_mw, size_energy
@@ -152,6 +156,29 @@ class PlanResult:
         }
 
 
+#: the load levels a plan takes: each multiplies every contingency's searches (a plan
+#: of 5 000 levels solved their power flows for minutes before saying a word)
+MAX_LOAD_LEVELS = 20
+
+
+def _load_levels(load_levels) -> tuple:
+    """The load levels (fractions of the base load), each once, in the order given.
+    Raises InputError for none, one that is not a number > 0, or more than
+    MAX_LOAD_LEVELS; WrongTypeError for a text or an item not a number."""
+    name = advice("load_levels", "--load-levels")
+    items = require_items(load_levels, name, "a list of load levels (fractions of the base load)")
+    levels = tuple(dict.fromkeys(require_number(x, f"{name}: a load level") for x in items))
+    if not levels or any(not (np.isfinite(x) and x > 0) for x in levels):
+        raise InputError(f"{name}: load levels must be numbers > 0, got {list(items)}")
+    if len(levels) > MAX_LOAD_LEVELS:
+        raise InputError(
+            f"{name}: {len(levels)} load levels, more than "
+            f"the {MAX_LOAD_LEVELS} a plan takes (each multiplies every contingency's CCT "
+            "searches; a plan's levels are a handful, e.g. 0.9,1.0,1.1)"
+        )
+    return levels
+
+
 @dataclass(frozen=True)
 class PlanOptions:
     """Settings of a plan (`plan`).
@@ -201,6 +228,15 @@ class PlanOptions:
     half_step_n : int
         Also simulate the half_step_n contingencies of least clearing margin again at
         half the integration step (`half_step`); default 0: not done.
+
+    Raises
+    ------
+    WrongTypeError
+        A field of another type (`stabctl.errors.check_fields`; place not PlaceOptions).
+    InputError
+        No load level, or one not > 0, or more than MAX_LOAD_LEVELS (each held once);
+        n_active or max_rounds < 1; half_step_n < 0; margins_tol or margins_cap_s not
+        > 0.
     """
 
     load_levels: tuple = (1.0,)
@@ -217,6 +253,23 @@ class PlanOptions:
     scope_stable_at_once: bool = True
     drop_infeasible: bool = False
     half_step_n: int = 0
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        object.__setattr__(self, "load_levels", _load_levels(self.load_levels))
+        if not isinstance(self.place, PlaceOptions):
+            raise WrongTypeError(
+                f"PlanOptions(place): PlaceOptions(...) is needed, got {self.place!r}"
+            )
+        for name in ("n_active", "max_rounds"):
+            if getattr(self, name) < 1:
+                raise InputError(f"PlanOptions({name}): must be >= 1, got {getattr(self, name)}")
+        if self.half_step_n < 0:
+            raise InputError(f"PlanOptions(half_step_n): must be >= 0, got {self.half_step_n}")
+        for name in ("margins_tol", "margins_cap_s"):
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and value > 0):
+                raise InputError(f"PlanOptions({name}): must be > 0 s, got {value:g}")
 
 
 def plan(
@@ -268,10 +321,8 @@ def plan(
     faults = list(faults)
     if not faults:
         raise InputError("no contingency given")
-    if o.n_active < 1 or o.max_rounds < 1 or o.place.max_iter < 1:
-        raise InputError("need n_active, max_rounds and max_iter >= 1")
     check_damping_model(o.place.zeta_min, study.esd_model)
-    levels = _load_levels(o.load_levels)
+    levels = o.load_levels  # checked, each once (PlanOptions)
     freq_hz, sites = _case_at_levels(case, study.model, levels, study.sites)
     say = Heartbeat(progress or logger.info)
     try:
@@ -333,27 +384,6 @@ def _planned(case, faults, requirement, o: PlanOptions, study, say, freq_hz, sit
         )
     result.n_simulations = pl.n_runs
     return result
-
-
-#: the load levels a plan takes: each multiplies every contingency's searches (a plan
-#: of 5 000 levels solved their power flows for minutes before saying a word)
-MAX_LOAD_LEVELS = 20
-
-
-def _load_levels(load_levels) -> tuple:
-    """The load levels (fractions of the base load), each once, in the order given.
-    Raises InputError for none, one that is not a number > 0, or more than
-    MAX_LOAD_LEVELS."""
-    levels = tuple(dict.fromkeys(float(x) for x in load_levels))
-    if not levels or any(not (np.isfinite(x) and x > 0) for x in levels):
-        raise InputError(f"load levels must be numbers > 0, got {list(load_levels)}")
-    if len(levels) > MAX_LOAD_LEVELS:
-        raise InputError(
-            f"{advice('load_levels', '--load-levels')}: {len(levels)} load levels, more than "
-            f"the {MAX_LOAD_LEVELS} a plan takes (each multiplies every contingency's CCT "
-            "searches; a plan's levels are a handful, e.g. 0.9,1.0,1.1)"
-        )
-    return levels
 
 
 def _case_at_levels(case: str, model: ModelOptions, levels, sites) -> tuple:

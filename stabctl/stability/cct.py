@@ -935,9 +935,7 @@ class _Probes:
         # no machine left in service (de-energised): no stable clearing, whatever an early
         # verdict on the machines left judged (none) or a custom criterion says
         dead = getattr(res, "de_energised_s", None) is not None  # a stand-in result: none
-        ok = (
-            not diverged and not dead and (verdict == "stable" if verdict else bool(self.crit(res)))
-        )
+        ok = not diverged and not dead and (verdict == "stable" if verdict else self._said(res))
         if record:
             self.probes[step].append((t_clear, ok))
         if not self.islanded:
@@ -963,6 +961,18 @@ class _Probes:
         if o.method == "sime" and ok and not provisional:
             self.swings[k] = largest_swing(res)
         return ok
+
+    def _said(self, res: SimulationResult) -> bool:
+        """The criterion's verdict on `res`: True (stable) or False, numpy's too; anything
+        else is refused (a criterion returning None was read as unstable: N-1 insecure)."""
+        said = self.crit(res)
+        if not isinstance(said, (bool, np.bool_)):
+            raise WrongTypeError(
+                f"SearchOptions(criterion): {getattr(self.crit, '__name__', 'the criterion')} "
+                f"returned {said!r} ({type(said).__name__}); it must return True (stable) or "
+                "False (unstable)"
+            )
+        return bool(said)
 
     def _keep(self, k: int, held: tuple) -> None:
         """Keep a provisional run (`_trim`)."""

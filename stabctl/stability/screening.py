@@ -19,6 +19,7 @@ step-up transformer, a radial tie) gets none: its bus fault kept those machines.
 from __future__ import annotations
 
 import dataclasses
+import os
 import warnings
 from contextlib import nullcontext
 from pathlib import Path
@@ -26,7 +27,14 @@ from pathlib import Path
 from stabctl import parallel
 from stabctl.case import Case
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import AboveSearchLimit, InsecureContingency
+from stabctl.errors import (
+    AboveSearchLimit,
+    InputError,
+    InsecureContingency,
+    WrongTypeError,
+    bus_numbers,
+    require_flag,
+)
 from stabctl.io import load_case
 from stabctl.network.topology import splits_machines
 from stabctl.parallel import RunnerOptions
@@ -92,6 +100,34 @@ def _guess(case: Case, fault: LineFault, bus_cct: float | None) -> float | None:
 
 #: when every fault of a screening starts, s
 T_FAULT = 1.0
+
+
+def _checked(out, buses, lines, guess, retry_failed, search, model, runner) -> tuple:
+    """`screen`'s arguments checked: (buses as ints or None, search, model, runner with
+    None as their defaults); WrongTypeError or InputError naming the argument."""
+    if not isinstance(out, (str, os.PathLike)):
+        raise WrongTypeError(f"screen(out): a file path is needed, got {out!r}")
+    for name, flag in (("lines", lines), ("guess", guess), ("retry_failed", retry_failed)):
+        require_flag(flag, f"screen({name})")
+    if buses is not None:
+        buses = bus_numbers(buses, "screen(buses)")
+        twice = next((b for i, b in enumerate(buses) if b in buses[:i]), None)
+        if twice is not None:
+            raise InputError(f"screen(buses): bus {twice} given twice")
+        if not buses and not lines:
+            raise InputError("screen: nothing to screen (buses=[] and lines=False)")
+    given = []
+    for name, value, kind in (
+        ("search", search, SearchOptions),
+        ("model", model, ModelOptions),
+        ("runner", runner, RunnerOptions),
+    ):
+        if value is not None and not isinstance(value, kind):
+            raise WrongTypeError(
+                f"screen({name}): {kind.__name__}(...) or None is needed, got {value!r}"
+            )
+        given.append(kind() if value is None else value)
+    return buses, *given
 
 
 def screening_faults(
@@ -183,9 +219,9 @@ def screen(
     buses=None,
     lines: bool = False,
     guess: bool = True,
-    search: SearchOptions = SearchOptions(),
-    model: ModelOptions = ModelOptions(),
-    runner: RunnerOptions = RunnerOptions(),
+    search: SearchOptions | None = SearchOptions(),
+    model: ModelOptions | None = ModelOptions(),
+    runner: RunnerOptions | None = RunnerOptions(),
     retry_failed: bool = False,
 ) -> list[dict]:
     """Run the screening.
@@ -231,7 +267,12 @@ def screen(
     Raises
     ------
     InputError, UnknownBusError
-        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`.
+        As `stabctl.stability.cct.cct_jobs` and `stabctl.parallel.run_sweep`; a bus
+        given twice; nothing to screen (``buses=[]`` without `lines`).
+    WrongTypeError
+        An argument of another type (`buses` a text or a number, a flag not a bool, `out`
+        not a path, `search`, `model` or `runner` not their options; None is the
+        default of each of those three).
 
     Warns
     -----
@@ -241,6 +282,9 @@ def screen(
         `stabctl.parallel.other_records`), named (the first OTHERS_SHOWN): kept in the
         file, left out of the table.
     """
+    buses, search, model, runner = _checked(
+        out, buses, lines, guess, retry_failed, search, model, runner
+    )
     case = load_case(case_name)
     faults = screening_faults(case, buses, lines)
     jobs = cct_jobs(case_name, faults, search=search, model=model)

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from numbers import Real
 from typing import NamedTuple
 
 import numpy as np
@@ -32,6 +31,7 @@ from stabctl.errors import (
     advice,
     check_fields,
     require_items,
+    require_number,
 )
 from stabctl.models import converters as conv
 from stabctl.storage.control import NO_LAW, NO_STORAGE, BangBangCOI, ControlLaw
@@ -350,8 +350,7 @@ def uniform_fleet(
     case = require_case(case, "uniform_fleet(case)")
     if controller is not None:
         _require_law(controller, "uniform_fleet(controller)")
-    if not isinstance(pct, Real) or isinstance(pct, bool):
-        raise TypeError(f"uniform_fleet(pct): a number of % is needed, got {type(pct).__name__}")
+    pct = require_number(pct, "uniform_fleet(pct)", "%")
     if not 0 < pct <= MAX_ESD_PCT:
         raise InputError(
             f"{advice('uniform_fleet(pct)', '--esd-pct')}: storage rating must be in (0, "
