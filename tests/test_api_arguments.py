@@ -490,3 +490,46 @@ def test_a_zero_dimensional_array_is_a_number(kundur):
     assert type(SearchOptions(t_max=np.asarray(0.5)).t_max) is float
     with pytest.raises(TypeError, match=r"uniform_fleet\(pct\): a number of %"):
         stabctl.uniform_fleet(kundur, np.array([5.0]))
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"search": None}, r"Study\(search\): SearchOptions\(...\) is needed"),
+        ({"runner": 2}, r"Study\(runner\): RunnerOptions"),
+        ({"controller": 5}, r"Study\(controller\): BangBangCOI\(...\) or None"),
+        ({"esd_model": "WECC"}, r"Study\(esd_model\): one of ideal, wecc"),
+        ({"critical_reference": "yes"}, r"Study\(critical_reference\) must be True or False"),
+    ],
+)
+def test_a_placement_study_is_checked_when_made(kw, said):
+    from stabctl.placement.loop import Study
+
+    with pytest.raises(InputError, match=said):
+        Study(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"seed": 1.5}, r"LoopOptions\(seed\): a whole number"),  # failed in numpy
+        ({"seed": True}, r"LoopOptions\(seed\)"),  # ran as seed 1
+        ({"pmu": None}, r"LoopOptions\(pmu\): PMUSettings"),
+        ({"control": None}, r"LoopOptions\(control\): BangBangCOI"),
+        ({"fleet_pct": "5"}, r"LoopOptions\(fleet_pct\): a number"),
+    ],
+)
+def test_closed_loop_options_are_checked_when_made(kw, said):
+    from stabctl.estimation.closed_loop import LoopOptions
+
+    with pytest.raises(InputError, match=said):
+        LoopOptions(**{"fleet_pct": 5.0, "estimator": "ekf", **kw})
+
+
+def test_a_feedback_law_is_checked_when_made():
+    from stabctl.smib.feedback import FeedbackLaw
+
+    with pytest.raises(TypeError, match=r"FeedbackLaw\(sign_law\) must be True or False"):
+        FeedbackLaw("eq. 14", Ka=0.1, sign_law="no")
+    with pytest.raises(TypeError, match=r"FeedbackLaw\(Kv\): a number"):
+        FeedbackLaw("speed", Kv="0.5")

@@ -32,7 +32,7 @@ import numpy as np
 
 from stabctl.dynamics.driver import CommandFrames
 from stabctl.dynamics.results import SimulationResult
-from stabctl.errors import InputError
+from stabctl.errors import InputError, WrongTypeError, check_fields
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.estimation.filters import FrequencyKF, SwingEKF
 from stabctl.estimation.models import MachineModels, machine_models, relative_speeds
@@ -429,6 +429,13 @@ class LoopOptions:
         float32 phasors, FREQ to 1 mHz, DFREQ to 0.01 Hz/s) or ``"tcp"`` (the PMUs
         publish a C37.118.2 stream on loopback, the controller subscribes in a thread and
         sends the modes back, `stabctl.estimation.c37_loop`).
+
+    Raises
+    ------
+    WrongTypeError
+        A field of another type (`stabctl.errors.check_fields`; pmu not PMUSettings,
+        control not BangBangCOI); the other values are checked where they are used
+        (`run_closed_loop`).
     """
 
     fleet_pct: float
@@ -439,6 +446,15 @@ class LoopOptions:
     at: str = "terminal"
     esd_model: str = "ideal"
     transport: str = "process"
+
+    def __post_init__(self) -> None:
+        check_fields(self)  # seed=1.5 failed in numpy, seed=True ran as seed 1
+        for name, kind in (("pmu", PMUSettings), ("control", law.BangBangCOI)):
+            if not isinstance(getattr(self, name), kind):
+                raise WrongTypeError(
+                    f"LoopOptions({name}): {kind.__name__}(...) is needed, got "
+                    f"{getattr(self, name)!r}"
+                )
 
 
 def run_closed_loop(

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError, check_fields
+from stabctl.errors import InputError, WrongTypeError, check_fields
 from stabctl.parallel import RunnerOptions, worker_pool
 from stabctl.placement.evaluation import Contingency, Evaluator, VerifyOptions, cuts_from, verify
 from stabctl.placement.program import (
@@ -60,6 +60,7 @@ from stabctl.placement.program import (
 )
 from stabctl.stability.cct import SearchOptions, cached_simulator
 from stabctl.storage.control import BangBangCOI
+from stabctl.storage.devices import ESD_MODELS
 
 logger = logging.getLogger(__name__)
 
@@ -163,6 +164,14 @@ class Study:
         other group, the group being the machines the fault separates without storage
         (`stabctl.placement.evaluation.controller_dict`); the controller's own ``coi``
         is then not used.  Default False: the controller as given.
+
+    Raises
+    ------
+    WrongTypeError
+        search, model, runner or controller not their options (controller: or None),
+        critical_reference not a bool.
+    InputError
+        esd_model not one of `stabctl.storage.devices.ESD_MODELS`.
     """
 
     sites: tuple | None = None
@@ -173,6 +182,24 @@ class Study:
     run_map: Any = None
     esd_model: str = "ideal"
     critical_reference: bool = False
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        for name, kind in (
+            ("search", SearchOptions),
+            ("model", ModelOptions),
+            ("runner", RunnerOptions),
+            ("controller", (BangBangCOI, type(None))),
+        ):
+            if not isinstance(getattr(self, name), kind):
+                raise WrongTypeError(
+                    f"Study({name}): {_kind_name(kind)} is needed, got {getattr(self, name)!r}"
+                )
+        if self.esd_model not in ESD_MODELS:
+            raise InputError(
+                f"Study(esd_model): one of {', '.join(ESD_MODELS)} is needed, got "
+                f"{self.esd_model!r}"
+            )
 
     @property
     def law(self) -> BangBangCOI:
@@ -208,6 +235,12 @@ class Study:
             esd_model=self.esd_model,
             critical_reference=self.critical_reference,
         )
+
+
+def _kind_name(kind) -> str:
+    """How a message names a type or a tuple of them (None for NoneType)."""
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    return " or ".join("None" if k is type(None) else f"{k.__name__}(...)" for k in kinds)
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stabctl.errors import InputError
+from stabctl.errors import InputError, check_fields
 
 
 @dataclass(frozen=True)
@@ -40,12 +40,18 @@ class FeedbackLaw:
         Kv: speed gain (pu*s/rad).
         sign_law: False for P = Kv*omega + Ka*a; True for eq. (14),
             P = Ka*|a|*sgn(omega) + Kv*omega.
+
+    Raises:
+        WrongTypeError: a gain not a number, sign_law not a bool (`check_fields`).
     """
 
     name: str
     Ka: float = 0.0
     Kv: float = 0.0
     sign_law: bool = False
+
+    def __post_init__(self) -> None:
+        check_fields(self)  # Ka="0.1" failed in arithmetic, sign_law="no" was the sign law
 
     def check(self, M: float) -> None:
         """Raise InputError when the algebraic loop has no unique solution for inertia M."""
