@@ -452,6 +452,12 @@ class UnknownBusError(CaseError, KeyError):
         return str(self.args[0]) if self.args else "unknown bus"
 
 
+class UnsharedCaseError(InputError):
+    """The case a job names is not the client's where the job runs (a Dask worker in
+    another working directory read its own ``c.json``, or none): the job is not run and
+    not recorded, and its sweep stops (`stabctl.stability.cct.job_case`)."""
+
+
 class PowerFlowError(StabctlError, RuntimeError):
     """Power flow did not converge: names the iteration count and the worst mismatch bus."""
 

@@ -76,6 +76,7 @@ from stabctl.errors import (
     InputError,
     SimulationError,
     StabctlError,
+    UnsharedCaseError,
     Verdict,
     WrongTypeError,
     is_whole_number,
@@ -181,11 +182,15 @@ def default_workers() -> int:
 
 
 def run_job(func: Callable[..., dict], key: str, inputs: Mapping) -> dict:
-    """Run one job (in a worker) and return its output record; never raises an Exception."""
+    """Run one job (in a worker) and return its output record; raises no Exception but
+    `UnsharedCaseError` (the job's case is not its client's where it runs: the job is not
+    run, and its sweep stops without recording it)."""
     wall = time.perf_counter()
     rec: dict
     try:
         rec = {"status": "ok", "result": func(dict(inputs))}
+    except UnsharedCaseError:
+        raise
     except Verdict as exc:  # an answer without a number (robust, N-1 insecure)
         rec = {"status": "verdict", "verdict": exc.label, "reason": " ".join(str(exc).split())}
         if exc.islanded:
@@ -1432,6 +1437,8 @@ def _completed(pool, jobs: list, marks: str) -> Generator[dict, None, tuple[list
         except BrokenProcessPool:
             broken.add(futures[fut])
             continue
+        except UnsharedCaseError:  # not run: the sweep stops (`run_job`)
+            raise
         except Exception as exc:  # noqa: BLE001 - the job could not be sent or returned
             rec = _lost(jobs[futures[fut]], exc)
         yield rec
@@ -1914,7 +1921,7 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             except _NoWorker:
                 futures[fut] = job  # not run either
                 raise
-            except InputError:  # a worker running another stabctl: no loss of the cluster
+            except InputError:  # another stabctl there, or another case (UnsharedCaseError)
                 raise
             except Exception as exc:  # noqa: BLE001 - the cluster lost the job: not a result
                 said = textwrap.shorten(" ".join(str(exc).split()), 160, placeholder=" ...")

@@ -12,13 +12,16 @@ from pathlib import Path
 
 
 @contextmanager
-def separate_cluster(workers: int, env: dict | None = None, path=(Path(__file__).parent,)):
+def separate_cluster(
+    workers: int, env: dict | None = None, path=(Path(__file__).parent,), cwd=None
+):
     """A Dask scheduler and `workers` single-threaded workers (no nanny), each its own
     process (`python -m distributed.cli.dask_scheduler` / `dask_worker`, as on a cluster)
     on a free loopback port, with `path` (folders: they import the job functions and
     stabctl by name, default this file's) and this process's PYTHONPATH on theirs and
-    `env` added to their environment; yields (address, the scheduler's Popen, the
-    workers' Popens) once every worker is in; all killed after."""
+    `env` added to their environment, the workers in the folder `cwd` (default this
+    process's); yields (address, the scheduler's Popen, the workers' Popens) once every
+    worker is in; all killed after."""
     folders = [str(p) for p in path] + list(filter(None, [os.environ.get("PYTHONPATH")]))
     env = {**os.environ, **(env or {}), "PYTHONPATH": os.pathsep.join(folders)}
     with socket.socket() as s:
@@ -29,8 +32,10 @@ def separate_cluster(workers: int, env: dict | None = None, path=(Path(__file__)
     scheduler = ["distributed.cli.dask_scheduler", "--port", str(port), *local]
     worker = ["distributed.cli.dask_worker", address, "--nthreads", "1", "--no-nanny", *local]
     procs = [
-        subprocess.Popen([sys.executable, "-m", *args], env=env, stderr=subprocess.DEVNULL)
-        for args in [scheduler] + [worker] * workers
+        subprocess.Popen(
+            [sys.executable, "-m", *args], env=env, stderr=subprocess.DEVNULL, cwd=here
+        )
+        for args, here in [(scheduler, None)] + [(worker, cwd)] * workers
     ]
     try:
         yield wait_for(address, workers), procs[0], procs[1:]

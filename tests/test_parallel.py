@@ -1966,3 +1966,61 @@ def test_a_dask_worker_whose_heartbeats_stop_is_named_once(monkeypatch, caplog):
     assert len(said) == 1 and said[0].startswith(
         "Dask worker tcp://b:2 has sent no heartbeat for 30 s"
     )
+
+
+def _kundur_file(path: Path, h_times: float = 1.0) -> None:
+    """Kundur's case written to `path`, every machine's H times `h_times`."""
+    import stabctl
+
+    d = json.loads((Path(stabctl.__file__).parent / "case/data/kundur.json").read_text())
+    m = d["tables"]["machines"]
+    h = m["columns"].index("H")
+    for row in m["rows"]:
+        row[h] *= h_times
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(d))
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_case_file_changed_under_a_sweep_stops_it_recording_nothing(
+    tmp_path, monkeypatch, workers
+):
+    """Each job carries the digest of the case its client read; a worker that reads
+    another content (the file edited mid-sweep; a Dask worker's own file of that name) runs
+    nothing and the sweep stops, the job unrecorded (a rerun then runs it)."""
+    from stabctl.errors import UnsharedCaseError
+
+    monkeypatch.chdir(tmp_path)
+    _kundur_file(tmp_path / "c.json")
+    faults = [LineFault(3, 101, 1.0), LineFault(13, 120, 1.0)]
+    jobs = cct_jobs("c.json", faults, search=SearchOptions(tol=0.005))
+    _kundur_file(tmp_path / "c.json", h_times=3.0)
+    out = tmp_path / "o.jsonl"
+    with pytest.raises(
+        UnsharedCaseError, match=r"case 'c.json' on the worker .* is not the client's"
+    ):
+        run_sweep(jobs, out, workers=workers, progress=False)
+    assert not out.exists() or not read_records(out)
+
+
+@pytest.mark.dask
+def test_a_dask_worker_reading_its_own_case_file_runs_nothing(tmp_path, monkeypatch):
+    """The finding (probe round 31): `sweep-cct c.json --scheduler tcp://...` with a worker
+    started in another folder ran the worker's own c.json (H x3: CCT 0.33 s for Kundur's
+    0.150 s), exit 0; without a c.json there, its jobs were recorded failed and a rerun
+    skipped them.  Now the sweep stops naming the worker's folder, nothing recorded."""
+    pytest.importorskip("distributed")
+    from stabctl.errors import UnsharedCaseError
+
+    monkeypatch.chdir(tmp_path)
+    _kundur_file(tmp_path / "c.json")
+    _kundur_file(tmp_path / "w" / "c.json", h_times=3.0)
+    (tmp_path / "bare").mkdir()
+    jobs = cct_jobs("c.json", [LineFault(3, 101, 1.0)], search=SearchOptions(tol=0.005))
+    out = tmp_path / "o.jsonl"
+    for folder, said in (("w", "is not the client's"), ("bare", "cannot be read on the worker")):
+        both = rf"(?=.*{said})(?=.*working directory [^)]*/{folder}\))"
+        refused = pytest.raises(UnsharedCaseError, match=both)
+        with separate_cluster(1, cwd=tmp_path / folder) as (address, _, _), refused:
+            run_sweep(jobs, out, scheduler=address, progress=False)
+        assert not out.exists() or not read_records(out)

@@ -687,7 +687,9 @@ def cct_job(inputs: dict) -> dict:
         inputs["seed"],
         esd_model=inputs.get("esd_model", "ideal"),
     )
-    runner = LoopRunner(cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs)), loop)
+    model = ModelOptions.from_inputs(inputs)
+    sim = cached_simulator(inputs["case"], model, digest=inputs.get("case_digest"))
+    runner = LoopRunner(sim, loop)
     fault = LineFault(int(inputs["bus"]), int(inputs["far_bus"]), float(inputs.get("t_fault", 1.0)))
     r = critical_clearing_time(
         runner, fault, SearchOptions(tol=inputs.get("tol", CCT_TOL_S), error_check=False)

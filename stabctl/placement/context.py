@@ -25,7 +25,7 @@ from stabctl.placement.evaluation import (
 )
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
-from stabctl.stability.cct import fault_inputs
+from stabctl.stability.cct import cached_simulator, fault_inputs
 from stabctl.storage.control import BangBangCOI
 from stabctl.storage.devices import model_inputs
 
@@ -69,6 +69,12 @@ class PlanContext:
     critical_reference: bool = False
     lock: Any = field(default_factory=threading.Lock)
 
+    @property
+    def case_digest(self) -> str:
+        """The digest of the case's content, put in every job (checked where it runs:
+        `stabctl.stability.cct.job_case`)."""
+        return cached_simulator(self.case, self.model).case.digest()
+
     def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
         """`stabctl.placement.evaluation.check` of every contingency at ratings mw (one
         run each, in parallel): name -> check dict.  energy_mj: usable energy per site
@@ -85,6 +91,7 @@ class PlanContext:
         jobs = [
             {
                 "case": self.case,
+                "case_digest": self.case_digest,
                 "fault": fault_inputs(c.fault),
                 "devices": devs,
                 "sites": sites,
@@ -107,6 +114,7 @@ class PlanContext:
         jobs = [
             {
                 "case": self.case,
+                "case_digest": self.case_digest,
                 "fault": fault_inputs(c.fault),
                 "t_max": self.t_max,
                 "load": c.load,
@@ -178,8 +186,6 @@ class PlanContext:
 
     def step_s(self) -> float:
         """The integration step of the plan's runs (s)."""
-        from stabctl.stability.cct import cached_simulator
-
         if self.model.h is not None:
             return self.model.h
         return cached_simulator(self.case, self.model).default_h

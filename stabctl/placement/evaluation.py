@@ -101,7 +101,8 @@ def evaluate(job: dict) -> dict:
     Parameters
     ----------
     job : dict
-        case (str); fault (`fault_inputs`); devices ([bus, machine, MW] each); sites
+        case (str) and case_digest (the client's, optional: `job_simulator`); fault
+        (`fault_inputs`); devices ([bus, machine, MW] each); sites
         ([bus, machine] each); beta (distribution factors, n_mac x n_sites,
         `sime.distribution_factors`); controller (BangBangCOI fields); tol, t_max (s, the
         search); conventions, h (model conventions and step, None: the default); load
@@ -135,7 +136,7 @@ def evaluate(job: dict) -> dict:
         The network fails while the fault is on.
     """
     sim = _Memo(
-        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0)),
+        job_simulator(job),
         [site[0] for site in job["sites"]],
     )
     f, sites, tol, t_max = fault_of_inputs(job["fault"]), job["sites"], job["tol"], job["t_max"]
@@ -237,7 +238,7 @@ def check(job: dict) -> dict:
         The network fails while the fault is on.
     """
     sim = _Memo(
-        cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0)),
+        job_simulator(job),
         [site[0] for site in job["sites"]],
     )
     fault = fault_of_inputs(job["fault"])
@@ -263,7 +264,7 @@ def simulable(job: dict) -> dict:
     dict
         {"failure": the failure's message or None, "n_simulations": 1}.
     """
-    sim = cached_simulator(job["case"], ModelOptions.from_inputs(job), load=job.get("load", 1.0))
+    sim = job_simulator(job)
     failure = fault_on_failure(sim, fault_of_inputs(job["fault"]), float(job["t_max"]))
     return {"failure": failure, "n_simulations": 1}
 
@@ -271,6 +272,15 @@ def simulable(job: dict) -> dict:
 #: the critical groups a worker has found (`_law`), by case content (at its load level),
 #: model, fault and search
 _GROUPS: dict[str, tuple[int, ...]] = {}
+
+
+def job_simulator(job: dict):
+    """The simulator of a placement job's case (``case``, checked against the client's
+    ``case_digest``: `stabctl.stability.cct.job_case`), model settings and load level."""
+    model = ModelOptions.from_inputs(job)
+    return cached_simulator(
+        job["case"], model, load=job.get("load", 1.0), digest=job.get("case_digest")
+    )
 
 
 def _law(job: dict, sim, fault: LineFault) -> BangBangCOI:
@@ -730,6 +740,7 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
     t_max, base, scan = ev.search.t_max, opts.base, opts.scan
     common = {
         "case": ev.case,
+        "case_digest": cached_simulator(ev.case, ev.model).case.digest(),
         "devices": devices,
         "sites": [[s.bus, s.machine] for s in ev.sites],
         "beta": np.asarray(ev.beta).tolist(),

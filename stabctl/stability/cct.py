@@ -102,6 +102,8 @@ from __future__ import annotations
 
 import functools
 import math
+import os
+import socket
 import time
 import warnings
 from collections.abc import Callable
@@ -111,6 +113,7 @@ from typing import Protocol
 
 import numpy as np
 
+from stabctl.case import Case
 from stabctl.dynamics.coi import machine_inertia
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault, LineTrip
@@ -119,10 +122,12 @@ from stabctl.dynamics.partition import judged_at, judged_relative
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import (
     AboveSearchLimit,
+    CaseError,
     InputError,
     InsecureContingency,
     NumericalInstabilityError,
     SimulationError,
+    UnsharedCaseError,
     Verdict,
     WrongTypeError,
     check_fields,
@@ -1504,9 +1509,60 @@ def storage_fleet(case, esd_pct: float | None):
     return storage.uniform_fleet(case, esd_pct)
 
 
+def job_case(case_name: str, digest: str | None = None) -> Case:
+    """The case a job names, read where the job runs, and checked to be the one its client
+    read (the digest of its content, `stabctl.case.Case.digest`, that the client put in
+    the job): a relative path read by a Dask worker in another working directory is
+    another file, or none.
+
+    Parameters
+    ----------
+    case_name : str
+        A built-in case name or case file (`stabctl.io.load_case`).
+    digest : str or None, optional
+        The client's digest of it; None: not checked.
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    UnsharedCaseError
+        With a digest: the case cannot be read here, or its content is not the client's
+        (naming this host and working directory).
+    CaseError
+        Without one: as `stabctl.io.load_case`.
+    """
+    from stabctl.io import load_case
+
+    where = f"{socket.gethostname()} (pid {os.getpid()}, working directory {os.getcwd()})"
+    advice = (
+        "the job was not run; give the case as a built-in name or an absolute path to a "
+        "file every worker reads the same"
+    )
+    try:
+        case = load_case(case_name)
+    except CaseError as exc:
+        if digest is None:
+            raise
+        raise UnsharedCaseError(
+            f"case '{case_name}' cannot be read on the worker {where}: {exc}; {advice}"
+        ) from None
+    if digest is not None and case.digest() != digest:
+        raise UnsharedCaseError(
+            f"case '{case_name}' on the worker {where} is not the client's: its content "
+            f"differs (digest {case.digest()} there, {digest} on the client); {advice}"
+        )
+    return case
+
+
 @functools.cache
 def cached_simulator(
-    case_name: str, model: ModelOptions = ModelOptions(), load: float = 1.0
+    case_name: str,
+    model: ModelOptions = ModelOptions(),
+    load: float = 1.0,
+    digest: str | None = None,
 ) -> Simulator:
     """One Simulator per case, model settings and load level per process (the power flow
     is solved once per worker).
@@ -1520,6 +1576,9 @@ def cached_simulator(
     load : float, optional
         Fraction of the base load (`stabctl.network.powerflow.scale_load`: loads and
         dispatch scaled, power flow re-solved).
+    digest : str or None, optional
+        The digest of the case the job's client read (a worker's job, `job_case`); None:
+        not checked.
 
     Returns
     -------
@@ -1530,12 +1589,12 @@ def cached_simulator(
     PowerFlowError, CaseError
         The scaled case has no power flow or no valid initial state (naming the load
         level).
+    UnsharedCaseError
+        The case read here is not the client's (`job_case`).
     """
-    from stabctl.errors import CaseError
-    from stabctl.io import load_case
     from stabctl.network.powerflow import scale_load
 
-    case = load_case(case_name)
+    case = job_case(case_name, digest)
     if float(load) == 1.0:
         return model.simulator(case)
     scaled = scale_load(case, load, q_limits=model.q_limits)
@@ -1593,10 +1652,10 @@ def cct_job(inputs: dict) -> dict:
     Parameters
     ----------
     inputs : dict
-        The job's JSON-able recorded inputs (`cct_jobs`): case (case_digest is not read
-        here); the fault (bus, far_bus, t_fault, circuit, trips); esd_pct (storage rating
-        in %, None = no storage); the search settings (`SearchOptions.to_inputs`) and
-        model settings (`ModelOptions.to_inputs`).
+        The job's JSON-able recorded inputs (`cct_jobs`): case and case_digest (the
+        client's, `job_case`); the fault (bus, far_bus, t_fault, circuit, trips);
+        esd_pct (storage rating in %, None = no storage); the search settings
+        (`SearchOptions.to_inputs`) and model settings (`ModelOptions.to_inputs`).
 
     Returns
     -------
@@ -1608,7 +1667,8 @@ def cct_job(inputs: dict) -> dict:
     InputError, SimulationError
         As `critical_clearing_time` and `storage_fleet`.
     """
-    sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
+    model = ModelOptions.from_inputs(inputs)
+    sim = cached_simulator(inputs["case"], model, digest=inputs.get("case_digest"))
     fault = fault_of_inputs(inputs)
     searched = {"esd_pct": inputs.get("esd_pct")}  # the result's own, checked on resume
     try:

@@ -42,7 +42,8 @@ def controlled_cct_job(inputs: dict) -> dict:
     dict
         `CCTResult.to_dict()`.
     """
-    sim = cached_simulator(inputs["case"], ModelOptions.from_inputs(inputs))
+    model = ModelOptions.from_inputs(inputs)
+    sim = cached_simulator(inputs["case"], model, digest=inputs.get("case_digest"))
     esd_pct = inputs.get("esd_pct")
     fleet = (
         None
