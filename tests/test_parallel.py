@@ -1248,6 +1248,11 @@ def test_cli_sweep_cct_faults_csv(tmp_path):
         (("--faults", "DEFAULT", "--esd-pct", "abc"), "--esd-pct 'abc'"),
         (("--faults", "DEFAULT", "--workers", 0), "--workers 0: must be in [1, 1024]"),
         (("--faults", "DEFAULT", "--tol-ms", -1), "--tol-ms"),
+        # --workers was left unused without a word (probe round 31)
+        (
+            ("--faults", "DEFAULT", "--workers", 7, "--scheduler", "tcp://127.0.0.1:9"),
+            "--workers 7 with --scheduler tcp://127.0.0.1:9: the jobs run on that cluster's",
+        ),
     ],
 )
 def test_cli_sweep_cct_bad_input(tmp_path, args, needle):

@@ -774,11 +774,19 @@ def _check_single_rate(kwargs) -> None:
 def _check_scheduler(kwargs) -> None:
     """Refuse a --scheduler address that is none (`stabctl.parallel.check_scheduler`: an
     empty one, 'local' with a port, no URL) before any work: given, it is never taken for
-    local processes."""
-    if kwargs.get("scheduler") is not None:
+    local processes; and --workers beside a scheduler's address, whose cluster has the
+    workers it has (it was left unused without a word)."""
+    address = kwargs.get("scheduler")
+    if address is not None:
         from stabctl.parallel import check_scheduler
 
-        check_scheduler(kwargs["scheduler"])
+        check_scheduler(address)
+        if address != "local" and kwargs.get("workers") is not None:
+            raise InputError(
+                f"--workers {kwargs['workers']} with --scheduler {address}: the jobs run on "
+                "that cluster's workers, as many as it has; drop --workers (it sizes local "
+                "processes, or a --scheduler local cluster)"
+            )
 
 
 def subintervals_chosen() -> bool:
