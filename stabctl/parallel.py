@@ -2009,6 +2009,10 @@ def _on_worker(digest: str, func: Callable, *args) -> Any:
     return func(*args)
 
 
+#: seconds one question to a Dask scheduler may take (`_DaskWorkers.ask`), and how long
+#: it may go without answering before a sweep says so
+SCHEDULER_ANSWER_S, SILENT_SCHEDULER_S = 5.0, 30.0
+
 #: seconds a Dask worker may go without a heartbeat reaching the scheduler before a
 #: sweep names it (stopped, hung or cut off: its job waits for it until the scheduler
 #: drops it, after its ``distributed.scheduler.worker-ttl``, 5 min by default)
@@ -2023,7 +2027,8 @@ class _DaskWorkers:
     warning: the sweep waits for a worker to join).  Every STALL_CHECK_S the workers'
     heartbeats are looked at: one whose last heartbeat has not moved for
     SILENT_WORKER_S is named once (log warning; a SIGSTOPped worker kept a sweep waiting
-    without a word)."""
+    without a word); a scheduler that has not answered for SILENT_SCHEDULER_S is said
+    once (`ask`) and waited for."""
 
     def __init__(self, client):
         self.client = client
@@ -2038,6 +2043,9 @@ class _DaskWorkers:
         #: process saw that value first); the silent workers named
         self.heard: dict[str, tuple[Any, float]] = {}
         self.named: set[str] = set()
+        #: since when (this process's clock) the scheduler has not answered; said or not
+        self.unanswered: float | None = None
+        self.said_unanswered = False
 
     def check(self, force: bool = False) -> None:
         """Ask the scheduler (if a second has passed, or `force`)."""
@@ -2045,7 +2053,10 @@ class _DaskWorkers:
         if now < self.next_check and not force:
             return
         self.next_check = now + 1.0
-        n = int(self.client.scheduler_info(n_workers=0).get("n_workers", 0))
+        info = self.ask(n_workers=0)
+        if info is None:  # the scheduler did not answer: said, and asked again
+            return
+        n = int(info.get("n_workers", 0))
         if self.count is not None and n < self.count:
             _log.warning(
                 "Dask worker(s) lost: %d of %d left; %s",
@@ -2077,10 +2088,38 @@ class _DaskWorkers:
             self.next_heartbeats = now + STALL_CHECK_S
             self.name_silent(now)
 
+    def ask(self, n_workers: int) -> dict | None:
+        """The scheduler's identity (`n_workers` workers' details: -1 all), or None when
+        it has not answered within SCHEDULER_ANSWER_S: once it has been silent for
+        SILENT_SCHEDULER_S, that is said (log warning, once; a SIGSTOPped scheduler kept a
+        sweep waiting without a word, as the client's own call waits for ever)."""
+        client = self.client
+        try:
+            info = client.sync(
+                client.scheduler.identity, n_workers=n_workers, callback_timeout=SCHEDULER_ANSWER_S
+            )
+        except TimeoutError:
+            now = time.monotonic()
+            self.unanswered = self.unanswered or now - SCHEDULER_ANSWER_S
+            if now - self.unanswered >= SILENT_SCHEDULER_S and not self.said_unanswered:
+                self.said_unanswered = True
+                _log.warning(
+                    "the Dask scheduler at %s has not answered for %.0f s (stopped, hung or "
+                    "cut off): the sweep waits for it; Ctrl-C stops the sweep, keeping its "
+                    "finished records",
+                    client.scheduler.address,
+                    now - self.unanswered,
+                )
+            return None
+        if self.said_unanswered:
+            _log.warning("the Dask scheduler at %s answers again", client.scheduler.address)
+        self.unanswered, self.said_unanswered = None, False
+        return info
+
     def name_silent(self, now: float) -> None:
         """Log a warning of each worker whose heartbeat (the scheduler's ``last_seen``)
         has not moved for SILENT_WORKER_S of this process's time, once per worker."""
-        workers = self.client.scheduler_info(n_workers=-1).get("workers", {})
+        workers = (self.ask(n_workers=-1) or {}).get("workers", {})
         for address, info in workers.items():
             beat = info.get("last_seen")
             before = self.heard.get(address)

@@ -1947,18 +1947,24 @@ def test_a_dask_worker_whose_heartbeats_stop_is_named_once(monkeypatch, caplog):
     SILENT_WORKER_S is named once, by address; one whose heartbeats go on is not."""
     from stabctl import parallel
 
-    class Client:  # the scheduler's view: worker a beats, worker b has stopped
+    class Scheduler:  # its view: worker a beats, worker b has stopped
         beats = 0.0
 
-        def scheduler_info(self, n_workers=-1):
-            Client.beats += 1.0
+        def identity(self, n_workers=-1):
+            Scheduler.beats += 1.0
             return {
                 "n_workers": 2,
                 "workers": {
-                    "tcp://a:1": {"last_seen": Client.beats},
+                    "tcp://a:1": {"last_seen": Scheduler.beats},
                     "tcp://b:2": {"last_seen": 5.0},
                 },
             }
+
+    class Client:  # asks as distributed's does, with a time-out
+        scheduler = Scheduler()
+
+        def sync(self, func, callback_timeout=None, **kw):
+            return func(**kw)
 
     watch = parallel._DaskWorkers(Client())
     caplog.set_level("WARNING", logger=parallel._log.name)
@@ -2029,3 +2035,34 @@ def test_a_dask_worker_reading_its_own_case_file_runs_nothing(tmp_path, monkeypa
         with separate_cluster(1, cwd=tmp_path / folder) as (address, _, _), refused:
             run_sweep(jobs, out, scheduler=address, progress=False)
         assert not out.exists() or not read_records(out)
+
+
+@pytest.mark.dask
+def test_a_stopped_scheduler_is_said_and_the_sweep_goes_on_once_continued(
+    tmp_path, monkeypatch, caplog
+):
+    """A Dask scheduler stopped (SIGSTOP) mid-sweep kept the sweep waiting without a word
+    (probe round 31: 300 s, nothing said): the client's own question to it waits for
+    ever.  Now each question has a time-out, the silence is said once, and once the
+    scheduler is continued every job is recorded, none twice."""
+    pytest.importorskip("distributed")
+    import threading
+
+    from stabctl import parallel
+
+    monkeypatch.setattr(parallel, "SCHEDULER_ANSWER_S", 0.5)
+    monkeypatch.setattr(parallel, "SILENT_SCHEDULER_S", 2.0)
+    out = tmp_path / "d.jsonl"
+    jobs = jobs_of(sleepy, *[0.5 + 0.01 * k for k in range(4)])
+    with separate_cluster(1) as (address, sched, _):
+
+        def stop_after_one(done, total):
+            if done == 1:
+                os.kill(sched.pid, signal.SIGSTOP)
+                threading.Timer(6.0, os.kill, (sched.pid, signal.SIGCONT)).start()
+
+        with caplog.at_level("WARNING", "stabctl.parallel"):
+            report = run_sweep(jobs, out, scheduler=address, progress=stop_after_one)
+    said = [r.getMessage() for r in caplog.records if "has not answered" in r.getMessage()]
+    assert len(said) == 1 and said[0].startswith(f"the Dask scheduler at {address} has not")
+    assert (report.ran, report.failed) == (4, 0) and len(lines(out)) == 4
