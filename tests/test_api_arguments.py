@@ -533,3 +533,58 @@ def test_a_feedback_law_is_checked_when_made():
         FeedbackLaw("eq. 14", Ka=0.1, sign_law="no")
     with pytest.raises(TypeError, match=r"FeedbackLaw\(Kv\): a number"):
         FeedbackLaw("speed", Kv="0.5")
+
+
+@pytest.mark.parametrize(
+    "ratings, said",
+    [
+        ([5, 5], r"cct_jobs\(ratings\): rating 5 given twice"),  # two jobs of one key
+        ([], r"cct_jobs\(ratings\): no rating given"),
+        ([float("nan")], r"a rating must be in \(0, 100\] %"),  # recorded as a job
+        ([-5], r"a rating must be in \(0, 100\] % of machine MVA, got -5"),
+        (["5"], r"cct_jobs\(ratings\): a rating is a number of % or None, got '5'"),
+        ([True], r"a rating is a number of % or None, got True"),  # ran as 1 %
+        ("5", r"cct_jobs\(ratings\): a list of ratings"),
+    ],
+)
+def test_cct_jobs_refuse_a_rating_they_cannot_run(ratings, said):
+    from stabctl.stability.cct import cct_jobs
+
+    with pytest.raises(InputError, match=said):
+        cct_jobs("kundur", [stabctl.LineFault(3, 101, 1.0)], ratings)
+
+
+@pytest.mark.parametrize(
+    "kw, said",
+    [
+        ({"esd_pct": float("nan")}, r"cct_study\(ratings\): a rating must be in"),  # a failed run
+        ({"seed": -1}, r"cct_study\(seed\): a whole number >= 0"),  # a failed run
+        ({"settings": None}, r"estimator_ccts\(settings\): PMUSettings"),  # no attribute 'rate'
+        ({"runs": 0}, r"need at least one run, got 0"),
+    ],
+)
+def test_estimator_ccts_refuse_before_any_run(kw, said):
+    from stabctl.estimation.settings import PMUSettings
+    from stabctl.studies.estimate import estimator_ccts
+
+    given = {"esd_pct": 5.0, "runs": 1, "seed": 0, "settings": PMUSettings(), **kw}
+    with pytest.raises(InputError, match=said):
+        estimator_ccts("kundur", 3, 101, **given)
+
+
+@pytest.mark.parametrize("stem", ["", "../../escape", ".md", "a/b"])
+def test_an_eigenvalue_report_s_stem_is_a_file_name(tmp_path, stem):
+    """'' wrote '.md'; '../../escape' wrote outside the folder (or failed on a missing one)."""
+    from stabctl.studies.eigenvalues import eig_study, write_report
+
+    with pytest.raises(InputError, match=r"write_report\(stem\): .* is no file name"):
+        write_report(eig_study(stabctl.load_case("kundur")), tmp_path, stem=stem)
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_whole_float_area_count_is_a_count():
+    """n_areas=2.0 failed as a slice index (modal_analysis took it as whole)."""
+    from stabctl.studies.eigenvalues import eig_study
+
+    two = eig_study(stabctl.load_case("kundur"), n_areas=2.0)
+    assert sorted(set(np.asarray(two.ma.areas).tolist())) == [0, 1]

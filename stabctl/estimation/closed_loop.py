@@ -32,7 +32,13 @@ import numpy as np
 
 from stabctl.dynamics.driver import CommandFrames
 from stabctl.dynamics.results import SimulationResult
-from stabctl.errors import InputError, WrongTypeError, check_fields
+from stabctl.errors import (
+    InputError,
+    WrongTypeError,
+    check_fields,
+    is_whole_number,
+    require_items,
+)
 from stabctl.estimation.ambient import AmbientLoad
 from stabctl.estimation.filters import FrequencyKF, SwingEKF
 from stabctl.estimation.models import MachineModels, machine_models, relative_speeds
@@ -754,6 +760,47 @@ class SeedRule:  # fields of a dataclass: numpydoc ignore=PR02
         return float(max(spread, (1.0 - (1.0 - self.confidence) ** (1.0 / n)) * tol_cycles))
 
 
+def _study_checked(fault, ratings, runs, estimators, seed, pmu, model, runner, esd_model):
+    """`cct_study`'s arguments checked before any job (each failed alone in a worker, or
+    was recorded as a failed run: a NaN rating, a seed of -1): its ratings, checked."""
+    from stabctl.dynamics.options import ModelOptions
+    from stabctl.parallel import RunnerOptions
+    from stabctl.stability.cct import LineFault, checked_ratings
+
+    for name, value, kind in (
+        ("fault", fault, LineFault),
+        ("pmu", pmu, PMUSettings),
+        ("model", model, ModelOptions),
+        ("runner", runner, RunnerOptions),
+    ):
+        if not isinstance(value, kind):
+            raise WrongTypeError(
+                f"cct_study({name}): {kind.__name__}(...) is needed, got {value!r}"
+            )
+    if fault.far_bus is None:
+        raise InputError("cct_study(fault): a line's fault is needed (far_bus), got a bus fault")
+    if not isinstance(runs, SeedRule) and not is_whole_number(runs):
+        raise WrongTypeError(f"cct_study(runs): a whole number or a SeedRule, got {runs!r}")
+    if not isinstance(runs, SeedRule) and runs < 1:
+        raise InputError(f"need at least one run, got {runs}")
+    if not is_whole_number(seed) or seed < 0:
+        raise InputError(f"cct_study(seed): a whole number >= 0 is needed, got {seed!r}")
+    unknown = [
+        e
+        for e in require_items(estimators, "cct_study(estimators)", "a list")
+        if e not in ESTIMATORS
+    ]
+    if unknown or not estimators:
+        raise InputError(
+            f"cct_study(estimators): of {', '.join(ESTIMATORS)}, got {list(estimators)}"
+        )
+    if esd_model not in st.ESD_MODELS:
+        raise InputError(
+            f"cct_study(esd_model): one of {', '.join(st.ESD_MODELS)}, got {esd_model!r}"
+        )
+    return checked_ratings(ratings, "cct_study(ratings)", none=False)
+
+
 def cct_study(
     case: str,
     fault,
@@ -813,7 +860,11 @@ def cct_study(
     Raises
     ------
     InputError
-        runs below 1; PMU settings the records cannot hold.
+        runs below 1; PMU settings the records cannot hold; a rating out of (0, 100] or
+        twice, an unknown estimator or device model, a seed below 0 (`_study_checked`).
+    WrongTypeError
+        An argument of another type (a fault not a line's LineFault, pmu, model or
+        runner not their settings, a seed or a count not a whole number).
     """
     from contextlib import nullcontext
 
@@ -824,14 +875,14 @@ def cct_study(
 
     model = ModelOptions() if model is None else model
     runner = RunnerOptions() if runner is None else runner
+    ratings = _study_checked(fault, ratings, runs, estimators, seed, pmu, model, runner, esd_model)
     if replace(pmu, rate=60.0, latency_s=0.05, window_cycles=2.0) != PMUSettings():
         raise InputError(
             "the estimator CCT sweep records the PMU rate, latency and window "
             "only; keep the other PMU settings at their defaults"
         )
     rule = runs if isinstance(runs, SeedRule) else None
-    if rule is None and runs < 1:
-        raise InputError(f"need at least one run, got {runs}")
+    seed, runs = int(seed), runs if rule else int(runs)  # 2.0 held as 2 (keys, ranges)
     loaded = load_case(case)
     tol_cycles, digest = CCT_TOL_S * loaded.freq_hz, loaded.digest()
     rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus

@@ -334,6 +334,7 @@ def modal_analysis(
     """
     if n_areas is not None and not is_whole_number(n_areas):
         raise WrongTypeError(f"modal_analysis(n_areas): a whole number or None, got {n_areas!r}")
+    n_areas = None if n_areas is None else int(n_areas)  # 2.0 failed as a slice index
     if areas is not None and not isinstance(areas, Mapping):
         raise WrongTypeError(
             f"modal_analysis(areas): a dict machine number -> area label or None, got {areas!r}"

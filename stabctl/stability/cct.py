@@ -131,6 +131,7 @@ from stabctl.errors import (
     Verdict,
     WrongTypeError,
     check_fields,
+    is_number,
     is_whole_number,
     require_items,
 )
@@ -1887,7 +1888,8 @@ def cct_jobs(
     (`SearchOptions.to_inputs`: error_check only when off) and the model settings
     (`ModelOptions.to_inputs`: q_limits only when off).
 
-    Checks the search settings (`check_search_range`: InputError), every fault's bus and
+    Checks the search settings (`check_search_range`: InputError), the ratings (each
+    None or in (0, 100] %, each once: InputError, WrongTypeError), every fault's bus and
     line against the case (UnknownBusError, CaseError) and its run end (`check_run_end`)
     first so that bad input fails before any job runs, then compiles the simulator's
     kernels in this process if they are not cached (`compile_here`).
@@ -1897,6 +1899,7 @@ def cct_jobs(
     from stabctl.parallel import Job
 
     check_search_range(search)
+    ratings = checked_ratings(ratings)
     case = load_case(case_name)
     faults = list(faults)
     for f in faults:
@@ -1924,6 +1927,53 @@ def cct_jobs(
         for f in faults
         for p in ratings
     ]
+
+
+def checked_ratings(ratings, name: str = "cct_jobs(ratings)", none: bool = True) -> list:
+    """Storage ratings of a sweep, checked: each a number in (0, MAX_ESD_PCT] % (or None,
+    no storage, where `none`), each once (``"5"`` failed in a format, ``nan`` and ``-5``
+    were recorded as jobs, ``True`` ran as 1 %).
+
+    Parameters
+    ----------
+    ratings : sequence of float or None
+        The ratings, % of each generator's MVA.
+    name : str, optional
+        The argument, as messages name it.
+    none : bool, optional
+        Whether None (no storage) is one.
+
+    Returns
+    -------
+    list of float or None
+
+    Raises
+    ------
+    WrongTypeError
+        Not a list, or an item not a number (nor None where `none`).
+    InputError
+        No rating, one out of range, or one given twice.
+    """
+    from stabctl.storage.devices import MAX_ESD_PCT
+
+    what = "a number of % or None" if none else "a number of %"
+    items = require_items(ratings, name, f"a list of ratings ({what})")
+    if not items:
+        raise InputError(f"{name}: no rating given" + (" ([None]: no storage)" if none else ""))
+    out: list[float | None] = []
+    for p in items:
+        if not (is_number(p) or (none and p is None)):
+            raise WrongTypeError(f"{name}: a rating is {what}, got {p!r} ({type(p).__name__})")
+        p = None if p is None else float(p)
+        if p is not None and not 0 < p <= MAX_ESD_PCT:
+            raise InputError(
+                f"{name}: a rating must be in (0, {MAX_ESD_PCT:g}] % of machine MVA, got {p:g}"
+                + (" (None: no storage)" if none else "")
+            )
+        if p in out:
+            raise InputError(f"{name}: rating {p:g} given twice")
+        out.append(p)
+    return out
 
 
 def compared_inputs(inputs: dict) -> dict:

@@ -18,6 +18,7 @@ import numpy as np
 
 from stabctl.case import Case, PssTable
 from stabctl.dynamics.coi import machine_inertia
+from stabctl.errors import InputError, WrongTypeError
 from stabctl.locking import beside
 from stabctl.outdir import output_directory
 from stabctl.parallel import naming
@@ -129,7 +130,7 @@ def write_report(
     the report says made it (None: ``stabctl eig CASE [--no-pss] --report``)."""
     from stabctl.plotting.figures import eigenvalue_plot, mode_shape_compass, participation_bars
 
-    stem = st.stem if stem is None else stem
+    stem = st.stem if stem is None else _file_stem(stem)
     names = {k: f"{stem}_{k}.png" for k in ("eigs", "shapes", "pf")}
     title = f"{st.case.name}" + (" without PSS" if st.no_pss else "")
     modes = figure_modes(st.ma)
@@ -160,6 +161,20 @@ def write_report(
             for t in tmp.values():
                 Path(t).unlink(missing_ok=True)
     return md
+
+
+def _file_stem(stem) -> str:
+    """`write_report`'s stem when it names files in its folder: InputError for an empty
+    one ('.md' was written), a path ('../../escape' wrote outside the folder) or a dot
+    name; WrongTypeError for another type than a text."""
+    if not isinstance(stem, str):
+        raise WrongTypeError(f"write_report(stem): a file name is needed, got {stem!r}")
+    if not stem.strip() or stem.startswith(".") or Path(stem).name != stem or "\\" in stem:
+        raise InputError(
+            f"write_report(stem): {stem!r} is no file name (a name without a folder, not "
+            "empty, not starting with '.': the report is STEM.md in the output folder)"
+        )
+    return stem
 
 
 def _temp(out: Path, name: str) -> str:
