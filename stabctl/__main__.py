@@ -124,7 +124,7 @@ def _end(signum: int) -> None:
     _ignore_all()
     _quiet_finalisers()
     argv = shlex.join(["stabctl", *sys.argv[1:]])
-    line = f"interrupted: nothing is kept; the work starts again; resume with: {argv}\n"
+    line = f"interrupted: nothing is kept; run again with: {argv}\n"
     try:
         sys.stderr.flush()
         os.write(2, line.encode())

@@ -873,7 +873,7 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
         raise SweepIncomplete(
             f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at "
             f"{address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
-            "last one died or left)"
+            f"last one died or left; {_DIED_AT_ONCE})"
         ) from None
     except Exception as exc:
         if not _lost_by_cluster(exc):
@@ -1942,10 +1942,18 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
         raise SweepIncomplete(
             f"{len(left) + len(lost)} of {len(jobs)} jobs not run: the Dask cluster at "
             f"{address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
-            f"last one died or left; not run: {', '.join(left[:3])}{more}); the finished "
+            f"last one died or left; {_DIED_AT_ONCE}; not run: {', '.join(left[:3])}{more}); "
+            "the finished "
             "records are kept, and the same command, once workers are back, runs the rest"
         ) from None
 
+
+#: what a cluster whose workers died says of one cause a client cannot see: a worker that
+#: cannot import stabctl dies on the first job it is sent (it cannot unpickle the job)
+_DIED_AT_ONCE = (
+    "a worker that cannot import this stabctl dies on its first job: its log then ends in "
+    "an ImportError"
+)
 
 #: seconds a Dask sweep waits for a worker when its cluster has none left (the last one
 #: died: a nanny restarts its worker within a few seconds) before it gives up the jobs

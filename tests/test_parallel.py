@@ -1071,7 +1071,9 @@ def test_a_sweep_whose_last_worker_dies_records_no_job_it_did_not_run(tmp_path, 
         with pytest.raises(
             SweepIncomplete,
             match=r"4 of 6 jobs not run: the Dask cluster at tcp://127.0.0.1:\d+ has had no "
-            r"worker for 2 s \(its last one died or left; not run: sleepy/0.5\d, ",
+            r"worker for 2 s \(its last one died or left; a worker that cannot import this "
+            r"stabctl dies on its first job: its log then ends in an ImportError; not run: "
+            r"sleepy/0.5\d, ",
         ):
             run_sweep(jobs, out, scheduler=address, progress=kill_at_second)
     assert time.perf_counter() - t0 < 30
@@ -1239,6 +1241,25 @@ def test_cli_sweep_cct_faults_csv(tmp_path):
     assert res.exit_code == 0, res.output
     rec = json.loads(res.stdout)["records"][0]
     assert rec["key"] == "kundur/3-101/t0.5/esd-none" and rec["status"] == "ok"
+
+
+def test_cli_sweep_cct_names_the_records_in_its_file_that_are_not_its_own(tmp_path):
+    """A screening's records in a sweep's --out were kept and never mentioned (a
+    screening warns of a sweep's in its file; probe round 31)."""
+    out = tmp_path / "s.jsonl"
+    res = run("screen", "kundur", "--buses", "3", "--out", out, "--workers", 1)
+    assert res.exit_code == 0, res.output
+    faults = tmp_path / "faults.csv"
+    faults.write_text("bus,far_bus\n3,101\n")
+    res = run(
+        "sweep-cct", "kundur", "--faults", faults, "--out", out, "--workers", 1, "--tol-ms", 5
+    )
+    assert res.exit_code == 0, res.output
+    assert (
+        f"warning: {out} holds 1 record(s) of none of this sweep's 1 job(s), kept in the "
+        "file and not counted here: line 1: job kundur/bus3/t1/esd-none (another run's)"
+    ) in " ".join(res.stderr.split())
+    assert len(lines(out)) == 2
 
 
 @pytest.mark.parametrize(

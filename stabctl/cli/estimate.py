@@ -548,7 +548,7 @@ def _check_estimable(case, model) -> None:
 @pmu_noise_options
 @PMU_AT
 @storage_options(" Optional: the ESDs whose Table 3 modes are written too.")
-@out_file_option(metavar="FILE.csv", help="The estimates, a row per frame.")
+@out_file_option(metavar="FILE.csv", help="Needed: the estimates, a row per frame.")
 @reports_errors
 def track(
     case_name,
@@ -608,7 +608,7 @@ def track(
     from stabctl.estimation.c37_tcp import End
     from stabctl.io import load_case
 
-    if out_path is None:
+    if out_path is None:  # not click's required: --source is checked as it is parsed
         raise InputError("estimate track needs --out FILE.csv")
     check_suffix(out_path, (".csv",), "--out")
     settings = pmu_settings(

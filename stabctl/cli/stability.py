@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, replace
 
 import click
@@ -345,6 +346,23 @@ def _ratings(values) -> list:
     return out
 
 
+def _say_others(out_path, jobs) -> None:
+    """Warn of the records in `out_path` of none of a sweep's `jobs` (another sweep's, a
+    screening's): kept in the file, not counted in its summary (a screening says the same
+    of a sweep's records in its file; a sweep said nothing)."""
+    from stabctl.parallel import other_records
+    from stabctl.stability.screening import OTHERS_SHOWN
+
+    others = other_records(out_path, (j.key for j in jobs), lambda r: "another run's")
+    if others:
+        shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
+        warnings.warn(
+            f"{out_path} holds {len(others)} record(s) of none of this sweep's {len(jobs)} "
+            f"job(s), kept in the file and not counted here: {shown}",
+            stacklevel=2,
+        )
+
+
 def _rating(item: str) -> float | None:
     return None if item.lower() == "none" else float(item)
 
@@ -431,6 +449,7 @@ def sweep_cct(
     jobs = controlled_cct_jobs(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )
+    _say_others(out_path, jobs)
     rep = run_sweep(
         jobs, out_path, workers=workers, scheduler=scheduler, retry_failed=retry_failed
     )  # Ctrl-C: reports_errors, exit 130

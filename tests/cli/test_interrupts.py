@@ -277,12 +277,12 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
         (
             ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
             "stabctl.placement.plan.plan",
-            "nothing is kept; the work starts again",
+            "nothing is kept",
         ),
         (
             ["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
             "stabctl.estimation.closed_loop.cct_study",
-            "nothing is kept; the work starts again",
+            "nothing is kept",
         ),
         (
             ["sweep-cct", "kundur", "--faults", "DEFAULT", "--out", "o.jsonl"],
@@ -328,7 +328,9 @@ def test_every_long_command_ends_the_same_way_on_ctrl_c(
     assert len(lines) == 1 and lines[0].startswith("interrupted: "), res.stderr
     assert kept in lines[0]
     resume = " ".join(command) + (" --resume" if command[0] == "paper" else "")
-    again = "run again with: " if command[0] == "pmu" else "resume with: "
+    again = (
+        "run again with: " if command[0] == "pmu" or kept == "nothing is kept" else "resume with: "
+    )
     assert lines[0].endswith(again + "stabctl " + resume)
 
 
@@ -736,7 +738,7 @@ def test_a_signal_during_start_up_ends_with_one_interrupted_line(tmp_path, modul
         assert "Traceback" not in err and "Aborted" not in err, err
         said = [x for x in err.splitlines() if x.startswith("interrupted:")]
         assert len(said) == 1, err
-        assert said[0].endswith("resume with: stabctl simulate kundur --tf 3600"), said
+        assert said[0].endswith("run again with: stabctl simulate kundur --tf 3600"), said
         seen.append(said[0])
     assert "nothing is kept" in seen[0], seen
 
