@@ -640,9 +640,10 @@ def _interrupted(kwargs, exc: BaseException | None = None) -> str:
     if _WRITTEN:
         files = ", ".join(_WRITTEN)
         return f"interrupted: {files} had been written whole; run again with: {shlex.join(argv)}"
-    if (name or "") not in _KEPT:  # nothing to resume from
+    kept = _KEPT.get(name or "")
+    if kept is None:  # nothing to resume from
         return f"interrupted: nothing is kept; run again with: {shlex.join(argv)}"
-    return f"interrupted: {_KEPT[name].format(out=out)}; resume with: {shlex.join(argv)}"
+    return f"interrupted: {kept.format(out=out)}; resume with: {shlex.join(argv)}"
 
 
 #: what an interrupted live command (a server, a closed loop) leaves: nothing to resume
