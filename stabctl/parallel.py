@@ -1228,6 +1228,37 @@ def other_records(path: str | Path, keys: Iterable[str], whose: Callable[[dict],
     ]
 
 
+#: records of other jobs a run names when its records file holds them (`warn_others`)
+OTHERS_SHOWN = 5
+
+
+def warn_others(path: str | Path, jobs, whose: Callable[[dict], str], run: str, left: str) -> None:
+    """Warn (UserWarning) of the records in `path` of none of `jobs` (`other_records`),
+    the first OTHERS_SHOWN named: kept in the file, but no part of what the run shows.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The records file.
+    jobs : sequence of Job
+        The run's jobs.
+    whose : callable
+        ``whose(record)``: whose record it is, in words.
+    run : str
+        The run, as the warning names it (``"this sweep's 4 job(s)"``).
+    left : str
+        What becomes of them in what it shows (``"not counted here"``).
+    """
+    others = other_records(path, (j.key for j in jobs), whose)
+    if others:
+        shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
+        warnings.warn(
+            f"{path} holds {len(others)} record(s) of none of {run}, kept in the file and "
+            f"{left}: {shown}",
+            stacklevel=3,
+        )
+
+
 def input_differences(old: dict, new: Mapping, same: Callable[[dict], dict] | None = None) -> str:
     """The inputs that differ between a record's and a job's, named.
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import asdict, replace
 
 import click
@@ -350,17 +349,10 @@ def _say_others(out_path, jobs) -> None:
     """Warn of the records in `out_path` of none of a sweep's `jobs` (another sweep's, a
     screening's): kept in the file, not counted in its summary (a screening says the same
     of a sweep's records in its file; a sweep said nothing)."""
-    from stabctl.parallel import other_records
-    from stabctl.stability.screening import OTHERS_SHOWN
+    from stabctl.parallel import warn_others
 
-    others = other_records(out_path, (j.key for j in jobs), lambda r: "another run's")
-    if others:
-        shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
-        warnings.warn(
-            f"{out_path} holds {len(others)} record(s) of none of this sweep's {len(jobs)} "
-            f"job(s), kept in the file and not counted here: {shown}",
-            stacklevel=2,
-        )
+    run = f"this sweep's {len(jobs)} job(s)"
+    warn_others(out_path, jobs, lambda r: "another run's", run, "not counted here")
 
 
 def _rating(item: str) -> float | None:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import warnings
 from contextlib import nullcontext
 from pathlib import Path
 
@@ -153,8 +152,6 @@ ABOVE = AboveSearchLimit.label
 INSECURE = InsecureContingency.label
 #: every verdict of a CCT record, in the order summaries count them
 VERDICTS = ("cct", ABOVE, INSECURE, "failed")
-#: records of other jobs a screening names when its records file holds them
-OTHERS_SHOWN = 5
 
 
 def verdict(rec: dict) -> str:
@@ -279,7 +276,7 @@ def screen(
     UserWarning
         `out` holds records of none of the screening's jobs (a wider screening's, a
         sweep-cct's, or its own faults' screened with other inputs, those named:
-        `stabctl.parallel.other_records`), named (the first OTHERS_SHOWN): kept in the
+        `stabctl.parallel.warn_others`), named (the first OTHERS_SHOWN): kept in the
         file, left out of the table.
     """
     buses, search, model, runner = _checked(
@@ -290,14 +287,13 @@ def screen(
     jobs = cct_jobs(case_name, faults, search=search, model=model)
     faulted = {f.bus for f in faults if f.far_bus is None}
     later = [guess and f.far_bus is not None and f.bus in faulted for f in faults]
-    others = parallel.other_records(out, (j.key for j in jobs), lambda r: _whose(r, jobs))
-    if others:
-        shown = "; ".join(others[:OTHERS_SHOWN]) + ("; ..." if len(others) > OTHERS_SHOWN else "")
-        warnings.warn(
-            f"{out} holds {len(others)} record(s) of none of this screening's "
-            f"{len(jobs)} fault(s), kept in the file and left out of its table: {shown}",
-            stacklevel=2,
-        )
+    parallel.warn_others(
+        out,
+        jobs,
+        lambda r: _whose(r, jobs),
+        f"this screening's {len(jobs)} fault(s)",
+        "left out of its table",
+    )
     workers = runner.workers or parallel.default_workers()
     local = runner.scheduler is None and workers > 1 and any(later)
     with parallel.pooled(workers) if local else nullcontext() as pool:  # one pool for both
