@@ -1553,7 +1553,8 @@ def job_case(case_name: str, digest: str | None = None) -> Case:
     if digest is not None and case.digest() != digest:
         raise UnsharedCaseError(
             f"case '{case_name}' on the worker {where} is not the client's: its content "
-            f"differs (digest {case.digest()} there, {digest} on the client); {advice}"
+            f"differs (digest {case.digest()} there, {digest} on the client: another file "
+            f"of that name, or the file changed since the client read it); {advice}"
         )
     return case
 
