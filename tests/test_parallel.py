@@ -2087,3 +2087,18 @@ def test_a_stopped_scheduler_is_said_and_the_sweep_goes_on_once_continued(
     said = [r.getMessage() for r in caplog.records if "has not answered" in r.getMessage()]
     assert len(said) == 1 and said[0].startswith(f"the Dask scheduler at {address} has not")
     assert (report.ran, report.failed) == (4, 0) and len(lines(out)) == 4
+
+
+def test_a_relative_case_name_is_read_where_and_as_it_is_now(tmp_path, monkeypatch):
+    """cached_simulator kept one Simulator per case name: 'c.json' asked in another folder
+    (a notebook's chdir), or after the file was edited, gave the first one read."""
+    import numpy as np
+
+    _kundur_file(tmp_path / "a" / "c.json")
+    _kundur_file(tmp_path / "b" / "c.json", h_times=3.0)
+    monkeypatch.chdir(tmp_path / "a")
+    h = cached_simulator("c.json").case.machines.H
+    monkeypatch.chdir(tmp_path / "b")
+    np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 3 * h)
+    _kundur_file(tmp_path / "b" / "c.json", h_times=2.0)
+    np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 2 * h)

@@ -1511,10 +1511,11 @@ def storage_fleet(case, esd_pct: float | None):
 
 
 def job_case(case_name: str, digest: str | None = None) -> Case:
-    """The case a job names, read where the job runs, and checked to be the one its client
-    read (the digest of its content, `stabctl.case.Case.digest`, that the client put in
-    the job): a relative path read by a Dask worker in another working directory is
-    another file, or none.
+    """The case a job names, read where the job runs (once per process and content,
+    `_read_case`), and checked to be the one its client read (the digest of its content,
+    `stabctl.case.Case.digest`, that the client put in the job): a relative path read by
+    a Dask worker in another working directory is another file, or none; a file edited
+    since the client read it is another content.
 
     Parameters
     ----------
@@ -1535,15 +1536,13 @@ def job_case(case_name: str, digest: str | None = None) -> Case:
     CaseError
         Without one: as `stabctl.io.load_case`.
     """
-    from stabctl.io import load_case
-
     where = f"{socket.gethostname()} (pid {os.getpid()}, working directory {os.getcwd()})"
     advice = (
         "the job was not run; give the case as a built-in name or an absolute path to a "
         "file every worker reads the same"
     )
     try:
-        case = load_case(case_name)
+        case = _read_case(_identity(case_name), case_name)
     except CaseError as exc:
         if digest is None:
             raise
@@ -1559,15 +1558,33 @@ def job_case(case_name: str, digest: str | None = None) -> Case:
     return case
 
 
-@functools.cache
+def _identity(case_name: str) -> tuple:
+    """What a case name reads in this process now: a file's absolute path, modification
+    time and size (a relative name read in another folder, or a file edited, is another
+    case), else the name (a built-in case)."""
+    try:
+        st = os.stat(case_name)
+    except (OSError, ValueError):
+        return (case_name,)
+    return (os.path.abspath(case_name), st.st_mtime_ns, st.st_size)
+
+
+@functools.lru_cache(maxsize=8)
+def _read_case(identity: tuple, case_name: str) -> Case:
+    """`stabctl.io.load_case` of `case_name`, once per `_identity`."""
+    from stabctl.io import load_case
+
+    return load_case(case_name)
+
+
 def cached_simulator(
     case_name: str,
     model: ModelOptions = ModelOptions(),
     load: float = 1.0,
     digest: str | None = None,
 ) -> Simulator:
-    """One Simulator per case, model settings and load level per process (the power flow
-    is solved once per worker).
+    """One Simulator per case (its content: `_identity`), model settings and load level
+    per process (the power flow is solved once per worker).
 
     Parameters
     ----------
@@ -1594,16 +1611,28 @@ def cached_simulator(
     UnsharedCaseError
         The case read here is not the client's (`job_case`).
     """
+    identity = _identity(case_name)
+    job_case(case_name, digest)  # read (once), and checked when a digest is given
+    return _simulator(identity, case_name, model, float(load))
+
+
+#: simulators a process keeps (`cached_simulator`): a plan's load levels of one case
+SIMULATORS_KEPT = 64
+
+
+@functools.lru_cache(maxsize=SIMULATORS_KEPT)
+def _simulator(identity: tuple, case_name: str, model: ModelOptions, load: float) -> Simulator:
+    """`cached_simulator`'s Simulator of the case read as `identity`."""
     from stabctl.network.powerflow import scale_load
 
-    case = job_case(case_name, digest)
-    if float(load) == 1.0:
+    case = _read_case(identity, case_name)
+    if load == 1.0:
         return model.simulator(case)
     scaled = scale_load(case, load, q_limits=model.q_limits)
     try:
         return model.simulator(scaled)
     except CaseError as exc:
-        raise CaseError(f"load level {float(load):g} of case '{case_name}': {exc}") from None
+        raise CaseError(f"load level {load:g} of case '{case_name}': {exc}") from None
 
 
 def compile_here(case_name: str, model: ModelOptions = ModelOptions()) -> None:
