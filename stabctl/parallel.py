@@ -869,11 +869,9 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
             del futures[fut]
             if done is not None:
                 done(len(jobs) - len(futures), len(jobs))
-    except _NoWorker:
+    except _NoWorker as exc:
         raise SweepIncomplete(
-            f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at "
-            f"{address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
-            f"last one died or left; {_DIED_AT_ONCE})"
+            f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at {address} {exc.why}"
         ) from None
     except Exception as exc:
         if not _lost_by_cluster(exc):
@@ -1967,15 +1965,13 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
                 f"lost them ({lost[0]}); the finished records are kept, and the same "
                 "command runs the rest"
             )
-    except _NoWorker:
+    except _NoWorker as exc:
         left = [j.key for j in futures.values()]
         more = f" and {len(left) - 3} more" if len(left) > 3 else ""
         raise SweepIncomplete(
             f"{len(left) + len(lost)} of {len(jobs)} jobs not run: the Dask cluster at "
-            f"{address} has had no worker for {DASK_NO_WORKER_S:g} s (its "
-            f"last one died or left; {_DIED_AT_ONCE}; not run: {', '.join(left[:3])}{more}); "
-            "the finished "
-            "records are kept, and the same command, once workers are back, runs the rest"
+            f"{address} {exc.why} (not run: {', '.join(left[:3])}{more}); the finished "
+            "records are kept, and the same command, once the cluster is back, runs the rest"
         ) from None
 
 
@@ -1998,7 +1994,16 @@ DASK_NO_WORKER_YET_S = 10.0
 
 
 class _NoWorker(Exception):
-    """The Dask cluster has had no worker for DASK_NO_WORKER_S."""
+    """The Dask cluster cannot run the jobs left: it has had no worker for
+    DASK_NO_WORKER_S (the default reason), or its scheduler has not answered for
+    SCHEDULER_GIVE_UP_S (`why` says which, after "the Dask cluster at ADDRESS")."""
+
+    def __init__(self, why: str = ""):
+        super().__init__(why)
+        self.why = why or (
+            f"has had no worker for {DASK_NO_WORKER_S:g} s (its last one died or left; "
+            f"{_DIED_AT_ONCE})"
+        )
 
 
 def _dask_result(fut, workers: _DaskWorkers) -> Any:
@@ -2048,9 +2053,10 @@ def _on_worker(digest: str, func: Callable, *args) -> Any:
     return func(*args)
 
 
-#: seconds one question to a Dask scheduler may take (`_DaskWorkers.ask`), and how long
-#: it may go without answering before a sweep says so
-SCHEDULER_ANSWER_S, SILENT_SCHEDULER_S = 5.0, 30.0
+#: seconds one question to a Dask scheduler may take (`_DaskWorkers.ask`), how long it
+#: may go without answering before a sweep says so, and before it gives up the jobs not
+#: run (`SweepIncomplete`: none recorded, the same command runs them)
+SCHEDULER_ANSWER_S, SILENT_SCHEDULER_S, SCHEDULER_GIVE_UP_S = 5.0, 30.0, 120.0
 
 #: seconds a Dask worker may go without a heartbeat reaching the scheduler before a
 #: sweep names it (stopped, hung or cut off: its job waits for it until the scheduler
@@ -2131,7 +2137,8 @@ class _DaskWorkers:
         """The scheduler's identity (`n_workers` workers' details: -1 all), or None when
         it has not answered within SCHEDULER_ANSWER_S: once it has been silent for
         SILENT_SCHEDULER_S, that is said (log warning, once; a SIGSTOPped scheduler kept a
-        sweep waiting without a word, as the client's own call waits for ever)."""
+        sweep waiting without a word, as the client's own call waits for ever); after
+        SCHEDULER_GIVE_UP_S `_NoWorker` is raised: the jobs left are not run."""
         client = self.client
         try:
             info = client.sync(
@@ -2140,14 +2147,20 @@ class _DaskWorkers:
         except TimeoutError:
             now = time.monotonic()
             self.unanswered = self.unanswered or now - SCHEDULER_ANSWER_S
+            if now - self.unanswered >= SCHEDULER_GIVE_UP_S:
+                silent = now - self.unanswered
+                raise _NoWorker(
+                    f"has not answered for {silent:.0f} s (its scheduler stopped, hung or cut off)"
+                ) from None
             if now - self.unanswered >= SILENT_SCHEDULER_S and not self.said_unanswered:
                 self.said_unanswered = True
                 _log.warning(
                     "the Dask scheduler at %s has not answered for %.0f s (stopped, hung or "
-                    "cut off): the sweep waits for it; Ctrl-C stops the sweep, keeping its "
-                    "finished records",
+                    "cut off): the sweep waits for it up to %g s in all, then gives up the "
+                    "jobs not run; Ctrl-C stops it now, keeping its finished records",
                     client.scheduler.address,
                     now - self.unanswered,
+                    SCHEDULER_GIVE_UP_S,
                 )
             return None
         if self.said_unanswered:

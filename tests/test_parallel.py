@@ -1072,8 +1072,8 @@ def test_a_sweep_whose_last_worker_dies_records_no_job_it_did_not_run(tmp_path, 
             SweepIncomplete,
             match=r"4 of 6 jobs not run: the Dask cluster at tcp://127.0.0.1:\d+ has had no "
             r"worker for 2 s \(its last one died or left; a worker that cannot import this "
-            r"stabctl dies on its first job: its log then ends in an ImportError; not run: "
-            r"sleepy/0.5\d, ",
+            r"stabctl dies on its first job: its log then ends in an ImportError\) \(not "
+            r"run: sleepy/0.5\d, ",
         ):
             run_sweep(jobs, out, scheduler=address, progress=kill_at_second)
     assert time.perf_counter() - t0 < 30
@@ -2102,3 +2102,35 @@ def test_a_relative_case_name_is_read_where_and_as_it_is_now(tmp_path, monkeypat
     np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 3 * h)
     _kundur_file(tmp_path / "b" / "c.json", h_times=2.0)
     np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 2 * h)
+
+
+@pytest.mark.dask
+def test_a_scheduler_that_never_answers_again_gives_up_the_jobs_not_run(tmp_path, monkeypatch):
+    """Stopped for good, the scheduler is given up after SCHEDULER_GIVE_UP_S: the jobs not
+    run are not recorded (SweepIncomplete names them), the finished ones are kept."""
+    pytest.importorskip("distributed")
+    from stabctl import parallel
+    from stabctl.parallel import SweepIncomplete
+
+    monkeypatch.setattr(parallel, "SCHEDULER_ANSWER_S", 0.5)
+    monkeypatch.setattr(parallel, "SILENT_SCHEDULER_S", 1.0)
+    monkeypatch.setattr(parallel, "SCHEDULER_GIVE_UP_S", 3.0)
+    out = tmp_path / "d.jsonl"
+    jobs = jobs_of(sleepy, *[0.5 + 0.01 * k for k in range(4)])
+    with separate_cluster(1) as (address, sched, _):
+
+        def stop_after_one(done, total):
+            if done == 1:
+                os.kill(sched.pid, signal.SIGSTOP)
+
+        try:
+            with pytest.raises(
+                SweepIncomplete,
+                match=r"of 4 jobs not run: the Dask cluster at "
+                rf"{address} has not answered for \d+ s",
+            ):
+                run_sweep(jobs, out, scheduler=address, progress=stop_after_one)
+        finally:
+            os.kill(sched.pid, signal.SIGCONT)
+    kept = lines(out)
+    assert 1 <= len(kept) < 4 and all(r["status"] == "ok" for r in kept)
