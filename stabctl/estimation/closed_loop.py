@@ -782,7 +782,7 @@ def _study_checked(fault, ratings, runs, estimators, seed, pmu, model, runner, e
     if not isinstance(runs, SeedRule) and not is_whole_number(runs):
         raise WrongTypeError(f"cct_study(runs): a whole number or a SeedRule, got {runs!r}")
     if not isinstance(runs, SeedRule) and runs < 1:
-        raise InputError(f"need at least one run, got {runs}")
+        raise InputError(f"cct_study(runs): need at least one run, got {runs}")
     if not is_whole_number(seed) or seed < 0:
         raise InputError(f"cct_study(seed): a whole number >= 0 is needed, got {seed!r}")
     unknown = [
@@ -869,9 +869,8 @@ def cct_study(
     from contextlib import nullcontext
 
     from stabctl.dynamics.options import ModelOptions
-    from stabctl.io import load_case
     from stabctl.parallel import Job, RunnerOptions, default_workers, pooled, run_sweep
-    from stabctl.stability.cct import compile_here
+    from stabctl.stability.cct import compile_here, job_case
 
     model = ModelOptions() if model is None else model
     runner = RunnerOptions() if runner is None else runner
@@ -883,7 +882,7 @@ def cct_study(
         )
     rule = runs if isinstance(runs, SeedRule) else None
     seed, runs = int(seed), runs if rule else int(runs)  # 2.0 held as 2 (keys, ranges)
-    loaded = load_case(case)
+    loaded = job_case(case)  # the content its jobs run on in this process, and digest
     tol_cycles, digest = CCT_TOL_S * loaded.freq_hz, loaded.digest()
     rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus
     window = (

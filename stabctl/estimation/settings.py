@@ -48,11 +48,14 @@ class PMUSettings:
                 f"PMU rate must be one of {', '.join(f'{r:g}' for r in RATES)} "
                 f"frames/s, got {number_text(self.rate)}"
             )
-        limits = (self.tve, self.fe_hz, self.rfe_hz_s, self.latency_s)
-        if not (all(0 <= v < float("inf") for v in limits) and 0 < self.k_sigma < float("inf")):
-            raise InputError(
-                "PMU accuracy limits and latency must be finite and >= 0, k_sigma finite and > 0"
-            )
+        for name in ("tve", "fe_hz", "rfe_hz_s", "latency_s"):
+            if not 0 <= getattr(self, name) < float("inf"):
+                raise InputError(
+                    f"PMUSettings({name}): PMU accuracy limits and latency must be finite and "
+                    f">= 0, got {getattr(self, name)}"
+                )
+        if not 0 < self.k_sigma < float("inf"):
+            raise InputError(f"PMUSettings(k_sigma): must be finite and > 0, got {self.k_sigma}")
         if not 0 <= self.drop_prob < 1:
             raise InputError(f"dropped-frame probability must be in [0, 1), got {self.drop_prob}")
         if not 0 < self.window_cycles < float("inf"):
