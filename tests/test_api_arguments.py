@@ -560,7 +560,7 @@ def test_cct_jobs_refuse_a_rating_they_cannot_run(ratings, said):
         ({"esd_pct": float("nan")}, r"cct_study\(ratings\): a rating must be in"),  # a failed run
         ({"seed": -1}, r"cct_study\(seed\): a whole number >= 0"),  # a failed run
         ({"settings": None}, r"estimator_ccts\(settings\): PMUSettings"),  # no attribute 'rate'
-        ({"runs": 0}, r"need at least one run, got 0"),
+        ({"runs": 0}, r"cct_study\(runs\): need at least one run, got 0"),
     ],
 )
 def test_estimator_ccts_refuse_before_any_run(kw, said):
