@@ -7,6 +7,7 @@ constraint generation (`stabctl.placement.plan`), the energy sizing
 
 from __future__ import annotations
 
+import functools
 import inspect
 import threading
 import time
@@ -69,10 +70,11 @@ class PlanContext:
     critical_reference: bool = False
     lock: Any = field(default_factory=threading.Lock)
 
-    @property
+    @functools.cached_property
     def case_digest(self) -> str:
-        """The digest of the case's content, put in every job (checked where it runs:
-        `stabctl.stability.cct.job_case`)."""
+        """The digest of the case's content as the plan first read it, put in every job
+        (checked where it runs: `stabctl.stability.cct.job_case`: a file edited during
+        the plan stops it rather than mixing two cases)."""
         return cached_simulator(self.case, self.model).case.digest()
 
     def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:

@@ -703,6 +703,9 @@ class Evaluator:
         The devices' model (`Study.esd_model`).
     critical_reference : bool
         The law armed per contingency (`Study.critical_reference`).
+    case_digest : str or None
+        The digest of the case's content as the study read it, put in every job (checked
+        where it runs: `stabctl.stability.cct.job_case`); None: not checked.
     """
 
     run_map: Any
@@ -715,6 +718,7 @@ class Evaluator:
     scan_s: float = SCAN_S
     esd_model: str = "ideal"
     critical_reference: bool = False
+    case_digest: str | None = None
 
 
 def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions()) -> dict:
@@ -740,7 +744,7 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
     t_max, base, scan = ev.search.t_max, opts.base, opts.scan
     common = {
         "case": ev.case,
-        "case_digest": cached_simulator(ev.case, ev.model).case.digest(),
+        "case_digest": ev.case_digest,
         "devices": devices,
         "sites": [[s.bus, s.machine] for s in ev.sites],
         "beta": np.asarray(ev.beta).tolist(),

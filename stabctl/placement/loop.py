@@ -234,6 +234,7 @@ class Study:
             self.model,
             esd_model=self.esd_model,
             critical_reference=self.critical_reference,
+            case_digest=cached_simulator(case, self.model).case.digest(),
         )
 
 

@@ -1511,8 +1511,8 @@ def storage_fleet(case, esd_pct: float | None):
 
 
 def job_case(case_name: str, digest: str | None = None) -> Case:
-    """The case a job names, read where the job runs (once per process, `_read_case`),
-    and checked to be the one its client read (the digest of its content,
+    """The case a job names, read where the job runs (once per process and content,
+    `_read_case`), and checked to be the one its client read (the digest of its content,
     `stabctl.case.Case.digest`, that the client put in the job): a relative path read by
     a Dask worker in another working directory is another file, or none; a file edited
     since the client read it is another content.
@@ -1558,16 +1558,19 @@ def job_case(case_name: str, digest: str | None = None) -> Case:
     return case
 
 
-def _identity(case_name: str) -> str:
-    """Which case a name reads in this process: a file's absolute path (a relative name
-    asked in another folder is another case), else the name (a built-in case).  A file
-    is read once per process: edited since, the process keeps what it read first (its
-    jobs' digests then tell a worker that reads it later, `job_case`)."""
-    return os.path.abspath(case_name) if os.path.isfile(case_name) else case_name
+def _identity(case_name: str) -> tuple:
+    """Which case a name reads in this process now: a file's absolute path, modification
+    time and size (a relative name asked in another folder, or a file edited since it was
+    read, is another case: read again), else the name (a built-in case)."""
+    try:
+        st = os.stat(case_name)
+    except (OSError, ValueError):
+        return (case_name,)
+    return (os.path.abspath(case_name), st.st_mtime_ns, st.st_size)
 
 
 @functools.lru_cache(maxsize=8)
-def _read_case(identity: str, case_name: str) -> Case:
+def _read_case(identity: tuple, case_name: str) -> Case:
     """`stabctl.io.load_case` of `case_name`, once per `_identity`."""
     from stabctl.io import load_case
 
@@ -1580,8 +1583,9 @@ def cached_simulator(
     load: float = 1.0,
     digest: str | None = None,
 ) -> Simulator:
-    """One Simulator per case (a file by its absolute path: `_identity`), model settings
-    and load level per process (the power flow is solved once per worker).
+    """One Simulator per case (a file by its absolute path, time and size: `_identity`),
+    model settings and load level per process (the power flow is solved once per
+    worker).
 
     Parameters
     ----------
@@ -1618,7 +1622,7 @@ SIMULATORS_KEPT = 64
 
 
 @functools.lru_cache(maxsize=SIMULATORS_KEPT)
-def _simulator(identity: str, case_name: str, model: ModelOptions, load: float) -> Simulator:
+def _simulator(identity: tuple, case_name: str, model: ModelOptions, load: float) -> Simulator:
     """`cached_simulator`'s Simulator of the case read as `identity`."""
     from stabctl.network.powerflow import scale_load
 
