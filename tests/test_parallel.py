@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from contextlib import nullcontext
 from pathlib import Path
 
 import pytest
@@ -2059,20 +2060,24 @@ def test_a_dask_worker_reading_its_own_case_file_runs_nothing(tmp_path, monkeypa
 
 
 @pytest.mark.dask
-def test_a_stopped_scheduler_is_said_and_the_sweep_goes_on_once_continued(
-    tmp_path, monkeypatch, caplog
+@pytest.mark.parametrize("continued", [True, False])
+def test_a_stopped_scheduler_is_said_then_waited_for_or_given_up(
+    tmp_path, monkeypatch, caplog, continued
 ):
     """A Dask scheduler stopped (SIGSTOP) mid-sweep kept the sweep waiting without a word
     (probe round 31: 300 s, nothing said): the client's own question to it waits for
-    ever.  Now each question has a time-out, the silence is said once, and once the
-    scheduler is continued every job is recorded, none twice."""
+    ever.  Now each question has a time-out and the silence is said once; continued, every
+    job is recorded, none twice; never continued, the scheduler is given up after
+    SCHEDULER_GIVE_UP_S, the jobs not run unrecorded (SweepIncomplete), the finished kept."""
     pytest.importorskip("distributed")
     import threading
 
     from stabctl import parallel
+    from stabctl.parallel import SweepIncomplete
 
     monkeypatch.setattr(parallel, "SCHEDULER_ANSWER_S", 0.5)
     monkeypatch.setattr(parallel, "SILENT_SCHEDULER_S", 2.0)
+    monkeypatch.setattr(parallel, "SCHEDULER_GIVE_UP_S", 30.0 if continued else 4.0)
     out = tmp_path / "d.jsonl"
     jobs = jobs_of(sleepy, *[0.5 + 0.01 * k for k in range(4)])
     with separate_cluster(1) as (address, sched, _):
@@ -2080,13 +2085,26 @@ def test_a_stopped_scheduler_is_said_and_the_sweep_goes_on_once_continued(
         def stop_after_one(done, total):
             if done == 1:
                 os.kill(sched.pid, signal.SIGSTOP)
-                threading.Timer(6.0, os.kill, (sched.pid, signal.SIGCONT)).start()
+                if continued:
+                    threading.Timer(6.0, os.kill, (sched.pid, signal.SIGCONT)).start()
 
-        with caplog.at_level("WARNING", "stabctl.parallel"):
-            report = run_sweep(jobs, out, scheduler=address, progress=stop_after_one)
+        given_up = rf"of 4 jobs not run: the Dask cluster at {address} has not answered for"
+        try:
+            with (
+                caplog.at_level("WARNING", "stabctl.parallel"),
+                nullcontext() if continued else pytest.raises(SweepIncomplete, match=given_up),
+            ):
+                report = run_sweep(jobs, out, scheduler=address, progress=stop_after_one)
+        finally:
+            os.kill(sched.pid, signal.SIGCONT)
     said = [r.getMessage() for r in caplog.records if "has not answered" in r.getMessage()]
     assert len(said) == 1 and said[0].startswith(f"the Dask scheduler at {address} has not")
-    assert (report.ran, report.failed) == (4, 0) and len(lines(out)) == 4
+    kept = lines(out)
+    assert all(r["status"] == "ok" for r in kept)
+    if continued:
+        assert (report.ran, report.failed) == (4, 0) and len(kept) == 4
+    else:
+        assert 1 <= len(kept) < 4
 
 
 def test_a_relative_case_name_is_read_where_and_as_it_is_now(tmp_path, monkeypatch):
@@ -2102,35 +2120,3 @@ def test_a_relative_case_name_is_read_where_and_as_it_is_now(tmp_path, monkeypat
     np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 3 * h)
     _kundur_file(tmp_path / "b" / "c.json", h_times=2.0)
     np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 2 * h)
-
-
-@pytest.mark.dask
-def test_a_scheduler_that_never_answers_again_gives_up_the_jobs_not_run(tmp_path, monkeypatch):
-    """Stopped for good, the scheduler is given up after SCHEDULER_GIVE_UP_S: the jobs not
-    run are not recorded (SweepIncomplete names them), the finished ones are kept."""
-    pytest.importorskip("distributed")
-    from stabctl import parallel
-    from stabctl.parallel import SweepIncomplete
-
-    monkeypatch.setattr(parallel, "SCHEDULER_ANSWER_S", 0.5)
-    monkeypatch.setattr(parallel, "SILENT_SCHEDULER_S", 1.0)
-    monkeypatch.setattr(parallel, "SCHEDULER_GIVE_UP_S", 3.0)
-    out = tmp_path / "d.jsonl"
-    jobs = jobs_of(sleepy, *[0.5 + 0.01 * k for k in range(4)])
-    with separate_cluster(1) as (address, sched, _):
-
-        def stop_after_one(done, total):
-            if done == 1:
-                os.kill(sched.pid, signal.SIGSTOP)
-
-        try:
-            with pytest.raises(
-                SweepIncomplete,
-                match=r"of 4 jobs not run: the Dask cluster at "
-                rf"{address} has not answered for \d+ s",
-            ):
-                run_sweep(jobs, out, scheduler=address, progress=stop_after_one)
-        finally:
-            os.kill(sched.pid, signal.SIGCONT)
-    kept = lines(out)
-    assert 1 <= len(kept) < 4 and all(r["status"] == "ok" for r in kept)
