@@ -588,3 +588,14 @@ def test_a_whole_float_area_count_is_a_count():
 
     two = eig_study(stabctl.load_case("kundur"), n_areas=2.0)
     assert sorted(set(np.asarray(two.ma.areas).tolist())) == [0, 1]
+
+
+def test_a_study_s_case_digest_goes_to_its_evaluations():
+    """A plan puts the digest of the case as it first read it in every round's jobs
+    (Study.case_digest), so a file edited mid-plan stops it rather than mixing contents."""
+    from stabctl.placement.loop import Study
+
+    kundur = stabctl.load_case("kundur")
+    beta = np.zeros((4, 0))
+    assert Study(case_digest="0123").evaluator(None, "kundur", (), beta).case_digest == "0123"
+    assert Study().evaluator(None, "kundur", (), beta).case_digest == kundur.digest()

@@ -164,6 +164,10 @@ class Study:
         other group, the group being the machines the fault separates without storage
         (`stabctl.placement.evaluation.controller_dict`); the controller's own ``coi``
         is then not used.  Default False: the controller as given.
+    case_digest : str or None
+        The digest of the case as the study first read it, put in every job (a plan's,
+        so that its rounds run on one content: `stabctl.stability.cct.job_case`); None:
+        the case's as each evaluation reads it.
 
     Raises
     ------
@@ -182,6 +186,7 @@ class Study:
     run_map: Any = None
     esd_model: str = "ideal"
     critical_reference: bool = False
+    case_digest: str | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -234,7 +239,7 @@ class Study:
             self.model,
             esd_model=self.esd_model,
             critical_reference=self.critical_reference,
-            case_digest=cached_simulator(case, self.model).case.digest(),
+            case_digest=self.case_digest or cached_simulator(case, self.model).case.digest(),
         )
 
 

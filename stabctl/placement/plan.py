@@ -363,7 +363,13 @@ def _planned(case, faults, requirement, o: PlanOptions, study, say, freq_hz, sit
             critical_reference=study.critical_reference,
         )
         pl.run_map = pl.counting(pool_map, say)
-        kw = replace(study, sites=sites, run_map=pl.run_map, controller=pl.controller)
+        kw = replace(
+            study,
+            sites=sites,
+            run_map=pl.run_map,
+            controller=pl.controller,
+            case_digest=pl.case_digest,  # every round on the content the plan first read
+        )
         cons = _contingencies(pl, faults, requirement, o.overrides, freq_hz, levels, kw)
         cons, failing, checks, out = _without_storage(
             pl, cons, len(faults), len(levels), o.scope_stable_at_once
