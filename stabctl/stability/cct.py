@@ -1536,26 +1536,35 @@ def job_case(case_name: str, digest: str | None = None) -> Case:
     CaseError
         Without one: as `stabctl.io.load_case`.
     """
-    where = f"{socket.gethostname()} (pid {os.getpid()}, working directory {os.getcwd()})"
-    advice = (
-        "the job was not run; give the case as a built-in name or an absolute path to a "
-        "file every worker reads the same"
-    )
+    return _checked_case(_identity(case_name), case_name, digest)
+
+
+def _checked_case(identity: tuple, case_name: str, digest: str | None) -> Case:
+    """`job_case` of the case read as `identity` (`_identity`, asked once by the caller)."""
     try:
-        case = _read_case(_identity(case_name), case_name)
+        case = _read_case(identity, case_name)
     except CaseError as exc:
         if digest is None:
             raise
-        raise UnsharedCaseError(
-            f"case '{case_name}' cannot be read on the worker {where}: {exc}; {advice}"
-        ) from None
-    if digest is not None and (here := _digest(_identity(case_name), case)) != digest:
-        raise UnsharedCaseError(
-            f"case '{case_name}' on the worker {where} is not the client's: its content "
-            f"differs (digest {here} there, {digest} on the client: another file "
-            f"of that name, or the file changed since the client read it); {advice}"
+        raise _unshared(case_name, f"cannot be read on the worker {{where}}: {exc}") from None
+    if digest is not None and (here := _digest(identity, case)) != digest:
+        raise _unshared(
+            case_name,
+            f"on the worker {{where}} is not the client's: its content differs (digest {here} "
+            f"there, {digest} on the client: another file of that name, or the file changed "
+            "since the client read it)",
         )
     return case
+
+
+def _unshared(case_name: str, what: str) -> UnsharedCaseError:
+    """The error of a job whose case is not its client's here (`what`: with ``{where}``,
+    this host, pid and working directory, asked only then)."""
+    where = f"{socket.gethostname()} (pid {os.getpid()}, working directory {os.getcwd()})"
+    return UnsharedCaseError(
+        f"case '{case_name}' {what.replace('{where}', where)}; the job was not run; give the case "
+        "as a built-in name or an absolute path to a file every worker reads the same"
+    )
 
 
 def _identity(case_name: str) -> tuple:
@@ -1619,7 +1628,7 @@ def cached_simulator(
         The case read here is not the client's (`job_case`).
     """
     identity = _identity(case_name)
-    job_case(case_name, digest)  # read (once), and checked when a digest is given
+    _checked_case(identity, case_name, digest)  # read (once), checked with a digest
     return _simulator(identity, case_name, model, float(load))
 
 
