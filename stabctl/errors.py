@@ -196,6 +196,38 @@ def require_items(value, name: str, wanted: str) -> list:
     return list(value)
 
 
+def require_instance(value, kind: type, name: str, none: bool = False):
+    """``value`` when it is a ``kind`` (or None, where `none`), else `WrongTypeError`
+    naming ``name`` and the settings object needed (``Study(search)``: "SearchOptions(...)
+    is needed, got None").
+
+    Parameters
+    ----------
+    value : object
+        The argument.
+    kind : type
+        Its class.
+    name : str
+        How to name it (``"Study(search)"``).
+    none : bool, optional
+        Whether None is taken.
+
+    Returns
+    -------
+    object
+        `value`.
+
+    Raises
+    ------
+    WrongTypeError
+        Of another type.
+    """
+    if not (isinstance(value, kind) or (none and value is None)):
+        alone = f"{kind.__name__}(...)" + (" or None" if none else "")
+        raise WrongTypeError(f"{name}: {alone} is needed, got {value!r}")
+    return value
+
+
 def check_fields(obj) -> None:
     """`WrongTypeError` naming the class and the field when a field of the dataclass
     ``obj`` annotated ``int``, ``float`` or ``bool`` (or one of them ``| None``) holds

@@ -37,6 +37,7 @@ from stabctl.errors import (
     WrongTypeError,
     check_fields,
     is_whole_number,
+    require_instance,
     require_items,
 )
 from stabctl.estimation.ambient import AmbientLoad
@@ -456,11 +457,7 @@ class LoopOptions:
     def __post_init__(self) -> None:
         check_fields(self)  # seed=1.5 failed in numpy, seed=True ran as seed 1
         for name, kind in (("pmu", PMUSettings), ("control", law.BangBangCOI)):
-            if not isinstance(getattr(self, name), kind):
-                raise WrongTypeError(
-                    f"LoopOptions({name}): {kind.__name__}(...) is needed, got "
-                    f"{getattr(self, name)!r}"
-                )
+            require_instance(getattr(self, name), kind, f"LoopOptions({name})")
 
 
 def run_closed_loop(
@@ -773,10 +770,7 @@ def _study_checked(fault, ratings, runs, estimators, seed, pmu, model, runner, e
         ("model", model, ModelOptions),
         ("runner", runner, RunnerOptions),
     ):
-        if not isinstance(value, kind):
-            raise WrongTypeError(
-                f"cct_study({name}): {kind.__name__}(...) is needed, got {value!r}"
-            )
+        require_instance(value, kind, f"cct_study({name})")
     if fault.far_bus is None:
         raise InputError("cct_study(fault): a line's fault is needed (far_bus), got a bus fault")
     if not isinstance(runs, SeedRule) and not is_whole_number(runs):

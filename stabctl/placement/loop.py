@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.dynamics.options import ModelOptions
-from stabctl.errors import InputError, WrongTypeError, check_fields
+from stabctl.errors import InputError, check_fields, require_instance
 from stabctl.parallel import RunnerOptions, worker_pool
 from stabctl.placement.evaluation import Contingency, Evaluator, VerifyOptions, cuts_from, verify
 from stabctl.placement.program import (
@@ -194,12 +194,9 @@ class Study:
             ("search", SearchOptions),
             ("model", ModelOptions),
             ("runner", RunnerOptions),
-            ("controller", (BangBangCOI, type(None))),
+            ("controller", BangBangCOI),
         ):
-            if not isinstance(getattr(self, name), kind):
-                raise WrongTypeError(
-                    f"Study({name}): {_kind_name(kind)} is needed, got {getattr(self, name)!r}"
-                )
+            require_instance(getattr(self, name), kind, f"Study({name})", none=name == "controller")
         if self.esd_model not in ESD_MODELS:
             raise InputError(
                 f"Study(esd_model): one of {', '.join(ESD_MODELS)} is needed, got "
@@ -241,12 +238,6 @@ class Study:
             critical_reference=self.critical_reference,
             case_digest=self.case_digest or cached_simulator(case, self.model).case.digest(),
         )
-
-
-def _kind_name(kind) -> str:
-    """How a message names a type or a tuple of them (None for NoneType)."""
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    return " or ".join("None" if k is type(None) else f"{k.__name__}(...)" for k in kinds)
 
 
 @dataclass(frozen=True)

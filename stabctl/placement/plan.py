@@ -36,10 +36,10 @@ from stabctl.errors import (
     InputError,
     NumericalInstabilityError,
     SimulationError,
-    WrongTypeError,
     advice,
     check_fields,
     counted,
+    require_instance,
     require_items,
     require_number,
 )
@@ -257,10 +257,7 @@ class PlanOptions:
     def __post_init__(self) -> None:
         check_fields(self)
         object.__setattr__(self, "load_levels", _load_levels(self.load_levels))
-        if not isinstance(self.place, PlaceOptions):
-            raise WrongTypeError(
-                f"PlanOptions(place): PlaceOptions(...) is needed, got {self.place!r}"
-            )
+        require_instance(self.place, PlaceOptions, "PlanOptions(place)")
         for name in ("n_active", "max_rounds"):
             if getattr(self, name) < 1:
                 raise InputError(f"PlanOptions({name}): must be >= 1, got {getattr(self, name)}")

@@ -33,6 +33,7 @@ from stabctl.errors import (
     WrongTypeError,
     bus_numbers,
     require_flag,
+    require_instance,
 )
 from stabctl.io import load_case
 from stabctl.network.topology import splits_machines
@@ -121,10 +122,7 @@ def _checked(out, buses, lines, guess, retry_failed, search, model, runner) -> t
         ("model", model, ModelOptions),
         ("runner", runner, RunnerOptions),
     ):
-        if value is not None and not isinstance(value, kind):
-            raise WrongTypeError(
-                f"screen({name}): {kind.__name__}(...) or None is needed, got {value!r}"
-            )
+        require_instance(value, kind, f"screen({name})", none=True)
         given.append(kind() if value is None else value)
     return buses, *given
 

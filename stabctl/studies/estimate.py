@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from stabctl.errors import InputError, WrongTypeError
+from stabctl.errors import InputError, require_instance
 
 if TYPE_CHECKING:
     from stabctl.estimation.ambient import AmbientLoad
@@ -370,10 +370,7 @@ def estimator_ccts(
     from stabctl.estimation.settings import PMUSettings
     from stabctl.stability.cct import LineFault
 
-    if not isinstance(settings, PMUSettings):  # None failed as "no attribute 'rate'"
-        raise WrongTypeError(
-            f"estimator_ccts(settings): PMUSettings(...) is needed, got {settings!r}"
-        )
+    require_instance(settings, PMUSettings, "estimator_ccts(settings)")  # None: no 'rate'
     pmu = PMUSettings(
         rate=settings.rate, latency_s=settings.latency_s, window_cycles=settings.window_cycles
     )
