@@ -157,6 +157,16 @@ def fastest_time_constant(case: Case) -> tuple[float, str]:
 TRAPEZOID_TRUSTED_CYCLES = 1.0
 
 
+def _compare() -> str:
+    """The advice of a step warning, in the caller's words (`advice`): ``cct`` has no
+    --check-step (it reruns its cell at h/2 by itself), so the command line names both."""
+    return advice(
+        "halve the step and compare",
+        "halve the step and compare (simulate --check-step; cct, screen and sweep-cct rerun "
+        "their final cell at h/2 by themselves)",
+    )
+
+
 def check_step(
     fastest: tuple[float, str], h: float, explicit: bool = True, freq_hz: float = 60.0
 ) -> None:
@@ -184,15 +194,14 @@ def check_step(
             f"step {h:g} s is above the fastest time constant {T:g} s ({where}): the "
             "predictor-corrector is near its stability limit there, where a fast control "
             "loop can oscillate at the step's own period and a verdict be the step's; "
-            "halve the step and compare (--check-step)",
+            f"{_compare()}",
             stacklevel=3,
         )
     trusted = TRAPEZOID_TRUSTED_CYCLES / freq_hz
     if not explicit and h > trusted * (1 + 1e-9):
         warnings.warn(
             f"trapezoid step {h:g} s is above {trusted:.4g} s (one cycle at {freq_hz:g} Hz): "
-            "the swings are sampled too coarsely to trust the verdict; halve the step and "
-            "compare",
+            f"the swings are sampled too coarsely to trust the verdict; {_compare()}",
             stacklevel=3,
         )
 

@@ -619,7 +619,7 @@ class SimulationResult:
             )
         d.pop("units", None)  # (files written before it have none)
         stable, tsep = d.pop("verdict")
-        sep = list(d.pop("separated"))
+        sep = [int(i) for i in d.pop("separated")]  # as a run gives them: JSON-able ints
         parts = {name: d.pop(f"partition_{name}", ()) for name in PARTITION_FIELDS}
         partitions = tuple(
             Partition(float(t), island, inertia, judged.astype(bool), tripped.astype(bool))
@@ -628,7 +628,7 @@ class SimulationResult:
         return cls(
             **d,
             stable=bool(stable),
-            t_separation=None if np.isnan(tsep) else tsep,
+            t_separation=None if np.isnan(tsep) else float(tsep),
             separated=sep,
             partitions=partitions,
         )

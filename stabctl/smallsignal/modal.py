@@ -348,7 +348,18 @@ def modal_analysis(
     speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")], int)
     angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")], int)
     machines = np.array([int(states[i].rsplit("_G", 1)[1]) for i in speed])
+    if inertia is not None and speed.size == 0 and np.size(inertia):
+        raise InputError(
+            f"modal_analysis(sys): no machine speed state (mac_omega_G<n>, as "
+            f"stabctl.linearise names them) among its {states.size} states "
+            f"({', '.join(states[:3])}, ...), so inertia has no machine to weigh"
+        )
     if inertia is None:
+        if "omega_coi" not in sys.output_labels:  # a model rebuilt from bare matrices
+            raise InputError(
+                "modal_analysis(sys): no output 'omega_coi' (stabctl.linearise's) to read "
+                "the machines' COI weights from; pass inertia= (H * MVA, one per machine)"
+            )
         inertia = sys.C[sys.output_labels.index("omega_coi"), speed]
         if not np.any(inertia):  # the COI is an infinite bus: no weight on the others
             inertia = np.ones(speed.size)

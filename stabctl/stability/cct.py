@@ -130,6 +130,7 @@ from stabctl.errors import (
     UnsharedCaseError,
     Verdict,
     WrongTypeError,
+    advice,
     check_fields,
     is_number,
     is_whole_number,
@@ -1287,11 +1288,14 @@ def check_search_range(search: SearchOptions) -> None:
     lattice cell (a t_max below the tolerance): every search with these settings would
     fail, whatever the fault; and one whose tolerance is not below t_max: its one cell
     spans the whole range, so every search would report a CCT of 0 (or above t_max),
-    whatever the fault; and, with the default run end (``t_end`` None: the fault start +
-    T_AFTER_FAULT), a t_max that leaves less than MIN_AFTER_CLEARING_S after it (a given
-    t_end is checked per fault, `check_run_end`).  The sweeps (`cct_jobs`) and the CLI's
-    searches check their settings so; `critical_clearing_time` takes such a one-cell
-    bracket (a caller that already knows its upper end unstable).
+    whatever the fault; one whose t_max is not a multiple of the tolerance (the search
+    clears on those multiples: its last run would lie below t_max, and a fault stable
+    there be reported robust up to t_max); and, with the default run end (``t_end``
+    None: the fault start + T_AFTER_FAULT), a t_max that leaves less than
+    MIN_AFTER_CLEARING_S after it (a given t_end is checked per fault, `check_run_end`).
+    The sweeps (`cct_jobs`) and the CLI's searches check their settings so;
+    `critical_clearing_time` takes such a one-cell bracket (a caller that already knows
+    its upper end unstable).
 
     Parameters
     ----------
@@ -1302,12 +1306,24 @@ def check_search_range(search: SearchOptions) -> None:
     ------
     InputError
         A tolerance below `MIN_TOL`, the range narrower than the tolerance (the search's
-        own rule and message), the tolerance not below t_max, or a t_max too close to the
-        default run end.
+        own rule and message), the tolerance not below t_max, a t_max off the tolerance's
+        multiples, or a t_max too close to the default run end.
     """
     if not search.tol >= MIN_TOL:
         raise InputError(f"CCT tolerance must be >= {MIN_TOL:g} s (1 us), got {search.tol:g}")
     _lattice_bounds(search.tol, search.t_lo, _first_upper(search), search.t_max)
+    cells = search.t_max / search.tol
+    if abs(cells - round(cells)) > 1e-6:  # its last run would be below t_max, unsaid
+        below, above = (
+            _lattice(math.floor(cells), search.tol),
+            _lattice(math.ceil(cells), search.tol),
+        )
+        raise InputError(
+            f"t_max {search.t_max:g} s is not a multiple of the CCT tolerance "
+            f"{search.tol:g} s: the search clears on multiples of it, so its last run would "
+            f"be at {below:g} s and a fault stable there reported robust up to "
+            f"{search.t_max:g} s; give {advice('t_max', '--t-max')} {below:g} or {above:g} s"
+        )
     if not search.tol < search.t_max:
         raise InputError(
             f"the CCT tolerance {search.tol:g} s is not below t_max {search.t_max:g} s: one "

@@ -1717,6 +1717,42 @@ def test_a_tolerance_not_below_the_search_limit_is_refused_before_any_run(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
 
 
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("sweep-cct", "kundur", "--faults", "f.csv", "--workers", 1),
+        ("screen", "kundur", "--buses", 3, "--lines", "--workers", 1),
+        ("cct", "kundur", "--fault", 3, "--far-bus", 101),
+        ("place", "kundur", "--faults", "f.csv", "--target-cct-s", 0.3),
+    ],
+)
+def test_a_search_limit_off_the_tolerance_s_multiples_is_refused_before_any_run(
+    no_simulation, tmp_path, monkeypatch, args
+):
+    """Round 32: `cct kundur --fault 3 --far-bus 101 --t-max 0.1545` reported the fault
+    robust "above t_max 0.1545 s" (and `screen --t-max 0.16 --tol-ms 50` as ">0.160")
+    although the search clears on multiples of the tolerance, so its last run was at
+    0.154 s (0.150 s), and the CCT is 0.1541 s.  Refused up front, nearest limits named."""
+    _no_sweep_here(tmp_path, monkeypatch)
+    res = run(*args, "--t-max", 0.16, "--tol-ms", 50)
+    assert_error(
+        res,
+        "--tol-ms 50 with --t-max 0.16 s",
+        "not a multiple of the CCT tolerance 0.05 s",
+        "last run would be at 0.15 s",
+        "give --t-max 0.15 or 0.2 s",
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
+def test_a_search_limit_off_the_lattice_is_refused_by_the_library_too():
+    """`cct_jobs` (screen's and the sweeps' jobs) names the argument in its own words."""
+    from stabctl.stability.cct import SearchOptions, cct_jobs
+
+    with pytest.raises(InputError, match=r"0.1545 s is not a multiple.*give t_max 0.154 or"):
+        cct_jobs("kundur", [], search=SearchOptions(t_max=0.1545))
+
+
 def test_a_sweep_s_search_settings_are_checked_by_the_library_too():
     """`cct_jobs` (the sweeps' and the screening's jobs) refuses the settings before any
     job, as the CLI does."""

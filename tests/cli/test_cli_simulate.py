@@ -712,7 +712,7 @@ def test_a_trapezoid_step_above_one_cycle_is_a_warning():
     coarse = run(*args, "--method", "trapezoid", "--step", "0.1")
     assert coarse.exit_code == 0, coarse.output
     assert "warning: trapezoid step 0.1 s is above 0.01667 s (one cycle at 60 Hz)" in coarse.stderr
-    assert "halve the step and compare" in coarse.stderr
+    assert "halve the step and compare (simulate --check-step; cct" in coarse.stderr
     fine = run(*args, "--method", "trapezoid", "--step", str(1 / 60))
     assert fine.exit_code == 0 and "warning" not in fine.stderr
     near = [*args[:-1], "5", "--clear-cycles", "9.2", "--method", "trapezoid", "--json"]

@@ -16,6 +16,7 @@ bound (1e-6) guards against silent drift of the engine.
 """
 
 import gzip
+import json
 import re
 from dataclasses import replace
 from pathlib import Path
@@ -423,6 +424,9 @@ def test_npz_round_trip(case1, tmp_path):
         np.testing.assert_array_equal(getattr(back, name), getattr(case1, name), err_msg=name)
     assert back.stable is False and back.separated == [1, 2]
     assert back.t_separation == pytest.approx(case1.t_separation)
+    # as a run gives them (round 32: numpy scalars, so json.dumps(back.separated) failed)
+    assert [type(i) for i in back.separated] == [int, int] and type(back.t_separation) is float
+    assert json.loads(json.dumps(back.separated)) == [1, 2]
     assert back.columns()[0] == expected_columns(case1)
     assert [p.name for p in tmp_path.iterdir()] == ["run.npz"]
     with np.load(path) as z:  # every array's unit in the file, as the docstring gives it

@@ -165,6 +165,24 @@ def test_bad_input(sys_k, ma_k):
         mode_sensitivity(sys_k, ma_k, inputs="Q_esd")
 
 
+def test_a_model_rebuilt_from_its_matrices_is_told_what_it_lacks(sys_k, ma_k):
+    """A StateSpace rebuilt from linearise's matrices keeps its state names but not its
+    outputs: the COI weights are then asked for (a bare ValueError before); given, the
+    modes are the linearised model's own.  Unnamed states have no machine to weigh."""
+    import control
+
+    rebuilt = control.ss(sys_k.A, sys_k.B, sys_k.C, sys_k.D, states=sys_k.state_labels)
+    with pytest.raises(InputError, match=r"no output 'omega_coi'.*pass inertia="):
+        modal_analysis(rebuilt)
+    weights = sys_k.C[sys_k.output_labels.index("omega_coi")]
+    speed = [i for i, n in enumerate(sys_k.state_labels) if n.startswith("mac_omega_G")]
+    ma = modal_analysis(rebuilt, inertia=weights[speed])
+    assert np.allclose(np.sort_complex(ma.eigenvalues), np.sort_complex(ma_k.eigenvalues))
+    assert list(ma.kind) == list(ma_k.kind)
+    with pytest.raises(InputError, match="no machine speed state"):
+        modal_analysis(control.ss(sys_k.A, sys_k.B, sys_k.C, sys_k.D), inertia=np.ones(4))
+
+
 # -------------------------------------------------------------------------- stabctl eig
 
 
