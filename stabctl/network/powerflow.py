@@ -4,7 +4,10 @@ Polar coordinates, sparse Jacobian, sparse LU solve. Conventions (PSTess ``loadf
 ``calc.m``, ``chq_lim.m``, ``lftap.m``; PST manual section 1.4):
 
 * start values are the bus table's ``vmag`` and ``vang_deg`` (not a flat start); the
-  swing bus keeps its magnitude and angle; PV buses keep their magnitude;
+  swing bus keeps its magnitude and angle; PV buses keep their magnitude; when that
+  does not converge (a bus added with a voltage far from any solution), the flow is
+  solved again from a flat start, first without Q limits and taps, with a warning
+  (`_from_flat_start`; PST has no such retry: cases that converge solve exactly as PST);
 * specified injection ``Pg - Pl`` (and ``Qg - Ql`` at PQ buses), loads at PV and swing
   buses are kept as given; bus shunts are constant admittances in Ybus;
 * convergence when ``max|dP| + max|dQ| <= tol`` over non-swing (P) and PQ (Q) buses;
@@ -522,8 +525,9 @@ def _move_taps(case: Case, vmag, taps) -> bool:
     return bool(np.any(taps != old))
 
 
-def _initial_state(case: Case) -> tuple[_State, np.ndarray, np.ndarray]:
-    """Start state from the bus table, and the fixed injections per bus (P, Q)."""
+def _initial_state(case: Case, start=None) -> tuple[_State, np.ndarray, np.ndarray]:
+    """Start state from the bus table or `start` (voltage magnitudes, pu, and angles,
+    rad: arrays of shape (n_bus,)), and the fixed injections per bus (P, Q)."""
     b = case.buses
     inj_p = np.zeros(case.n_bus)
     inj_q = np.zeros(case.n_bus)
@@ -533,8 +537,8 @@ def _initial_state(case: Case) -> tuple[_State, np.ndarray, np.ndarray]:
         np.add.at(inj_q, idx, case.injections.q)
     return (
         _State(
-            vmag=b.vmag.copy(),
-            vang=np.deg2rad(b.vang_deg),
+            vmag=(b.vmag if start is None else start[0]).copy(),
+            vang=np.deg2rad(b.vang_deg) if start is None else start[1].copy(),
             pg=b.pgen + inj_p,
             qg=b.qgen + inj_q,
             pl=b.pload.copy(),
@@ -625,7 +629,8 @@ def solve_powerflow(
     Warns
     -----
     RuntimeWarning
-        Voltages still at their limits after the last allowed tap-changer iteration.
+        Voltages still at their limits after the last allowed tap-changer iteration; the
+        flow solved from a flat start after failing from the case's voltages.
 
     Notes
     -----
@@ -646,33 +651,19 @@ def solve_powerflow(
     drop = _branch_rows(case, drop)
     _check_islands(case, drop)
     _note_shared_swing(case)
-    taps = case.branches.tap.copy()
-    taps[taps == 0] = 1.0
-    sw = case.switched_shunts
-    levels = sws.initial_levels(sw)
-    sw_bus = case.bus_indices(sw.bus) if len(sw) else np.zeros(0, int)
-    for tap_it in range(1, _TAP_ITER_MAX + 1):  # noqa: B007 - the count is reported after
-        base = build_ybus(case, drop=drop, taps=taps)
-        for _ in range(sws.MAX_ROUNDS):  # the switched shunts' steps: the branches as they are
-            ybus = add_shunts(base, sw_bus, sws.admittances(sw, levels))
-            st, inj_p, inj_q = _initial_state(case)
-            iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
-            if not (converged and sws.step(sw, levels, st.vmag[sw_bus])):
-                break
-        if not (tap_changing and _move_taps(case, st.vmag, taps)):
-            break
-    else:
+    settings = (tol, max_iter, q_limits, tap_changing, drop)
+    try:
+        sol = _solve(case, settings)
+    except PowerFlowError as exc:  # run again from a flat start
+        sol = _from_flat_start(case, settings, exc)
+    st, s, inj_p, inj_q, iters, mism, taps, tap_it, levels = sol
+    if tap_changing and tap_it == _TAP_ITER_MAX and _move_taps(case, st.vmag, taps.copy()):
         warnings.warn(
             f"power flow of case '{case.name}': voltages still at limits after "
             f"{_TAP_ITER_MAX} tap iterations",
             RuntimeWarning,
             stacklevel=2,
         )
-    if not converged:
-        try:
-            _fail(case, iters, dp, dq, "did not converge")
-        except PowerFlowError as exc:
-            raise PowerFlowError(f"{exc}{_without_limits_hint(case, q_limits, drop)}") from None
     pg, qg, pl, ql, limited = _report(case, st, s, inj_p, inj_q)
     return PowerFlowResult(
         case=case,
@@ -691,6 +682,66 @@ def solve_powerflow(
         dropped=drop,
         shunt_levels=levels,
     )
+
+
+def _solve(case, settings: tuple, start=None) -> tuple:
+    """Newton with the switched shunts' and the taps' outer loops, `settings` (tol,
+    max_iter, q_limits, tap_changing, drop), from the bus table's voltages or `start`
+    (`_initial_state`): (state, S, fixed injections P and Q,
+    iterations, mismatch, taps, tap iterations, shunt levels).  Raises PowerFlowError
+    when it does not converge."""
+    tol, max_iter, q_limits, tap_changing, drop = settings
+    taps = case.branches.tap.copy()
+    taps[taps == 0] = 1.0
+    sw = case.switched_shunts
+    levels = sws.initial_levels(sw)
+    sw_bus = case.bus_indices(sw.bus) if len(sw) else np.zeros(0, int)
+    for tap_it in range(1, _TAP_ITER_MAX + 1):
+        base = build_ybus(case, drop=drop, taps=taps)
+        for _ in range(sws.MAX_ROUNDS):  # the switched shunts' steps: the branches as they are
+            ybus = add_shunts(base, sw_bus, sws.admittances(sw, levels))
+            st, inj_p, inj_q = _initial_state(case, start)
+            iters, mism, s, converged, dp, dq = _newton(case, ybus, st, tol, max_iter, q_limits)
+            if not (converged and sws.step(sw, levels, st.vmag[sw_bus])):
+                break
+        if not (tap_it < _TAP_ITER_MAX and tap_changing and _move_taps(case, st.vmag, taps)):
+            break
+    if not converged:
+        _fail(case, iters, dp, dq, "did not converge")
+    return st, s, inj_p, inj_q, iters, mism, taps, tap_it, levels
+
+
+def _from_flat_start(case: Case, settings: tuple, failed: PowerFlowError) -> tuple:
+    """`_solve` again after `failed` from the bus table's voltages (a bus added or
+    reconnected with a voltage no solution is near, whose first iterate the magnitude
+    limits then clip for good): from a flat start (PQ buses at 1 pu, every angle the
+    first swing bus's) without Q limits or taps, then from that solution with them (PSS/E
+    applies its var limits once the mismatch is small; switched from a flat start's first
+    iterates, Kundur's PV buses make it diverge).  A warning says so; failing again, the
+    first failure with that said and the hint of `_without_limits_hint`."""
+    tol, max_iter, q_limits, _, drop = settings
+    b = case.buses
+    flat = (
+        np.where(b.kind == PQ, 1.0, b.vmag),
+        np.full(case.n_bus, np.deg2rad(b.vang_deg[b.kind == SWING][:1].sum())),
+    )
+    try:
+        near = _solve(case, (tol, max_iter, False, False, drop), flat)[0]
+        sol = _solve(case, settings, (near.vmag, near.vang))
+    except PowerFlowError:
+        raise PowerFlowError(
+            f"{failed} (from the case's own voltages; from a flat start, 1 pu at the "
+            f"swing bus's angle, it did not converge either)"
+            f"{_without_limits_hint(case, q_limits, drop)}"
+        ) from None
+    warnings.warn(
+        f"{failed} from the case's own voltages; solved from a flat start instead (1 pu "
+        "at the swing bus's angle, PV buses at their set points; Q limits and taps applied "
+        "from its solution)",
+        RuntimeWarning,
+        stacklevel=3,
+    )
+    return sol
 
 
 def _without_limits_hint(case: Case, q_limits: bool, drop) -> str:

@@ -146,6 +146,34 @@ def test_nonconvergence_names_iterations_and_bus():
     assert bus in case.buses.number
 
 
+@pytest.mark.parametrize("name", ["kundur", "miniwecc"])
+def test_a_start_no_solution_is_near_is_solved_again_from_a_flat_start_and_said(name):
+    """Round 32: a bus added on a short branch with its RAW voltage left at 1 pu, 0 deg
+    made import-psse refuse a case that solves from a flat start (its first iterate
+    clipped to the 0.5 pu limit for good).  Every load bus started at 0.3 pu and 120 deg
+    off: the same solution as from the case's own voltages (angles relative to the
+    swing bus's), with a warning that says how it was reached; a case with no solution
+    fails both ways and says so."""
+    case = load_case(name)
+    b = case.buses
+    ref = solve_powerflow(case)
+    off = case.replace(
+        buses=b.replace(
+            vmag=np.where(b.kind == PQ, 0.3, b.vmag), vang_deg=b.vang_deg + 120 * (b.kind == PQ)
+        )
+    )
+    with pytest.warns(
+        RuntimeWarning, match="from the case's own voltages; solved from a flat start"
+    ):
+        got = solve_powerflow(off)
+    assert np.abs(got.vmag - ref.vmag).max() < 1e-9
+    assert np.abs(got.vang - ref.vang).max() < 1e-9
+    assert got.max_mismatch <= 1e-8 and list(got.kind) == list(ref.kind)
+    hopeless = off.replace(buses=off.buses.replace(pload=30 * b.pload))
+    with pytest.raises(PowerFlowError, match=r"from a flat start.*did not converge either"):
+        solve_powerflow(hopeless)
+
+
 def test_islanded_bus_raises_powerflowerror():
     case = load_case("kundur")
     row = network.circuit_row(case, 3, 4)  # the only branch to load bus 4
