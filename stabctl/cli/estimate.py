@@ -52,6 +52,7 @@ from stabctl.cli.pmu_options import (
     kept_at,
     pmu_noise_options,
     pmu_settings,
+    rate_for_case,
     rate_latency_options,
     stream_controller,
     stream_idcodes,
@@ -266,6 +267,7 @@ def rmse(
     )
     check_storage_given(esd_pct, _STORAGE_NOT_COI)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    settings = rate_for_case(settings, rate, case)
     check_latency(settings, error_window(ev, settle_ms / 1000, tf)[0], tf, f"--tf {tf:g} s")
     mc = ErrorRuns(
         runs=runs,
@@ -405,6 +407,7 @@ def closed_loop(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    settings = rate_for_case(settings, rate, case)
     check_latency(settings, t_fault, tf, f"--tf {tf:g} s")
     rows = closed_loop_verdicts(
         case,
@@ -472,6 +475,7 @@ def cct(
     _check_positive(runs=runs)
     settings = pmu_settings(rate, latency_ms, window_cycles=window_cycles)
     case, ev, t_end = fault_event(case_name, fault, far_bus, 1.0, 6.0, None)  # checks the line
+    settings = rate_for_case(settings, rate, case)
     check_latency(
         settings, ev.t, t_end, f"the runs' end {t_end:g} s (the fault at {ev.t:g} s + 5 s)"
     )
@@ -632,6 +636,7 @@ def track(
     codes = stream_idcodes(idcode, len(src.servers)) if src.path is None else 1
     try:  # the case, its estimators (compiled if not cached) and the frames
         case = load_case(case_name)
+        settings = rate_for_case(settings, rate, case)
         law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
         ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
         got = sources.read_frames(src, case, ctrl.pmus, settings.rate, end, idcode=codes)

@@ -43,6 +43,7 @@ from stabctl.cli.pmu_options import (
     kept_at,
     pmu_noise_options,
     pmu_settings,
+    rate_for_case,
     rate_latency_options,
     stream_controller,
     stream_idcodes,
@@ -305,6 +306,7 @@ def serve(
     guard = _guard(host, allow, timeout, wait)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = pmu_settings(rate, 0.0, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles)
+    settings = rate_for_case(settings, rate, case)
     pmus = pm.machine_pmus(case, pmu_at)
     if each_pmu and port and port + len(pmus) - 1 > 65535:
         raise InputError(
@@ -322,7 +324,7 @@ def serve(
             stack.enter_context(
                 StreamServer.of_frames(
                     c37.stream_config(
-                        case, [pmus[k] for k in cols], rate, 1, pmu_idcode=2 + cols[0]
+                        case, [pmus[k] for k in cols], settings.rate, 1, pmu_idcode=2 + cols[0]
                     ),
                     [f.of(cols) for f in frames],
                     host=host,
@@ -631,6 +633,7 @@ def plant(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
+    settings = rate_for_case(settings, rate, case)
     check_latency(settings, t_fault, tf, f"--tf {tf:g} s")
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     # the plant only measures: the estimator named here is never run (the controller's is)
@@ -717,9 +720,12 @@ def control(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
     case = load_case(case_name)
+    settings = rate_for_case(settings, rate, case)
     law = controller(deadband_hz, v_gate, coi, hysteresis_hz)
     ctrl = stream_controller(case, estimator, settings, esd_pct, law, pmu_at)
-    got = serve_controller(ctrl, c37.stream_config(case, ctrl.pmus, rate), host, port, timeout)
+    got = serve_controller(
+        ctrl, c37.stream_config(case, ctrl.pmus, settings.rate), host, port, timeout
+    )
     d = ctrl.diagnostics()
     flagged, gaps = unused_values(got.flagged), gaps_line(got.gaps, " (no frame sent)")
     unformed = d.unformed([p.label for p in ctrl.pmus])

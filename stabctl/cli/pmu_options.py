@@ -4,6 +4,7 @@ measure."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -22,16 +23,18 @@ from stabctl.cli.options import (
     tf_option,
 )
 from stabctl.errors import InputError, number_text
-from stabctl.estimation.settings import RATES
+from stabctl.estimation.settings import RATES, RATES_TEXT, check_rate, nominal_rate
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
 
 RATE = click.option(
     "--rate",
     type=FLOAT,
-    default=_PMU.rate,
-    show_default=True,
+    default=None,
+    show_default="60 at 60 Hz, 50 at 50 Hz",
     metavar="FPS",
-    help="PMU reporting rate (frames/s): 10, 12, 15, 20, 30, 60 or 120.",
+    help="PMU reporting rate (frames/s), one of the case's nominal frequency (C37.118.1): "
+    "10, 12, 15, 20, 30, 60 or 120 at 60 Hz; 10, 25, 50 or 100 at 50 Hz; by default the "
+    "nominal frequency's, one frame per cycle.",
 )
 IDCODE = click.option(
     "--idcode",
@@ -175,15 +178,37 @@ def pmu_settings(
     k_sigma=_PMU.k_sigma,
     window_cycles=_PMU.window_cycles,
 ):
-    """The PMUSettings of the command line's values (its units: %, ms); InputError
-    naming --rate for a rate C37.118.1 does not list."""
-    if rate not in RATES:
+    """The PMUSettings of the command line's values (its units: %, ms), checked before the
+    case is read.
+
+    Parameters
+    ----------
+    rate : float or None
+        ``--rate``; None (not given): the settings hold the API default until
+        `rate_for_case` gives them the case's nominal rate.
+    latency_ms : float
+        ``--latency-ms``.
+    drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles : float
+        ``--drop``, ``--tve-pct``, ``--fe-hz``, ``--rfe-hz-s``, ``--k-sigma``,
+        ``--window-cycles``.
+
+    Returns
+    -------
+    PMUSettings
+        The settings; pass them through `rate_for_case` once the case is known.
+
+    Raises
+    ------
+    InputError
+        A rate C37.118.1 lists for neither 50 nor 60 Hz systems, naming --rate; a value
+        `PMUSettings` refuses.
+    """
+    if rate is not None and rate not in RATES:
         raise InputError(
-            f"--rate {number_text(rate)}: must be one of "
-            f"{', '.join(f'{r:g}' for r in RATES)} frames/s (C37.118.1 reporting rates at 60 Hz)"
+            f"--rate {number_text(rate)}: must be one of {RATES_TEXT} (C37.118.1 reporting rates)"
         )
     return _PMU(
-        rate=rate,
+        rate=_PMU.rate if rate is None else rate,
         tve=tve_pct / 100,
         fe_hz=fe_hz,
         rfe_hz_s=rfe_hz_s,
@@ -192,6 +217,38 @@ def pmu_settings(
         drop_prob=drop,
         window_cycles=window_cycles,
     )
+
+
+def rate_for_case(settings, rate, case):
+    """The settings of `pmu_settings` with --rate resolved for `case`, as soon as it is
+    read: the case's nominal rate (`nominal_rate`: 60 frames/s at 60 Hz, 50 at 50 Hz)
+    when --rate was not given, else the rate given if it is one of the case's frequency.
+
+    Parameters
+    ----------
+    settings : stabctl.estimation.settings.PMUSettings
+        As `pmu_settings` made them.
+    rate : float or None
+        ``--rate``, None when not given.
+    case : stabctl.case.Case
+        The case (its ``freq_hz``).
+
+    Returns
+    -------
+    stabctl.estimation.settings.PMUSettings
+        The settings at the rate used.
+
+    Raises
+    ------
+    InputError
+        A rate given that is not one of the case's nominal frequency
+        (`stabctl.estimation.settings.check_rate`), naming --rate, the frequency and its
+        rates, and suggesting ``--rate`` of its nominal rate.
+    """
+    if rate is None:
+        return replace(settings, rate=nominal_rate(case.freq_hz))
+    check_rate(rate, case.freq_hz, "--rate {}", "give {}")
+    return settings
 
 
 def check_latency(settings, t_first: float, t_end: float, end: str) -> None:

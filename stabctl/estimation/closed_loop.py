@@ -51,7 +51,7 @@ from stabctl.estimation.pmu import (
     measure,
     window_estimates,
 )
-from stabctl.estimation.settings import PMUSettings
+from stabctl.estimation.settings import PMUSettings, check_rate
 from stabctl.estimation.sources import FILL_S
 from stabctl.network.ybus import branch_admittances
 from stabctl.storage import control as law
@@ -854,8 +854,10 @@ def cct_study(
     Raises
     ------
     InputError
-        runs below 1; PMU settings the records cannot hold; a rating out of (0, 100] or
-        twice, an unknown estimator or device model, a seed below 0 (`_study_checked`).
+        runs below 1; PMU settings the records cannot hold, or a rate that is not one
+        of the case's nominal frequency (`stabctl.estimation.settings.check_rate`,
+        before any job); a rating out of (0, 100] or twice, an unknown estimator or
+        device model, a seed below 0 (`_study_checked`).
     WrongTypeError
         An argument of another type (a fault not a line's LineFault, pmu, model or
         runner not their settings, a seed or a count not a whole number).
@@ -877,6 +879,7 @@ def cct_study(
     rule = runs if isinstance(runs, SeedRule) else None
     seed, runs = int(seed), runs if rule else int(runs)  # 2.0 held as 2 (keys, ranges)
     loaded = job_case(case)  # the content its jobs run on in this process, and digest
+    check_rate(pmu.rate, loaded.freq_hz)  # here, not as every job's failure
     tol_cycles, digest = CCT_TOL_S * loaded.freq_hz, loaded.digest()
     rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus
     window = (

@@ -43,8 +43,10 @@ and ROCOF get independent Gaussian errors of standard deviation FE / k and RFE /
 Errors are white: independent between frames, channels and PMUs (a compliance-limit
 worst case for the noise level; real PMU errors are smaller and correlated in time).
 
-Reporting rates: C37.118.1 clause 5.3 (Table 1) lists 10 to 60 frames/s for 60 Hz systems
-and allows higher rates; 30, 60 and 120 frames/s are the ones used here.  Frame k is
+Reporting rates: C37.118.1 clause 5.3 (Table 1) lists 10, 12, 15, 20, 30 and 60 frames/s for
+60 Hz systems and 10, 25 and 50 for 50 Hz systems, and allows higher rates (120 and 100
+here); `measure` takes only a rate of the truth's nominal frequency
+(`stabctl.estimation.settings.check_rate`).  Frame k is
 stamped t_k = k / rate; it arrives at t_k + latency, or never with probability `drop_prob`
 (independent per frame and PMU).  Every PMU draws from its own random stream
 (`numpy.random.SeedSequence(seed).spawn`), so a stream is reproducible from its seed and
@@ -62,7 +64,7 @@ import numpy as np
 from stabctl.case import Case
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import InputError
-from stabctl.estimation.settings import PMUSettings
+from stabctl.estimation.settings import PMUSettings, check_rate
 from stabctl.network.ybus import branch_admittances
 from stabctl.storage.devices import hv_bus
 
@@ -453,11 +455,14 @@ def measure(
     within the truth's time span, plus noise, latency and dropped frames (module docstring).
 
     seed: non-negative integer; the same seed gives the same stream.  Raises InputError
-    for a negative seed, a truth shorter than one frame interval, or a truth whose
+    for a negative seed, a rate that is not one of the truth's nominal frequency
+    (`check_rate`: the default 60 frames/s on a 50 Hz case too, pass
+    ``PMUSettings(rate=50)``), a truth shorter than one frame interval, or a truth whose
     frequency window (`PhasorTruth.window`) is not the settings' `window_cycles`.
     """
     if seed < 0:
         raise InputError(f"seed must be >= 0, got {seed}")
+    check_rate(settings.rate, truth.f0)
     if truth.window is not None and not np.isclose(
         truth.window, settings.window_s(truth.f0), rtol=1e-12, atol=0.0
     ):

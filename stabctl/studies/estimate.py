@@ -133,7 +133,9 @@ def estimator_errors(
     Raises
     ------
     InputError
-        ``t_end`` before the errors start; a source as
+        A PMU rate that is not one of the case's nominal frequency
+        (`stabctl.estimation.settings.check_rate`), before the fault run; ``t_end``
+        before the errors start; a source as
         `stabctl.estimation.sources.read_frames`, or one whose streams stop before the
         run's end, or with a gap of reporting instants longer than
         `stabctl.estimation.sources.FILL_S` (`stabctl.estimation.sources.Received.breaks`)
@@ -144,9 +146,11 @@ def estimator_errors(
     from stabctl.estimation.filters import compile_filters
     from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
+    from stabctl.estimation.settings import check_rate
     from stabctl.storage.devices import uniform_fleet
     from stabctl.studies import estimation as study
 
+    check_rate(settings.rate, case.freq_hz)
     window = error_window(event, settle_s, t_end)
     fleet = None if esd_pct is None else uniform_fleet(case, esd_pct, model=esd_model)
     sim = (model or ModelOptions()).simulator(
@@ -265,13 +269,21 @@ def closed_loop_verdicts(
         machine's speed estimated: dropped frames leave the devices idle) and ``link``
         (over TCP the link's figures, `stabctl.estimation.c37_loop.LinkStats.summary`;
         else None).
+
+    Raises
+    ------
+    InputError
+        A PMU rate that is not one of the case's nominal frequency
+        (`stabctl.estimation.settings.check_rate`), before any run.
     """
     from stabctl.dynamics.options import ModelOptions
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation.filters import compile_filters
     from stabctl.estimation.models import machine_models
     from stabctl.estimation.pmu import machine_pmus
+    from stabctl.estimation.settings import check_rate
 
+    check_rate(settings.rate, case.freq_hz)
     sim, rows = (model or ModelOptions()).simulator(case), {}
     compile_filters(machine_models(case, machine_pmus(case)))
     for e in cl.ESTIMATORS:
@@ -365,6 +377,12 @@ def estimator_ccts(
         Estimator -> statistics of the CCT in cycles (mean, std, min, max, runs, failed),
         :func:`stabctl.estimation.closed_loop.cct_study` (its records in a temporary
         file, removed).
+
+    Raises
+    ------
+    InputError
+        As `stabctl.estimation.closed_loop.cct_study`: a PMU rate that is not one of the
+        case's nominal frequency among them, before any search.
     """
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation.settings import PMUSettings

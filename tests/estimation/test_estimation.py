@@ -615,3 +615,107 @@ def test_the_error_window_starts_on_its_frame_whatever_the_clearing(cycles):
     sel = study.in_window(t, window)
     assert np.flatnonzero(sel)[0] == 66 + cycles
     assert sel.sum() == 60 * 6 - (66 + cycles) + 1
+
+
+def _kundur_at(tmp_path, freq_hz: float) -> Path:
+    """A copy of Kundur's case file at another nominal frequency."""
+    d = json.loads((Path(stabctl.__file__).parent / "case" / "data" / "kundur.json").read_text())
+    d["freq_hz"], d["name"] = freq_hz, f"kundur{freq_hz:g}"
+    path = tmp_path / f"kundur{freq_hz:g}.json"
+    path.write_text(json.dumps(d))
+    return path
+
+
+RMSE_QUICK = ["--fault", "3", "--far-bus", "101", "--tf", "1.5", "--runs", "1", "--ambient-s", "0"]
+
+
+@pytest.mark.parametrize("rate, used", [(None, 50.0), ("25", 25.0), ("50", 50.0)])
+def test_estimate_rmse_on_a_50_hz_case_takes_the_50_hz_rates(tmp_path, rate, used):
+    """A 50 Hz copy of Kundur: --rate 50 and 25 (C37.118.1 Table 1 at 50 Hz) were refused
+    as not 60 Hz rates, and the default 60 frames/s was taken; the default is now the
+    case's nominal frequency, one frame per cycle."""
+    k50 = _kundur_at(tmp_path, 50.0)
+    given = [] if rate is None else ["--rate", rate]
+    res = CliRunner().invoke(main, ["estimate", "rmse", str(k50), *RMSE_QUICK, *given, "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["pmu"]["rate"] == used and d["case"] == "kundur50"
+    assert np.isfinite(d["estimators"]["ekf"]["rel_rmse_mhz"]["mean"])
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["estimate", "rmse", "{case}", *RMSE_QUICK],
+        ["estimate", "closed-loop", "{case}", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
+        ["estimate", "cct", "{case}", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
+        ["estimate", "track", "{case}", "--source", "{rec}", "--out", "t.csv"],
+        ["pmu", "serve", "{case}", "--fault", "3", "--far-bus", "101", "--port", "0"],
+        ["pmu", "plant", "{case}", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"],
+        ["pmu", "control", "{case}", "127.0.0.1:1", "--esd-pct", "5"],
+    ],
+    ids=lambda a: " ".join(a[:2]),
+)
+@pytest.mark.parametrize(
+    "freq_hz, rate, rates, fix",
+    [
+        (50.0, "60", "10, 25, 50, 100 frames/s on a 50 Hz system", "give --rate 50"),
+        (60.0, "25", "10, 12, 15, 20, 30, 60, 120 frames/s on a 60 Hz system", "give --rate 60"),
+    ],
+)
+def test_a_rate_not_of_the_case_s_frequency_is_refused_before_any_run(
+    tmp_path, monkeypatch, args, freq_hz, rate, rates, fix
+):
+    """Every command with --rate checks it against the case's nominal frequency once the
+    case is read: named with the frequency, its rates and the rate to give, exit status
+    2, before any simulation, server or output file."""
+    case = _kundur_at(tmp_path, freq_hz)
+    rec = tmp_path / "r.c37"
+    rec.write_bytes(b"")
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    argv = [a.format(case=case, rec=rec) for a in args] + ["--rate", rate]
+    res = CliRunner().invoke(main, argv)
+    assert res.exit_code == 2, res.output
+    assert res.stderr.startswith(f"error: --rate {rate}: must be one of {rates} (C37.118.1")
+    assert f"{fix}, one frame per cycle" in res.stderr
+    assert list(work.iterdir()) == []
+
+
+def test_the_api_refuses_a_rate_not_of_the_case_s_frequency(tmp_path):
+    """`PMUSettings` takes the rates of 50 and 60 Hz systems (it knows no case); what
+    takes a case with them refuses the default 60 frames/s on a 50 Hz case, before the
+    fault run, naming the setting to pass."""
+    from stabctl.estimation.ambient import AmbientLoad
+    from stabctl.estimation.settings import PMUSettings
+    from stabctl.studies.estimate import ErrorRuns, closed_loop_verdicts, estimator_errors
+
+    mc = ErrorRuns(1, 0, "terminal", "system", BangBangCOI(), AmbientLoad(1.0, 2.0, 0), 0.0, 1)
+    k50 = load_case(str(_kundur_at(tmp_path, 50.0)))
+    ev = fault_with_clearing(k50, 3, 101, 1.0, 6)
+    need = r"PMUSettings\(rate=60\): must be one of 10, 25, 50, 100 frames/s on a 50 Hz .*"
+    need += r"pass PMUSettings\(rate=50\)"
+    with pytest.raises(InputError, match=need):
+        estimator_errors(k50, ev, mc, settings=PMUSettings(), esd_pct=None, settle_s=0.1, t_end=2)
+    with pytest.raises(InputError, match=need):
+        closed_loop_verdicts(
+            k50,
+            ev,
+            t_end=2,
+            settings=PMUSettings(),
+            esd_pct=5,
+            seed=0,
+            control=BangBangCOI(),
+            deadband_hz=0.1,
+        )
+    with pytest.raises(InputError, match=r"PMUSettings\(rate=25\): .* on a 60 Hz system"):
+        estimator_errors(
+            load_case("kundur"),
+            fault_with_clearing(load_case("kundur"), 3, 101, 1.0, 6),
+            mc,
+            settings=PMUSettings(rate=25),
+            esd_pct=None,
+            settle_s=0.1,
+            t_end=2,
+        )

@@ -2,6 +2,8 @@
 bus frequency, and the true phasors taken from a simulation (generator and device
 currents)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -103,7 +105,8 @@ def test_reporting_rates(rate):
 @pytest.mark.parametrize(
     "bad",
     [
-        dict(rate=50.0),
+        dict(rate=45.0),
+        dict(rate=24.0),
         dict(tve=-0.01),
         dict(drop_prob=1.0),
         dict(latency_s=-1.0),
@@ -114,6 +117,43 @@ def test_reporting_rates(rate):
 def test_bad_settings(bad):
     with pytest.raises(InputError):
         pmu.PMUSettings(**bad)
+
+
+def test_reporting_rates_per_nominal_frequency():
+    """C37.118.1-2011 Table 1 (with the higher rates of clause 5.3): 10-60 (120) frames/s
+    at 60 Hz, 10, 25, 50 (100) at 50 Hz.  `PMUSettings` takes either (it knows no case);
+    `check_rate` holds a rate to its case's frequency, suggesting one frame per cycle."""
+    from stabctl.estimation import settings as ps
+
+    assert ps.rates_at(60) == (10, 12, 15, 20, 30, 60, 120)
+    assert ps.rates_at(50.0) == (10, 25, 50, 100)
+    assert (ps.nominal_rate(60), ps.nominal_rate(50)) == (60, 50)
+    assert ps.nominal_rate(16.7) == 15 and ps.rates_at(16.7) == ps.RATES  # no list there
+    for rate in (25.0, 50.0, 100.0, 120.0):
+        assert pmu.PMUSettings(rate=rate).rate == rate
+    ps.check_rate(25, 50)
+    ps.check_rate(120, 60)
+    with pytest.raises(InputError) as bad:
+        ps.check_rate(60, 50, "--rate {}", "give {}")
+    assert str(bad.value) == (
+        "--rate 60: must be one of 10, 25, 50, 100 frames/s on a 50 Hz system (C37.118.1-2011 "
+        "Table 1 reporting rates at 50 Hz, with the higher rate of clause 5.3); 60 frames/s "
+        "is a rate of 60 Hz systems: give --rate 50, one frame per cycle"
+    )
+    with pytest.raises(InputError, match=r"PMUSettings\(rate=100\): .* 60 Hz system .* "):
+        ps.check_rate(100, 60)
+
+
+def test_measure_refuses_a_rate_not_of_the_truth_s_frequency():
+    """The default 60 frames/s on a 50 Hz truth is refused naming the setting to pass;
+    50 and 25 frames/s are measured there, frame k at k / rate."""
+    truth = dataclasses.replace(constant_truth(1, 2.0, f=50.0), f0=50.0)
+    with pytest.raises(InputError, match=r"PMUSettings\(rate=60\).* pass PMUSettings\(rate=50\)"):
+        pmu.measure(truth)
+    for rate in (25.0, 50.0):
+        s = pmu.measure(truth, pmu.PMUSettings(rate=rate), seed=0)
+        assert len(s) == int(2 * rate) + 1
+        np.testing.assert_allclose(np.diff(s.t), 1 / rate)
 
 
 def test_window_frequency_of_an_angle_parabola_is_exact():
