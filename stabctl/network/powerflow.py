@@ -6,8 +6,8 @@ Polar coordinates, sparse Jacobian, sparse LU solve. Conventions (PSTess ``loadf
 * start values are the bus table's ``vmag`` and ``vang_deg`` (not a flat start); the
   swing bus keeps its magnitude and angle; PV buses keep their magnitude; when that
   does not converge (a bus added with a voltage far from any solution), the flow is
-  solved again from a flat start, first without Q limits and taps, with a warning
-  (`_from_flat_start`; PST has no such retry: cases that converge solve exactly as PST);
+  solved again from a flat start with a warning (`_from_flat_start`; PST has no such
+  retry: cases that converge solve exactly as PST);
 * specified injection ``Pg - Pl`` (and ``Qg - Ql`` at PQ buses), loads at PV and swing
   buses are kept as given; bus shunts are constant admittances in Ybus;
 * convergence when ``max|dP| + max|dQ| <= tol`` over non-swing (P) and PQ (Q) buses;
@@ -712,23 +712,20 @@ def _solve(case, settings: tuple, start=None) -> tuple:
 
 
 def _from_flat_start(case: Case, settings: tuple, failed: PowerFlowError) -> tuple:
-    """`_solve` again after `failed` from the bus table's voltages (a bus added or
-    reconnected with a voltage no solution is near, whose first iterate the magnitude
-    limits then clip for good): from a flat start (PQ buses at 1 pu, every angle the
-    first swing bus's) without Q limits or taps, then from that solution with them (PSS/E
-    applies its var limits once the mismatch is small; switched from a flat start's first
-    iterates, Kundur's PV buses make it diverge).  A warning says so; failing again, the
-    first failure with that said and the hint of `_without_limits_hint`."""
-    tol, max_iter, q_limits, _, drop = settings
+    """`_solve` again, with the same settings, from a flat start (PQ buses at 1 pu, every
+    angle the first swing bus's) after `failed` from the bus table's voltages (a bus
+    added or reconnected with a voltage no solution is near, whose first iterate the
+    magnitude limits then clip for good), with a warning that says so; failing again,
+    the first failure with that said and the hint of `_without_limits_hint`."""
     b = case.buses
     flat = (
         np.where(b.kind == PQ, 1.0, b.vmag),
         np.full(case.n_bus, np.deg2rad(b.vang_deg[b.kind == SWING][:1].sum())),
     )
     try:
-        near = _solve(case, (tol, max_iter, False, False, drop), flat)[0]
-        sol = _solve(case, settings, (near.vmag, near.vang))
+        sol = _solve(case, settings, flat)
     except PowerFlowError:
+        _, _, q_limits, _, drop = settings
         raise PowerFlowError(
             f"{failed} (from the case's own voltages; from a flat start, 1 pu at the "
             f"swing bus's angle, it did not converge either)"
@@ -736,8 +733,7 @@ def _from_flat_start(case: Case, settings: tuple, failed: PowerFlowError) -> tup
         ) from None
     warnings.warn(
         f"{failed} from the case's own voltages; solved from a flat start instead (1 pu "
-        "at the swing bus's angle, PV buses at their set points; Q limits and taps applied "
-        "from its solution)",
+        "at the swing bus's angle, PV buses at their set points)",
         RuntimeWarning,
         stacklevel=3,
     )

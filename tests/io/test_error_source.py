@@ -844,6 +844,33 @@ def test_an_unsolved_power_flow_s_advice_names_whose_option_solves_it(tmp_path):
     assert not out.exists()
 
 
+def test_a_bus_added_with_a_voltage_no_solution_is_near_imports_from_a_flat_start(tmp_path):
+    """Round 32: PSS/E's three-bus GENROU system with a bus 104 added behind 0.001 pu from
+    bus 103 (a 10 MW load), its RAW voltage left at 1 pu, 0 deg: the power flow from the
+    RAW's voltages diverged (its first iterate clipped at 0.5 pu) and the import was
+    refused; it now solves from a flat start, says so, and names bus 104 as where the
+    RAW's voltages are not the solution."""
+    runs = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU"
+    text = (runs / "ThreeBusMulti.raw").read_text()
+    nl = "\r\n" if "\r\n" in text else "\n"
+    for end, line in (
+        (" 0 /End of Bus data", "   104,'BUS 4', 138.0000,1,   1,   1,   1,1.00000,   0.0000"),
+        (" 0 /End of Load data", "   104,'1 ',1, 1, 1, 10.0, 3.0, 0.0, 0.0, 0.0, 0.0, 1,1,0"),
+        (" 0 /End of Branch data", "103,104,'1',0,1E-3,0,250,250,250,0,0,0,0,1,1,0,1,1"),
+    ):  # fmt: skip
+        assert end in text, end
+        text = text.replace(end, line + nl + end, 1)
+    raw = tmp_path / "added.raw"
+    raw.write_text(text)
+    out = tmp_path / "added.json"
+    res = CliRunner().invoke(
+        main, ["import-psse", str(raw), str(runs / "ThreeBus_GENROU.dyr"), "-o", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    assert "from the case's own voltages; solved from a flat start instead" in res.stderr
+    assert "(bus 104)" in res.stderr and out.exists()
+
+
 @pytest.mark.parametrize(
     "machine, expected",
     [
