@@ -444,6 +444,29 @@ def test_a_cache_others_may_write_into_is_not_used(tmp_path):
     assert run.stdout.strip() == str(shared) and "numba cache" not in run.stderr
 
 
+def test_an_unsafe_cache_with_no_private_one_possible_caches_for_the_run(tmp_path):
+    """Round 32: NUMBA_CACHE_DIR writable by others and a private cache that cannot be made
+    (XDG_CACHE_HOME a file; a read-only home alike): every command, `--version`
+    included, failed at import with a traceback.  The kernels are now cached for the run
+    in a directory of its own, removed at exit, and the warning says so."""
+    shared = tmp_path / "shared"
+    shared.mkdir(mode=0o777)
+    shared.chmod(0o777)
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    code = "import warnings\nwarnings.simplefilter('always')\nimport numba\n" + _LOAD
+    code += "print(numba.config.CACHE_DIR)\n"
+    run = _fresh_process(code, shared, XDG_CACHE_HOME=str(afile))
+    assert run.returncode == 0, run.stderr
+    assert f"numba cache: {shared} is writable by others than its owner" in run.stderr
+    assert f"({afile / 'stabctl-numba'} cannot be made: Not a directory; for this run" in (
+        run.stderr
+    )
+    used = Path(run.stdout.split()[-1])
+    assert used.name.startswith("stabctl-numba.") and not used.exists()  # removed at exit
+    assert not list(shared.iterdir())
+
+
 def test_cache_directories_are_made_private_whatever_the_umask(tmp_path):
     """Round 30: under umask 000 the first run made NUMBA_CACHE_DIR and its kernels'
     directories 0777; the next run found them writable by others, moved the cache away

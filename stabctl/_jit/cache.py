@@ -29,13 +29,16 @@ stabctl writes are writable by their owner only, whatever the umask.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import errno
 import functools
 import hashlib
 import os
 import re
+import shutil
 import stat
+import tempfile
 import warnings
 from pathlib import Path
 from typing import ClassVar
@@ -504,13 +507,25 @@ def _unsafe_owner_or_mode(path: Path, st: os.stat_result) -> str:
     return ""
 
 
-def private_cache_dir() -> Path:
+def private_cache_dir() -> tuple[Path, str]:
     """This user's own cache directory (``~/.cache/stabctl-numba``, mode 0700), used
-    instead of an unsafe one (`unsafe_reason`)."""
+    instead of an unsafe one (`unsafe_reason`), and what to add to the warning.  Where it
+    cannot be made (a read-only home, XDG_CACHE_HOME a file: every command, --help
+    included, failed at import with a traceback), a new directory of this process under
+    the temporary directory (mode 0700, removed at exit): kernels are then compiled
+    again by each run, which the warning says."""
     path = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "stabctl-numba"
-    path.mkdir(parents=True, exist_ok=True, mode=0o700)
-    os.chmod(path, 0o700)
-    return path
+    try:
+        path.mkdir(parents=True, exist_ok=True, mode=0o700)
+        os.chmod(path, 0o700)
+        return path, ""
+    except OSError as exc:
+        run = Path(tempfile.mkdtemp(prefix="stabctl-numba."))
+        atexit.register(shutil.rmtree, run, ignore_errors=True)
+        return run, (
+            f" ({path} cannot be made: {exc.strerror}; for this run only, every run "
+            "compiling them again: set NUMBA_CACHE_DIR to a directory of your own)"
+        )
 
 
 def ensure_safe_cache() -> None:
@@ -522,10 +537,9 @@ def ensure_safe_cache() -> None:
     places = ([Path(root)] if root else []) + cache_dirs()
     why = next((r for r in map(unsafe_reason, places) if r), "")
     if why:
-        numba.config.CACHE_DIR = str(private_cache_dir())
-        _MOVED[:] = [
-            f"numba cache: {why}; stabctl's kernels are cached in {numba.config.CACHE_DIR} instead"
-        ]
+        path, note = private_cache_dir()
+        numba.config.CACHE_DIR = str(path)
+        _MOVED[:] = [f"numba cache: {why}; stabctl's kernels are cached in {path} instead{note}"]
 
 
 #: why the cache was moved (`ensure_safe_cache`), said once (`_say_moved`)
