@@ -1716,10 +1716,15 @@ def _connect(scheduler: str, workers: int, timeout: float):
             _handshake(address, timeout)
         return _started_client(address, timeout=timeout)
     except Exception as exc:  # noqa: BLE001 - whatever a foreign service makes Dask raise
-        kind = "" if type(exc) in (ConnectionError, TimeoutError) else f"{type(exc).__name__}: "
-        raise InputError(
-            f"no Dask scheduler answers at {address} within {timeout:g} s "
-            f"({kind}{' '.join(str(exc).split())[:200]})"
+        said = " ".join(str(exc).split())[:200] or "no word"
+        if type(exc) in (ConnectionError, TimeoutError):  # nothing listens, or silent
+            raise InputError(
+                f"no Dask scheduler answers at {address} within {timeout:g} s ({said})"
+            ) from None
+        kind = f"{type(exc).__name__}: "
+        raise InputError(  # an echo server read as "no answer within 10 s" after 1 s
+            f"no Dask scheduler at {address}: what answers there closed the connection or "
+            f"does not speak Dask's protocol ({kind}{said})"
         ) from None
 
 
@@ -2138,35 +2143,49 @@ class _DaskWorkers:
         it has not answered within SCHEDULER_ANSWER_S: once it has been silent for
         SILENT_SCHEDULER_S, that is said (log warning, once; a SIGSTOPped scheduler kept a
         sweep waiting without a word, as the client's own call waits for ever); after
-        SCHEDULER_GIVE_UP_S `_NoWorker` is raised: the jobs left are not run."""
+        SCHEDULER_GIVE_UP_S `_NoWorker` is raised: the jobs left are not run.  A
+        connection closed (the scheduler killed: distributed's CommClosedError, which
+        reached the user in Dask's own words) raises `_NoWorker` at once."""
         client = self.client
         try:
             info = client.sync(
                 client.scheduler.identity, n_workers=n_workers, callback_timeout=SCHEDULER_ANSWER_S
             )
-        except TimeoutError:
-            now = time.monotonic()
-            self.unanswered = self.unanswered or now - SCHEDULER_ANSWER_S
-            if now - self.unanswered >= SCHEDULER_GIVE_UP_S:
-                silent = now - self.unanswered
-                raise _NoWorker(
-                    f"has not answered for {silent:.0f} s (its scheduler stopped, hung or cut off)"
-                ) from None
-            if now - self.unanswered >= SILENT_SCHEDULER_S and not self.said_unanswered:
-                self.said_unanswered = True
-                _log.warning(
-                    "the Dask scheduler at %s has not answered for %.0f s (stopped, hung or "
-                    "cut off): the sweep waits for it up to %g s in all, then gives up the "
-                    "jobs not run; Ctrl-C stops it now, keeping its finished records",
-                    client.scheduler.address,
-                    now - self.unanswered,
-                    SCHEDULER_GIVE_UP_S,
-                )
-            return None
+        except OSError as exc:  # distributed's CommClosedError: the scheduler is gone
+            if isinstance(exc, TimeoutError):
+                return self._unanswered()
+            said = textwrap.shorten(" ".join(str(exc).split()), 120, placeholder=" ...")
+            raise _NoWorker(
+                f"closed its connection (its scheduler stopped or was killed: "
+                f"{type(exc).__name__}: {said})"
+            ) from None
         if self.said_unanswered:
             _log.warning("the Dask scheduler at %s answers again", client.scheduler.address)
         self.unanswered, self.said_unanswered = None, False
         return info
+
+    def _unanswered(self) -> None:
+        """`ask`'s question unanswered: said after SILENT_SCHEDULER_S, given up
+        (`_NoWorker`) after SCHEDULER_GIVE_UP_S."""
+        client = self.client
+        now = time.monotonic()
+        self.unanswered = self.unanswered or now - SCHEDULER_ANSWER_S
+        if now - self.unanswered >= SCHEDULER_GIVE_UP_S:
+            silent = now - self.unanswered
+            raise _NoWorker(
+                f"has not answered for {silent:.0f} s (its scheduler stopped, hung or cut off)"
+            )
+        if now - self.unanswered >= SILENT_SCHEDULER_S and not self.said_unanswered:
+            self.said_unanswered = True
+            _log.warning(
+                "the Dask scheduler at %s has not answered for %.0f s (stopped, hung or "
+                "cut off): the sweep waits for it up to %g s in all, then gives up the "
+                "jobs not run; Ctrl-C stops it now, keeping its finished records",
+                client.scheduler.address,
+                now - self.unanswered,
+                SCHEDULER_GIVE_UP_S,
+            )
+        return None
 
     def name_silent(self, now: float) -> None:
         """Log a warning of each worker whose heartbeat (the scheduler's ``last_seen``)

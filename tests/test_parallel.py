@@ -613,13 +613,18 @@ def test_a_records_file_starting_with_a_byte_order_mark_is_read_whole(tmp_path, 
     assert not [w for w in recwarn if "d.jsonl" in str(w.message)]
 
 
+_NOT_DASK = "what answers there closed the connection or does not speak Dask's protocol"
+
+
 @pytest.mark.parametrize(
     "reply, why",
     [
-        (b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50, ""),
-        (b"", "it accepted the connection and sent no Dask handshake"),
+        (b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50, f"at {{}}: {_NOT_DASK}"),
+        (b"", "answers at {} .*it accepted the connection and sent no Dask handshake"),
+        ("echo", f"at {{}}: {_NOT_DASK} \\(\\w+: "),
+        ("hang up", f"at {{}}: {_NOT_DASK} \\(\\w+: "),
     ],
-    ids=["web-server", "silent"],
+    ids=["web-server", "silent", "echo", "hang-up"],
 )
 def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time_box(
     tmp_path, monkeypatch, reply, why
@@ -627,7 +632,9 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
     """A web server where the scheduler should be: "Unable to allocate 3.07 EiB" (a length
     read from its HTTP reply) or a hang; a peer that accepts and says nothing: a hang
     (Dask's handshake has no time-out).  Now one InputError within SCHEDULER_TIMEOUT_S
-    naming the address."""
+    naming the address.  Round 32: an echo server read as "no answer within 10 s
+    (AssertionError: )" after 1 s, and one that hangs up in Dask's raw words; both now
+    say that what answers is no Dask scheduler."""
     pytest.importorskip("distributed")
     import socket
     import threading
@@ -644,13 +651,25 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
             except OSError:
                 return
             held.append(conn)
-            conn.sendall(reply)
+            if reply == "hang up":
+                conn.close()
+            elif reply == "echo":
+                threading.Thread(target=echo, args=(conn,), daemon=True).start()
+            else:
+                conn.sendall(reply)
+
+    def echo(conn):
+        try:
+            while data := conn.recv(65536):
+                conn.sendall(data)
+        except OSError:
+            return
 
     threading.Thread(target=serve, daemon=True).start()
     t0 = time.perf_counter()
     try:
         with pytest.raises(
-            InputError, match=rf"no Dask scheduler answers at tcp://127.0.0.1:{port} .*{why}"
+            InputError, match="no Dask scheduler " + why.format(f"tcp://127.0.0.1:{port}")
         ):
             run_sweep(
                 jobs_of(square, 1),
@@ -1998,6 +2017,35 @@ def test_a_dask_worker_whose_heartbeats_stop_is_named_once(monkeypatch, caplog):
     said = [r.getMessage() for r in caplog.records if "heartbeat" in r.getMessage()]
     assert len(said) == 1 and said[0].startswith(
         "Dask worker tcp://b:2 has sent no heartbeat for 30 s"
+    )
+
+
+def test_a_scheduler_that_closes_its_connection_gives_the_jobs_up_in_stabctl_s_words():
+    """Round 32: a scheduler killed mid-sweep sometimes ended it with Dask's own words
+    ("error: in <TCP (closed) ConnectionPool.identity ...>: ConnectionResetError"), the
+    address and the jobs left unnamed: the question to the scheduler met the connection
+    closed.  It now gives the jobs up at once (`_NoWorker`, the sweep's SweepIncomplete
+    naming the address), as a silent scheduler after SCHEDULER_GIVE_UP_S."""
+    pytest.importorskip("distributed")
+    from distributed.comm.core import CommClosedError
+
+    from stabctl import parallel
+
+    class Client:
+        class scheduler:
+            address = "tcp://127.0.0.1:1"
+            identity = None
+
+        def sync(self, func, callback_timeout=None, **kw):
+            raise CommClosedError(
+                "in <TCP (closed) ConnectionPool.identity local=tcp://127.0.0.1:2 remote="
+                "tcp://127.0.0.1:1>: ConnectionResetError: [Errno 104] Connection reset by peer"
+            )
+
+    with pytest.raises(parallel._NoWorker) as err:
+        parallel._DaskWorkers(Client()).ask(n_workers=0)
+    assert err.value.why.startswith(
+        "closed its connection (its scheduler stopped or was killed: CommClosedError: in <TCP"
     )
 
 
