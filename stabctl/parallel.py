@@ -2153,7 +2153,8 @@ class _DaskWorkers:
             )
         except OSError as exc:  # distributed's CommClosedError: the scheduler is gone
             if isinstance(exc, TimeoutError):
-                return self._unanswered()
+                self._unanswered()
+                return None
             said = textwrap.shorten(" ".join(str(exc).split()), 120, placeholder=" ...")
             raise _NoWorker(
                 f"closed its connection (its scheduler stopped or was killed: "
@@ -2185,7 +2186,6 @@ class _DaskWorkers:
                 now - self.unanswered,
                 SCHEDULER_GIVE_UP_S,
             )
-        return None
 
     def name_silent(self, now: float) -> None:
         """Log a warning of each worker whose heartbeat (the scheduler's ``last_seen``)
