@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import fcntl
 import io
 import json
 import logging
@@ -1348,7 +1349,11 @@ class _appender:
     def append(self, line: str) -> None:
         """Write ``line`` whole; if a write fails, truncate the file to where it began."""
         if self.f is None:
+            made = not self.path.exists()
             self.f = self.path.open("a+b", buffering=0)
+            if made:  # locked as `locking.exclusive` locks a file there before it: a hard
+                # link made to it mid-sweep let a second sweep append to it too
+                fcntl.flock(self.f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
             size = os.fstat(self.f.fileno()).st_size
             if size and os.pread(self.f.fileno(), 1, size - 1) != b"\n":
                 line = "\n" + line

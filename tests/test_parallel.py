@@ -408,6 +408,36 @@ def test_a_second_writer_through_a_link_to_the_sweep_file_is_refused(tmp_path, m
     assert (rep.ran, rep.skipped) == (1, 1)  # the holder gone, the link is written
 
 
+def _link_then_lock(inputs):
+    """A job that makes a hard link to the sweep's file (made by the first record) and
+    tries to take that file's lock through it, as a second sweep on the link would."""
+    from stabctl.locking import _file_locked
+
+    if inputs["x"] == 1:
+        return {"x": 1}
+    os.link(inputs["out"], inputs["hard"])
+    try:
+        fd = _file_locked(inputs["hard"])
+    except InputError as exc:
+        return {"refused": str(exc)}
+    os.close(fd)
+    return {"refused": None}
+
+
+def test_a_hard_link_made_to_the_sweep_file_mid_sweep_finds_it_locked(tmp_path):
+    """Round 32: a hard link made while a sweep ran, to the file its first record made
+    (the lock on the file itself is taken when the sweep starts, and there was no file
+    then), let a second sweep append to it too: 4 jobs recorded twice, and the file
+    refused on the next resume.  The file a sweep makes is locked as it is made."""
+    out, hard = tmp_path / "a.jsonl", tmp_path / "b.jsonl"
+    jobs = [
+        Job(f"j/{x}", _link_then_lock, {"x": x, "out": str(out), "hard": str(hard)}) for x in (1, 2)
+    ]
+    run_sweep(jobs, out, workers=1, progress=False)
+    said = read_records(out)["j/2"]["result"]["refused"]
+    assert said is not None and "another stabctl process is writing this file" in said
+
+
 _WRITER = """
 import sys, time
 from stabctl.errors import InputError
