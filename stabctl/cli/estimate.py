@@ -56,6 +56,7 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     stream_controller,
     stream_idcodes,
+    write_kept,
     write_recording,
 )
 from stabctl.errors import InputError
@@ -673,7 +674,8 @@ def track(
             else f"no frame was estimated yet, so nothing is kept: {what}"
         )
         raise
-    _write_track(at, ctrl, d, esd_pct is not None)
+    short = why if got.short else None
+    write_kept(at, lambda to: _write_track(to, ctrl, d, esd_pct is not None), short, kept)
     rel = np.where(d.formed[:, None], np.abs(d.rel), -1.0)
     worst = np.unravel_index(np.argmax(rel), rel.shape) if d.formed.any() else None
     unformed = d.unformed([p.label for p in ctrl.pmus])

@@ -47,6 +47,7 @@ from stabctl.cli.pmu_options import (
     rate_latency_options,
     stream_controller,
     stream_idcodes,
+    write_kept,
     write_recording,
 )
 from stabctl.errors import InputError, counted
@@ -491,7 +492,7 @@ def record(address, out, frames, idcode):
     cfg2 = c37.read_config(got.cfg2, "the CFG-2")
     data, why, kept = got.data, f"{address}: {got.short}", f"{len(got.data)} received"
     at = kept_at(out) if got.short else out
-    write_recording(at, got.cfg2, data)
+    write_kept(at, lambda to: write_recording(to, got.cfg2, data), why if got.short else None, kept)
     if got.short:
         fail_short(out, at, why, kept)
     gaps = stream_gaps(data, cfg2)

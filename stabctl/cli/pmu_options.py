@@ -412,6 +412,39 @@ def where_kept(out, at) -> str:
     return f"in {at}" if Path(at) == Path(out) else f"in {at} ({out} is left as it was)"
 
 
+def write_kept(at, write, why: str | None, kept: str) -> None:
+    """``write(at)``; when the stream stopped before its end (`why`), a write that fails
+    (a disk full) says that too: it was "r.partial.c37: No space left on device" alone,
+    the shortfall unsaid.
+
+    Parameters
+    ----------
+    at : str or Path
+        Where to write (`kept_at` for a stream cut short).
+    write : callable
+        ``write(path)``, atomic.
+    why : str or None
+        The stream and what cut it (`fail_short`), None or empty for a whole stream.
+    kept : str
+        What came, e.g. ``"121 received"``.
+
+    Raises
+    ------
+    InputError
+        The write failed after a stream cut short: both named.
+    OSError
+        The write failed after a whole stream.
+    """
+    try:
+        write(at)
+    except OSError as exc:
+        if not why:
+            raise
+        raise InputError(
+            f"{why}; the {kept} could not be kept: {at}: {exc.strerror or exc}"
+        ) from None
+
+
 def fail_short(out, at, why: str, kept: str) -> None:
     """Name, as an error, a stream that stopped before its end: `at` (`kept_at`) holds what
     it brought, written whole as far as the stream came, so the frames received are kept

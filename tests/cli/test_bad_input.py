@@ -2069,6 +2069,28 @@ def test_record_cut_short_leaves_an_existing_recording_as_it_was(kundur_wire, tm
     assert out.read_bytes() == head + b"".join(body[:5]) and list(tmp_path.iterdir()) == [out]
 
 
+def test_a_recording_cut_short_that_cannot_be_written_says_both(kundur_wire, tmp_path, monkeypatch):
+    """Round 32: a stream cut after 3 of 50 frames whose partial recording met a full disk
+    said only "r.partial.c37: No space left on device": the shortfall is said too."""
+    import errno
+
+    def full(path, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr("stabctl.cli.pmu.write_recording", full)
+    _, _, head, body = kundur_wire
+    out = tmp_path / "r.c37"
+    srv, port = _pmu_server(head, body[:3])
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 50, "-o", out)
+    assert_error(
+        res,
+        f"127.0.0.1:{port}: the server closed the connection after 3 data frames",
+        f"the 3 received could not be kept: {out}: No space left on device",
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize(
     "change, needle",
     [
