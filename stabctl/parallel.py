@@ -467,7 +467,9 @@ def set_aside_damaged(
     return numbers
 
 
-def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -> Path:
+def atomic_write(
+    path: str | Path, write: Callable, *, mode: str | None = "w", later: list | None = None
+) -> Path:
     """Write a file atomically: into a temporary file beside it (hidden, same suffix, so
     that writers choosing the format by extension still do), renamed over `path` only when
     complete; the temporary file is removed if writing fails.  A file replaced keeps its
@@ -488,6 +490,9 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
         ``write(tmp_path)`` with the temporary file's path (a str; the file exists, empty).
     mode : {"w", "wb", None}
         How the temporary file is opened for `write`.
+    later : list or None, optional
+        Where to leave the rename, as (temporary file, path) (`atomic_writes`: files
+        renamed together once all are written); None: renamed at once.
 
     Returns
     -------
@@ -529,11 +534,42 @@ def atomic_write(path: str | Path, write: Callable, *, mode: str | None = "w") -
                 except OSError:
                     keep = None
                 os.chmod(tmp, 0o666 & ~_umask() if keep is None else keep)  # mkstemp: 0o600
-                os.replace(tmp, path)
+                if later is None:
+                    os.replace(tmp, path)
+                else:
+                    later.append((tmp, path))
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
     return given
+
+
+def atomic_writes(outputs) -> None:
+    """Write several files together (`atomic_write` each): every one into its temporary
+    file, all renamed only once all are written, so that a failure (a full disk, the
+    file size limit) leaves every one of them as it was (`simulate --out x.csv --plot
+    x.png` left a new x.png beside the error on x.csv).
+
+    Parameters
+    ----------
+    outputs : iterable of (path, write)
+        Each file and its ``write(tmp_path)`` (`atomic_write` with ``mode=None``).
+
+    Raises
+    ------
+    OSError
+        As `atomic_write`, naming the file; the temporary files are removed.
+    """
+    renames: list = []
+    try:
+        for path, write in outputs:
+            atomic_write(path, write, mode=None, later=renames)
+    except BaseException:
+        for tmp, _ in renames:
+            Path(tmp).unlink(missing_ok=True)
+        raise
+    for tmp, path in renames:
+        os.replace(tmp, path)
 
 
 @contextmanager

@@ -6,7 +6,6 @@ Every function here formats; none computes a result.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import click
 
@@ -71,29 +70,29 @@ def step_text(h: float) -> str:
     return f"{1000 * h:.4g} ms"
 
 
-def save_plot_atomically(result, path: Path, title: str, case) -> None:
-    """Plot a run (stabctl.plotting.figures.simulation_overview) to a temporary file
-    beside ``path``, then rename it, so that ``path`` is whole or absent.
+def plot_writer(result, title: str, case):
+    """The writer of a run's plot (stabctl.plotting.figures.simulation_overview) for
+    `stabctl.parallel.atomic_writes`, which writes it with the command's other outputs.
 
     Parameters
     ----------
     result : SimulationResult
-    path : Path
     title : str
     case : Case
         The run's case: its machines named by number and bus (`Case.machine_name`), its
         system base (MVA) for the device powers.
+
+    Returns
+    -------
+    callable
+        ``write(path)``.
     """
-    from stabctl.parallel import atomic_write
     from stabctl.plotting.figures import simulation_overview
 
-    atomic_write(
-        path,
-        lambda tmp: simulation_overview(
-            result, tmp, title=title, base_mva=case.base_mva, case=case
-        ),
-        mode=None,
-    )
+    def write(tmp):
+        simulation_overview(result, tmp, title=title, base_mva=case.base_mva, case=case)
+
+    return write
 
 
 #: what `describe_esd` and `print_cct` call the devices of each storage model

@@ -15,9 +15,9 @@ from stabctl.cli.format import (
     islanding_lines,
     machine_buses,
     machine_list,
+    plot_writer,
     print_json,
     print_storage,
-    save_plot_atomically,
     step_text,
 )
 from stabctl.cli.options import (
@@ -467,6 +467,7 @@ def simulate(
     from stabctl.dynamics.events import validate as validate_events
     from stabctl.dynamics.grid import check_step_count
     from stabctl.io import load_case
+    from stabctl.parallel import atomic_writes
 
     out_p = check_suffix(out_path, OUT_SUFFIXES, "--out")
     plot_p = check_suffix(plot_path, PLOT_SUFFIXES, "--plot")
@@ -571,21 +572,19 @@ def simulate(
             "hysteresis_hz": hysteresis_hz,
         }
     )
-    written = []
+    outputs: list = []  # written together: a failure leaves every one as it was
+    if out_p is not None:
+        npz = out_p.suffix.lower() == ".npz"
+        outputs.append((out_p, result.to_npz if npz else result.to_csv))
     if plot_p is not None:
         title = f"{case.name}: " + (
             "; ".join(described(e, case) for e in _in_time_order(events)) or "flat run"
         )
         if esd is not None:
             title += "\n" + describe_esd(esd, short=True)
-        save_plot_atomically(result, plot_p, title=title, case=case)
-        written.append(str(plot_p))
-    if out_p is not None:
-        if out_p.suffix.lower() == ".npz":
-            result.to_npz(out_p)
-        else:
-            result.to_csv(out_p)
-        written.insert(0, str(out_p))
+        outputs.append((plot_p, plot_writer(result, title, case)))
+    atomic_writes(outputs)
+    written = [str(p) for p, _ in outputs]
     summary = result.summary()
     summary["separated_buses"] = machine_buses(case, summary["separated_machines"])
     if esd is not None:

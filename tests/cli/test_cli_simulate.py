@@ -820,3 +820,26 @@ def test_a_cct_whose_stable_run_ends_off_a_normal_operating_point_says_so():
     d = json.loads(run(*args, "--json").stdout)
     assert (d["verdict"], d["end_concerns"], d["end_t_s"]) == ("above t_max", [said], 6.0)
     assert end["concerns"] == [said]
+
+
+@pytest.mark.parametrize("failing", ["csv", "plot"])
+def test_outputs_are_written_together_or_not_at_all(tmp_path, monkeypatch, failing):
+    """Round 32: `simulate --out x.csv --plot x.png` under a file size limit failed on
+    x.csv and left a new x.png: the outputs are renamed only once all are written, so a
+    failure in either leaves neither (and no temporary file)."""
+    import errno
+
+    def too_large(*args, **kwargs):
+        raise OSError(errno.EFBIG, "File too large")
+
+    if failing == "csv":
+        monkeypatch.setattr(SimulationResult, "to_csv", too_large)
+    else:
+        monkeypatch.setattr("stabctl.plotting.figures.simulation_overview", too_large)
+    res = run(
+        "simulate", "kundur", "--fault", "3", "--far-bus", "101", "--tf", "1.2",
+        "--out", tmp_path / "x.csv", "--plot", tmp_path / "x.png",
+    )  # fmt: skip
+    assert res.exit_code == 2
+    assert res.stderr.strip().startswith("error: ") and "File too large" in res.stderr
+    assert sorted(tmp_path.iterdir()) == []
