@@ -16,6 +16,25 @@ import click
 from stabctl.errors import InputError
 
 
+def _check_name(text: str, option: str) -> None:
+    """Refuse an output name that the lines and JSON naming it would garble: a control
+    character (``wrote o`` and ``ut.csv`` on two lines for a name with a newline) or
+    bytes that are not UTF-8 (a lone surrogate in ``--json``'s ``files``, which strict
+    JSON readers refuse)."""
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):
+        raise InputError(
+            f"{option} {text!r}: a name with a control character (a newline, a tab): the "
+            "lines and records naming the file would be garbled; give another name"
+        )
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        raise InputError(
+            f"{option} {os.fsencode(text)!r}: a name that is not UTF-8: the JSON outputs "
+            "and records naming the file could not; give another name"
+        ) from None
+
+
 def check_writable(path, option: str, directory: bool = False, records: bool = False) -> None:
     """Check, before any work, that an output file or directory can be written.
 
@@ -42,8 +61,10 @@ def check_writable(path, option: str, directory: bool = False, records: bool = F
         or another non-regular file (a file is wanted) or a file (a directory is wanted);
         or it exists and is not writable; an empty name (``Path("")`` is the current
         directory: the outputs landed there), or a file name ending in ``/`` (Path drops
-        it: ``x.csv/`` wrote ``x.csv``).
+        it: ``x.csv/`` wrote ``x.csv``); a name with a control character or not UTF-8
+        (`_check_name`).
     """
+    _check_name(str(path), option)
     if not str(path):
         kind = "directory" if directory else "file"
         raise InputError(

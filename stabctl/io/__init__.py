@@ -96,6 +96,16 @@ def _read_case(name_or_path: str | Path) -> Case:
             )
     path = Path(name_or_path)
     if not path.exists():
+        if path.is_symlink():  # a link that is broken or loops: "not found" misled
+            try:
+                path.stat()
+            except FileNotFoundError:
+                raise CaseError(
+                    f"case file not found: {path} is a symbolic link to "
+                    f"{os.readlink(path)}, which does not exist"
+                ) from None
+            except OSError as exc:
+                raise CaseError(f"case file {path}: {exc.strerror}") from None
         raise CaseError(f"case file not found: {path}")
     try:
         input_file(path, "case file")

@@ -5,6 +5,7 @@ and no work done."""
 import copy
 import json
 import math
+import os
 import re
 from pathlib import Path
 
@@ -2699,3 +2700,32 @@ def test_output_paths_through_a_file_or_a_broken_link_are_named_for_what_they_ar
         "--out-dir dl: a broken symbolic link (to nowhere, ",
         "give a directory, or create what it points to",
     )
+
+
+@pytest.mark.parametrize(
+    "name, shown, needle",
+    [
+        ("o\nut.csv", "o\\nut.csv'", "a name with a control character"),
+        ("tab\t.csv", "tab\\t.csv'", "a name with a control character"),
+        (os.fsdecode(b"\xffo.csv"), "\\xffo.csv'", "a name that is not UTF-8"),
+    ],
+    ids=["newline", "tab", "not-utf-8"],
+)
+def test_an_output_name_its_lines_and_json_would_garble_is_refused(tmp_path, name, shown, needle):
+    """Round 32: `simulate --out $'o\\nut.csv'` printed "wrote o" and "ut.csv" on two
+    lines; a name of bytes that are not UTF-8 reached --json's files as a lone surrogate,
+    which strict JSON readers refuse.  Refused before any run, nothing written."""
+    res = run("simulate", "kundur", "--tf", 0.5, "--out", str(tmp_path / name), "--json")
+    assert_error(res, "--out ", f"{shown}: {needle}")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_case_named_through_a_link_that_loops_or_leads_nowhere_says_so(tmp_path):
+    """Round 32: a CASE that is a loop of symbolic links was "case file not found"."""
+    (tmp_path / "l1.json").symlink_to("l2.json")
+    (tmp_path / "l2.json").symlink_to("l1.json")
+    (tmp_path / "br.json").symlink_to("nowhere.json")
+    res = run("simulate", tmp_path / "l1.json", "--tf", 0.5)
+    assert_error(res, f"case file {tmp_path / 'l1.json'}: Too many levels of symbolic links")
+    res = run("simulate", tmp_path / "br.json", "--tf", 0.5)
+    assert_error(res, f"{tmp_path / 'br.json'} is a symbolic link to nowhere.json, which does")
