@@ -425,7 +425,8 @@ def import_psse(
     negative loads with --net-unmodelled (synthetic grids such as ACTIVSg2000 give their
     wind and solar plants no dynamic data). Exciters and governors that cannot start within
     their own limits make simulate refuse the case; --leave-out-infeasible leaves them out,
-    each named. A case whose power flow (Q limits on) does not converge is refused naming
+    each named. A case whose power flow (Q limits on) does not converge, from the RAW's
+    voltages nor from a flat start (tried next, with a warning), is refused naming
     the worst mismatch and its bus (every analysis command would refuse it); --keep-unsolved
     writes it all the same, with a warning. The summary names each record left out, out of
     the network (isolated buses and what is at them, equipment out of service: left out as
