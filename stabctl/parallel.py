@@ -1764,8 +1764,8 @@ def _connect(scheduler: str, workers: int, timeout: float):
             ) from None
         kind = f"{type(exc).__name__}: "
         raise InputError(  # an echo server read as "no answer within 10 s" after 1 s
-            f"no Dask scheduler at {address}: what answers there closed the connection or "
-            f"does not speak Dask's protocol ({kind}{said})"
+            f"no Dask scheduler answers at {address}: what answers there closed the "
+            f"connection or does not speak Dask's protocol ({kind}{said})"
         ) from None
 
 

@@ -649,10 +649,10 @@ _NOT_DASK = "what answers there closed the connection or does not speak Dask's p
 @pytest.mark.parametrize(
     "reply, why",
     [
-        (b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50, f"at {{}}: {_NOT_DASK}"),
-        (b"", "answers at {} .*it accepted the connection and sent no Dask handshake"),
-        ("echo", f"at {{}}: {_NOT_DASK} \\(\\w+: "),
-        ("hang up", f"at {{}}: {_NOT_DASK} \\(\\w+: "),
+        (b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nhi" * 50, f"{{}}: {_NOT_DASK}"),
+        (b"", "{} .*it accepted the connection and sent no Dask handshake"),
+        ("echo", f"{{}}: {_NOT_DASK} \\(\\w+: "),
+        ("hang up", f"{{}}: {_NOT_DASK} \\(\\w+: "),
     ],
     ids=["web-server", "silent", "echo", "hang-up"],
 )
@@ -699,7 +699,8 @@ def test_a_service_that_is_not_a_dask_scheduler_is_a_clear_error_within_the_time
     t0 = time.perf_counter()
     try:
         with pytest.raises(
-            InputError, match="no Dask scheduler " + why.format(f"tcp://127.0.0.1:{port}")
+            InputError,
+            match="no Dask scheduler answers at " + why.format(f"tcp://127.0.0.1:{port}"),
         ):
             run_sweep(
                 jobs_of(square, 1),

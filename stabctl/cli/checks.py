@@ -17,15 +17,10 @@ from stabctl.errors import InputError
 
 
 def _check_name(text: str, option: str) -> None:
-    """Refuse an output name that the lines and JSON naming it would garble: a control
-    character (``wrote o`` and ``ut.csv`` on two lines for a name with a newline) or
-    bytes that are not UTF-8 (a lone surrogate in ``--json``'s ``files``, which strict
-    JSON readers refuse)."""
-    if any(ord(c) < 32 or ord(c) == 127 for c in text):
-        raise InputError(
-            f"{option} {text!r}: a name with a control character (a newline, a tab): the "
-            "lines and records naming the file would be garbled; give another name"
-        )
+    """Refuse an output name that is not UTF-8: the JSON naming it (``--json``'s
+    ``files``, the records) would hold a lone surrogate, which strict JSON readers
+    refuse.  (A name with a newline is legal: the lines naming it show it escaped,
+    `stabctl.cli.format.shown`.)"""
     try:
         text.encode("utf-8")
     except UnicodeEncodeError:
@@ -61,8 +56,7 @@ def check_writable(path, option: str, directory: bool = False, records: bool = F
         or another non-regular file (a file is wanted) or a file (a directory is wanted);
         or it exists and is not writable; an empty name (``Path("")`` is the current
         directory: the outputs landed there), or a file name ending in ``/`` (Path drops
-        it: ``x.csv/`` wrote ``x.csv``); a name with a control character or not UTF-8
-        (`_check_name`).
+        it: ``x.csv/`` wrote ``x.csv``); a name that is not UTF-8 (`_check_name`).
     """
     _check_name(str(path), option)
     if not str(path):

@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from stabctl.cli.checks import check_writable
-from stabctl.cli.format import print_json, print_modes
+from stabctl.cli.format import print_json, print_modes, shown
 from stabctl.cli.options import (
     INT,
     conventions_option,
@@ -120,7 +120,7 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
         return
     print_modes(st, no_pss)
     for w in written:
-        click.echo(f"wrote {w}")
+        click.echo(f"wrote {shown(w)}")
 
 
 def _report_name(case_name, no_pss, n_areas, out_dir, conventions, q_limits, limits):

@@ -19,6 +19,7 @@ from stabctl.cli.format import (
     estimator_cct_lines,
     print_estimate,
     print_json,
+    shown,
 )
 from stabctl.cli.options import (
     FLOAT,
@@ -692,7 +693,7 @@ def track(
         + (f"; {flagged}" if (flagged := sources.unused_values(got.flagged)) else "")
         + (f"; {gaps}" if (gaps := sources.gap_line(got)) else "")
         + "".join(f"; {unsent}" for unsent in got.unsent)
-        + f"; wrote {at}"
+        + f"; wrote {shown(at)}"
     )
     if got.short:
         fail_short(out_path, at, why, kept)

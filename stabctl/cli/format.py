@@ -30,6 +30,23 @@ def one_line(exc) -> str:
     return msg
 
 
+def shown(path) -> str:
+    """A file's name as a line of output shows it: as it is, or quoted with its control
+    characters escaped (``'o\\nut.csv'``) when it has any, so that the line stays one
+    (``wrote o`` and ``ut.csv`` were two).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    str
+    """
+    text = str(path)
+    return text if text.isprintable() else repr(text)
+
+
 def print_json(obj) -> None:
     """Print ``obj`` as indented JSON (numpy numbers as floats).
 

@@ -9,7 +9,7 @@ from typing import cast
 import click
 
 from stabctl.cli.checks import check_suffix
-from stabctl.cli.format import describe_sw_con, print_json
+from stabctl.cli.format import describe_sw_con, print_json, shown
 from stabctl.cli.options import (
     AliasedOption,
     json_option,
@@ -331,7 +331,7 @@ def _imported(case, out) -> tuple[dict, str]:
         "governors": len(case.governors),
     }
     text = (
-        f"wrote {out}: {counted(case.n_bus, 'bus', 'buses')}, "
+        f"wrote {shown(out)}: {counted(case.n_bus, 'bus', 'buses')}, "
         f"{counted(len(case.branches), 'branch', 'branches')}, "
         f"{counted(len(case.machines), 'machine')}, {counted(len(case.exciters), 'exciter')}, "
         f"{len(case.pss)} PSS, {counted(len(case.governors), 'governor')}"

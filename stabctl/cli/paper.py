@@ -7,6 +7,7 @@ import json
 import click
 
 from stabctl.cli.checks import check_writable
+from stabctl.cli.format import shown
 from stabctl.cli.options import out_dir_option, reports_errors
 from stabctl.errors import InputError
 
@@ -58,4 +59,4 @@ def paper(out_dir, resume, only):
     check_writable(out_dir, "--out-dir", directory=True)
     path = write_paper_report(out_dir, resume=resume, only=only)
     click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text())))
-    click.echo(f"wrote {path}")
+    click.echo(f"wrote {shown(path)}")

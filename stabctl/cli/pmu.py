@@ -12,6 +12,7 @@ import socket
 import click
 
 from stabctl.cli.checks import check_writable
+from stabctl.cli.format import shown
 from stabctl.cli.options import (
     FLOAT,
     INT,
@@ -502,7 +503,7 @@ def record(address, out, frames, idcode):
         collections.Counter(why for d in data for why in c37.flags(cfg2, d) if why)
     )
     click.echo(
-        f"recorded {counted(len(data), 'frame')} from {address} to {out}"
+        f"recorded {counted(len(data), 'frame')} from {address} to {shown(out)}"
         + (f"; {gaps}" if gaps else "")
         + (f"; {flagged}" if flagged else "")
     )

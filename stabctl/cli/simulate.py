@@ -18,6 +18,7 @@ from stabctl.cli.format import (
     plot_writer,
     print_json,
     print_storage,
+    shown,
     step_text,
 )
 from stabctl.cli.options import (
@@ -671,7 +672,7 @@ def simulate(
     if halved is not None:
         click.echo(_step_check_line(result, halved))
     for w in written:
-        click.echo(f"wrote {w}")
+        click.echo(f"wrote {shown(w)}")
 
 
 def _in_time_order(events) -> list:
