@@ -251,6 +251,10 @@ def rmse(
 
     With --source the frames come from C37.118.2 streams (docs/estimation.md 6): the
     figures of the one stream received, the same seed's figures in process beside them.
+
+    \b
+    Example:
+      stabctl estimate rmse kundur --fault 3 --far-bus 101 --runs 2
     """
     from stabctl.estimation import ambient as am
     from stabctl.studies.estimate import ErrorRuns, error_window, estimator_errors
@@ -399,6 +403,10 @@ def closed_loop(
     For each estimator (ideal, raw, kf, ekf; PMU noise seed --seed) the verdict, the
     number of ESD switchings and the false actions; with --transport tcp also the frames
     and their measured round trips (docs/estimation.md 6).
+
+    \b
+    Example:
+      stabctl estimate closed-loop kundur --fault 3 --far-bus 101 --esd-pct 5
     """
     from stabctl.studies.estimate import closed_loop_verdicts
 
@@ -471,6 +479,10 @@ def cct(
     """CCT of the fault line with each estimator in the loop, over --runs noise seeds.
 
     The CCT searches run in parallel; printed per estimator: mean and spread (cycles).
+
+    \b
+    Example:
+      stabctl estimate cct kundur --fault 3 --far-bus 101 --esd-pct 5 --runs 4
     """
     from stabctl.studies.estimate import estimator_ccts
 

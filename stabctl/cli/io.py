@@ -96,6 +96,10 @@ def cases(case_name, buses, lines, as_json):
     `simulate --pstess-default`).  With CASE (a built-in or a case file): that case, and
     with --bus-table / --line-table its buses and branches, to choose --fault, --far-bus
     and --circuit (bus numbers are the data file's: PST numbering).
+
+    \b
+    Example:
+      stabctl cases kundur --line-table
     """
     from stabctl.io import list_cases
 

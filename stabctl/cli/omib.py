@@ -47,6 +47,10 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 
     Defaults are the paper's Section 2 case (H = 3 s, Pm = 0.5 pu, delta0 = 0.4950 rad,
     bolted fault at the generator bus, post-fault network = pre-fault).
+
+    \b
+    Example:
+      stabctl omib --clear-s 0.2
     """
     from stabctl.smib.omib import BISECTION_T_MAX, OMIB, clearing_table, eac_summary
 

@@ -50,6 +50,10 @@ def paper(out_dir, resume, only):
     hold no timings or other run-dependent values (two runs on one machine give identical
     files; another machine's libm moves the storage energies in their third or fourth
     digit), those go to OUT_DIR/run_log.json (seconds per section, every progress line).
+
+    \b
+    Example:
+      stabctl paper --out-dir reports/paper --only analytic
     """
     from stabctl.studies.paper import RUN_LOG, run_summary, write_paper_report
 

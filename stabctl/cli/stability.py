@@ -543,6 +543,10 @@ def screen(
     Exit status: 0 every search reached a verdict (a CCT, robust, N-1 insecure, with
     islanding or not); 1 a search failed (listed and recorded with its reason); 2 bad
     input.
+
+    \b
+    Example:
+      stabctl screen kundur --lines --workers 2 --plot kundur_map.png
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions
