@@ -287,17 +287,15 @@ def n_data_frames(path: Path) -> int:
     return len(split_frames(path.read_bytes())) - 1 if path.exists() else -1
 
 
-class FakePMU:
-    """A TCP server answering a PDC: on any command frame with CMD 5 sends `cfg`, on CMD 2
-    streams `frames` (bytes each, sent as given), then behaves per `after` ('hold': keep the
-    connection open, 'close')."""
+class _Listener:
+    """A TCP server at 127.0.0.1 on a free port: each connection accepted is handed to
+    `_serve` (a subclass's) in a thread of its own; `close` ends it and its connections."""
 
-    def __init__(self, cfg: bytes, frames, after="hold", gap=0.0):
-        self.cfg, self.frames, self.after, self.gap = cfg, frames, after, gap
+    def __init__(self):
         self.sock = socket.socket()
         self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(16)
+        self.sock.listen(50)
         self.port = self.sock.getsockname()[1]
         self.stopped = False
         self.conns = []
@@ -311,6 +309,27 @@ class FakePMU:
                 return
             self.conns.append(c)
             threading.Thread(target=self._serve, args=(c,), daemon=True).start()
+
+    def _serve(self, c):
+        raise NotImplementedError
+
+    def close(self):
+        self.stopped = True
+        with contextlib.suppress(OSError):
+            self.sock.close()
+        for c in self.conns:
+            with contextlib.suppress(OSError):
+                c.close()
+
+
+class FakePMU(_Listener):
+    """A TCP server answering a PDC: on any command frame with CMD 5 sends `cfg`, on CMD 2
+    streams `frames` (bytes each, sent as given), then behaves per `after` ('hold': keep the
+    connection open, 'close')."""
+
+    def __init__(self, cfg: bytes, frames, after="hold", gap=0.0):
+        self.cfg, self.frames, self.after, self.gap = cfg, frames, after, gap
+        super().__init__()
 
     def _serve(self, c):
         try:
@@ -338,14 +357,6 @@ class FakePMU:
                             return
         except OSError:
             return
-
-    def close(self):
-        self.stopped = True
-        with contextlib.suppress(OSError):
-            self.sock.close()
-        for c in self.conns:
-            with contextlib.suppress(OSError):
-                c.close()
 
 
 def wait_for(pred, timeout=60, step=0.1):
@@ -995,33 +1006,18 @@ def B04():
 # ================================================================ C. Dask
 
 
-class FakeServer:
+class FakeServer(_Listener):
     """A TCP server at 127.0.0.1:port: 'http' answers an HTTP 400-ish line, 'echo' echoes,
     'hangup' accepts and closes at once, 'silent' accepts and says nothing."""
 
     def __init__(self, kind):
         self.kind = kind
-        self.sock = socket.socket()
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(50)
-        self.port = self.sock.getsockname()[1]
-        self.conns = []
-        self.stopped = False
-        threading.Thread(target=self._loop, daemon=True).start()
+        super().__init__()
 
-    def _loop(self):
-        while not self.stopped:
-            try:
-                c, _ = self.sock.accept()
-            except OSError:
-                return
-            if self.kind == "hangup":
-                c.close()
-                continue
-            self.conns.append(c)
-            threading.Thread(target=self._one, args=(c,), daemon=True).start()
-
-    def _one(self, c):
+    def _serve(self, c):
+        if self.kind == "hangup":
+            c.close()
+            return
         try:
             while True:
                 b = c.recv(65536)
@@ -1035,14 +1031,6 @@ class FakeServer:
                     return
         except OSError:
             return
-
-    def close(self):
-        self.stopped = True
-        with contextlib.suppress(OSError):
-            self.sock.close()
-        for c in self.conns:
-            with contextlib.suppress(OSError):
-                c.close()
 
 
 def _can_connect(port):
