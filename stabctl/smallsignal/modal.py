@@ -39,12 +39,16 @@ INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
 # Stability and Control, 12.1; Rogers, Power System Oscillations, 1.3): a mode above this
 # is local whatever its area momentum (a swing of neighbours across an area boundary)
 INTER_AREA_MAX_HZ = 1.0
-#: system momentum fraction |sum_k M_k s_k| / sum_k M_k |s_k| above which an
-#: electromechanical mode is "common": every machine swings with the others, the centre of
-#: inertia itself (a governor or exciter mode of the system's frequency), where a swing of
-#: machines against each other keeps the momentum (Kundur, miniWECC: at most 0.24; ANDES's
-#: IEEE 14 read as PSS/E reads it: 0.18 Hz, 0.997)
-COMMON_MOMENTUM = 0.5
+#: share of an electromechanical mode's kinetic energy that moves the centre of inertia,
+#: |sum_k M_k s_k|^2 / (sum_k M_k * sum_k M_k |s_k|^2) (1 when every machine swings alike),
+#: above which the mode is "common": the centre of inertia itself swinging (a governor or
+#: exciter mode of the system's frequency), where machines swinging against each other move
+#: it little (ANDES's IEEE 14 read as PSS/E reads it: 0.18 Hz, 0.994; pjm5bus 0.11 Hz,
+#: 1.000).  A swing of some machines against others keeps some momentum where loads make
+#: large transfer conductances: pjm5bus's 1.09 Hz mode, three machines against a fourth
+#: that barely moves, 0.70 (its momentum fraction |sum M s| / sum M |s| 0.998), and its
+#: 1.73 Hz mode, one machine against the others, 0.20 (0.68): ANDES's three swing modes
+COMMON_SHARE = 0.9
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
 STATE_GROUPS = (
@@ -83,10 +87,10 @@ class ModalAnalysis:
         mode (None where an infinite bus holds the angles); electromechanical: indices of
         the electromechanical modes; areas (g,) area label (0..r-1) of each machine; kind
         (m,) 'angle reference', 'common' (every machine in phase, the centre of inertia
-        swinging: system momentum fraction above COMMON_MOMENTUM, without an infinite
-        bus), 'inter-area' (area momentum fraction above INTER_AREA_ETA at
-        INTER_AREA_MAX_HZ or below), 'local' or 'other'; eta (m,) area-momentum fraction
-        (NaN outside the EM modes).
+        swinging: its share of the mode's kinetic energy above COMMON_SHARE,
+        `coi_energy_share`, without an infinite bus), 'inter-area' (area momentum
+        fraction above INTER_AREA_ETA at INTER_AREA_MAX_HZ or below), 'local' or
+        'other'; eta (m,) area-momentum fraction (NaN outside the EM modes).
     """
 
     eigenvalues: np.ndarray
@@ -390,9 +394,8 @@ def modal_analysis(
     kind = np.full(lam.size, "other", dtype=object)
     inter = (eta[em] > INTER_AREA_ETA) & (f[em] <= INTER_AREA_MAX_HZ)
     kind[em] = np.where(inter, "inter-area", "local")
-    if ref is not None and speed.size > 1:  # no infinite bus: the swings keep momentum
-        M = np.asarray(inertia, float)[:, None] * shape[:, em]
-        kind[em[np.abs(M.sum(axis=0)) > COMMON_MOMENTUM * np.abs(M).sum(axis=0)]] = "common"
+    if ref is not None and speed.size > 1:  # no infinite bus: the COI can swing
+        kind[em[coi_energy_share(shape[:, em], inertia) > COMMON_SHARE]] = "common"
     if ref is not None:
         kind[ref] = "angle reference"
     return ModalAnalysis(
@@ -553,6 +556,30 @@ def _slow_mode_count(f_sorted: np.ndarray) -> int:
     lower = ratios[: max(1, f_sorted.size // 2)]
     wide = np.nonzero(lower >= GAP_RATIO)[0]
     return int(wide[-1] if wide.size else np.argmax(lower)) + 1
+
+
+def coi_energy_share(shape: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+    """The share of each mode's kinetic energy that moves the centre of inertia.
+
+    Parameters
+    ----------
+    shape : numpy.ndarray
+        (g, m) complex speed mode shapes s (one column per mode).
+    inertia : numpy.ndarray
+        (g,) machine weights M_k (H * MVA).
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) |sum_k M_k s_k|^2 / (sum_k M_k * sum_k M_k |s_k|^2), in [0, 1]: 1 when every
+        machine swings alike (the centre of inertia's own motion), near 0 when they swing
+        against each other.  The energy of the speeds splits into the centre of inertia's
+        and that of the speeds relative to it (Pai, Energy Function Analysis for Power
+        System Stability, 1989, 2.4: the COI reference frame).
+    """
+    M = np.asarray(inertia, float)
+    coi = np.abs(M @ shape) ** 2
+    return coi / (M.sum() * (M @ np.abs(shape) ** 2))
 
 
 def area_momentum_fraction(shape: np.ndarray, inertia: np.ndarray, areas: np.ndarray):

@@ -24,7 +24,7 @@ from stabctl.outdir import output_directory
 from stabctl.parallel import naming
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
-    COMMON_MOMENTUM,
+    COMMON_SHARE,
     ModalAnalysis,
     ModeSensitivity,
     modal_analysis,
@@ -288,7 +288,8 @@ def report_markdown(
         "it; 'others, each < 0.2' when the machines swinging against it each move less "
         "(a single machine against the system, or a heavy area against a light one); "
         "'none, all in phase' for a common mode, the centre of inertia itself swinging "
-        f"(system momentum fraction above {COMMON_MOMENTUM:g}: a mode of the system's "
+        f"(the centre of inertia's share of the mode's kinetic energy above {COMMON_SHARE:g}: "
+        "a mode of the system's "
         "frequency). "
         "Best ESD bus: the ESD power input with the largest residue to the "
         "relative speeds.",

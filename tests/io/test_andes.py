@@ -80,7 +80,7 @@ from stabctl.models.converters import WTDS, WTDTA1, converter_params  # noqa: E4
 from stabctl.models.exciters import EXCITER  # noqa: E402
 from stabctl.models.pss import pss_inputs  # noqa: E402
 from stabctl.smallsignal.linearise import linearise  # noqa: E402
-from stabctl.smallsignal.modal import modal_analysis  # noqa: E402
+from stabctl.smallsignal.modal import coi_energy_share, modal_analysis  # noqa: E402
 from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time  # noqa: E402
 
 # each ANDES call of a stored run is named in its file's metadata (tests/andes_refs.py)
@@ -1414,6 +1414,32 @@ def test_a_negative_line_resistance_of_an_equivalent_is_kept():
     br = case.branches
     k = np.nonzero((br.from_bus == 101733) & (br.to_bus == 100009))[0]
     assert br.r[k] == pytest.approx([-0.00181], abs=1e-12)
+
+
+def test_pjm5bus_swing_modes_are_not_common(ref):
+    """pjm5bus (four GENCLS behind xd' = 1.7 pu, 300-400 MW loads: large transfer
+    conductances): ANDES's three swing modes (1.08, 1.46, 1.73 Hz) are machines swinging
+    against each other, though two of them keep much of the system's momentum (fraction
+    0.998 and 0.68): none is "common".  The one common mode is the governors' 0.11 Hz
+    frequency mode, the centre of inertia carrying its whole kinetic energy."""
+    path = andes.get_case("5bus/pjm5bus.json")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # bus idx 0 renumbered (the test above)
+        case = import_andes(path, on_unsupported="skip")
+    ma = modal_analysis(linearise(case, q_limits=False))
+    em = ma.electromechanical[ma.eigenvalues[ma.electromechanical].imag > 0]
+    theirs = modes_run(ref, "modes", path)
+    swings = theirs[(theirs.imag > 0) & (np.abs(theirs.imag) / (2 * np.pi) > 0.5)]
+    assert len(swings) == 3  # measured 1.079, 1.458, 1.725 Hz
+    ours = [em[np.argmin(np.abs(ma.eigenvalues[em] - lam))] for lam in swings]
+    gaps = np.abs(ma.eigenvalues[ours] - swings) / np.abs(swings)
+    assert np.max(gaps) < 0.01  # measured 0.6 %
+    assert list(ma.kind[ours]) == ["local", "local", "local"]
+    (common,) = em[ma.kind[em] == "common"]
+    assert abs(ma.freq_hz[common] - 0.111) < 0.005  # measured 0.111 Hz
+    share = coi_energy_share(ma.speed_shape[:, ours], ma.inertia)
+    assert np.all(share < 0.75)  # measured 0.70, 0.15, 0.20
+    assert coi_energy_share(ma.speed_shape[:, [common]], ma.inertia)[0] > 0.999
 
 
 def test_pjm5bus_tg2_governors_follow_andes_through_its_own_line_trip(ref):
