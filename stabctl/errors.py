@@ -439,37 +439,41 @@ class InitialLimitError(CaseError):
 
 
 #: where `refuse_initial` records instead of raising (`run_on_suspect_starts`), or None
-_SUSPECT: ContextVar[list[str] | None] = ContextVar("stabctl_suspect_starts", default=None)
+_SUSPECT: ContextVar[list[InitialLimitError] | None] = ContextVar(
+    "stabctl_suspect_starts", default=None
+)
 
 
 def refuse_initial(table: str, bad, message) -> None:
     """Raise :class:`InitialLimitError` for the True entries of ``bad`` (boolean array over
     the table's rows), ``message(i)`` describing row i (0-based); nothing if none.  Inside
-    `run_on_suspect_starts` each message is recorded there instead and the
+    `run_on_suspect_starts` the refusal is recorded there instead and the
     initialisation goes on with the state outside its limit."""
     rows = [int(i) for i, b in enumerate(bad) if b]
     if not rows:
         return
     found = _SUSPECT.get()
+    refusal = InitialLimitError(table, rows, [message(i) for i in rows])
     if found is None:
-        raise InitialLimitError(table, rows, [message(i) for i in rows])
-    found.extend(message(i) for i in rows)
+        raise refusal
+    found.append(refusal)
 
 
 @contextmanager
-def run_on_suspect_starts() -> Iterator[list[str]]:
+def run_on_suspect_starts() -> Iterator[list[InitialLimitError]]:
     """Within this block, controls whose initial point lies outside their own limits are
-    not refused (`refuse_initial`) but listed in the yielded list, one line each, and
+    not refused (`refuse_initial`) but listed in the yielded list, each refusal, and
     keep that initial point: PSS/E's "initial conditions suspect", where the run goes on
     and the limiter takes the state to its limit at the first step (PSS/E Program
     Operation Manual, "Dynamic Simulation Initialization").
 
     Yields
     ------
-    list of str
-        Filled with the suspect starts met inside the block.
+    list of InitialLimitError
+        Filled with the refusals met inside the block (each the error `refuse_initial`
+        would have raised: its table, rows and messages).
     """
-    found: list[str] = []
+    found: list[InitialLimitError] = []
     token = _SUSPECT.set(found)
     try:
         yield found

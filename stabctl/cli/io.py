@@ -499,20 +499,21 @@ def import_psse(
     _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")
 
 
-def _leave_out_infeasible(case, asked: bool) -> tuple:
+def _leave_out_infeasible(case, asked: bool, q_limits: bool = True) -> tuple:
     """(case, lines): with --leave-out-infeasible the case without its controls that
-    cannot start inside their limits (each line echoed as a warning), else as it is,
-    each such control named in a warning (every run refuses the case as written)."""
+    cannot start inside their limits at its power flow (``q_limits`` as said; each line
+    echoed as a warning), else as it is, each such control named in a warning (every run
+    refuses the case as written)."""
     from stabctl.dynamics.infeasible import leave_out_infeasible
 
     if asked:
-        case, infeasible = leave_out_infeasible(case)
+        case, infeasible = leave_out_infeasible(case, q_limits)
         for line in infeasible:
             click.echo(f"warning: left out the {line}", err=True)
         return case, infeasible
     if len(case.machines):
         try:
-            _, found = leave_out_infeasible(case)
+            _, found = leave_out_infeasible(case, q_limits)
         except StabctlError:  # another refusal: a run names it, as for any case
             found = ()
         for line in found:
@@ -577,6 +578,15 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
     "Library states them or as PST's.  [default: psse for RAW + DYR files, andes "
     "otherwise]",
 )
+@click.option(
+    "--leave-out-infeasible",
+    is_flag=True,
+    help="Leave out the exciters (with their PSS) and governors whose initial point, at "
+    "the power flow ANDES solves (Q limits off: the commands' --no-q-limits), lies "
+    "outside their own limits (PSS/E: 'initial conditions suspect'), each named, instead "
+    "of writing a case that every run refuses (without it, each such control is named in "
+    "a warning).",
+)
 @_unsolved_option(False)
 @_islands_option
 @_static_option
@@ -588,6 +598,7 @@ def import_andes(
     out_path,
     skip_unsupported,
     conventions,
+    leave_out_infeasible,
     keep_unsolved,
     leave_out_islands,
     static,
@@ -626,7 +637,10 @@ def import_andes(
     out = cast(Path, check_suffix(out_path, (".json",), "--out"))  # --out is required
     _refuse_swapped(case_path, dyr_path, "CASE")
     if static:
-        refuse_given(("conventions",), "with --static (a power-flow-only case has no models)")
+        refuse_given(
+            ("conventions", "leave_out_infeasible"),
+            "with --static (a power-flow-only case has no models)",
+        )
     if conventions is None:
         conventions = "psse" if dyr_path is not None else "andes"
     imported = read_andes_case(
@@ -638,11 +652,13 @@ def import_andes(
     against_raw = (
         None if imported.data_solution is None else _raw_gap(case, imported.data_solution, True)
     )
+    case, infeasible = _leave_out_infeasible(case, leave_out_infeasible, q_limits=False)
     _write_case_atomically(case, out)
     summary, text = _imported(case, out)
     summary.update(
         left_out=list(imported.left_out),
         out_of_service=list(imported.out_of_service),
+        infeasible=list(infeasible),
         changed=list(imported.changed),
         unlike_andes=list(imported.unlike_andes),
         defaulted=list(imported.defaulted),
@@ -657,7 +673,8 @@ def import_andes(
         return
     click.echo(
         f"{text}; {len(imported.left_out)} left out, "
-        f"{len(imported.out_of_service)} out of service (u = 0)"
+        f"{len(imported.out_of_service)} out of service (u = 0, or with their device)"
+        + (f"; {len(infeasible)} control(s) outside their limits left out" if infeasible else "")
         + (f"; {len(islands)} island(s) without a swing bus left out" if islands else "")
         + (f"; {len(imported.changed)} kept with a change" if imported.changed else "")
         + (

@@ -50,6 +50,7 @@ from stabctl.dynamics.grid import (
     stiff_step,
     time_grid,
 )
+from stabctl.dynamics.infeasible import offenders
 from stabctl.dynamics.model import (
     DynamicModel,
     KeptBuses,
@@ -73,6 +74,7 @@ from stabctl.dynamics.results import SimulationResult, de_energised_at
 from stabctl.dynamics.switching import device_state
 from stabctl.errors import (
     CaseError,
+    InitialLimitError,
     InputError,
     NumericalInstabilityError,
     SimulationError,
@@ -401,10 +403,14 @@ class Simulator:
 
     def _build_model(self, buses: list) -> DynamicModel:
         if self.suspect_starts == "refuse":
-            return DynamicModel(self.case, self.op, buses, self.conventions)
+            try:
+                return DynamicModel(self.case, self.op, buses, self.conventions)
+            except InitialLimitError as err:
+                raise _named_limits(self.case, err) from None
         with run_on_suspect_starts() as found:
             model = DynamicModel(self.case, self.op, buses, self.conventions)
-        self.suspect = tuple(dict.fromkeys((*self.suspect, *found)))
+        named = (line for err in found for line in offenders(self.case, err))
+        self.suspect = tuple(dict.fromkeys((*self.suspect, *named)))
         return model
 
     def run(
@@ -1150,6 +1156,27 @@ def _held_at_q_limits(case: Case, held: np.ndarray, settings: dict) -> str:
         f"at rest: {advice('q_limits=False', '--no-q-limits')} solves the power flow as "
         "ANDES does (pv2pq = 0, the power flow import-andes compares with)"
     )
+
+
+#: the controls outside their limits a refusal names (`_named_limits`); the rest counted
+NAMED_LIMITS = 5
+
+
+def _named_limits(case: Case, err: InitialLimitError) -> InitialLimitError:
+    """`err` with each control named by its machine or bus instead of its table row
+    (`stabctl.dynamics.infeasible.offenders`), and what to do: a run must start at rest."""
+    lines = offenders(case, err)
+    todo = advice(
+        "leave_out_infeasible(case) leaves such controls out, named; "
+        "Simulator(suspect_starts='run') runs on as PSS/E does",
+        "the import's --leave-out-infeasible leaves such controls out, named; simulate "
+        "--suspect-starts run runs on as PSS/E does",
+    )
+    named = InitialLimitError(err.table, err.rows, lines)
+    shown = "; ".join(f"the {line}" for line in lines[:NAMED_LIMITS])
+    more = f"; and {len(lines) - NAMED_LIMITS} more" if len(lines) > NAMED_LIMITS else ""
+    named.args = (f"{shown}{more}: the run cannot start at rest ({todo})",)
+    return named
 
 
 def _with_solved_taps(case: Case, taps: np.ndarray) -> Case:

@@ -21,7 +21,7 @@ import numpy as np
 from stabctl.case import Case
 from stabctl.errors import CaseError, InitialLimitError
 
-__all__ = ["leave_out_infeasible"]
+__all__ = ["leave_out_infeasible", "offenders"]
 
 #: at most this many passes (each pass removes every offender its model build reports;
 #: an exciter's removal can only reveal offenders of the other kind)
@@ -79,16 +79,52 @@ def leave_out_infeasible(
     )
 
 
-def _without(case: Case, err: InitialLimitError, left: list[str]) -> Case:
-    """``case`` without the rows ``err`` names (an exciter's stabiliser with it); each
-    appended to ``left`` as text."""
-    kind, table = {"exc_con": ("exciter", "exciters"), "tg_con": ("governor", "governors")}[
-        err.table
-    ]
-    rows = getattr(case, table)
+#: the control tables a leave-out removes rows of: (what a row is, the case's table)
+LEFT_OUT = {"exc_con": ("exciter", "exciters"), "tg_con": ("governor", "governors")}
+
+
+def offenders(case: Case, err: InitialLimitError) -> list[str]:
+    """One line per row `err` names, the device by its machine or bus as outputs name
+    them (``"governor of G1 (bus 1, id '1'): initial power order 1.2415 pu outside
+    [Tmin, Tmax] = [0.3000, 1.0500]"``), instead of the table's row number.
+
+    Parameters
+    ----------
+    case : Case
+        The case whose model build raised `err`.
+    err : InitialLimitError
+        Its table (``exc_con``, ``tg_con`` or ``svc_con``), rows and messages.
+
+    Returns
+    -------
+    list of str
+        The lines, in the order of ``err.rows``.
+    """
+    lines = []
     for r, message in zip(err.rows, err.messages):
         what = message.split(": ", 1)[-1]
-        left.append(f"{kind} of {case.machine_name(int(rows.machine[r]))}: {what}")
+        if err.table in LEFT_OUT:
+            kind, table = LEFT_OUT[err.table]
+            device = f"{kind} of {case.machine_name(int(getattr(case, table).machine[r]))}"
+        else:  # a static var compensator (svc_con): named by its bus
+            device = f"static var compensator at bus {int(case.svcs.bus[r])}"
+        lines.append(f"{device}: {what}")
+    return lines
+
+
+def _without(case: Case, err: InitialLimitError, left: list[str]) -> Case:
+    """``case`` without the rows ``err`` names (an exciter's stabiliser with it); each
+    appended to ``left`` as text.  A compensator is not left out: its reactive power is
+    the power flow's at its bus (CaseError)."""
+    if err.table not in LEFT_OUT:
+        raise CaseError(
+            f"{'; '.join(offenders(case, err))}: a compensator is not left out (its "
+            "reactive power is the power flow's at its bus); change its limits or the "
+            "power flow's voltage there"
+        )
+    table = LEFT_OUT[err.table][1]
+    left.extend(offenders(case, err))
+    rows = getattr(case, table)
     keep = np.ones(len(rows), bool)
     keep[list(err.rows)] = False
     changes = {table: rows.select(keep)}

@@ -1434,16 +1434,31 @@ def _in_service(model) -> list[int]:
 
 
 def _switched_off(ss, file: str) -> tuple[str, ...]:
-    """Each device of ``ss`` out of service (``u = 0``; the models ignored as without
-    effect aside), named as its file holds it: left out of the case as ANDES leaves it
-    out of its run, never silently."""
+    """Each device of ``ss`` out of service (the models ignored as without effect aside),
+    named as its file holds it: left out of the case as ANDES leaves it out of its run
+    (`_in_service`), never silently.  Its own status ``u = 0``, or ANDES's effective status
+    ``ue = 0`` with ``u = 1``: a control of a machine out of service (an exciter,
+    stabiliser or governor of a GENROU whose generator is off), a device at a bus out
+    of service."""
     return tuple(
-        f"{_device_where(ss, file, name, k)}: out of service (u = 0)"
+        f"{_device_where(ss, file, name, k)}: {why}"
         for name, m in ss.models.items()
         if m.n and name not in IGNORED_MODELS and name not in EVENT_MODELS and hasattr(m, "u")
         for k in range(m.n)
-        if m.u.v[k] == 0
+        if (why := _off_why(m, k))
     )
+
+
+def _off_why(model, k: int) -> str:
+    """Why device ``k`` of ``model`` is out of service, or "" when it is in service."""
+    if model.u.v[k] == 0:
+        return "out of service (u = 0)"
+    if hasattr(model, "ue") and not model.ue.v[k]:
+        return (
+            "out of service with the device it serves or its bus (u = 1, ANDES's effective "
+            "status ue = 0)"
+        )
+    return ""
 
 
 def _warn_out_of_service(ss, file: str, buses: list, numbers: dict) -> None:

@@ -38,8 +38,9 @@ def test_the_model_names_every_offender_of_a_check(crowded):
     with pytest.raises(InitialLimitError) as err:
         Simulator(no_exciter, background_compile=False)
     assert (err.value.table, err.value.rows) == ("tg_con", (0, 2))
-    assert "tg_con row 1: initial power order 0.8068 pu outside [Tmin, Tmax]" in str(err.value)
-    assert "and 1 more tg_con row(s): tg_con row 3" in str(err.value)
+    said = str(err.value)  # each named as outputs name machines, not by its table row
+    assert said.startswith("the governor of G1 (bus 1): initial power order 0.8068 pu outside")
+    assert "; the governor of G3 (bus 11): initial power order" in said
 
 
 def test_leave_out_removes_and_names_them(crowded):
@@ -78,9 +79,9 @@ def test_a_simple_exciter_whose_output_limit_is_below_its_field_voltage_is_named
         Simulator(case, background_compile=False)
     assert (err.value.table, err.value.rows) == ("exc_con", (1,))
     assert str(err.value).startswith(
-        "exc_con row 2: Vrmax = 0.5 below the initial field voltage E_fd0 = "
+        "the exciter of G2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0 = "
     )
-    assert str(err.value).endswith(" pu: the regulator's output limit cannot deliver it")
+    assert " pu: the regulator's output limit cannot deliver it: the run cannot" in str(err.value)
     kept, left = leave_out_infeasible(case)
     assert len(left) == 1 and left[0].startswith(
         "exciter of G2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0"

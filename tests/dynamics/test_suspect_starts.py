@@ -34,13 +34,17 @@ def test_a_suspect_start_is_refused_by_name(case):
     with pytest.raises(InitialLimitError, match=r"initial power order 1.0000 pu outside") as err:
         Simulator(case, background_compile=False)
     assert err.value.table == "tg_con" and err.value.rows == (0,)
+    # the machine named as outputs name it (tg_con's row 1 is G2's), and what to do
+    assert str(err.value).startswith("the governor of G2 (bus 102, id '1'): initial power")
+    assert "leave_out_infeasible(case) leaves such controls out" in str(err.value)
 
 
 def test_run_on_takes_the_valve_to_its_limit(case):
     with pytest.warns(UserWarning, match="not an equilibrium"):
         sim = Simulator(case, suspect_starts="run")
     assert sim.suspect == (
-        "tg_con row 1: initial power order 1.0000 pu outside [Tmin, Tmax] = [0.1000, 0.9000]",
+        "governor of G2 (bus 102, id '1'): initial power order 1.0000 pu outside [Tmin, "
+        "Tmax] = [0.1000, 0.9000]",
     )
     res = sim.run([], t_end=8.0)
     assert res.meta["suspect_starts"] == list(sim.suspect)
@@ -55,6 +59,8 @@ def test_simulate_lists_what_it_runs_on(case, tmp_path):
     write_case_json(case, path)
     refused = CliRunner().invoke(main, ["simulate", str(path), "--tf", "1"])
     assert refused.exit_code == 2 and "initial power order" in refused.output
+    assert "the import's --leave-out-infeasible leaves such controls out" in refused.output
     ran = CliRunner().invoke(main, ["simulate", str(path), "--tf", "1", "--suspect-starts", "run"])
     assert ran.exit_code == 0, ran.output
-    assert "initial condition suspect, run on: tg_con row 1: initial power" in ran.output
+    said = "initial condition suspect, run on: governor of G2 (bus 102, id '1'): initial power"
+    assert said in ran.output

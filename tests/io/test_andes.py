@@ -418,6 +418,49 @@ def ieee14(tmp_path_factory):
     return CASES / "ieee14" / "ieee14.raw", dyr
 
 
+def test_a_generator_off_names_its_controls_and_its_swing_unit_that_cannot_start(ieee14, tmp_path):
+    """IEEE 14 with the generator at bus 3 out of service (STAT 0 in the RAW, its DYR
+    records kept): ANDES takes its ESST3A, IEEEST and IEEEG1 out with it (u = 1, ue = 0),
+    and the import named only the generator and its machine.  Its 40 MW fall on the swing
+    unit, whose IEEEG1 then cannot start (power order 1.24 pu above Tmax 1.05): named in
+    a warning, or left out by name with --leave-out-infeasible, as import-psse does."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    raw, dyr = ieee14
+    lines = raw.read_text().splitlines()
+    (k,) = [i for i, line in enumerate(lines) if re.match(r"\s+3,'1 ',\s+40\.000", line)]
+    fields = lines[k].split(",")
+    fields[14] = "0"  # STAT
+    lines[k] = ",".join(fields)
+    off = tmp_path / "genout.raw"
+    off.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "g.json"
+    run = CliRunner().invoke(main, ["import-andes", str(off), str(dyr), "-o", str(out)])
+    assert run.exit_code == 0, run.output
+    for model in ("GENROU", "ESST3A", "IEEEST", "IEEEG1"):
+        assert re.search(
+            rf"out of service: genout.raw: {model} row \d+ \(idx \w+\): out of", run.output
+        )
+    assert "ANDES's effective status ue = 0" in run.output
+    said = "warning: the governor of G4 (bus 1): initial power order 1.2383 pu outside [Tmin"
+    assert said in run.output  # measured 1.2383 against Tmax 1.05
+    refused = CliRunner().invoke(main, ["cct", str(out), "--fault", "2", "--far-bus", "4"])
+    assert refused.exit_code == 2 and "the governor of G4 (bus 1): initial" in refused.output
+    args = ["import-andes", str(off), str(dyr), "-o", str(out), "--leave-out-infeasible", "--json"]
+    run = CliRunner().invoke(main, args)
+    assert run.exit_code == 0, run.output
+    summary = json.loads(run.stdout)
+    assert summary["infeasible"] == [
+        "governor of G4 (bus 1): initial power order 1.2383 pu outside [Tmin, Tmax] = "
+        "[0.3000, 1.0500]"
+    ]
+    assert len(summary["out_of_service"]) == 5  # PV, GENROU and its three controls
+    args = ["simulate", str(out), "--no-q-limits", "--tf", "1"]
+    assert CliRunner().invoke(main, args).exit_code == 0
+
+
 def test_an_esst3a_read_as_psse_reads_it_starts_at_equilibrium_and_its_common_mode_is_named(
     ieee14, tmp_path
 ):

@@ -8,6 +8,8 @@ from psse_reference import DATA
 from runs import flat_run
 from scipy.integrate import solve_ivp
 
+from stabctl.dynamics.driver import Simulator
+from stabctl.dynamics.infeasible import leave_out_infeasible
 from stabctl.dynamics.model import OperatingPoint
 from stabctl.errors import CaseError, InitialLimitError
 from stabctl.io.psse import load_psse
@@ -106,6 +108,11 @@ def test_start_outside_the_reactor_range_is_refused():
     c = c.replace(svcs=c.svcs.replace(CBASE=np.array([600.0])))
     with pytest.raises(InitialLimitError, match=r"svc_con row 1: .* outside \[RMIN/RBASE, 1\]"):
         params(c)
+    bus = int(c.svcs.bus[0])
+    with pytest.raises(InitialLimitError, match=rf"^the static var compensator at bus {bus}: "):
+        Simulator(c, background_compile=False)  # named by its bus, not its table row
+    with pytest.raises(CaseError, match=rf"compensator at bus {bus}: .* is not left out"):
+        leave_out_infeasible(c)  # its Q is the power flow's: not a control to leave out
 
 
 @pytest.mark.parametrize(
