@@ -618,6 +618,7 @@ def die_with_parent(parent: int) -> None:
     rather than record its jobs as lost."""
     for sig in _GROUP_SIGNALS:
         signal.signal(sig, signal.SIG_IGN)
+    warnings.showwarning = _worker_warning
     if sys.platform.startswith("linux"):
         try:
             libc = ctypes.CDLL(None, use_errno=True)
@@ -626,6 +627,18 @@ def die_with_parent(parent: int) -> None:
             pass
     if os.getppid() != parent:
         os._exit(1)
+
+
+def _worker_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """How a worker process shows a warning: one ``warning:`` line on stderr, as the
+    command line shows its own, instead of Python's file, line and source line in the
+    middle of a progress bar (each worker shows a warning once per place, Python's
+    default)."""
+    text = " ".join(str(message).split())
+    try:
+        print(f"warning: {text}", file=sys.stderr if file is None else file, flush=True)
+    except (OSError, ValueError):  # stderr closed: nowhere to say it
+        pass
 
 
 _PR_SET_PDEATHSIG = 1  # <linux/prctl.h>

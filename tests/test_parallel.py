@@ -2199,3 +2199,22 @@ def test_a_relative_case_name_is_read_where_and_as_it_is_now(tmp_path, monkeypat
     np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 3 * h)
     _kundur_file(tmp_path / "b" / "c.json", h_times=2.0)
     np.testing.assert_allclose(cached_simulator("c.json").case.machines.H, 2 * h)
+
+
+def test_a_worker_shows_a_warning_in_one_line_as_the_command_line_does(capfd):
+    """A warning given in a pool's worker (the estimators' model warns of a governor it
+    leaves out, `estimate cct`) was shown as Python shows it: the file, line and source
+    line in the middle of the progress bar.  It is one ``warning:`` line, as the command
+    line's own."""
+    import functools
+    import warnings
+
+    pool = process_pool(1)
+    try:
+        say = functools.partial(warnings.warn, "the model holds\n   two lines", UserWarning)
+        pool.submit(say).result(timeout=120)
+    finally:
+        pool.shutdown()
+    err = capfd.readouterr().err
+    assert "warning: the model holds two lines\n" in err
+    assert "UserWarning" not in err and ".py:" not in err

@@ -74,8 +74,11 @@ def _case_info(name: str) -> dict:
     "--bus-table",
     "buses",
     is_flag=True,
-    help="List CASE's buses (number, type, kV, V, angle, generation, load and "
-    "shunt in MW and Mvar, machines and converters).",
+    help="List CASE's buses (number, type, kV, V and angle as its data gives them, "
+    "generation, load and shunt in MW and Mvar, machines and converters).  V_data_pu "
+    "of a PV or swing bus is its set point, which the power flow every command solves "
+    "holds unless a Q limit binds (then lower or higher: simulate --out FILE.csv "
+    "records the solved voltages from t = 0).",
 )
 @click.option(
     "--line-table",
@@ -152,10 +155,12 @@ def _cell(v, width: int) -> str:
 
 
 def _bus_rows(case) -> list[dict]:
-    """One dict per bus: number, type, kV, |V| and angle of the data, generation, load and
-    shunt in MW and Mvar (the shunt's at 1 pu, capacitive positive, as PSS/E's bus data),
-    the machines there named as every output names them (``G3``), and in a case with
-    converters theirs (``C17``: the ``pibr_pu.C17`` columns of `simulate --out`)."""
+    """One dict per bus: number, type, kV, |V| (a PV or swing bus's set point) and angle
+    of the data (``V_data_pu``, ``angle_data_deg``: not the solved power flow),
+    generation, load and shunt in MW and Mvar (the shunt's at 1 pu, capacitive positive,
+    as PSS/E's bus data), the machines there named as every output names them (``G3``),
+    and in a case with converters theirs (``C17``: the ``pibr_pu.C17`` columns of
+    `simulate --out`)."""
     from stabctl.case import PQ, PV, SWING
 
     b, kinds, base = case.buses, {SWING: "swing", PV: "PV", PQ: "PQ"}, case.base_mva
@@ -170,8 +175,8 @@ def _bus_rows(case) -> list[dict]:
             "bus": int(b.number[i]),
             "type": kinds.get(int(b.kind[i]), "?"),
             "kV": float(b.kv[i]),
-            "V_pu": float(b.vmag[i]),
-            "angle_deg": float(b.vang_deg[i]),
+            "V_data_pu": float(b.vmag[i]),
+            "angle_data_deg": float(b.vang_deg[i]),
             "P_gen_MW": float(b.pgen[i] * base),
             "Q_gen_Mvar": float(b.qgen[i] * base),
             "P_load_MW": float(b.pload[i] * base),

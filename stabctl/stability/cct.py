@@ -410,9 +410,12 @@ class CCTResult:
 
 
 def _fault_dict(fault: LineFault) -> dict:
-    """A fault as records and `--json` give it: its fields, ``t_fault`` as ``t_fault_s``."""
+    """A fault as records and `--json` give it: its fields, ``t_fault`` as ``t_fault_s``,
+    a bus fault's circuit None (it opens no line: as `screen --json` gives it)."""
     d = asdict(fault)
     d["t_fault_s"] = d.pop("t_fault")  # its unit in its name, as every time's
+    if fault.far_bus is None:
+        d["circuit"] = None
     return d
 
 
@@ -1897,6 +1900,8 @@ def _other_search(inputs: dict, r: dict, where: str) -> str | None:
     for name, given in _REPEATED:
         head, _, tail = name.partition(".")
         value = (r.get(head) or {}).get(tail, _ABSENT) if tail else r.get(head, _ABSENT)
+        if name == "fault.circuit" and value is None and inputs.get("far_bus") is None:
+            continue  # a bus fault's: none in its result, 1 in its job's inputs
         if given in inputs and value is not _ABSENT and value != inputs[given]:
             return (
                 f"{where}{name} {value!r} is not the record's inputs.{given} "

@@ -89,6 +89,9 @@ def test_cases_lists_one_cases_buses_and_lines_to_choose_a_fault():
     assert d["name"] == "kundur" and len(d["buses"]) == 13 and len(d["lines"]) == 14
     bus1 = d["buses"][0]
     assert (bus1["bus"], bus1["type"], bus1["kV"], bus1["machines"]) == (1, "swing", 22.0, "G1")
+    # the data's voltage, named so: a PV or swing bus's set point (d2asbegp: 1.01 pu at
+    # bus 1), not what the power flow solves where a Q limit binds
+    assert (bus1["V_data_pu"], bus1["angle_data_deg"]) == (1.01, 18.5)
     # MW and Mvar on PSTess's 100 MVA base: bus 4's load 976 MW + 100 Mvar, bus 3's shunt
     # capacitor 300 Mvar (d2asbegp's bus matrix, 9.76 + j1.0 and b 3.0 pu)
     bus3, bus4 = d["buses"][2], d["buses"][3]

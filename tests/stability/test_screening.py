@@ -313,3 +313,16 @@ def test_two_cases_screened_in_one_directory_keep_their_own_records(tmp_path, mo
     ]
     again = CliRunner().invoke(main, ["screen", "kundur", *scr])
     assert "0 run now, 1 already in screening_kundur.jsonl" in again.stdout
+
+
+def test_a_bus_fault_has_no_circuit_in_cct_and_screen_json(tmp_path):
+    """A bus fault opens no line: `cct --json` gave it circuit 1 where `screen --json`
+    gives none (round 34); both give null, and its CCT is Kundur's bus 3 fault's."""
+    res = CliRunner().invoke(main, ["cct", "kundur", "--fault", "3", "--json"])
+    assert res.exit_code == 0, res.output
+    got = json.loads(res.stdout)
+    assert got["fault"]["far_bus"] is None and got["fault"]["circuit"] is None
+    assert got["cct_s"] == 0.238  # the bus fault's, not line 3-101's 0.154 s
+    scr = ["screen", "kundur", "--buses", "3", "--workers", "1", "--json"]
+    (row,) = json.loads(CliRunner().invoke(main, [*scr, "--out", str(tmp_path / "s.jsonl")]).stdout)
+    assert row["circuit"] is None and row["cct_s"] == got["cct_s"]
