@@ -1396,7 +1396,13 @@ class _appender:
         return self
 
     def append(self, line: str) -> None:
-        """Write ``line`` whole; if a write fails, truncate the file to where it began."""
+        """Write ``line`` whole; if a write fails, truncate the file to where it began.  A
+        file deleted since the last record is made again from the records held open (with
+        a warning); one replaced by another file stops the sweep (`_replaced`)."""
+        if self.f is not None and (kept := self._check_still_there()) is not None:
+            with naming(Path(kept.name)), kept:  # this record kept with the others
+                kept.write(line.encode())
+            raise _replaced(self.path, Path(kept.name))
         if self.f is None:
             made = not self.path.exists()
             self.f = self.path.open("a+b", buffering=0)
@@ -1417,9 +1423,74 @@ class _appender:
             os.ftruncate(fd, start)
             raise
 
+    def _check_still_there(self) -> io.FileIO | None:
+        """None when the path still names the file this sweep appends to, or when it was
+        deleted (made again from what the sweep holds open, with a warning); replaced by
+        another file: a copy of the held records beside it, for the sweep to stop
+        (`_replaced`).  Before, every later record went to the deleted file (a rerun did
+        all the work again) or to one the path no longer names, and the sweep said
+        nothing."""
+        assert self.f is not None
+        held = os.fstat(self.f.fileno())
+        try:
+            now = os.stat(self.path)
+        except FileNotFoundError:
+            now = None
+        if now is not None and (now.st_dev, now.st_ino) == (held.st_dev, held.st_ino):
+            return None
+        copy = self._copy_held()
+        if now is None:
+            try:
+                os.link(copy.name, self.path)
+            except FileExistsError:  # replaced meanwhile
+                now = os.stat(self.path)
+            else:
+                os.unlink(copy.name)
+                self.f.close()
+                self.f = copy
+                warnings.warn(
+                    f"{self.path}: deleted while the sweep ran: made again from the records "
+                    "the sweep held open, and the sweep goes on",
+                    stacklevel=3,
+                )
+                return None
+        return copy
+
+    def _copy_held(self) -> io.FileIO:
+        """A new file beside the path holding the bytes of the file held open, locked as
+        the sweep's, open for appending."""
+        assert self.f is not None
+        fd = self.f.fileno()
+        made, name = tempfile.mkstemp(
+            dir=self.path.parent, prefix=self.path.name + ".", suffix=".kept"
+        )
+        os.close(made)
+        copy = io.FileIO(name, "a+")  # held as the records file, closed by the appender
+        fcntl.flock(copy.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        offset, size = 0, os.fstat(fd).st_size
+        with naming(Path(name)):
+            while offset < size:
+                chunk = os.pread(fd, min(1 << 20, size - offset), offset)
+                if not chunk:
+                    break
+                copy.write(chunk)
+                offset += len(chunk)
+        return copy
+
     def __exit__(self, *exc):
         if self.f is not None:
             self.f.close()
+
+
+def _replaced(path: Path, kept: Path) -> SweepIncomplete:
+    """The error that stops a sweep whose records file was replaced by another file while
+    it ran: the sweep's records are kept at `kept`, the other file is left as it is."""
+    return SweepIncomplete(
+        f"{path} was replaced by another file while the sweep ran: the sweep's records "
+        f"(those it read and those it wrote) are kept in {kept}, the file now at {path} is "
+        "left as it is; the sweep stopped (move the kept records back to the path and run "
+        "the same command to finish)"
+    )
 
 
 def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, None]:

@@ -2218,3 +2218,49 @@ def test_a_worker_shows_a_warning_in_one_line_as_the_command_line_does(capfd):
     err = capfd.readouterr().err
     assert "warning: the model holds two lines\n" in err
     assert "UserWarning" not in err and ".py:" not in err
+
+
+def _three_cct_jobs():
+    faults = [LineFault(3, 101), LineFault(13, 101), LineFault(3, 4)]
+    return cct_jobs("kundur", faults, search=SearchOptions(error_check=False, t_max=0.5))
+
+
+def test_a_records_file_deleted_mid_sweep_is_made_again(tmp_path):
+    """The records file deleted after the first record (round 34): every later record
+    went to the deleted file, the sweep exited 0 and a rerun did all the work again.  It
+    is made again from the records the sweep holds open, with a warning, and a rerun runs
+    nothing."""
+    out = tmp_path / "r.jsonl"
+    jobs = _three_cct_jobs()
+
+    def delete_after_the_first(done, total):
+        if done == 1:
+            out.unlink()
+
+    with pytest.warns(UserWarning, match=r"r.jsonl: deleted while the sweep ran: made again"):
+        rep = run_sweep(jobs, out, workers=1, progress=delete_after_the_first)
+    assert rep.ran == 3
+    assert sorted(r["key"] for r in read_records(out).values()) == sorted(j.key for j in jobs)
+    assert run_sweep(jobs, out, workers=1).ran == 0
+    assert not list(tmp_path.glob("*.kept"))
+
+
+def test_a_records_file_replaced_mid_sweep_stops_it_with_its_records_kept(tmp_path):
+    """The records file replaced by another (an empty file moved over it) after the first
+    record: the sweep stops, naming where its records are kept (the two it had finished),
+    and the file now at the path is left as it is."""
+    from stabctl.parallel import SweepIncomplete
+
+    out, other = tmp_path / "r.jsonl", tmp_path / "other.jsonl"
+    jobs = _three_cct_jobs()
+
+    def replace_after_the_first(done, total):
+        if done == 1:
+            other.write_text("")
+            os.replace(other, out)
+
+    with pytest.raises(SweepIncomplete, match=r"r.jsonl was replaced by another file") as err:
+        run_sweep(jobs, out, workers=1, progress=replace_after_the_first)
+    (kept,) = tmp_path.glob("r.jsonl.*.kept")
+    assert str(kept) in str(err.value) and out.read_text() == ""
+    assert len(read_records(kept)) == 2  # the first, and the second that found it replaced
