@@ -124,6 +124,34 @@ def test_a_file_that_is_no_result_is_named_not_read_as_a_pickle(tmp_path):
             SimulationResult.from_npz(path)
 
 
+def test_a_result_file_with_other_arrays_a_pickle_or_a_bomb_is_refused_by_name(tmp_path):
+    """Round 34: an npz holding an object (pickled) array raised numpy's words ("Object
+    arrays cannot be loaded when allow_pickle=False"), one with an array `to_npz` does not
+    write or without those it writes a TypeError of the class, and a 2 MB file whose
+    array unpacks to 2 GiB was read whole.  Each is an InputError naming the file."""
+    import zipfile
+
+    from stabctl.dynamics import results
+    from stabctl.dynamics.results import SimulationResult
+
+    base = dict(t=np.arange(3.0), verdict=np.array([1.0, np.nan]), separated=np.array([], int))
+    obj = tmp_path / "obj.npz"
+    np.savez(obj, **base, extra=np.array([{"a": 1}], dtype=object))
+    with pytest.raises(InputError, match=r"obj.npz: array 'extra' holds Python objects"):
+        SimulationResult.from_npz(obj)
+    odd = tmp_path / "odd.npz"
+    np.savez(odd, **base, zzz=np.arange(2))
+    with pytest.raises(InputError, match=r"odd.npz: .*arrays it does not write: zzz; no angle,"):
+        SimulationResult.from_npz(odd)
+    bomb = tmp_path / "bomb.npz"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("t.npy", bytes(1 << 20))  # 1 MiB of zeros packs into about 1 kB
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(results, "BOMB_BYTES", 1 << 19)
+        with pytest.raises(InputError, match=r"bomb.npz: its arrays unpack to 1048576 bytes"):
+            SimulationResult.from_npz(bomb)
+
+
 @pytest.mark.parametrize(
     "call, said",
     [

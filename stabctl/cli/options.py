@@ -267,7 +267,8 @@ def reports_errors(func):
         ``OSError`` (a disk full, a file the system refuses) is one ``error:`` line too
         (exit status 2; the outputs are written whole or not at all, and a sweep's
         finished records stay), one saying ``cannot write to standard output`` when it
-        is stdout that failed (closed, its disk full: `stabctl.cli.stdout`); Ctrl-C
+        is stdout that failed (closed, its disk full: `stabctl.cli.stdout`); so is a
+        ``MemoryError`` (an input or a run beyond the machine's memory); Ctrl-C
         prints what was kept (exit status 130), and so do SIGTERM and SIGHUP (exit
         status 143, 129), also when the interrupt surfaced as another error (raised in
         code that turned it into one: `_interrupt`); a closed pipe on stdout (``stabctl
@@ -310,6 +311,15 @@ def _reported(func, args, kwargs):
             sys.exit(2)
         except StdoutError as exc:  # stdout closed, its disk full
             click.echo(cannot_write(exc), err=True)
+            sys.exit(2)
+        except MemoryError as exc:  # an input or a run larger than this machine holds
+            said = f" ({one_line(exc)})" if str(exc) else ""
+            click.echo(
+                f"error: out of memory{said}: the input or the run is larger than this "
+                "machine (or its memory limit, ulimit -v) holds; no output is left "
+                "half-written",
+                err=True,
+            )
             sys.exit(2)
         except BrokenPipeError:  # the reader went away (`stabctl cases | head`)
             _quiet_stdout()

@@ -106,6 +106,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -667,8 +668,14 @@ def _input_rows(path: Path) -> tuple[dict, dict[str, list[int]]]:
         try:
             sheets = pd.read_excel(path, sheet_name=None)
             texts = _cell_texts(path)
-        except Exception:  # noqa: BLE001 - ANDES's own reading names what is wrong
-            return {}, {}
+        except Exception as exc:  # noqa: BLE001 - any reader's failure, named
+            # ANDES read the file (before these checks): a workbook stabctl cannot read
+            # as written (an external link openpyxl cannot follow) would run unchecked
+            raise InputError(
+                f"{path.name}: ANDES reads the workbook, but stabctl cannot read it as "
+                "written to check its rows before ANDES fills its defaults "
+                f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]}): refused"
+            ) from None
         kept = {  # rows with a value, or a cell pandas read as NaN that holds something
             name: df[df.notna().any(axis=1) | df.index.isin([i for i, _ in texts.get(name, {})])]
             for name, df in sheets.items()
@@ -723,7 +730,8 @@ def _cell_texts(path: Path) -> dict[str, dict[tuple[int, Any], str]]:
     NaN ("NaN", "N/A", "null", ...)."""
     import openpyxl  # type: ignore[import-untyped]  # ANDES reads xlsx with it (pandas)
 
-    book = openpyxl.load_workbook(path, read_only=True, data_only=False)
+    # links to other workbooks not followed, as pandas and ANDES read it
+    book = openpyxl.load_workbook(path, read_only=True, data_only=False, keep_links=False)
     try:
         found = {}
         for sheet in book.worksheets:
@@ -1140,12 +1148,24 @@ def _violated(p, v: float) -> str:
 #: records (50 MB)
 MAX_MODEL_ROWS = 1_000_000
 MAX_XLSX_SHEET_BYTES = 1 << 30
+#: the bytes all the parts of an xlsx case unpack to: its sheets, shared strings, styles
+#: (a 1.56 GB shared-strings part packed into 3.8 MB took 3.4 GB and minutes to fail)
+MAX_XLSX_BYTES = 1 << 30
+#: a row's start tag, with a namespace prefix or without (``<row``, ``<x:row``)
+_ROW_TAG = re.compile(rb"<(?:[A-Za-z_][\w.-]{0,63}:)?row[\s/>]")
+#: bytes of one part kept from one chunk to the next, so that no tag is split unseen
+_TAIL = 256
 
 
 def check_xlsx_size(path: Path) -> None:
-    """Refuse an xlsx case whose sheets hold more than MAX_MODEL_ROWS rows or unpack to more
-    than MAX_XLSX_SHEET_BYTES, before any reader parses it: the rows are counted in the
-    sheet's XML as it unpacks (``<row`` tags), nothing is parsed.
+    """Refuse an xlsx case beyond the sizes a case has, before any reader parses it:
+    every part is read as it unpacks (nothing parsed), wherever the workbook places it.
+
+    Bounds: MAX_XLSX_BYTES unpacked over all parts and MAX_XLSX_SHEET_BYTES for one;
+    MAX_MODEL_ROWS rows in a part, counted as row tags (``<row``, or with a namespace
+    prefix, ``<x:row``) and as the numbers rows and cells are given (``r="30000000"``,
+    ``r="A30000000"``, a dimension ``ref="A1:B30000000"``: readers fill every row up to
+    such a number; the header is row 1).
 
     Parameters
     ----------
@@ -1155,36 +1175,56 @@ def check_xlsx_size(path: Path) -> None:
     Raises
     ------
     InputError
-        A sheet beyond a bound, named with the file, the sheet's part and its size; a file
-        that is no zip archive (an xlsx is one).
+        A part beyond a bound, named with the file, the part and its size or its row; a
+        file that is no zip archive (an xlsx is one).
     """
     import zipfile
 
+    numbered = re.compile(
+        rb'\b(?:r|ref)="(?:[A-Z]{0,3}\d+:)?[A-Z]{0,3}(\d{%d,})"' % len(str(MAX_MODEL_ROWS))
+    )
     try:
         with zipfile.ZipFile(path) as z:
-            for info in z.infolist():
-                if not info.filename.startswith("xl/worksheets/"):
-                    continue
+            infos = z.infolist()
+            total = sum(info.file_size for info in infos)
+            if total > MAX_XLSX_BYTES:
+                raise InputError(
+                    f"{path.name}: its parts unpack to {total} bytes, more than a case's "
+                    f"workbook holds (at most {MAX_XLSX_BYTES} bytes): refused before reading it"
+                )
+            for info in infos:
                 if info.file_size > MAX_XLSX_SHEET_BYTES:
                     raise InputError(
                         f"{path.name}: {info.filename} unpacks to {info.file_size} bytes, more "
                         f"than a case's sheet holds (at most {MAX_XLSX_SHEET_BYTES} bytes)"
                     )
-                rows, tail = 0, b""
-                with z.open(info) as sheet:
-                    while chunk := sheet.read(1 << 20):
-                        rows += (tail + chunk).count(b"<row") - tail.count(b"<row")
-                        tail = chunk[-3:]
-                        if rows > MAX_MODEL_ROWS:
-                            raise InputError(
-                                f"{path.name}: {info.filename} holds more than {MAX_MODEL_ROWS} "
-                                "rows, more than any case's sheet (a planning case of 100 000 "
-                                "buses holds a few 100 000): refused before reading it"
-                            )
+                _check_part_rows(path, z, info, numbered)
     except (zipfile.BadZipFile, OSError) as exc:
         raise InputError(
             f"{path.name}: not an xlsx workbook (an xlsx is a zip archive: {exc})"
         ) from None
+
+
+def _check_part_rows(path: Path, z, info, numbered: re.Pattern) -> None:
+    """`check_xlsx_size`'s count of one part's rows as it unpacks."""
+    rows, tail = 0, b""
+    with z.open(info) as part:
+        while chunk := part.read(1 << 20):
+            text = tail + chunk
+            rows += len(_ROW_TAG.findall(text)) - len(_ROW_TAG.findall(tail))
+            far = max((int(m) for m in numbered.findall(text)), default=0)
+            if rows > MAX_MODEL_ROWS or far > MAX_MODEL_ROWS + 1:
+                what = (
+                    f"numbers a row {far}, beyond {MAX_MODEL_ROWS} rows"
+                    if far > MAX_MODEL_ROWS + 1
+                    else f"holds more than {MAX_MODEL_ROWS} rows"
+                )
+                raise InputError(
+                    f"{path.name}: {info.filename} {what}, more than any case's sheet (a "
+                    "planning case of 100 000 buses holds a few 100 000): refused before "
+                    "reading it"
+                )
+            tail = text[-_TAIL:]
 
 
 def _row_list(rows: list[int]) -> str:

@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 import re
 import warnings
+from array import array
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
@@ -410,22 +411,27 @@ def _parse_value(body: str, start: int, where: str, name: str) -> np.ndarray:
     return _parse_matrix(body, start, where, name)
 
 
+#: a token of a matrix body: a line mark, a row end, or a run of other characters
+_TOKEN = re.compile(r"\x00\d+\x00|;|[^\x00;,\s]+")
+
+
 def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
+    """A ``[ ... ]`` matrix's rows, read token by token (the tokens never held at once:
+    a 60 MB matrix took 2.2 GB as a list of them); each row kept as packed floats."""
     inner = body[body.index("[") + 1 : body.rindex("]")]
-    rows: list[list[float]] = []
+    rows: list[array[float]] = []
     row_lines: list[int] = []
-    row: list[float] = []
+    row: array[float] = array("d")
     lineno = start
-    for tok in re.split(r"(\x00\d+\x00|;|,|\s+)", inner):
-        if not tok or tok.isspace() or tok == ",":
-            continue
+    for match in _TOKEN.finditer(inner):
+        tok = match.group()
         if tok.startswith("\x00"):
             lineno = int(tok.strip("\x00"))
         elif tok == ";":
             if row:
                 rows.append(row)
                 row_lines.append(lineno)
-            row = []
+            row = array("d")
         elif _NUMBER.match(tok):
             row.append(_to_float(tok))
         else:
@@ -448,7 +454,7 @@ def _parse_matrix(body: str, start: int, where: str, name: str) -> np.ndarray:
             f"{where} line {row_lines[k]}: '{name}': row {k + 1} has {lengths[k]} columns, "
             f"{lengths.count(count)} other row(s) have {count}"
         )
-    return np.array(rows, dtype=float)
+    return np.array([np.frombuffer(r, dtype=float) for r in rows], dtype=float)
 
 
 def _to_float(tok: str) -> float:

@@ -2733,3 +2733,17 @@ def test_a_case_named_through_a_link_that_loops_or_leads_nowhere_says_so(tmp_pat
     assert_error(res, f"case file {tmp_path / 'l1.json'}: Too many levels of symbolic links")
     res = run("simulate", tmp_path / "br.json", "--tf", 0.5)
     assert_error(res, f"{tmp_path / 'br.json'} is a symbolic link to nowhere.json, which does")
+
+
+def test_out_of_memory_is_one_error_line_not_a_traceback(tmp_path, monkeypatch):
+    """Round 34: a MemoryError (a .m file of 30 million numbers under ulimit -v, an xlsx
+    whose strings unpack to 1.5 GB) ended every command in a traceback, exit status 1."""
+    from stabctl.cli import io as cli_io
+
+    def too_big(name):
+        raise MemoryError("Unable to allocate 2.00 GiB for an array")
+
+    monkeypatch.setattr(cli_io, "_case_info", too_big)
+    res = CliRunner().invoke(main, ["cases", "kundur"])
+    assert res.exit_code == 2 and "Traceback" not in res.output
+    assert res.output.startswith("error: out of memory (Unable to allocate 2.00 GiB for an array)")

@@ -497,3 +497,101 @@ def test_an_xlsx_beyond_any_case_s_size_is_refused_before_it_is_read(tmp_path, m
     text.write_text("bus,name\n1,a\n")
     with pytest.raises(InputError, match=r"text.xlsx: not an xlsx workbook"):
         andes_case.check_xlsx_size(text)
+
+
+def _zipped(path, parts):
+    import zipfile
+
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, text in parts.items():
+            z.writestr(name, text)
+    return path
+
+
+@pytest.mark.parametrize(
+    "parts, said",
+    [
+        # a row tag with a namespace prefix: the count read '<row' only
+        (
+            {"xl/worksheets/sheet1.xml": "<x:sheetData>" + "<x:row/>" * 1001 + "</x:sheetData>"},
+            r"xl/worksheets/sheet1.xml holds more than 1000 rows",
+        ),
+        # a sheet placed outside xl/worksheets/ by its relationships: not checked
+        (
+            {"xl/data/sheet1.xml": "<sheetData>" + "<row/>" * 1001 + "</sheetData>"},
+            r"xl/data/sheet1.xml holds more than 1000 rows",
+        ),
+        # one row numbered far beyond: readers fill every row up to it (30 M rows of a
+        # 17 kB file took 4 GB)
+        (
+            {"xl/worksheets/sheet1.xml": '<sheetData><row r="30000000"><c r="A30000000"/></row>'},
+            r"sheet1.xml numbers a row 30000000, beyond 1000 rows",
+        ),
+        # a dimension reaching as far
+        (
+            {"xl/worksheets/sheet1.xml": '<dimension ref="A1:B5000"/><sheetData/>'},
+            r"sheet1.xml numbers a row 5000, beyond 1000 rows",
+        ),
+    ],
+)
+def test_an_xlsx_s_rows_are_counted_however_written_and_wherever_placed(
+    tmp_path, monkeypatch, parts, said
+):
+    """Round 34: the rows of an xlsx case escaped their count written with a namespace
+    prefix, in a part outside xl/worksheets/ or as a row number far beyond the others."""
+    from stabctl.io import andes_case
+
+    monkeypatch.setattr(andes_case, "MAX_MODEL_ROWS", 1000)
+    with pytest.raises(InputError, match=said):
+        andes_case.check_xlsx_size(_zipped(tmp_path / "x.xlsx", parts))
+    within = {"xl/worksheets/sheet1.xml": '<sheetData><row r="1001"/></sheetData>'}
+    andes_case.check_xlsx_size(_zipped(tmp_path / "y.xlsx", within))  # the header + 1000
+
+
+def test_an_xlsx_whose_parts_unpack_beyond_a_case_s_is_refused(tmp_path, monkeypatch):
+    """A shared-strings part of 1.56 GB packed into 3.8 MB is no sheet: it was read whole
+    (3.4 GB, then a MemoryError traceback).  Every part counts towards MAX_XLSX_BYTES."""
+    from stabctl.io import andes_case
+
+    monkeypatch.setattr(andes_case, "MAX_XLSX_BYTES", 10_000)
+    strings = "<sst>" + "<si><t>a</t></si>" * 1000 + "</sst>"
+    path = _zipped(tmp_path / "s.xlsx", {"xl/sharedStrings.xml": strings})
+    with pytest.raises(InputError, match=r"s.xlsx: its parts unpack to 17011 bytes, more than"):
+        andes_case.check_xlsx_size(path)
+
+
+def test_an_xlsx_with_a_dangling_external_link_is_checked_as_any_other(tmp_path):
+    """Round 34: a workbook naming an external link it does not hold made stabctl's own
+    reading fail (openpyxl followed links; pandas and ANDES do not), and that failure was
+    taken for 'nothing to check': a GENROU M = 0 ran at ANDES's default M = 6 without a
+    word.  The links are not followed, so the rows are checked; a workbook stabctl cannot
+    read at all after ANDES did is refused by name."""
+    import zipfile
+
+    path = cells_edited(tmp_path, [("GENROU", 2, "M", 0)])
+    linked = tmp_path / "linked.xlsx"
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(linked, "w", zipfile.ZIP_DEFLATED) as z:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == "xl/workbook.xml":
+                data = data.replace(
+                    b"</sheets>",
+                    b'</sheets><externalReferences><externalReference r:id="rId99"/>'
+                    b"</externalReferences>",
+                )
+            z.writestr(info, data)
+    with pytest.raises(CaseError, match=r"GENROU row 1 \(idx 1; spreadsheet row 2\): M = 0"):
+        read_andes_case(linked)
+
+
+def test_a_workbook_stabctl_cannot_read_after_andes_did_is_refused(tmp_path, monkeypatch):
+    """Any failure of stabctl's reading of the rows (after ANDES read the file) refuses
+    the file naming it, instead of importing it unchecked."""
+    from stabctl.io import andes_case
+
+    def cannot(path):
+        raise KeyError("There is no item named 'xl/externalLinks/externalLink1.xml'")
+
+    monkeypatch.setattr(andes_case, "_cell_texts", cannot)
+    with pytest.raises(InputError, match=r"kundur_full.xlsx: ANDES reads the workbook, but"):
+        read_andes_case(andes.get_case(KUNDUR))
