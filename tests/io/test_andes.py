@@ -1459,6 +1459,29 @@ def test_a_negative_line_resistance_of_an_equivalent_is_kept():
     assert br.r[k] == pytest.approx([-0.00181], abs=1e-12)
 
 
+def test_a_machine_s_own_swing_out_of_the_band_is_named(ieee14, tmp_path):
+    """IEEE 14 with G5's H 5 -> 0.05 s: its swing is 13.3 Hz, outside the 0.1-2.5 Hz
+    band, so it was no electromechanical mode and no summary named it (round 34); it is
+    listed as a rotor mode outside the band, with its machine, and in the statistics."""
+    raw, dyr = ieee14
+    lines = dyr.read_text().splitlines()
+    (k,) = [i for i, line in enumerate(lines) if re.match(r"\s*8 'GENROU'", line)]
+    lines[k + 1] = lines[k + 1].replace("5.0000", "0.0500", 1)
+    light = tmp_path / "light.dyr"
+    light.write_text("\n".join(lines) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        case = load_psse(raw, light)
+        ma = modal_analysis(linearise(case))
+    (i,) = ma.rotor_modes_outside_band()
+    assert abs(ma.freq_hz[i] - 13.3) < 0.2  # measured 13.3 Hz, damping ratio 0.109
+    (g,) = ma.dominant_machines(int(i))
+    assert case.machines.bus[list(case.machines.number).index(g)] == 8
+    assert i not in ma.electromechanical
+    assert ma.damping_statistics()["rotor_outside_band"]["mode"] == i
+    assert "rotor modes outside 0.1-2.5 Hz" in ma.table()
+
+
 def test_pjm5bus_swing_modes_are_not_common(ref):
     """pjm5bus (four GENCLS behind xd' = 1.7 pu, 300-400 MW loads: large transfer
     conductances): ANDES's three swing modes (1.08, 1.46, 1.73 Hz) are machines swinging
