@@ -179,25 +179,25 @@ class ModalAnalysis:
             )
         return "\n".join(lines + self._outside_band_lines(named))
 
-    def rotor_modes_outside_band(self) -> np.ndarray:
-        """Indices of the oscillatory modes outside the electromechanical band (F_MIN_HZ
-        to F_MAX_HZ) whose largest participating state group is still the rotor angle
-        and speed: a machine's own swing moved out of the band (a tiny H: IEEE 14's G5 at
-        H = 0.05 s swings at 13.3 Hz), which the electromechanical modes leave out."""
+    def rotor_modes_above_band(self) -> np.ndarray:
+        """Indices of the oscillatory modes above the electromechanical band (F_MAX_HZ)
+        whose largest participating state group is still the rotor angle and speed: a
+        machine's own swing moved out of the band (a tiny H: IEEE 14's G5 at H = 0.05 s
+        swings at 13.3 Hz), which the electromechanical modes leave out.  (Below F_MIN_HZ
+        such modes are the governors' frequency modes: miniWECC's 0.032 Hz.)"""
         groups = np.array([state_group(n) for n in self.states])
         shares = np.stack([self.participation[groups == g].sum(axis=0) for g in STATE_GROUPS])
-        out = (self.freq_hz < F_MIN_HZ) | (self.freq_hz > F_MAX_HZ)
         rotor = shares[0] >= shares.max(axis=0)
-        return np.nonzero(out & rotor & (self.eigenvalues.imag > 0))[0]
+        return np.nonzero((self.freq_hz > F_MAX_HZ) & rotor & (self.eigenvalues.imag > 0))[0]
 
     def _outside_band_lines(self, named) -> list[str]:
-        """`table`'s lines naming the rotor modes outside the band, if any."""
-        idx = self.rotor_modes_outside_band()
+        """`table`'s lines naming the rotor modes above the band, if any."""
+        idx = self.rotor_modes_above_band()
         if not idx.size:
             return []
         lines = [
-            f"rotor modes outside {F_MIN_HZ:g}-{F_MAX_HZ:g} Hz (not electromechanical above; "
-            "a machine's own swing):"
+            f"rotor modes above {F_MAX_HZ:g} Hz (not electromechanical above; a machine's "
+            "own swing):"
         ]
         for i in idx[np.argsort(self.damping[idx], kind="stable")]:
             who = " ".join(named(k) for k in self.dominant_machines(int(i)))
@@ -250,16 +250,16 @@ class ModalAnalysis:
 
     def damping_statistics(self) -> dict:
         """Least damping ratio and its mode, over all modes but the angle reference, over
-        the electromechanical modes and over the rotor modes outside their band
-        (`rotor_modes_outside_band`; keys ``all``, ``electromechanical``,
-        ``rotor_outside_band``, each only when it has a mode)."""
+        the electromechanical modes and over the rotor modes above their band
+        (`rotor_modes_above_band`; keys ``all``, ``electromechanical``,
+        ``rotor_above_band``, each only when it has a mode)."""
         ref = [] if self.reference_mode is None else [self.reference_mode]
         rest = np.setdiff1d(np.arange(self.eigenvalues.size), ref)
         out = {}
         for key, idx in (
             ("all", rest),
             ("electromechanical", self.electromechanical),
-            ("rotor_outside_band", self.rotor_modes_outside_band()),
+            ("rotor_above_band", self.rotor_modes_above_band()),
         ):
             if idx.size:
                 j = int(idx[np.argmin(self.damping[idx])])

@@ -242,10 +242,10 @@ def report_markdown(
             + (" (unstable)" if s["damping_ratio"] < 0 else "")
             + "."
         )
-    outside = ma.rotor_modes_outside_band()
+    outside = ma.rotor_modes_above_band()
     if outside.size:
         lines.append(
-            "- Rotor modes outside 0.1-2.5 Hz (a machine's own swing, left out above): "
+            "- Rotor modes above 2.5 Hz (a machine's own swing, left out above): "
             + "; ".join(
                 f"{ma.freq_hz[i]:.3f} Hz, damping ratio {ma.damping[i]:.4f} "
                 f"({', '.join(named(k) for k in ma.dominant_machines(int(i)))})"
