@@ -480,6 +480,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
                 np.rad2deg(np.asarray(ss.Bus.a0.v, float)[on]),
             )
         )
+        changed += _branches_unlike_raw(path, case)
     return AndesImport(
         case,
         left_out,
@@ -493,6 +494,53 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
         tuple(given.defaulted),
         _switched_off(ss, path.name),
     )
+
+
+#: relative difference of a branch's ratio, phase or reactance between ANDES's reading of
+#: a RAW file and the file's (`_branches_unlike_raw`) named as a change
+RAW_BRANCH_TOL = 1e-6
+
+
+def _branches_unlike_raw(path: Path, case: Case) -> list[str]:
+    """The branches ANDES's RAW reader reads otherwise than the RAW file states them
+    (stabctl's own reading, `stabctl.io.psse_raw.read_raw`, as ``import-psse`` reads
+    it), named each with both readings, kept as ANDES reads them: a two-winding
+    transformer's WINDV2, which ANDES drops (PSS/E's TVC system: ratio 1 for 0.96154),
+    Nordic 44's transformers, whose reactances ANDES reads ten times the file's (its case
+    then has no power flow).  Nothing when stabctl cannot read the file itself
+    (``import-psse`` names why)."""
+    from stabctl.io.psse_raw import read_raw
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            raw = read_raw(path)
+    except (CaseError, InputError):
+        return []
+    br = case.branches
+    ours: dict[tuple[int, int], list[int]] = {}
+    for k, (f, t) in enumerate(zip(br.from_bus, br.to_bus)):
+        ours.setdefault((int(f), int(t)), []).append(k)
+    seen: dict[tuple[int, int], int] = {}
+    found = []
+    for row in raw.line:
+        pair = (int(row[0]), int(row[1]))
+        n = seen[pair] = seen.get(pair, 0) + 1
+        rows = ours.get(pair, [])
+        if len(rows) < n:
+            continue
+        k = rows[n - 1]
+        given = (row[5] or 1.0, row[6], row[3])
+        andes = (br.tap[k] or 1.0, br.phase_deg[k], br.x[k])
+        if all(abs(a - b) <= RAW_BRANCH_TOL * max(1.0, abs(b)) for a, b in zip(andes, given)):
+            continue
+        found.append(
+            f"{path.name} branch {pair[0]}-{pair[1]} (circuit {n}): ratio "
+            f"{andes[0]:.5g}, phase {andes[1] + 0.0:g} deg, x {andes[2]:.5g} pu as ANDES's "
+            f"RAW reader reads it; the file states ratio {given[0]:.5g}, phase {given[1] + 0.0:g} "
+            f"deg, x {given[2]:.5g} pu (import-psse reads it as the file states)"
+        )
+    return found
 
 
 #: parameters stabctl reads that ANDES fills with its default when the case file leaves

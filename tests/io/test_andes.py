@@ -2102,8 +2102,17 @@ def test_import_andes_n44_keeps_its_machines_and_says_what_changed():
         "GENROU (80: GENROU_51, GENROU_52, GENROU_53, GENROU_1, GENROU_2, ...): fn = 60 Hz "
         "read as the system frequency 50 Hz (one frequency in stabctl)"
     )
-    scrx = imported.changed[1:]
-    assert all(c.startswith("SCRX (") for c in scrx)
+    scrx = [c for c in imported.changed[1:] if c.startswith("SCRX (")]
+    # and its transformers, whose reactances ANDES's RAW reader reads ten times the
+    # file's (stabctl's own reading solves to 3.6e-3 pu of the RAW's solution; ANDES's
+    # does not converge in stabctl's power flow): each named (round 34)
+    branches = [c for c in imported.changed[1:] if not c.startswith("SCRX (")]
+    assert (
+        "N44_BC.raw branch 7000-7010 (circuit 1): ratio 1, phase 0 deg, x 0.1 pu as ANDES's "
+        "RAW reader reads it; the file states ratio 1, phase 0 deg, x 0.01 pu (import-psse "
+        "reads it as the file states)"
+    ) in branches
+    assert all(c.startswith("N44_BC.raw branch ") for c in branches)
     assert all(
         c.endswith("ANDES reads the record as its SEXS, with that model's defaults") for c in scrx
     )
@@ -3430,7 +3439,7 @@ def test_psse_infinite_bus_keeps_h_0_and_andes_misread_records_are_named():
 
 
 def test_import_andes_reports_its_power_flow_against_the_raw_solution(tmp_path):
-    """PSS/E's EXST1 run (TVC system): ANDES's RAW reader drops transformer 4-3's WINDV2 =
+    """PSS/E's EXST1 run (TVC system): ANDES's RAW reader drops transformer 2-4's WINDV2 =
     1.04, so its power flow, which stabctl's matches to 4e-7, starts bus 3 0.033 pu off
     the RAW's own solution: reported with the bus, and warned of (import-psse: 5e-6)."""
     from click.testing import CliRunner
@@ -3446,6 +3455,16 @@ def test_import_andes_reports_its_power_flow_against_the_raw_solution(tmp_path):
     gap = summary["powerflow_against_raw"]
     assert gap["vmag_bus"] == 3 and gap["vmag_diff_pu"] == pytest.approx(0.033, abs=1e-3)
     assert "differs from the RAW file's own solution by up to 3.3e-02 pu (bus 3)" in res.stderr
+    # and the transformer it reads otherwise is named, with both readings (round 34)
+    assert summary["changed"] == [
+        "TVC_System_32.raw branch 2-4 (circuit 1): ratio 1, phase 0 deg, x 0.016 pu as "
+        "ANDES's RAW reader reads it; the file states ratio 0.96154, phase 0 deg, x 0.017306 "
+        "pu (import-psse reads it as the file states)"
+    ]
+    assert (
+        "  changed: TVC_System_32.raw branch 2-4 (circuit 1): ratio 1,"
+        in CliRunner().invoke(main, [*args, "-o", str(tmp_path / "tvc2.json")]).output
+    )
 
 
 # -- the case's own disturbance (ANDES's Toggle, Fault, Alter) ------------------------------
