@@ -407,6 +407,8 @@ class Simulator:
                 return DynamicModel(self.case, self.op, buses, self.conventions)
             except InitialLimitError as err:
                 raise _named_limits(self.case, err) from None
+            except CaseError as err:
+                raise _named_converter(self.case, err) from None
         with run_on_suspect_starts() as found:
             model = DynamicModel(self.case, self.op, buses, self.conventions)
         named = (line for err in found for line in offenders(self.case, err))
@@ -1156,6 +1158,20 @@ def _held_at_q_limits(case: Case, held: np.ndarray, settings: dict) -> str:
         f"at rest: {advice('q_limits=False', '--no-q-limits')} solves the power flow as "
         "ANDES does (pv2pq = 0, the power flow import-andes compares with)"
     )
+
+
+def _named_converter(case: Case, err: CaseError) -> CaseError:
+    """`err` as it is, or, when it is a converter's (``ibr_con`` row r: one that cannot
+    start at its power-flow point), with the converter named as outputs name it
+    (``C3 (bus 7)``, the ``pibr_pu.C3`` columns) before its table row."""
+    row, table = getattr(err, "row", None), getattr(err, "table", None)
+    said = str(err)
+    head = f"ibr_con row {row + 1}: " if row is not None else ""
+    if table != "ibr_con" or not said.startswith(head) or row >= len(case.converters):
+        return err
+    conv = case.converters
+    who = f"converter C{int(conv.number[row])} (bus {int(conv.bus[row])}, ibr_con row {row + 1})"
+    return CaseError(f"{who}: {said[len(head) :]}", table=table, row=row)
 
 
 #: the controls outside their limits a refusal names (`_named_limits`); the rest counted

@@ -1032,3 +1032,14 @@ def test_reecd1_p_and_q_paths_step_as_their_lags(column, to, lags):
     start = 0.5 if column == "P0" else 0.1
     want = start + (to - start) * _lags_step(t, [T[n] for n in lags])
     assert np.max(np.abs(got - want)) < 1e-12  # 6.1e-14 (P), 1.7e-13 (Q) measured
+
+
+def test_a_converter_that_cannot_start_is_named_as_outputs_name_it():
+    """A run's refusal named only the table row ("ibr_con row 1"); it names the converter
+    as every output does (C1, its bus), the row beside it (round 34)."""
+    from stabctl.dynamics.driver import Simulator
+
+    case = make_case(ialim=0.4)
+    bus = int(case.converters.bus[0])
+    with pytest.raises(CaseError, match=rf"^converter C1 \(bus {bus}, ibr_con row 1\): the conv"):
+        Simulator(case, background_compile=False)

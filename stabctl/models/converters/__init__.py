@@ -720,7 +720,9 @@ def initialise(cp: ConverterParams, V0: np.ndarray) -> np.ndarray:
                 f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {v[k]:.6g} pu: its "
                 f"commands there are Ip = {Ipcmd:.6g}, Iq = {Iqcmd:.6g} pu instead of "
                 f"{x[PV.Ip, k]:.6g}, {x[PV.Iq, k]:.6g} (a current limit ialim, a trip curve, the "
-                "Q droop or the power-order limit is active at the start)"
+                "Q droop or the power-order limit is active at the start)",
+                table="ibr_con",
+                row=k,
             )
     return x
 
@@ -775,5 +777,7 @@ def _check_at_rest(cp: ConverterParams, P, x: np.ndarray, Vc, V_nc, kind: int, w
                 f"ibr_con row {k + 1}: the {name} cannot start at its power-flow point "
                 f"P0 = {cp.P0[k]:.6g}, Q0 = {cp.Q0[k]:.6g} pu at |V| = {abs(Vc[k]):.6g} pu: "
                 f"it injects {S[k].real:.6g} + j{S[k].imag:.6g} pu there, its states "
-                f"moving at up to {speed[worst]:.3g} pu/s ({STATE_NAMES[kind][worst]}; {why})"
+                f"moving at up to {speed[worst]:.3g} pu/s ({STATE_NAMES[kind][worst]}; {why})",
+                table="ibr_con",
+                row=int(k),
             )
