@@ -1296,6 +1296,8 @@ def _load(path: Path, dyr, said: list):
         with warnings.catch_warnings():  # ANDES's own deprecation notices
             warnings.simplefilter("ignore")
             ss = andes.load(str(path), setup=False, no_output=True, default_config=True, **kw)
+    except MemoryError:  # no reading of the file: the machine's memory (the CLI says so)
+        raise
     except Exception as exc:  # noqa: BLE001 - ANDES raises many kinds for a file it cannot parse
         raise _dyr_unmatched(path, dyr) or _unreadable(path, said, exc) from None
     if ss is None:
