@@ -159,6 +159,9 @@ class LoopController:
         )
         self.filter = _make_filter(estimator, self.models, settings)
         self.mode = np.zeros(len(devices), np.int64)
+        #: each machine's island in the plant's network now (None: one), from the run's
+        #: stages in process (`__call__`); a stream's plant does not say it
+        self.island: np.ndarray | None = None
         self.held = np.full(self.models.n, np.nan)
         #: time stamp (s) of each machine's last usable PMU value (nan: none yet)
         self.seen = np.full(self.models.n, np.nan)
@@ -177,6 +180,7 @@ class LoopController:
 
     def __call__(self, t_f: float, partial: SimulationResult) -> np.ndarray:
         """Modes (n_dev,) to take effect at t_f + latency."""
+        self.island = island_at(partial, t_f)
         if self.estimator == "ideal":
             return self._command(t_f, partial.speed_at(np.array([t_f]))[0])
         if partial.t.size < 2:  # the run start is not recorded yet: no frame
@@ -216,8 +220,7 @@ class LoopController:
 
     def _command(self, t_f: float, speed: np.ndarray) -> np.ndarray:
         """Table 3 modes on the relative speeds of `speed` (n_mac,) pu, recorded."""
-        rel = relative_speeds(speed, speed, self.models.inertia, self.coi)[0]
-        rel = np.nan_to_num(rel)
+        rel = np.nan_to_num(island_relative(speed, self.models.inertia, self.island, self.coi))
         self.mode = law.desired_modes(self.sa, self.mode, rel)
         f0 = self.case.freq_hz
         self.rows.append(self.row(t_f, rel * f0, self.mode, np.asarray(speed) * f0))
@@ -275,6 +278,36 @@ class LoopController:
             f0=self.case.freq_hz,
             coi=self.coi,
         )
+
+
+def island_at(partial: SimulationResult, t: float) -> np.ndarray | None:
+    """Each machine's island (n_mac,) int labels in the stage of the run `partial` at time
+    t (`stabctl.dynamics.partition.Partition`), or None when the run has one island: a
+    fault whose clearing cuts machines off the grid (Kundur's line 10-1: G1 alone)."""
+    stages = [p for p in partial.partitions if p.t_s <= t + 1e-12]
+    if not stages or stages[-1].island.max() == 0:
+        return None
+    return np.asarray(stages[-1].island)
+
+
+def island_relative(
+    speed: np.ndarray, inertia: np.ndarray, island: np.ndarray | None, coi: str
+) -> np.ndarray:
+    """omega_i - omega_COI (pu, (n_mac,)) of each machine against the COI of its island
+    (`relative_speeds` within each), as the simulator's own law takes it
+    (`stabctl.storage.control.relative_speeds`): 0 for a machine alone in its island or
+    one that carries its island's whole weight (its devices idle).  Before, the closed
+    loop took one COI of every machine, so after Kundur's line 10-1 cleared G1 alone at
+    1.17 pu drove every device (round 35)."""
+    if island is None:
+        return relative_speeds(speed, speed, inertia, coi)[0]
+    rel = np.zeros_like(np.asarray(speed, float))
+    for k in np.unique(island):
+        m = island == k
+        if m.sum() < 2 or np.count_nonzero(inertia[m]) < 2:
+            continue  # alone, or the whole weight on one machine: no relative speed
+        rel[m] = relative_speeds(speed[m], speed[m], inertia[m], coi)[0]
+    return rel
 
 
 def track(controller: LoopController, frames, breaks=()) -> Diagnostics:

@@ -49,6 +49,24 @@ def test_ideal_closed_loop_reproduces_the_internal_controller_verdict(kundur):
     assert np.abs(loop.result.speed[-1] - inner.speed[-1]).max() < 2e-3
 
 
+def test_the_ideal_closed_loop_takes_each_island_s_coi_as_the_simulator_does(kundur):
+    """Round 35: after Kundur's line 10-1 cleared, G1 alone in its island at 1.17 pu, and
+    the closed loop took one COI of every machine: every device switched on its speed,
+    device 1 (G1's, in the main grid) absorbing 45 MW to the end, and the "ideal" CCT was
+    21.5 cycles against the simulator's own law's 27.6.  Each island's COI is taken now,
+    as the simulator's law takes it: G1's device idles, and the speeds and powers are the
+    internal controller's."""
+    case, sim, _ = kundur
+    ev = [fault_with_clearing(case, 10, 1, 1.0, 6)]
+    opts = cl.LoopOptions(5, "ideal", PMUSettings(rate=120, latency_s=0.0))
+    loop = cl.run_closed_loop(sim, ev, 6.0, opts)
+    inner = sim.run(ev, t_end=6.0, storage=uniform_fleet(case, 5))
+    assert loop.result.pesd[-1, 0] == inner.pesd[-1, 0] == 0.0  # G1's device, idle
+    assert np.all(loop.result.pesd[loop.result.t > 1.1, 0] == 0.0)
+    assert np.abs(loop.result.speed[-1] - inner.speed[-1]).max() < 2e-3
+    assert loop.result.speed[-1, 0] > 1.1  # G1 runs away alone: lost, not a COI member
+
+
 def test_same_seed_same_switchings_other_seed_other_noise(kundur):
     _case, sim, ev = kundur
     runs = [cl.run_closed_loop(sim, ev, 3.0, cl.LoopOptions(5, "kf", seed=s)) for s in (7, 7, 8)]
