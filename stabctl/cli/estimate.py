@@ -514,7 +514,7 @@ def cct(
         "cct_cycles": table,
         "esd_model": esd_model,
         "lines": estimator_cct_lines(
-            table, fault, far_bus, esd_pct, settings, runs, seed, esd_model
+            table, fault, far_bus, esd_pct, settings, runs, seed, esd_model, case.freq_hz
         ),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
@@ -636,6 +636,12 @@ def track(
     refuse_given(
         ("drop", "window_cycles"),
         "to estimate track: its frames are the recorded ones (no PMU is simulated)",
+    )
+    refuse_given(
+        ("v_gate",),
+        "to estimate track: its ESD modes are the controller's commands, and no device is "
+        "simulated to gate them by its bus voltage (the plant's devices do: pmu plant "
+        "--v-gate)",
     )
     src = sources.parse_source(source)
     end = End(frames, until_s)

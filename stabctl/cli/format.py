@@ -893,6 +893,7 @@ def estimator_cct_lines(
     runs: int,
     seed: int,
     esd_model: str = "ideal",
+    freq_hz: float = 60.0,
 ) -> list:
     """The text lines of `estimate cct`.
 
@@ -906,12 +907,15 @@ def estimator_cct_lines(
     runs, seed : int
     esd_model : {"ideal", "wecc"}, optional
         The storage devices' model (named in the first line).
+    freq_hz : float, optional
+        The case's nominal frequency (Hz), whose quarter cycle the searches resolve
+        (`stabctl.estimation.closed_loop.cct_tol`); default 60.
 
     Returns
     -------
     list of str
     """
-    from stabctl.estimation.closed_loop import CCT_TOL_S
+    from stabctl.estimation.closed_loop import cct_tol
 
     rate, lat = settings.rate, settings.latency_s
     lines = [
@@ -919,7 +923,7 @@ def estimator_cct_lines(
         f"frames/s, latency "
         f"{1000 * lat:g} ms, frequency window {settings.window_cycles:g} cycles, "
         f"{counted(runs, 'seed')} from {seed} (cycles, each found on a "
-        f"{1000 * CCT_TOL_S:.2f} ms grid, 1/4 cycle: coarser than stabctl cct's 1 ms):"
+        f"{1000 * cct_tol(freq_hz):.2f} ms grid, 1/4 cycle: coarser than stabctl cct's 1 ms):"
     ]
     lines += [
         f"  {e:5} "

@@ -719,6 +719,11 @@ def control(
         ("drop", "window_cycles"),
         "to pmu control: its frames are the plant's, as received (no PMU is simulated)",
     )
+    refuse_given(
+        ("v_gate",),
+        "to pmu control: the devices are the plant's, and they gate their commands by "
+        "their bus voltage as the plant is told (pmu plant --v-gate)",
+    )
     host, port = _host_port(address)
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles

@@ -670,8 +670,15 @@ class LoopRunner:
 
 
 #: Clearing-time resolution of the CCT searches with the estimator in the loop (s): 1/4
-#: cycle at 60 Hz, the lattice the cold bisection searches on.
+#: cycle at 60 Hz, the lattice the cold bisection searches on (`cct_tol`: the case's).
 CCT_TOL_S = 1 / 240
+
+
+def cct_tol(freq_hz: float) -> float:
+    """The clearing-time resolution (s) of a case of nominal frequency `freq_hz` (Hz): a
+    quarter cycle (60 Hz: `CCT_TOL_S`, 4.17 ms; 50 Hz: 5 ms, where 1/240 s was 0.208
+    cycle and the CCTs fell off the quarter-cycle lattice)."""
+    return CCT_TOL_S if freq_hz == 60.0 else 0.25 / freq_hz
 
 
 def cct_job(inputs: dict) -> dict:
@@ -913,7 +920,8 @@ def cct_study(
     seed, runs = int(seed), runs if rule else int(runs)  # 2.0 held as 2 (keys, ranges)
     loaded = job_case(case)  # the content its jobs run on in this process, and digest
     check_rate(pmu.rate, loaded.freq_hz)  # here, not as every job's failure
-    tol_cycles, digest = CCT_TOL_S * loaded.freq_hz, loaded.digest()
+    tol = cct_tol(loaded.freq_hz)
+    tol_cycles, digest = tol * loaded.freq_hz, loaded.digest()
     rate, latency, bus, far_bus = pmu.rate, pmu.latency_s, fault.bus, fault.far_bus
     window = (
         {}
@@ -946,6 +954,7 @@ def cct_study(
                 **window,
                 **devices,
                 **at,
+                **({} if tol == CCT_TOL_S else {"tol": tol}),  # 60 Hz: keys as before
             ),
         )
 

@@ -2747,3 +2747,20 @@ def test_out_of_memory_is_one_error_line_not_a_traceback(tmp_path, monkeypatch):
     res = CliRunner().invoke(main, ["cases", "kundur"])
     assert res.exit_code == 2 and "Traceback" not in res.output
     assert res.output.startswith("error: out of memory (Unable to allocate 2.00 GiB for an array)")
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["estimate", "track", "kundur", "--source", "x.c37", "--esd-pct", "10", "--out", "a.csv"],
+        ["pmu", "control", "kundur", "127.0.0.1:4999", "--esd-pct", "10"],
+    ],
+)
+def test_a_voltage_gate_no_device_of_the_command_applies_is_refused(args, tmp_path, monkeypatch):
+    """Round 35: --v-gate was taken and ignored by estimate track and pmu control (their
+    devices are not simulated: the plant's gate its commands), 0.8 and 1.5 pu giving the
+    same file byte for byte."""
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(main, [*args, "--v-gate", "1.5"])
+    assert res.exit_code == 2 and "error: --v-gate given to " in res.output
+    assert "pmu plant --v-gate" in res.output and not list(tmp_path.iterdir())

@@ -220,3 +220,16 @@ def test_cct_study_with_wecc_batteries_names_them_and_commands_them(tmp_path):
     assert table["ideal"]["values"] == [pytest.approx(11.5)]
     keys = [json.loads(line)["key"] for line in (tmp_path / "cct.jsonl").read_text().splitlines()]
     assert keys == ["kundur/3-101/5%/ideal/60fps/0.05s/seed0/wecc"]
+
+
+def test_a_50_hz_case_s_estimator_ccts_are_found_on_its_quarter_cycle():
+    """Round 35: `estimate cct` of a 50 Hz case searched on 1/240 s (0.208 cycle) and said
+    "4.17 ms grid, 1/4 cycle"; its lattice is the case's quarter cycle, 5 ms."""
+    from stabctl.cli.format import estimator_cct_lines
+
+    assert cl.cct_tol(60.0) == cl.CCT_TOL_S == 1 / 240 and cl.cct_tol(50.0) == 0.005
+    row = {"mean": 16.75, "std": None, "min": 16.75, "max": 16.75, "runs": 1, "failed": 0}
+    lines = estimator_cct_lines(
+        {"ideal": row}, 2, 4, 20.0, PMUSettings(rate=50), 1, 0, freq_hz=50.0
+    )
+    assert "each found on a 5.00 ms grid, 1/4 cycle" in lines[0]
