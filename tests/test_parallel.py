@@ -2264,3 +2264,30 @@ def test_a_records_file_replaced_mid_sweep_stops_it_with_its_records_kept(tmp_pa
     (kept,) = tmp_path.glob("r.jsonl.*.kept")
     assert str(kept) in str(err.value) and out.read_text() == ""
     assert len(read_records(kept)) == 2  # the first, and the second that found it replaced
+
+
+def test_a_controlled_sweep_s_record_relabelled_to_another_controller_is_set_aside(tmp_path):
+    """Round 35: a record of a sweep with another controller (or WECC batteries) whose key
+    and inputs were relabelled was taken as the other run's answer on resume ("1 already
+    in"): the result did not carry what it answers, as `cct_job`'s carries its rating.  It
+    carries the controller and the devices' model now, and such a record is set aside."""
+    from stabctl.storage.control import BangBangCOI
+    from stabctl.studies.sweeps import controlled_cct_jobs
+
+    out = tmp_path / "r.jsonl"
+    search = SearchOptions(error_check=False, t_max=0.5)
+    fault = [LineFault(3, 101)]
+    (wide,) = controlled_cct_jobs(
+        "kundur", fault, [5.0], BangBangCOI(deadband_hz=0.05), search=search
+    )
+    (narrow,) = controlled_cct_jobs(
+        "kundur", fault, [5.0], BangBangCOI(deadband_hz=0.2), search=search
+    )
+    run_sweep([wide], out, workers=1)
+    rec = json.loads(out.read_text())
+    assert rec["result"]["controller"] == wide.inputs["controller"]
+    rec.update(key=narrow.key, inputs=narrow.inputs)  # the 0.05 Hz answer relabelled 0.2 Hz
+    out.write_text(json.dumps(rec) + "\n")
+    with pytest.warns(UserWarning, match=r"result.controller .* is not the record's inputs"):
+        again = run_sweep([narrow], out, workers=1)
+    assert again.ran == 1

@@ -1735,16 +1735,20 @@ def cct_job(inputs: dict) -> dict:
     """
     model = ModelOptions.from_inputs(inputs)
     sim = cached_simulator(inputs["case"], model, digest=inputs.get("case_digest"))
+    return searched_job(sim, inputs, storage_fleet(sim.case, inputs.get("esd_pct")))
+
+
+def searched_job(sim, inputs: dict, storage, **own) -> dict:
+    """A sweep job's CCT search (`cct_job`, `stabctl.studies.sweeps.controlled_cct_job`):
+    `CCTResult.to_dict()` with the rating it answers (``esd_pct``) and `own` (the
+    controller, the devices' model), which a resumed sweep checks against the record's
+    inputs (`_REPEATED`); a verdict (robust, N-1 insecure) raised with the same and its
+    fault (`stabctl.parallel.run_job` records them)."""
     fault = fault_of_inputs(inputs)
-    searched = {"esd_pct": inputs.get("esd_pct")}  # the result's own, checked on resume
+    searched = {"esd_pct": inputs.get("esd_pct"), **own}
     try:
-        res = critical_clearing_time(
-            sim,
-            fault,
-            SearchOptions.from_inputs(inputs),
-            storage=storage_fleet(sim.case, inputs.get("esd_pct")),
-        )
-    except Verdict as exc:  # recorded with the fault and rating it answers (`run_job`)
+        res = critical_clearing_time(sim, fault, SearchOptions.from_inputs(inputs), storage=storage)
+    except Verdict as exc:
         exc.searched = {"fault": _fault_dict(fault), **searched}
         raise
     return {**res.to_dict(), **searched}
@@ -1882,6 +1886,8 @@ def _unlike_its_bracket(r: dict, slack: float) -> str | None:
 #: the inputs' name)
 _REPEATED = (
     ("esd_pct", "esd_pct"),
+    ("controller", "controller"),
+    ("esd_model", "esd_model"),
     ("fault.bus", "bus"),
     ("fault.far_bus", "far_bus"),
     ("fault.circuit", "circuit"),

@@ -18,8 +18,7 @@ from stabctl.stability.cct import (
     SearchOptions,
     cached_simulator,
     cct_jobs,
-    critical_clearing_time,
-    fault_of_inputs,
+    searched_job,
 )
 from stabctl.storage.control import BangBangCOI
 from stabctl.storage.devices import model_inputs, uniform_fleet
@@ -40,7 +39,8 @@ def controlled_cct_job(inputs: dict) -> dict:
     Returns
     -------
     dict
-        `CCTResult.to_dict()`.
+        `CCTResult.to_dict()` with the rating, controller and devices' model it answers
+        (checked on resume, as `cct_job`'s rating).
     """
     model = ModelOptions.from_inputs(inputs)
     sim = cached_simulator(inputs["case"], model, digest=inputs.get("case_digest"))
@@ -55,9 +55,8 @@ def controlled_cct_job(inputs: dict) -> dict:
             model=inputs.get("esd_model", "ideal"),
         )
     )
-    return critical_clearing_time(
-        sim, fault_of_inputs(inputs), SearchOptions.from_inputs(inputs), storage=fleet
-    ).to_dict()
+    own = {"controller": inputs["controller"], "esd_model": inputs.get("esd_model", "ideal")}
+    return searched_job(sim, inputs, fleet, **own)
 
 
 def controlled_cct_jobs(
