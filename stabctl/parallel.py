@@ -568,8 +568,44 @@ def atomic_writes(outputs) -> None:
         for tmp, _ in renames:
             Path(tmp).unlink(missing_ok=True)
         raise
-    for tmp, path in renames:
-        os.replace(tmp, path)
+    with signals_held():  # all renamed, or none
+        for tmp, path in renames:
+            os.replace(tmp, path)
+
+
+#: the signals that interrupt a command (Ctrl-C, a batch system's stop, a closed terminal)
+_STOPS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold Ctrl-C, SIGTERM and SIGHUP for the block: one that comes meanwhile is
+    recorded and sent again after it, to the handlers the block found, so that a few
+    renames that put several outputs in place happen all or none (`atomic_writes`;
+    `stabctl paper`, whose output directory an interrupt between its moves left half
+    replaced).  Keep the block short: nothing in it can be interrupted.  In the main
+    thread (where Python runs signal handlers); elsewhere a plain block.
+
+    Yields
+    ------
+    None
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    came: list[int] = []
+
+    def hold(signum, frame):
+        came.append(signum)
+
+    before = {sig: signal.signal(sig, hold) for sig in _STOPS}
+    try:
+        yield
+    finally:
+        for sig, handler in before.items():  # None: one not set from Python, the default
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        if came:  # the first one, now that the block is done
+            os.kill(os.getpid(), came[0])
 
 
 @contextmanager

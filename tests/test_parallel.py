@@ -2291,3 +2291,16 @@ def test_a_controlled_sweep_s_record_relabelled_to_another_controller_is_set_asi
     with pytest.warns(UserWarning, match=r"result.controller .* is not the record's inputs"):
         again = run_sweep([narrow], out, workers=1)
     assert again.ran == 1
+
+
+def test_signals_held_delivers_an_interrupt_after_the_block(tmp_path):
+    """`signals_held` (the final moves of `stabctl paper` and `atomic_writes`): a Ctrl-C
+    inside the block is delivered after it, so the block's renames happen all or none."""
+    from stabctl.parallel import signals_held
+
+    done = []
+    with pytest.raises(KeyboardInterrupt), signals_held():
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)
+        done.append("renamed")  # reached: the interrupt waited
+    assert done == ["renamed"]

@@ -24,7 +24,13 @@ import numpy as np
 from stabctl.errors import InputError
 from stabctl.locking import exclusive
 from stabctl.outdir import output_directory
-from stabctl.parallel import naming, read_records, set_aside_damaged, write_reproducible
+from stabctl.parallel import (
+    naming,
+    read_records,
+    set_aside_damaged,
+    signals_held,
+    write_reproducible,
+)
 from stabctl.plotting import figures as plotting
 from stabctl.smib.coi import PAPER_TWO_MACHINE, PAPER_TWO_MACHINE_T_RELEASE
 from stabctl.smib.feedback import PAPER_LAWS, settling_time
@@ -551,22 +557,28 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
                 )
         score, parts[4:] = gather(parts[4:])
         (tmp / "paper.md").write_text("\n".join(parts[:4] + score + parts[4:]))
-        for f in tmp.iterdir():
-            os.replace(f, out / f.name)
-    for key in keys:
-        for f in sorted(work.glob(RESUMABLE[key][1])) if key in RESUMABLE else ():
+        finished = [
+            f
+            for key in keys
+            for f in (sorted(work.glob(RESUMABLE[key][1])) if key in RESUMABLE else ())
+        ]
+        for f in finished:  # every output made beside the others, then all moved at once
             log["records"][f.name] = {
-                **write_reproducible(f, out / f.name),
-                "simulations": _simulations(out / f.name),
-                **_verdicts(out / f.name),
+                **write_reproducible(f, tmp / f.name),
+                "simulations": _simulations(tmp / f.name),
+                **_verdicts(tmp / f.name),
             }
-            f.unlink()
+        log["total_s"] = round(time.perf_counter() - t_start, 1)
+        (tmp / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
+        with signals_held():  # an interrupt between two moves left the directory half new
+            for f in tmp.iterdir():
+                os.replace(f, out / f.name)
+    for f in finished:
+        f.unlink()
     try:
         work.rmdir()
     except OSError:  # something else left there: keep it
         pass
-    log["total_s"] = round(time.perf_counter() - t_start, 1)
-    (out / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
     return out / "paper.md"
 
 

@@ -373,7 +373,8 @@ def test_a_start_refused_at_the_q_limits_names_the_held_buses_and_no_q_limits(na
     case = read_andes_case(andes.get_case(name)).case
     with pytest.raises(
         CaseError,
-        match=r"ibr_con row 1: the converter cannot start at its power-flow point .*; the "
+        match=r"converter C1 \(bus \d+, ibr_con row 1\): the converter cannot start at its "
+        r"power-flow point .*; the "
         r"power flow held buses 2, 3, 4, 6 at their Q limits, and without Q limits the case "
         r"starts at rest: q_limits=False solves the power flow as ANDES does",
     ):
