@@ -1109,8 +1109,8 @@ def _sweep_locked(
                 f.append(line)
                 rec = done[rec["key"]] = json.loads(line)  # as it reads back
                 failed += rec["status"] == "failed"
+                bar.set_postfix(failed=failed, refresh=False)  # drawn with the update
                 bar.update()
-                bar.set_postfix(failed=failed)
                 written += 1
                 if callable(progress):
                     progress(written, len(todo))

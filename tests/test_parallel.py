@@ -2304,3 +2304,14 @@ def test_signals_held_delivers_an_interrupt_after_the_block(tmp_path):
         time.sleep(0.05)
         done.append("renamed")  # reached: the interrupt waited
     assert done == ["renamed"]
+
+
+def test_a_bar_in_a_log_file_is_not_redrawn_at_every_job(tmp_path, capsys):
+    """Round 35: on a stderr that is no terminal (a log file) each job drew its bar twice
+    (the update, then the failed= count), 49 frames on one line for 24 faults, some
+    10 000 for an N-1 of ACTIVSg2000.  It is drawn at its start and end (and every
+    `stabctl.progress.LOG_INTERVAL_S`), with the count."""
+    jobs = [Job(f"sq{x}", square, {"x": x}) for x in range(40)]
+    run_sweep(jobs, tmp_path / "r.jsonl", workers=1, progress=True)
+    err = capsys.readouterr().err
+    assert err.count("\r") <= 3 and "40/40" in err and "failed=0" in err

@@ -42,7 +42,8 @@ NPZ_UNITS = {
     "efd": "pu",
     "vmag": "pu",
     "vang": "rad",
-    "inertia": "MW s (H * MVA)",
+    "inertia": "COI weight, MW s (H * MVA; an island with an infinite bus: 1 for it, 0 "
+    "for the others, stabctl.dynamics.coi.coi_inertia)",
     "pesd": "pu on the system base (+ absorbs)",
     "ibr_p": "pu on the system base",
     "ibr_q": "pu on the system base",

@@ -435,6 +435,8 @@ def test_npz_round_trip(case1, tmp_path):
     assert units["pelect"] == "pu on the system base"
     assert units["pmech"] == "pu on the machine base" and units["t"] == "s"
     assert {"vmag", "vang", "efd", "inertia", "verdict"} <= set(units)
+    # the COI weights, named so (round 35: "MW s (H * MVA)" beside an infinite bus's 1, 0)
+    assert units["inertia"].startswith("COI weight, MW s (H * MVA; an island with an infinite")
 
 
 def test_simultaneous_near_and_far_clearing_keeps_psts_zero_length_stage(kundur_pstess):
