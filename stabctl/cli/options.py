@@ -602,7 +602,7 @@ def _numbers(value):
 _KEPT = {
     "sweep-cct": "finished jobs are in {out}; they are skipped",
     "screen": "finished searches are in {out}; they are skipped",
-    "paper": "finished sweep records in {out} are kept with --resume",
+    "paper": "finished sweep records are kept in {out}/.paper-work for --resume",
 }
 
 
@@ -621,6 +621,17 @@ def note_written(path) -> None:
         The file written.
     """
     _WRITTEN.append(str(path))
+
+
+def _paper_records(out) -> bool:
+    """Whether an interrupted `stabctl paper` kept sweep records to resume from (in its
+    output directory's work directory, `stabctl.studies.paper.WORK_DIR`)."""
+    from stabctl.studies.paper import WORK_DIR
+
+    try:
+        return any(f.stat().st_size for f in (Path(out or ".") / WORK_DIR).glob("*.jsonl"))
+    except OSError:
+        return False
 
 
 def _interrupted(kwargs, exc: BaseException | None = None) -> str:
@@ -651,6 +662,8 @@ def _interrupted(kwargs, exc: BaseException | None = None) -> str:
         files = ", ".join(_WRITTEN)
         return f"interrupted: {files} had been written whole; run again with: {shlex.join(argv)}"
     kept = _KEPT.get(name or "")
+    if name == "paper" and not _paper_records(out):
+        kept = None  # no sweep had finished a job (the analytic part has none)
     if kept is None:  # nothing to resume from
         return f"interrupted: nothing is kept; run again with: {shlex.join(argv)}"
     return f"interrupted: {kept.format(out=out)}; resume with: {shlex.join(argv)}"

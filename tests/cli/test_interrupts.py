@@ -272,7 +272,8 @@ def test_ctrl_c_at_the_terminal_of_a_screening_on_a_local_dask_cluster_says_one_
         (
             ["paper", "--out-dir", "rep", "--only", "analytic"],
             "stabctl.studies.paper.write_paper_report",
-            "finished sweep records in rep are kept with --resume; resume with: stabctl ",
+            # no sweep record to resume from (round 35: it said records were kept)
+            "nothing is kept",
         ),
         (
             ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10"],
@@ -332,6 +333,28 @@ def test_every_long_command_ends_the_same_way_on_ctrl_c(
         "run again with: " if command[0] == "pmu" or kept == "nothing is kept" else "resume with: "
     )
     assert lines[0].endswith(again + "stabctl " + resume)
+
+
+def test_an_interrupted_paper_says_where_its_records_are_kept(tmp_path, monkeypatch):
+    """With sweep records in its work directory, an interrupted `paper` says they are kept
+    there for --resume (round 35: it said so, naming the output directory, when none
+    had been kept)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "rep" / ".paper-work").mkdir(parents=True)
+    (tmp_path / "rep" / ".paper-work" / "table4_cct.jsonl").write_text('{"key": "k"}\n')
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("stabctl.studies.paper.write_paper_report", interrupted)
+    command = ["paper", "--out-dir", "rep", "--only", "table4"]
+    monkeypatch.setattr(sys, "argv", ["stabctl", *command])
+    res = CliRunner().invoke(main, command)
+    assert res.exit_code == 130
+    assert res.stderr.strip() == (
+        "interrupted: finished sweep records are kept in rep/.paper-work for --resume; "
+        "resume with: stabctl paper --out-dir rep --only table4 --resume"
+    )
 
 
 @pytest.fixture(scope="module")
