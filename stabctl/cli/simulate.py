@@ -610,16 +610,7 @@ def simulate(
                 "machine_names": {
                     str(int(k)): case.machine_name(int(k)) for k in case.machines.number
                 },
-                **(
-                    {
-                        "converter_names": {
-                            str(int(k)): f"C{int(k)} (bus {int(b)})"
-                            for k, b in zip(case.converters.number, case.converters.bus)
-                        }
-                    }
-                    if len(case.converters)
-                    else {}
-                ),
+                **({"converter_names": names} if (names := _converter_names(case, fleet)) else {}),
                 "files": written,
                 **({} if halved is None else {"step_check": halved}),
             }
@@ -709,3 +700,20 @@ def _step_check_line(result, halved: dict) -> str:
         "depends on the step (a clearing within its error of the CCT; `stabctl cct` gives "
         "the CCT with its half-step error bar)"
     )
+
+
+def _converter_names(case, fleet) -> dict[str, str]:
+    """`simulate --json`'s ``converter_names``: each converter of the run, the case's and
+    a WECC-battery fleet's (`stabctl.storage.devices.battery_case`: its ``pibr_pu.C<k>``
+    columns were named nowhere), as ``"C11 (bus 4, WECC battery)"``."""
+    names = {
+        str(int(k)): f"C{int(k)} (bus {int(b)})"
+        for k, b in zip(case.converters.number, case.converters.bus)
+    }
+    if fleet is not None and fleet.model == "wecc":
+        from stabctl.storage.devices import battery_case
+
+        run = battery_case(case, fleet)[0].converters
+        for k, b in list(zip(run.number, run.bus))[len(case.converters) :]:
+            names[str(int(k))] = f"C{int(k)} (bus {int(b)}, WECC battery)"
+    return names

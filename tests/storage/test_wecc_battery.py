@@ -229,3 +229,27 @@ def test_commanded_batteries_read_no_uninitialised_memory(tmp_path):
         assert np.all(np.isfinite(ref)), name
         for other in runs[1:]:
             np.testing.assert_array_equal(other[name], ref, err_msg=name)
+
+
+def test_simulate_names_the_wecc_batteries_converter_columns(tmp_path):
+    """Round 35: with --esd-model wecc the CSV held pibr_pu.C1..C4 (the batteries as
+    converters) that --json's converter_names did not name (null on a case without
+    converters of its own); each is named with its bus."""
+    import csv
+    import json
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    out = tmp_path / "w.csv"
+    args = ["simulate", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
+    args += ["--esd-model", "wecc", "--tf", "1.2", "--json", "--out", str(out)]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    names = json.loads(res.stdout)["converter_names"]
+    with out.open() as f:
+        columns = next(csv.reader(f))
+    numbers = [c.split(".C")[1] for c in columns if c.startswith("pibr_pu.C")]
+    assert numbers == sorted(names, key=int) == ["1", "2", "3", "4"]
+    assert names["1"] == "C1 (bus 10, WECC battery)"
