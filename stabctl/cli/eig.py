@@ -94,15 +94,24 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
             f"--areas {n_areas}: case '{case.name}' has {len(case.machines)} machine(s), "
             "and each area at least one"
         )
+    from stabctl import progress
+
+    beat = progress.Heartbeat(
+        lambda line: click.echo(line, err=True), "eig: {}".format, progress.HEARTBEAT_S
+    )
+    beat.note(  # said every 8 s of a long linearisation (a planning case: about a minute)
+        f"still linearising and analysing case {case.name} ({len(case.machines)} machines)"
+    )
     try:
-        st = eig_study(
-            case,
-            no_pss=no_pss,
-            n_areas=n_areas,
-            conventions=conventions,
-            q_limits=q_limits,
-            limits=limits,
-        )
+        with beat:
+            st = eig_study(
+                case,
+                no_pss=no_pss,
+                n_areas=n_areas,
+                conventions=conventions,
+                q_limits=q_limits,
+                limits=limits,
+            )
     except AreaCountError as exc:  # fewer electromechanical modes than machines - 1
         raise InputError(f"--areas {n_areas}: {exc}") from None
     written = []

@@ -846,3 +846,26 @@ def test_outputs_are_written_together_or_not_at_all(tmp_path, monkeypatch, faili
     assert res.exit_code == 2
     assert res.stderr.strip().startswith("error: ") and "File too large" in res.stderr
     assert sorted(tmp_path.iterdir()) == []
+
+
+def test_a_long_eig_says_it_is_still_working(monkeypatch):
+    """Round 35: eig of a planning case printed nothing for its whole linearisation (9-17
+    s on WECC 240, about a minute on ACTIVSg2000).  A heartbeat says it is still at work
+    after every HEARTBEAT_S of silence."""
+    import time
+
+    from stabctl import progress
+    from stabctl.studies import eigenvalues
+
+    real = eigenvalues.eig_study
+
+    def slow(*a, **k):
+        time.sleep(1.5)
+        return real(*a, **k)
+
+    monkeypatch.setattr(progress, "HEARTBEAT_S", 0.5)
+    monkeypatch.setattr(eigenvalues, "eig_study", slow)
+    res = run("eig", "kundur", "--json")
+    assert res.exit_code == 0, res.output
+    assert "eig: still linearising and analysing case kundur (4 machines)" in res.stderr
+    json.loads(res.stdout)  # stdout stays the JSON alone
