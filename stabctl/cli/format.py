@@ -967,7 +967,7 @@ def closed_loop_lines(
         f"{_ESD_NAMES[esd_model]} {esd_pct:g} %, seed {seed}:"
     )
     return [head] + [
-        f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} switchings "
+        f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} mode commands "
         f"{r['switchings']:5d}  false actions {r['false_actions']}"
         + (_frames_used(r) if "frames" in r else "")
         + _link_text(r.get("link"))

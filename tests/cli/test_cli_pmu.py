@@ -158,6 +158,9 @@ def test_estimate_closed_loop_says_how_many_frames_the_controller_used():
     used, due = rows["raw"]["frames_formed"], rows["raw"]["frames"]
     assert f"frames used {used} of {due} ({due - used} lost or incomplete" in lines[2]
     assert f"frames used {due} of {due}\n" in "\n".join(lines) + "\n"  # ideal
+    # the count is of the commands sent (round 35: called switchings, 26 of them with
+    # a voltage gate of 1.5 pu that let no device deliver any power)
+    assert f"mode commands {rows['ideal']['switchings']:5d}  false actions" in lines[1]
 
 
 def test_plant_and_controller_in_two_processes_close_the_loop():
