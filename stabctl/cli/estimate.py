@@ -401,7 +401,7 @@ def closed_loop(
     """The fault simulated with the ESDs commanded by each estimator in the loop.
 
     For each estimator (ideal, raw, kf, ekf; PMU noise seed --seed) the verdict, the
-    number of mode commands the controller sent the ESDs (JSON `switchings`: each a
+    number of mode commands the controller sent the ESDs (JSON `mode_commands`: each a
     switching, unless the device's voltage gate --v-gate holds it idle, as while a fault
     is on) and the false actions; with --transport tcp also the frames and their measured
     round trips (docs/estimation.md 6).

@@ -968,7 +968,7 @@ def closed_loop_lines(
     )
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} mode commands "
-        f"{r['switchings']:5d}  false actions {r['false_actions']}"
+        f"{r['mode_commands']:5d}  false actions {r['false_actions']}"
         + (_frames_used(r) if "frames" in r else "")
         + _link_text(r.get("link"))
         for e, r in rows.items()

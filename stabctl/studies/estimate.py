@@ -264,7 +264,8 @@ def closed_loop_verdicts(
     -------
     dict
         Per estimator (`stabctl.estimation.closed_loop.ESTIMATORS`): ``stable``,
-        ``switchings``, ``false_actions``, ``frames`` (the frames the controller acted
+        ``mode_commands`` (sent to the devices: a device's voltage gate may hold one
+        idle), ``false_actions``, ``frames`` (the frames the controller acted
         on), ``frames_formed`` (those whose relative speeds it could form, every
         machine's speed estimated: dropped frames leave the devices idle) and ``link``
         (over TCP the link's figures, `stabctl.estimation.c37_loop.LinkStats.summary`;
@@ -321,14 +322,15 @@ def loop_row(run, deadband_hz: float, controller_here: bool = True) -> dict:
     Returns
     -------
     dict
-        ``stable``, ``switchings``, ``false_actions``, (``frames``, ``frames_formed``)
+        ``stable``, ``mode_commands``, ``false_actions``, (``frames``, ``frames_formed``)
         and ``link``, as `closed_loop_verdicts` says.
     """
     from stabctl.estimation.closed_loop import false_actions
 
     row = {
         "stable": run.result.stable,
-        "switchings": len(run.result.meta.get("switchings", [])),
+        # commands sent, not switchings: a device's voltage gate may hold it idle
+        "mode_commands": len(run.result.meta.get("switchings", [])),
         "false_actions": false_actions(run, deadband_hz),
     }
     if controller_here:

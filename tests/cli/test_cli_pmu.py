@@ -135,8 +135,8 @@ def test_estimate_closed_loop_over_tcp_prints_the_link():
     for e in ("raw", "kf", "ekf"):
         row = tcp["closed_loop"][e]
         assert row["link"]["frames"] == 3 * 60 and row["link"]["round_trip_ms"]["median"] > 0
-        assert {k: row[k] for k in ("stable", "switchings", "false_actions")} == {
-            k: codec["closed_loop"][e][k] for k in ("stable", "switchings", "false_actions")
+        assert {k: row[k] for k in ("stable", "mode_commands", "false_actions")} == {
+            k: codec["closed_loop"][e][k] for k in ("stable", "mode_commands", "false_actions")
         }
     assert "over TCP: 180 frames, round trip median" in "\n".join(tcp["lines"])
 
@@ -160,7 +160,7 @@ def test_estimate_closed_loop_says_how_many_frames_the_controller_used():
     assert f"frames used {due} of {due}\n" in "\n".join(lines) + "\n"  # ideal
     # the count is of the commands sent (round 35: called switchings, 26 of them with
     # a voltage gate of 1.5 pu that let no device deliver any power)
-    assert f"mode commands {rows['ideal']['switchings']:5d}  false actions" in lines[1]
+    assert f"mode commands {rows['ideal']['mode_commands']:5d}  false actions" in lines[1]
 
 
 def test_plant_and_controller_in_two_processes_close_the_loop():
@@ -180,8 +180,8 @@ def test_plant_and_controller_in_two_processes_close_the_loop():
     args = ["estimate", "closed-loop", *fault, "--tf", "3", "--esd-pct", "10"]
     codec = json.loads(CliRunner().invoke(main, [*args, "--transport", "codec", "--json"]).stdout)
     ekf = codec["closed_loop"]["ekf"]
-    assert {k: remote[k] for k in ("stable", "switchings", "false_actions")} == {
-        k: ekf[k] for k in ("stable", "switchings", "false_actions")
+    assert {k: remote[k] for k in ("stable", "mode_commands", "false_actions")} == {
+        k: ekf[k] for k in ("stable", "mode_commands", "false_actions")
     }
     assert remote["link"]["frames"] == 180
 
