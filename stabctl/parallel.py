@@ -1005,6 +1005,7 @@ def run_sweep(
     retry_failed: bool = False,
     pool=None,
     stage: str | None = None,
+    label: str | None = None,
 ) -> SweepReport:
     """Run `jobs` (Job) not yet recorded in `out`, appending one JSON line per job.
 
@@ -1019,6 +1020,8 @@ def run_sweep(
             keys recorded as failed.
         stage: what these jobs are when a study runs several sweeps into one file (e.g.
             'bus faults'), named in the progress bar after the file's name.
+        label: the progress bar's name (default: the records file's); a study whose
+            records file is its own temporary one names the work instead.
 
     Raises:
         WrongTypeError: workers, scheduler or progress of another type (`check_runner`).
@@ -1038,7 +1041,8 @@ def run_sweep(
     with ExitStack() as held:
         with naming(out):  # the pid written in the lock file on a full disk names `out`
             held.enter_context(exclusive(out))
-        return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool, stage)
+        name = (label or out.name) + (f" ({stage})" if stage else "")
+        return _sweep_locked(jobs, out, workers, scheduler, progress, retry_failed, pool, name)
 
 
 def _to_run(jobs, done: dict, retry_failed: bool) -> list:
@@ -1080,7 +1084,7 @@ def _sweep_read_only(jobs, out: Path, retry_failed: bool) -> SweepReport:
 
 
 def _sweep_locked(
-    jobs, out: Path, workers, scheduler, progress, retry_failed, pool, stage
+    jobs, out: Path, workers, scheduler, progress, retry_failed, pool, name: str
 ) -> SweepReport:
     """`run_sweep`'s work once it holds `out`'s lock: repair, read, run, append."""
     check = _schema(jobs)
@@ -1100,9 +1104,7 @@ def _sweep_locked(
         with (
             _records(todo, scheduler, workers, pool) as results,
             _appender(out) as f,
-            progress_bar(
-                len(todo), out.name + (f" ({stage})" if stage else ""), show=progress is True
-            ) as bar,
+            progress_bar(len(todo), name, show=progress is True) as bar,
         ):
             for rec in results:
                 line = _line(rec)

@@ -2315,3 +2315,12 @@ def test_a_bar_in_a_log_file_is_not_redrawn_at_every_job(tmp_path, capsys):
     run_sweep(jobs, tmp_path / "r.jsonl", workers=1, progress=True)
     err = capsys.readouterr().err
     assert err.count("\r") <= 3 and "40/40" in err and "failed=0" in err
+
+
+def test_a_sweep_s_bar_can_name_its_work_instead_of_its_records_file(tmp_path, capsys):
+    """Round 35: `estimate cct`'s bar read "cct.jsonl: 77%", the name of a temporary file
+    the user never sees; a sweep's bar takes the name its caller gives (`label`)."""
+    jobs = [Job(f"sq{x}", square, {"x": x}) for x in range(3)]
+    run_sweep(jobs, tmp_path / "cct.jsonl", workers=1, progress=True, label="estimate cct")
+    err = capsys.readouterr().err
+    assert "estimate cct: 100%" in err and "cct.jsonl" not in err

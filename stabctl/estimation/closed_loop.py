@@ -848,6 +848,7 @@ def cct_study(
     model=None,
     runner=None,
     esd_model: str = "ideal",
+    label: str | None = None,
 ) -> dict:
     """CCTs per rating and estimator over noise seeds, each by the cold bisection of
     `cct_job`, in parallel with `stabctl.parallel.run_sweep` (records appended to `out`,
@@ -882,6 +883,8 @@ def cct_study(
     esd_model : {"ideal", "wecc"}
         The storage devices' model (`LoopOptions.esd_model`); "wecc" jobs carry it in
         their inputs and a "/wecc" key suffix.
+    label : str or None, optional
+        The progress bar's name (`run_sweep`'s); default the records file's.
 
     Returns
     -------
@@ -971,6 +974,7 @@ def cct_study(
                 workers=runner.workers,
                 progress=runner.progress,
                 pool=pool,
+                label=label,
             )
             values = {
                 pe: [

@@ -405,4 +405,5 @@ def estimator_ccts(
             pmu=pmu,
             model=model,
             esd_model=esd_model,
+            label="estimate cct",  # its records file is a temporary one the user never sees
         )[esd_pct]
