@@ -1,4 +1,5 @@
-"""An exclusive lock on an output that a long command appends to or replaces.
+"""The files a run holds: an exclusive lock on an output that a long command appends to
+or replaces, and the run's temporary files and directories.
 
 A sweep's JSON-lines records, a screening's, ``stabctl paper``'s work directory: two
 processes writing one of them at once lose records (one repairs a damaged line by renaming a
@@ -8,6 +9,20 @@ output for as long as the output is written; a second writer is refused at once,
 holder's process id, instead of waiting.  The lock goes with the process (a killed writer
 holds nothing; its lock file, left behind, is taken over by the next writer); the lock
 file is removed when the writer ends.
+
+Temporary files and directories (`temp_file`, `temp_dir`): a run killed by SIGKILL
+(``kill -9``, the out-of-memory killer) cannot remove them: an output's hidden temporary file beside
+it (`stabctl.parallel.atomic_write`), ``stabctl paper``'s staging directory in OUT_DIR, a
+sweep's directory of running marks in the temporary directory.  Each is made here and holds
+a lock (``flock``) on itself for as long as its maker holds it; the lock goes with the
+process however it ends.  Whoever next makes one of the same kind in the same directory (the
+next write of the same output, the next sweep) removes those that are its user's, whose lock
+is free (their maker is gone) and that are older than `STALE_AFTER_S` (a new one is unlocked
+for the instant between its making and its lock).  They hold nothing of the user's: a
+half-written output is no output.  A file system whose locks cannot be taken (some NFS
+mounts) keeps them rather than risk removing a live process's; one whose locks are each
+machine's own (NFS with ``local_lock=flock``) must not be shared by two machines writing the
+same output at once.
 """
 
 from __future__ import annotations
@@ -15,6 +30,10 @@ from __future__ import annotations
 import fcntl
 import hashlib
 import os
+import re
+import shutil
+import stat
+import tempfile
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -22,7 +41,16 @@ from pathlib import Path
 
 from stabctl.errors import InputError
 
-__all__ = ["beside", "exclusive", "lock_path"]
+__all__ = [
+    "STALE_AFTER_S",
+    "Held",
+    "beside",
+    "exclusive",
+    "lock_path",
+    "remove_stale",
+    "temp_dir",
+    "temp_file",
+]
 
 #: a holder writes its pid just after it takes the lock: a refused writer reads it this
 #: many times, 1 ms apart, before calling the holder unknown
@@ -160,3 +188,189 @@ def _locked(lock: Path, path) -> int:
         if same:
             return fd
         os.close(fd)  # its holder removed it meanwhile: lock the file now at the path
+
+
+#: a temporary file or directory younger than this (s, by its modification time) is never
+#: taken for a killed run's, even unlocked
+STALE_AFTER_S = 2.0
+
+#: the random part ``tempfile.mkstemp`` and ``mkdtemp`` put between prefix and suffix
+_RANDOM_PART = "[a-z0-9_]{8}"
+
+
+class Held:
+    """A temporary file or directory of this process, locked while it is held.
+
+    Parameters
+    ----------
+    path : str
+        The file or directory.
+    fd : int
+        An open descriptor of it holding its lock; `release` closes it.
+    """
+
+    def __init__(self, path: str, fd: int) -> None:
+        self.path = path
+        self._fd: int | None = fd
+
+    def release(self) -> None:
+        """Close the descriptor holding the lock (the file or directory itself stays)."""
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+    def remove(self) -> None:
+        """Remove the directory (its contents with it) or file if still there, then release
+        its lock."""
+        try:
+            if os.path.isdir(self.path) and not os.path.islink(self.path):
+                shutil.rmtree(self.path, ignore_errors=True)
+            else:
+                os.unlink(self.path)
+        except FileNotFoundError:
+            pass
+        finally:
+            self.release()
+
+    def __enter__(self) -> Held:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.remove()
+
+
+def _lock(fd: int) -> bool:
+    """Take `fd`'s exclusive lock without waiting: False when another holds it or the
+    file system takes no lock."""
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return False
+    return True
+
+
+def temp_file(directory: str | Path, prefix: str, suffix: str = "") -> tuple[int, Held]:
+    """A new temporary file ``<prefix><8 random characters><suffix>`` in `directory`
+    (``tempfile.mkstemp``, mode 0600), locked, after removing killed runs' files of the
+    same name pattern there (`remove_stale`).
+
+    Parameters
+    ----------
+    directory : str or Path
+        Where (it must exist).
+    prefix, suffix : str
+        The name's start and end.
+
+    Returns
+    -------
+    fd : int
+        The file open for reading and writing, for the caller to close.
+    held : Held
+        The file's path and lock, released by ``held.release()`` (or removed with it by
+        ``held.remove()``); the lock outlives `fd`.
+
+    Raises
+    ------
+    OSError
+        The file cannot be made.
+    """
+    remove_stale(directory, prefix, suffix)
+    fd, path = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=suffix)
+    lock = os.dup(fd)
+    _lock(lock)
+    return fd, Held(path, lock)
+
+
+def temp_dir(prefix: str, directory: str | Path | None = None) -> Held:
+    """A new temporary directory ``<prefix><8 random characters>`` in `directory` (the
+    temporary directory by default; ``tempfile.mkdtemp``, mode 0700), locked, after
+    removing killed runs' directories of the same name pattern there (`remove_stale`).
+    Used as a context manager it is removed, contents and all, when the block ends.
+
+    Parameters
+    ----------
+    prefix : str
+        The name's start.
+    directory : str or Path or None, optional
+        Where; None: ``tempfile.gettempdir()``.
+
+    Returns
+    -------
+    Held
+        Its path and lock (``held.remove()`` removes it).
+
+    Raises
+    ------
+    OSError
+        The directory cannot be made.
+    """
+    where = str(directory) if directory is not None else tempfile.gettempdir()
+    remove_stale(where, prefix)
+    path = tempfile.mkdtemp(prefix=prefix, dir=where)
+    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+    _lock(fd)
+    return Held(path, fd)
+
+
+def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[str]:
+    """Remove the temporary files and directories a killed run left in `directory`:
+    those named ``<prefix><8 random characters><suffix>`` (as `temp_file` and `temp_dir`
+    name them), this user's, not symbolic links, older than `STALE_AFTER_S`, and whose
+    lock is free.  Nothing is raised: one that cannot be read, locked or removed stays.
+
+    Parameters
+    ----------
+    directory : str or Path
+        Where to look (not below it).
+    prefix, suffix : str
+        The names' start and end.
+
+    Returns
+    -------
+    list of str
+        The paths removed.
+    """
+    pattern = re.compile(re.escape(prefix) + _RANDOM_PART + re.escape(suffix) + r"\Z")
+    try:
+        names = [n for n in os.listdir(directory) if pattern.match(n)]
+    except OSError:
+        return []
+    removed = []
+    for name in names:
+        path = os.path.join(directory, name)
+        if _remove_if_stale(path):
+            removed.append(path)
+    return removed
+
+
+def _remove_if_stale(path: str) -> bool:
+    """Remove `path` if it is a killed run's (`remove_stale`); True if removed."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return False
+    is_dir = stat.S_ISDIR(st.st_mode)
+    if (
+        not (is_dir or stat.S_ISREG(st.st_mode))
+        or st.st_uid != os.getuid()
+        or time.time() - st.st_mtime < STALE_AFTER_S
+    ):
+        return False
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | (os.O_DIRECTORY if is_dir else 0))
+    except OSError:
+        return False
+    try:
+        now = os.fstat(fd)
+        if (now.st_dev, now.st_ino) != (st.st_dev, st.st_ino) or not _lock(fd):
+            return False
+        if is_dir:
+            shutil.rmtree(path, ignore_errors=True)
+            return not os.path.lexists(path)
+        try:
+            os.unlink(path)
+        except OSError:
+            return False
+        return True
+    finally:
+        os.close(fd)

@@ -84,7 +84,7 @@ from stabctl.errors import (
     require_flag,
 )
 from stabctl.jsontext import input_file, parse_json
-from stabctl.locking import beside, exclusive
+from stabctl.locking import beside, exclusive, temp_dir, temp_file
 from stabctl.progress import bar as progress_bar
 
 _log = logging.getLogger(__name__)
@@ -491,8 +491,9 @@ def atomic_write(
     mode : {"w", "wb", None}
         How the temporary file is opened for `write`.
     later : list or None, optional
-        Where to leave the rename, as (temporary file, path) (`atomic_writes`: files
-        renamed together once all are written); None: renamed at once.
+        Where to leave the rename, as (temporary file, path), the temporary file a
+        `stabctl.scratch.Held` to release once renamed (`atomic_writes`: files renamed
+        together once all are written); None: renamed at once.
 
     Returns
     -------
@@ -518,9 +519,8 @@ def atomic_write(
                     write(f)
             return given
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(
-            dir=path.parent, prefix=beside(path.name, "."), suffix=path.suffix
-        )
+        fd, held = temp_file(path.parent, beside(path.name, "."), path.suffix)
+        tmp = held.path
         try:
             with naming(given, tmp):
                 if mode is None:
@@ -537,10 +537,12 @@ def atomic_write(
                 if later is None:
                     os.replace(tmp, path)
                 else:
-                    later.append((tmp, path))
+                    later.append((held, path))
         except BaseException:
-            Path(tmp).unlink(missing_ok=True)
+            held.remove()
             raise
+        if later is None:
+            held.release()
     return given
 
 
@@ -565,12 +567,14 @@ def atomic_writes(outputs) -> None:
         for path, write in outputs:
             atomic_write(path, write, mode=None, later=renames)
     except BaseException:
-        for tmp, _ in renames:
-            Path(tmp).unlink(missing_ok=True)
+        for held, _ in renames:
+            held.remove()
         raise
     with signals_held():  # all renamed, or none
-        for tmp, path in renames:
-            os.replace(tmp, path)
+        for held, path in renames:
+            os.replace(held.path, path)
+    for held, _ in renames:
+        held.release()
 
 
 #: the signals that interrupt a command (Ctrl-C, a batch system's stop, a closed terminal)
@@ -1547,7 +1551,8 @@ def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, 
             yield run_job(j.func, j.key, j.inputs)
         return
     left, restarts = list(jobs), 0
-    with tempfile.TemporaryDirectory(prefix="stabctl-running-") as marks:
+    with temp_dir("stabctl-running-") as held:
+        marks = held.path
         while left:
             given = pool is not None and not getattr(pool, "_broken", False)
             with nullcontext(pool) if given else pooled(n) as p:
@@ -1847,7 +1852,8 @@ def _connect(scheduler: str, workers: int, timeout: float):
         # scratch space of its scheduler and workers (``dask-scratch-space``, left in the
         # temporary directory by Dask) is a directory of its own, removed with the cluster
         start_resource_tracker()
-        scratch = tempfile.mkdtemp(prefix="stabctl-dask-")
+        held = temp_dir("stabctl-dask-")
+        scratch = held.path
         try:
             settings = {
                 "distributed.scheduler.worker-saturation": 1.0,
@@ -1866,9 +1872,9 @@ def _connect(scheduler: str, workers: int, timeout: float):
                     scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 )
         except BaseException:
-            shutil.rmtree(scratch, ignore_errors=True)
+            held.remove()
             raise
-        cluster.stabctl_scratch = scratch  # type: ignore[attr-defined] # removed by `_close`
+        cluster.stabctl_scratch = held  # type: ignore[attr-defined] # removed by `_close`
         try:
             return _started_client(cluster)
         except BaseException:
@@ -2029,7 +2035,7 @@ def _close_cluster(cluster) -> None:
         finally:
             scratch = getattr(cluster, "stabctl_scratch", None)
             if scratch is not None:
-                shutil.rmtree(scratch, ignore_errors=True)
+                scratch.remove()
 
 
 @contextmanager

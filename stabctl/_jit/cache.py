@@ -36,15 +36,15 @@ import functools
 import hashlib
 import os
 import re
-import shutil
 import stat
-import tempfile
 import warnings
 from pathlib import Path
 from typing import ClassVar
 
 import numba
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile
+
+from stabctl.locking import temp_dir
 
 _PKG = Path(__file__).resolve().parents[1]
 
@@ -520,9 +520,9 @@ def private_cache_dir() -> tuple[Path, str]:
         os.chmod(path, 0o700)
         return path, ""
     except OSError as exc:
-        run = Path(tempfile.mkdtemp(prefix="stabctl-numba."))
-        atexit.register(shutil.rmtree, run, ignore_errors=True)
-        return run, (
+        held = temp_dir("stabctl-numba.")
+        atexit.register(held.remove)
+        return Path(held.path), (
             f" ({path} cannot be made: {exc.strerror}; for this run only, every run "
             "compiling them again: set NUMBA_CACHE_DIR to a directory of your own)"
         )

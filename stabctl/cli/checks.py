@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import errno
 import os
-import tempfile
 from pathlib import Path
 
 import click
 
 from stabctl.errors import InputError
+from stabctl.locking import temp_file
 
 
 def _check_name(text: str, option: str) -> None:
@@ -93,9 +93,9 @@ def check_writable(path, option: str, directory: bool = False, records: bool = F
             "first; it is not created for you)"
         )
     try:
-        fd, tmp = tempfile.mkstemp(dir=where, prefix=".stabctl-write-test.")
+        fd, held = temp_file(where, ".stabctl-write-test.")
         os.close(fd)
-        os.unlink(tmp)
+        held.remove()
     except OSError as exc:
         raise InputError(
             f"{option} {path}: cannot write in {where} ({exc.strerror or exc})"

@@ -7,8 +7,6 @@ written to temporary files first and renamed only when every one is complete.
 
 from __future__ import annotations
 
-import os
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,9 +17,8 @@ import numpy as np
 from stabctl.case import Case, PssTable
 from stabctl.dynamics.coi import machine_inertia
 from stabctl.errors import InputError, WrongTypeError
-from stabctl.locking import beside
 from stabctl.outdir import output_directory
-from stabctl.parallel import naming
+from stabctl.parallel import atomic_writes
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
     COMMON_SHARE,
@@ -134,32 +131,20 @@ def write_report(
     names = {k: f"{stem}_{k}.png" for k in ("eigs", "shapes", "pf")}
     title = f"{st.case.name}" + (" without PSS" if st.no_pss else "")
     modes = figure_modes(st.ma)
-    tmp = {}
     with output_directory(out_dir) as out:
-        try:
-            for key, draw in (
-                ("eigs", lambda p: eigenvalue_plot(st.ma, p, title)),
-                ("shapes", lambda p: mode_shape_compass(st.ma, modes, p)),
-                ("pf", lambda p: participation_bars(st.ma, modes, p)),
-            ):
-                tmp[names[key]] = _temp(out, names[key])
-                if modes or key == "eigs":
-                    with naming(out / names[key], tmp[names[key]]):  # EFBIG names no file
-                        draw(tmp[names[key]])
-            md = out / f"{stem}.md"
-            tmp[md.name] = _temp(out, md.name)
-            with naming(md, tmp[md.name]):
-                Path(tmp[md.name]).write_text(report_markdown(st, names, bool(modes), command))
-            for final, t in tmp.items():
-                if Path(t).stat().st_size:
-                    os.chmod(t, 0o644)
-                    with naming(out / final, t):
-                        os.replace(t, out / final)
-                else:
-                    Path(t).unlink()
-        finally:
-            for t in tmp.values():
-                Path(t).unlink(missing_ok=True)
+        md = out / f"{stem}.md"
+        text = report_markdown(st, names, bool(modes), command)
+        figures = [
+            (out / names["eigs"], lambda p: eigenvalue_plot(st.ma, p, title)),
+            (out / names["shapes"], lambda p: mode_shape_compass(st.ma, modes, p)),
+            (out / names["pf"], lambda p: participation_bars(st.ma, modes, p)),
+        ]
+        atomic_writes(
+            [
+                *(figures if modes else figures[:1]),
+                (md, lambda p: Path(p).write_text(text)),
+            ]
+        )
     return md
 
 
@@ -175,12 +160,6 @@ def _file_stem(stem) -> str:
             "empty, not starting with '.': the report is STEM.md in the output folder)"
         )
     return stem
-
-
-def _temp(out: Path, name: str) -> str:
-    fd, path = tempfile.mkstemp(dir=out, prefix=beside(name, "."), suffix=Path(name).suffix)
-    os.close(fd)
-    return path
 
 
 def _nothing_against(kind: str) -> str:

@@ -11,12 +11,12 @@
 
 from __future__ import annotations
 
-import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from stabctl.errors import InputError, require_instance
+from stabctl.locking import temp_dir
 
 if TYPE_CHECKING:
     from stabctl.estimation.ambient import AmbientLoad
@@ -394,7 +394,8 @@ def estimator_ccts(
     pmu = PMUSettings(
         rate=settings.rate, latency_s=settings.latency_s, window_cycles=settings.window_cycles
     )
-    with tempfile.TemporaryDirectory() as tmp:
+    with temp_dir("stabctl-estimate-") as held:
+        tmp = held.path
         return cl.cct_study(
             case_name,
             LineFault(bus, far_bus),

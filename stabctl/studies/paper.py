@@ -12,7 +12,6 @@ import logging
 import os
 import platform
 import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from datetime import UTC, datetime
@@ -22,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from stabctl.errors import InputError
-from stabctl.locking import exclusive
+from stabctl.locking import exclusive, temp_dir
 from stabctl.outdir import output_directory
 from stabctl.parallel import (
     naming,
@@ -525,8 +524,8 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
         log["progress"].append([round(time.perf_counter() - t_start, 1), msg])
         (progress or logger.info)(msg)
 
-    with tempfile.TemporaryDirectory(dir=out, prefix=".paper-") as tmp_name:
-        tmp = Path(tmp_name)
+    with temp_dir(".paper-", out) as held:
+        tmp = Path(held.path)
         parts = [
             "# stabctl: reproduction of the paper's results",
             "",
