@@ -46,6 +46,7 @@ __all__ = [
     "Held",
     "beside",
     "exclusive",
+    "is_held",
     "lock_path",
     "remove_stale",
     "temp_dir",
@@ -198,6 +199,27 @@ STALE_AFTER_S = 2.0
 _RANDOM_PART = "[a-z0-9_]{8}"
 
 
+#: the real paths of the temporary files and directories this process holds (`Held`)
+_HELD: set[str] = set()
+
+
+def is_held(path: str | os.PathLike) -> bool:
+    """Whether `path` is a temporary file or directory this process holds (`temp_file`,
+    `temp_dir`): an atomic write into one writes it in place, as it is already the
+    temporary file of an atomic write (``simulate --out``'s writer, given the temporary
+    file of `stabctl.parallel.atomic_writes`, left one of its own beside it).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    bool
+    """
+    return os.path.realpath(path) in _HELD
+
+
 class Held:
     """A temporary file or directory of this process, locked while it is held.
 
@@ -212,12 +234,14 @@ class Held:
     def __init__(self, path: str, fd: int) -> None:
         self.path = path
         self._fd: int | None = fd
+        _HELD.add(os.path.realpath(path))
 
     def release(self) -> None:
         """Close the descriptor holding the lock (the file or directory itself stays)."""
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
+            _HELD.discard(os.path.realpath(self.path))
 
     def remove(self) -> None:
         """Remove the directory (its contents with it) or file if still there, then release

@@ -84,7 +84,7 @@ from stabctl.errors import (
     require_flag,
 )
 from stabctl.jsontext import input_file, parse_json
-from stabctl.locking import beside, exclusive, temp_dir, temp_file
+from stabctl.locking import beside, exclusive, is_held, temp_dir, temp_file
 from stabctl.progress import bar as progress_bar
 
 _log = logging.getLogger(__name__)
@@ -479,7 +479,8 @@ def atomic_write(
     A symbolic link stays: the file it points to is the one replaced; a link that leads
     nowhere (broken, or a loop) is an error, and no directory it points to is created.
     A path that is neither a file nor a directory (a device or pipe: ``/dev/stdout``, a
-    FIFO) is written in place, as no file can replace it.
+    FIFO) is written in place, as no file can replace it; so is a temporary file this
+    process holds (`stabctl.locking.is_held`: the writer of `atomic_writes` given its own).
 
     Parameters
     ----------
@@ -511,7 +512,7 @@ def atomic_write(
     given = Path(path)
     with naming(given):
         path = Path(os.path.realpath(given, strict=True)) if given.is_symlink() else given
-        if path.exists() and not (path.is_file() or path.is_dir()):
+        if is_held(path) or (path.exists() and not (path.is_file() or path.is_dir())):
             if mode is None:
                 write(str(path))
             else:

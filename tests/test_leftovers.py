@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from stabctl import locking as scratch
-from stabctl.parallel import atomic_write
+from stabctl.parallel import atomic_write, atomic_writes
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -116,3 +116,22 @@ def test_a_failed_write_leaves_no_temporary_file(tmp_path):
     with pytest.raises(OSError):
         atomic_write(tmp_path / "out.csv", fail)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_writer_given_atomic_writes_temporary_file_writes_it_in_place(tmp_path):
+    """simulate --out's CSV writer writes through atomic_write itself: given the temporary
+    file of atomic_writes, it made a second one beside it, which a SIGKILL left behind and
+    no later run of the command would remove."""
+    seen = []
+
+    def write(tmp):
+        def inner(f):
+            f.write("t\n")
+            seen.extend(sorted(p.name for p in tmp_path.iterdir()))
+
+        atomic_write(tmp, inner)
+
+    atomic_writes([(tmp_path / "out.csv", write)])
+    assert len(seen) == 1 and seen[0].startswith(".out.csv.")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]
+    assert (tmp_path / "out.csv").read_text() == "t\n"
