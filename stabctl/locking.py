@@ -11,22 +11,23 @@ holds nothing; its lock file, left behind, is taken over by the next writer); th
 file is removed when the writer ends.
 
 Temporary files and directories (`temp_file`, `temp_dir`): a run killed by SIGKILL
-(``kill -9``, the out-of-memory killer) cannot remove them: an output's hidden temporary file beside
-it (`stabctl.parallel.atomic_write`), ``stabctl paper``'s staging directory in OUT_DIR, a
-sweep's directory of running marks in the temporary directory.  Each is made here and holds
-a lock (``flock``) on itself for as long as its maker holds it; the lock goes with the
-process however it ends.  Whoever next makes one of the same kind in the same directory (the
-next write of the same output, the next sweep) removes those that are its user's, whose lock
-is free (their maker is gone) and that are older than `STALE_AFTER_S` (a new one is unlocked
-for the instant between its making and its lock).  They hold nothing of the user's: a
-half-written output is no output.  A file system whose locks cannot be taken (some NFS
-mounts) keeps them rather than risk removing a live process's; one whose locks are each
-machine's own (NFS with ``local_lock=flock``) must not be shared by two machines writing the
-same output at once.
+(``kill -9``, the out-of-memory killer) cannot remove them: an output's hidden temporary
+file beside it (`stabctl.parallel.atomic_write`), ``stabctl paper``'s staging directory in
+OUT_DIR, a sweep's directory of running marks in the temporary directory.  Each is made here
+under a first name (ending ``.new``), locked (``flock``), and only then given its name, and
+holds its lock for as long as its maker holds it; the lock goes with the process however it
+ends.  Whoever next makes one of the same kind in the same directory (the next write of the
+same output, the next sweep) removes those that are its user's and whose lock is free: their
+maker is gone (one still under its first name only once older than `STALE_AFTER_S`, as its
+maker may be about to lock it).  They hold nothing of the user's: a half-written output is
+no output.  A file system whose locks cannot be taken (some NFS mounts) keeps them rather
+than risk removing a live process's; one whose locks are each machine's own (NFS with
+``local_lock=flock``) must not be shared by two machines writing the same output at once.
 """
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import hashlib
 import os
@@ -191,12 +192,17 @@ def _locked(lock: Path, path) -> int:
         os.close(fd)  # its holder removed it meanwhile: lock the file now at the path
 
 
-#: a temporary file or directory younger than this (s, by its modification time) is never
-#: taken for a killed run's, even unlocked
-STALE_AFTER_S = 2.0
+#: a temporary file or directory still bearing its first name (ending `_UNLOCKED`) younger
+#: than this (s, by its modification time) is never taken for a killed run's: its maker may
+#: be about to lock it
+STALE_AFTER_S = 60.0
 
 #: the random part ``tempfile.mkstemp`` and ``mkdtemp`` put between prefix and suffix
 _RANDOM_PART = "[a-z0-9_]{8}"
+#: the end of a temporary file's or directory's name until its maker has locked it
+_UNLOCKED = ".new"
+#: names tried for a temporary file or directory (one taken between making and naming)
+_NAMES = 100
 
 
 #: the real paths of the temporary files and directories this process holds (`Held`)
@@ -299,10 +305,15 @@ def temp_file(directory: str | Path, prefix: str, suffix: str = "") -> tuple[int
         The file cannot be made.
     """
     remove_stale(directory, prefix, suffix)
-    fd, path = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=suffix)
-    lock = os.dup(fd)
-    _lock(lock)
-    return fd, Held(path, lock)
+    for _ in range(_NAMES):
+        fd, made = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=suffix + _UNLOCKED)
+        lock = os.dup(fd)
+        path = _named(made, lock)
+        if path is not None:
+            return fd, Held(path, lock)
+        os.close(fd)
+        os.close(lock)
+    raise FileExistsError(errno.EEXIST, "no free temporary file name", str(directory))
 
 
 def temp_dir(prefix: str, directory: str | Path | None = None) -> Held:
@@ -330,17 +341,38 @@ def temp_dir(prefix: str, directory: str | Path | None = None) -> Held:
     """
     where = str(directory) if directory is not None else tempfile.gettempdir()
     remove_stale(where, prefix)
-    path = tempfile.mkdtemp(prefix=prefix, dir=where)
-    fd = os.open(path, os.O_RDONLY | os.O_DIRECTORY)
+    for _ in range(_NAMES):
+        made = tempfile.mkdtemp(prefix=prefix, suffix=_UNLOCKED, dir=where)
+        fd = os.open(made, os.O_RDONLY | os.O_DIRECTORY)
+        path = _named(made, fd)
+        if path is not None:
+            return Held(path, fd)
+        os.close(fd)
+    raise FileExistsError(errno.EEXIST, "no free temporary directory name", where)
+
+
+def _named(made: str, fd: int) -> str | None:
+    """Lock the new temporary file or directory `made` (through its descriptor `fd`) and
+    only then give it its name, `made` without `_UNLOCKED`, so that whatever bears such a
+    name unlocked is a killed run's; None (`made` removed) if that name is taken."""
     _lock(fd)
-    return Held(path, fd)
+    path = made[: -len(_UNLOCKED)]
+    if not os.path.lexists(path):
+        os.rename(made, path)
+        return path
+    if os.path.isdir(made):
+        os.rmdir(made)
+    else:
+        os.unlink(made)
+    return None
 
 
 def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[str]:
     """Remove the temporary files and directories a killed run left in `directory`:
     those named ``<prefix><8 random characters><suffix>`` (as `temp_file` and `temp_dir`
-    name them), this user's, not symbolic links, older than `STALE_AFTER_S`, and whose
-    lock is free.  Nothing is raised: one that cannot be read, locked or removed stays.
+    name them once locked), this user's, not symbolic links, whose lock is free; those
+    still named as first made (ending ``.new``) only once older than `STALE_AFTER_S`.
+    Nothing is raised: one that cannot be read, locked or removed stays.
 
     Parameters
     ----------
@@ -354,7 +386,9 @@ def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[s
     list of str
         The paths removed.
     """
-    pattern = re.compile(re.escape(prefix) + _RANDOM_PART + re.escape(suffix) + r"\Z")
+    pattern = re.compile(
+        re.escape(prefix) + _RANDOM_PART + re.escape(suffix) + f"({re.escape(_UNLOCKED)})?" + r"\Z"
+    )
     try:
         names = [n for n in os.listdir(directory) if pattern.match(n)]
     except OSError:
@@ -377,7 +411,7 @@ def _remove_if_stale(path: str) -> bool:
     if (
         not (is_dir or stat.S_ISREG(st.st_mode))
         or st.st_uid != os.getuid()
-        or time.time() - st.st_mtime < STALE_AFTER_S
+        or (path.endswith(_UNLOCKED) and time.time() - st.st_mtime < STALE_AFTER_S)
     ):
         return False
     try:

@@ -18,8 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _killed_maker(tmp_path, code: str) -> str:
-    """The path a child process made with `code` (it prints it) before it was SIGKILLed,
-    made older than STALE_AFTER_S."""
+    """The path a child process made with `code` (it prints it) before it was SIGKILLed."""
     child = subprocess.Popen(
         [sys.executable, "-c", textwrap.dedent(code)],
         stdout=subprocess.PIPE,
@@ -30,8 +29,6 @@ def _killed_maker(tmp_path, code: str) -> str:
     path = os.path.join(tmp_path, child.stdout.readline().strip())
     child.send_signal(signal.SIGKILL)
     child.wait()
-    old = time.time() - 10 * scratch.STALE_AFTER_S
-    os.utime(path, (old, old))
     return path
 
 
@@ -63,7 +60,6 @@ def test_an_output_s_temporary_file_left_by_a_killed_write_goes_with_the_next_wr
 def test_a_killed_run_s_directory_goes_with_the_next_of_its_kind(tmp_path):
     left = _killed_maker(tmp_path, MAKE_DIR)
     (Path(left) / "mark").write_text("x")
-    os.utime(left, (0, 0))  # the mark made it new again
     other = tmp_path / "stabctl-estimate-abcdefgh"  # another kind: not removed
     other.mkdir()
     os.utime(other, (0, 0))
@@ -87,9 +83,11 @@ def test_a_live_run_s_temporary_files_stay_however_old(tmp_path):
     assert scratch.remove_stale(tmp_path, "stabctl-running-") == [live.path]
 
 
-def test_young_links_and_other_names_stay(tmp_path):
-    young = tmp_path / ".paper-abcd1234"
-    young.mkdir()  # unlocked, but made this instant: maybe a live run's not yet locked
+def test_unnamed_yet_young_links_and_other_names_stay(tmp_path):
+    killed = tmp_path / ".paper-abcd1234"  # a killed run's, however young: unlocked
+    killed.mkdir()
+    young = tmp_path / ".paper-efgh5678.new"  # maybe a live run's, about to be locked
+    young.mkdir()
     target = tmp_path / "target"
     target.mkdir()
     link = tmp_path / ".paper-linkxxxx"
@@ -101,8 +99,9 @@ def test_young_links_and_other_names_stay(tmp_path):
     for p in (work, longer):
         os.utime(p, (0, 0))
     os.utime(link, (0, 0), follow_symlinks=False)
-    assert scratch.remove_stale(tmp_path, ".paper-") == []
-    os.utime(young, (0, 0))
+    assert scratch.remove_stale(tmp_path, ".paper-") == [str(killed)]
+    old = time.time() - scratch.STALE_AFTER_S - 1
+    os.utime(young, (old, old))
     assert scratch.remove_stale(tmp_path, ".paper-") == [str(young)]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
         [link.name, target.name, work.name, longer.name]
