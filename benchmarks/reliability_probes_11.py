@@ -21,11 +21,10 @@ into OUT_DIR and its last record), paper's interrupt message (records said kept 
 were), the bar's frames in a log file and eig's silence short; they are fixed (an interrupt
 during paper's final moves is delivered after them; "nothing is kept"; a bar on a stderr
 that is no terminal redrawn every 30 s; "eig: still linearising ..." every 8 s) and the
-probes are now their regression checks.  Two findings are open by the developers' choice
-and show SHORT: sigkill.leftovers (what SIGKILL leaves -- simulate's hidden temporary
-output, paper's staging directory, a sweep's marks in TMPDIR -- is not cleaned by the next
-run) and progress.estimate_cct.label (estimate cct's bar is named after its temporary
-records file).
+probes are now their regression checks.  What SIGKILL leaves (simulate's hidden temporary
+output, paper's staging directory, a sweep's marks in TMPDIR) was left by the next run
+until 2026-11-30 (sigkill.leftovers); estimate cct's bar was named after its temporary
+records file (progress.estimate_cct.label).  Both are fixed.
 
     python benchmarks/reliability_probes_11.py [-k SUBSTRING] [ID ...]
 
@@ -756,8 +755,7 @@ def interrupt_dask_local():
 @probe("sigkill.leftovers")
 def sigkill_leftovers():
     """SIGKILL (the OOM killer, kill -9) cannot be handled; what it leaves should be cleaned
-    by the next run of the same command, which owns the output (its lock).  Open by the
-    developers' choice: SHORT is expected."""
+    by the next run of the same command, which owns the output (its lock)."""
     notes = []
     # simulate --out killed while writing: hidden temporary files beside the output
     cwd = W("k9sim")
