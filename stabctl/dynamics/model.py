@@ -1193,8 +1193,8 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
         it += more
     matvec(Y11, psi, cur)
     matvec(Y12, V_nc, I_kept)
-    for m in range(nm):
-        cur[m] += I_kept[m]
+    for m in range(nm):  # a tripped machine (Z_mac 0, its node grounded) carries none
+        cur[m] = cur[m] + I_kept[m] if Z_mac[m] != 0 else 0.0
     z = np.concatenate((psi, V_nc))
     if want_vbus and V_bus.size > 0:  # R: every bus's rows, or those a run records
         matvec(R, z, V_bus)
@@ -1273,7 +1273,34 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
         mot.derivatives(p.MO, xmo, k, V_nc[int(p.MO[k, mot.Q.POS])], on[k], dxmo)
     for k in range(nv):
         svc.derivatives(p.SVP, xsv, k, abs(V_nc[int(p.SVP[k, svc.V.POS])]), dxsv)
+    _freeze_tripped(p, EP, GP, Z_mac, dxm, dxe, dxp, dxg, dxt)
     return it
+
+
+@kernel
+def _freeze_tripped(p, EP, GP, Z_mac, dxm, dxe, dxp, dxg, dxt):
+    """Hold the states of each tripped machine (Z_mac 0) and of its controls (exciter,
+    PSS, governor, shaft): out of service, as PSS/E's and ANDES's models of a machine whose
+    status is off, so that its recorded speed and angle stay where the trip left them and
+    no phantom power drives them (its node grounded, the network solution gave it a
+    current |psi|, an electrical power |psi|^2: Kundur's G4 tripped at 1 s read 1.15-1.48
+    pu and ran away).  An exciter integrated in sub-intervals (`stabctl.dynamics.subinterval`)
+    runs on, its output feeding nothing."""
+    for m in range(p.n_mac):
+        if Z_mac[m] == 0:
+            dxm[:, m] = 0.0
+    for i in range(p.n_exc):
+        if Z_mac[int(EP[i, exc.E.MAC])] == 0:
+            dxe[:, i] = 0.0
+    for k in range(p.n_pss):
+        if Z_mac[int(p.SP[k, pss_.S.MAC])] == 0:
+            dxp[:, k] = 0.0
+    for k in range(p.n_tg):
+        if Z_mac[int(GP[k, gov.G.MAC])] == 0:
+            dxg[:, k] = 0.0
+    for k in range(p.n_shaft):
+        if Z_mac[int(p.TP[k, shaft.T.MAC])] == 0:
+            dxt[:, k] = 0.0
 
 
 #: the packed columns the VREF / PREF steps move, as numpy integers (a Python literal

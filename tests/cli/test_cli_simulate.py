@@ -450,9 +450,9 @@ def test_a_separation_limit_below_the_initial_angle_spread_is_refused(tmp_path):
 
 
 def test_a_tripped_machine_is_named_and_not_a_separation():
-    """`--trip-gen 4 1`: G4 out of service from 1 s.  Its rotor runs away, but the machines
-    left in service stay within pi of their own COI (checked here from the angles): the
-    run is stable, no machine separates, and --json and the text name G4 as tripped."""
+    """`--trip-gen 4 1`: G4 out of service from 1 s.  The machines left in service stay
+    within pi of their own COI (checked here from the angles): the run is stable, no
+    machine separates, and --json and the text name G4 as tripped."""
     import numpy as np
 
     from stabctl.dynamics.driver import Simulator
@@ -471,6 +471,26 @@ def test_a_tripped_machine_is_named_and_not_a_separation():
     text = run(*args).stdout
     assert "  at t = 1 s machine(s) G4 (bus 12) tripped: out of the loss-of-synchronism" in text
     assert "stable: largest angle from the COI 0.9477 rad" in text and "separate" not in text
+
+
+def test_a_tripped_machine_delivers_nothing_and_its_states_are_held():
+    """A machine out of service carries no current: its recorded P and Q are 0 from the
+    trip and its speed and angle stay where the trip left them (PSS/E's and ANDES's models
+    of a machine whose status is off).  Its node grounded, the network solution gave it
+    |psi|^2 of power (Kundur's G4: 1.15-1.48 pu, 115-148 MW, summed with the others')."""
+    import numpy as np
+
+    from stabctl.dynamics.driver import Simulator
+    from stabctl.dynamics.events import GeneratorTrip
+
+    r = Simulator(load_case("kundur")).run([GeneratorTrip(4, 1.0)], 3.0)
+    after = r.t > 1.0
+    assert r.pelect[r.t < 1.0, 3].min() > 6.9  # 700 MW before the trip
+    assert np.all(r.pelect[after, 3] == 0.0) and np.all(r.qelect[after, 3] == 0.0)
+    at_trip = np.flatnonzero(after)[0] - 1
+    for x in (r.speed, r.angle):
+        assert np.all(x[after, 3] == x[at_trip, 3])
+    assert r.speed[after, :3].min() < 0.998  # the others slow down, 700 MW short
 
 
 def test_study_events_match_the_library(tmp_path):
