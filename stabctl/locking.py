@@ -61,8 +61,9 @@ PID_READS = 100
 
 #: the longest file name most file systems take (ext4, xfs, tmpfs: 255 bytes)
 NAME_MAX = 255
-#: room kept in a helper file's name for what tempfile.mkstemp adds (8 random characters)
-_RANDOM = 10
+#: room kept in a helper file's name for what a temporary file adds (`temp_file`: 8 random
+#: characters, the mark, ".new") and an output's suffix of up to 18 bytes (``.jsonl``)
+_RANDOM = 31
 
 
 def beside(name: str, suffix: str) -> str:
@@ -201,6 +202,9 @@ STALE_AFTER_S = 60.0
 _RANDOM_PART = "[a-z0-9_]{8}"
 #: the end of a temporary file's or directory's name until its maker has locked it
 _UNLOCKED = ".new"
+#: what follows the random part of a name made here (before a file's suffix): whatever
+#: lacks it (another program's, or an earlier stabctl's, never locked) is never removed
+_MARK = "~"
 #: names tried for a temporary file or directory (one taken between making and naming)
 _NAMES = 100
 
@@ -306,7 +310,7 @@ def temp_file(directory: str | Path, prefix: str, suffix: str = "") -> tuple[int
     """
     remove_stale(directory, prefix, suffix)
     for _ in range(_NAMES):
-        fd, made = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=suffix + _UNLOCKED)
+        fd, made = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=_MARK + suffix + _UNLOCKED)
         lock = os.dup(fd)
         path = _named(made, lock)
         if path is not None:
@@ -342,7 +346,7 @@ def temp_dir(prefix: str, directory: str | Path | None = None) -> Held:
     where = str(directory) if directory is not None else tempfile.gettempdir()
     remove_stale(where, prefix)
     for _ in range(_NAMES):
-        made = tempfile.mkdtemp(prefix=prefix, suffix=_UNLOCKED, dir=where)
+        made = tempfile.mkdtemp(prefix=prefix, suffix=_MARK + _UNLOCKED, dir=where)
         fd = os.open(made, os.O_RDONLY | os.O_DIRECTORY)
         path = _named(made, fd)
         if path is not None:
@@ -387,7 +391,11 @@ def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[s
         The paths removed.
     """
     pattern = re.compile(
-        re.escape(prefix) + _RANDOM_PART + re.escape(suffix) + f"({re.escape(_UNLOCKED)})?" + r"\Z"
+        re.escape(prefix)
+        + _RANDOM_PART
+        + re.escape(_MARK + suffix)
+        + f"({re.escape(_UNLOCKED)})?"
+        + r"\Z"
     )
     try:
         names = [n for n in os.listdir(directory) if pattern.match(n)]

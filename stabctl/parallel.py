@@ -1609,12 +1609,22 @@ POOL_RESTARTS = 5
 
 def _marked(marks: str, index: int, func, key: str, inputs) -> dict:
     """`run_job` in a worker, its job's index written to a file of the worker's pid in
-    the directory `marks` while it runs (left there if the worker dies: `_completed`)."""
+    the directory `marks` while it runs (left there if the worker dies: `_completed`).  A
+    mark that cannot be written (the directory removed meanwhile: a clean-up of the
+    temporary directory) does not stop the job: without it, a worker's death tells only
+    that one of the jobs not finished was running, and they all run again on a new pool
+    (each job was recorded failed, "FileNotFoundError ... stabctl-running-...")."""
     path = os.path.join(marks, str(os.getpid()))
-    with open(path, "w") as fh:
-        fh.write(str(index))
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
+        with os.fdopen(fd, "w") as fh:
+            fh.write(str(index))
+    except OSError:
+        path = ""
     rec = run_job(func, key, inputs)
-    os.unlink(path)
+    if path:
+        with contextlib.suppress(OSError):
+            os.unlink(path)
     return rec
 
 
@@ -1641,7 +1651,11 @@ def _completed(pool, jobs: list, marks: str) -> Generator[dict, None, tuple[list
             rec = _lost(jobs[futures[fut]], exc)
         yield rec
     running = set()
-    for name in os.listdir(marks):  # the workers that died, and those stopped with them
+    try:
+        names = os.listdir(marks)
+    except OSError:  # removed meanwhile (`_marked`)
+        names = []
+    for name in names:  # the workers that died, and those stopped with them
         path = os.path.join(marks, name)
         with contextlib.suppress(OSError, ValueError):
             running.add(int(Path(path).read_text()))

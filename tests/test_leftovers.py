@@ -84,19 +84,21 @@ def test_a_live_run_s_temporary_files_stay_however_old(tmp_path):
 
 
 def test_unnamed_yet_young_links_and_other_names_stay(tmp_path):
-    killed = tmp_path / ".paper-abcd1234"  # a killed run's, however young: unlocked
+    killed = tmp_path / ".paper-abcd1234~"  # a killed run's, however young: unlocked
     killed.mkdir()
-    young = tmp_path / ".paper-efgh5678.new"  # maybe a live run's, about to be locked
+    young = tmp_path / ".paper-efgh5678~.new"  # maybe a live run's, about to be locked
     young.mkdir()
     target = tmp_path / "target"
     target.mkdir()
-    link = tmp_path / ".paper-linkxxxx"
+    link = tmp_path / ".paper-linkxxxx~"
     link.symlink_to(target)
     work = tmp_path / ".paper-work"  # paper's records: not a temporary directory
     work.mkdir()
-    longer = tmp_path / ".paper-abcd12345"  # not what mkdtemp makes
+    longer = tmp_path / ".paper-abcd12345~"  # not what mkdtemp makes
     longer.mkdir()
-    for p in (work, longer):
+    unmarked = tmp_path / ".paper-abcd5678"  # an earlier stabctl's, which locked nothing
+    unmarked.mkdir()
+    for p in (work, longer, unmarked):
         os.utime(p, (0, 0))
     os.utime(link, (0, 0), follow_symlinks=False)
     assert scratch.remove_stale(tmp_path, ".paper-") == [str(killed)]
@@ -104,7 +106,7 @@ def test_unnamed_yet_young_links_and_other_names_stay(tmp_path):
     os.utime(young, (old, old))
     assert scratch.remove_stale(tmp_path, ".paper-") == [str(young)]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        [link.name, target.name, work.name, longer.name]
+        [link.name, target.name, work.name, longer.name, unmarked.name]
     )
 
 

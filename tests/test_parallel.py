@@ -9,6 +9,7 @@ import re
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from contextlib import nullcontext
 from pathlib import Path
@@ -2324,3 +2325,27 @@ def test_a_sweep_s_bar_can_name_its_work_instead_of_its_records_file(tmp_path, c
     run_sweep(jobs, tmp_path / "cct.jsonl", workers=1, progress=True, label="estimate cct")
     err = capsys.readouterr().err
     assert "estimate cct: 100%" in err and "cct.jsonl" not in err
+
+
+def _remove_marks(inputs):
+    """A job that removes its sweep's directory of running marks (`_marked`), as another
+    program's clean-up of the temporary directory did during a sweep."""
+    import glob
+    import shutil
+
+    for d in glob.glob(os.path.join(os.environ["TMPDIR"], "stabctl-running-*")):
+        shutil.rmtree(d, ignore_errors=True)
+    return {"y": inputs["x"] ** 2}
+
+
+def test_a_sweep_whose_marks_directory_is_removed_runs_on(tmp_path, monkeypatch):
+    """Every job after a clean-up of the temporary directory removed the sweep's marks
+    directory was recorded failed ("FileNotFoundError ... stabctl-running-..."), and the
+    sweep ended "error: <dir>: No such file or directory": the marks are a help only."""
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", None)
+    jobs = [Job(f"marks/{x}", _remove_marks, {"x": x}) for x in range(4)]
+    rep = run_sweep(jobs, tmp_path / "r.jsonl", workers=2, progress=False)
+    recs = [json.loads(x) for x in (tmp_path / "r.jsonl").read_text().splitlines()]
+    assert rep.ran == 4 and sorted(r["result"]["y"] for r in recs) == [0, 1, 4, 9]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.jsonl"]
