@@ -61,7 +61,7 @@ from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import InputError
 from stabctl.estimation.models import FrequencyTuning, MachineModels, SwingTuning
 from stabctl.estimation.pmu import Frame
-from stabctl.estimation.settings import PMUSettings
+from stabctl.estimation.settings import PMUSettings, check_rate, nominal_rate
 from stabctl.models.declaration import layout
 from stabctl.models.machines import EM, SUB, TRA
 from stabctl.models.machines import _dq as rotor_dq  # the one compiled dq transform
@@ -602,11 +602,25 @@ class _MachineFilters:
         return speed + horizon * rate, var + 2 * horizon * cov + horizon**2 * rate_var
 
 
+#: Hz: a first frame whose valid frequencies are, as a median, farther than this from a
+#: FrequencyKF's f0 is not of its system (a 50 Hz system's read as 60 Hz); later frames
+#: are not judged, as a fault's phase jumps swing a P-class estimate by more
+F0_OFF_HZ = 5.0
+
+
 class FrequencyKF(_MachineFilters):
     """Baseline filter on PMU frequency and ROCOF (compiled, all machines).
 
     pmu: (n,) index of each machine's PMU in the frames; settings: the PMUs' (noise);
-    tuning: `FrequencyTuning`; f0: nominal frequency (Hz).
+    tuning: `FrequencyTuning`; f0: nominal frequency (Hz), the case's (`machine_models`
+    gives it: ``models.f0``).
+
+    Raises
+    ------
+    InputError
+        The settings' rate is not a rate of f0 (`check_rate`); later, in `step`, a first
+        frame whose valid frequencies are, as a median, more than `F0_OFF_HZ` from f0 (a
+        50 Hz system's frames read with the default f0 of 60 Hz gave speeds of 0.84 pu).
     """
 
     name = "kf"
@@ -619,6 +633,7 @@ class FrequencyKF(_MachineFilters):
         tuning: FrequencyTuning = FrequencyTuning(),
         f0: float = 60.0,
     ):
+        check_rate(settings.rate, f0, fix=f"give FrequencyKF the case's f0 (not {f0:g}), or {{}}")
         self.pmu, self.tun, self.f0 = np.asarray(pmu), tuning, f0
         super().__init__(self.pmu.size, 2)
         self.R = np.diag([settings.sigma_freq**2, settings.sigma_rocof**2])
@@ -626,7 +641,14 @@ class FrequencyKF(_MachineFilters):
     def _measure(self, frame: Frame):
         """z (n, 2) = [f - f0 (Hz), ROCOF (Hz/s)] and the valid mask (n,)."""
         z = np.stack([frame.freq[self.pmu] - self.f0, frame.rocof[self.pmu]], axis=1)
-        return z, frame.valid[self.pmu] & np.isfinite(z).all(axis=1)
+        ok = frame.valid[self.pmu] & np.isfinite(z).all(axis=1)
+        if self.t is None and ok.any() and abs(np.median(z[ok, 0])) > F0_OFF_HZ:
+            raise InputError(
+                f"FrequencyKF(f0={self.f0:g}): the frame at t = {frame.t} s reads "
+                f"{self.f0 + np.median(z[ok, 0]):.4g} Hz (median of its valid PMUs), not near "
+                f"f0: give the case's nominal frequency as f0 (machine_models(case).f0)"
+            )
+        return z, ok
 
     def _advance(self, frame, dt):
         z, ok = self._measure(frame)
@@ -740,6 +762,6 @@ def compile_filters(models: MachineModels) -> None:
         np.full(n_pmu, np.nan),
         np.full(n_pmu, np.nan),
     )
-    settings = PMUSettings()
+    settings = PMUSettings(rate=nominal_rate(models.f0))
     for f in (FrequencyKF(models.pmu, settings, f0=models.f0), SwingEKF(models, settings)):
         f.step(lost)

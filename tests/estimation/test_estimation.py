@@ -719,3 +719,18 @@ def test_the_api_refuses_a_rate_not_of_the_case_s_frequency(tmp_path):
             settle_s=0.1,
             t_end=2,
         )
+
+
+def test_the_baseline_kf_refuses_another_system_s_frequency():
+    """FrequencyKF(f0=60) fed a 50 Hz system's frames estimated speeds of 0.84 pu without a
+    word (docs/estimation.md shows it without f0): a rate that is not one of f0's is
+    refused at once, and frames reading far from f0 at the first step."""
+    with pytest.raises(InputError, match=r"rate=50\).*50 Hz systems.*FrequencyKF the case's f0"):
+        FrequencyKF([0], pmu.PMUSettings(rate=50))
+    kf = FrequencyKF([0, 1], pmu.PMUSettings(rate=10))  # a rate of 50 and of 60 Hz
+    one, z = np.ones(2, bool), np.ones(2, complex)
+    frame = pmu.Frame(0.1, one, z, z, np.array([50.01, 49.98]), np.zeros(2))
+    with pytest.raises(InputError, match=r"t = 0.1 s reads 49.99 Hz .*not near f0"):
+        kf.step(frame)
+    speed, _ = FrequencyKF([0, 1], pmu.PMUSettings(rate=10), f0=50.0).step(frame)
+    assert speed == pytest.approx([1.0002, 0.9996])
