@@ -627,3 +627,26 @@ def test_a_study_s_case_digest_goes_to_its_evaluations():
     beta = np.zeros((4, 0))
     assert Study(case_digest="0123").evaluator(None, "kundur", (), beta).case_digest == "0123"
     assert Study().evaluator(None, "kundur", (), beta).case_digest == kundur.digest()
+
+
+def test_the_api_takes_the_cli_s_ranges_of_the_separation_limit_and_the_deadband():
+    """separation_limit=180 (degrees meant) called a run stable whose machines slipped
+    87 rad, and deadband_hz=100 (mHz meant) left every device idle, where the CLI refuses
+    both: the library holds the bounds, the CLI's ranges are the same."""
+    import math
+
+    from stabctl.cli.options import _RANGES
+    from stabctl.dynamics.driver import MAX_SEPARATION_LIMIT_RAD
+    from stabctl.storage.control import MAX_DEADBAND_HZ, MAX_V_GATE_PU, BangBangCOI
+
+    assert _RANGES["--separation-limit"][:2] == (0, MAX_SEPARATION_LIMIT_RAD)
+    assert _RANGES["--deadband-hz"][:2] == (0, MAX_DEADBAND_HZ)
+    assert _RANGES["--hysteresis-hz"][:2] == (0, MAX_DEADBAND_HZ)
+    assert _RANGES["--v-gate"][:2] == (0, MAX_V_GATE_PU)
+    sim = stabctl.Simulator(stabctl.load_case("kundur"))
+    for bad in (180, math.inf):
+        with pytest.raises(InputError, match=r"must be in \(0, 100\] rad.*pi, not 180"):
+            sim.run([], t_end=0.1, separation_limit=bad)
+    with pytest.raises(InputError, match=r"0 <= deadband <= 10 Hz \(in Hz: 0.1 is 100 mHz\)"):
+        BangBangCOI(deadband_hz=100)
+    assert BangBangCOI(deadband_hz=10).deadband_hz == 10

@@ -146,6 +146,8 @@ class CommandFrames:
 #: models (one per set of storage buses kept, `Simulator.model_for`) and simulators of
 #: WECC battery fleets a simulator keeps: a placement study tries many
 MODELS_KEPT = 8
+#: the widest loss-of-synchronism limit a run takes, rad (the CLI's --separation-limit range)
+MAX_SEPARATION_LIMIT_RAD = 100.0
 
 
 class Simulator:
@@ -839,10 +841,16 @@ class Simulator:
         Raises
         ------
         InputError
-            Naming the limit and the machine farthest from the COI at the start, with
-            its angle.
+            A limit not in (0, MAX_SEPARATION_LIMIT_RAD] (``separation_limit=180``, degrees
+            meant, called a run stable whose machines had slipped 87 rad); naming the
+            limit and the machine farthest from the COI at the start, with its angle.
         """
         require_number(limit, name, "rad")
+        if not 0 < limit <= MAX_SEPARATION_LIMIT_RAD:
+            raise InputError(
+                f"{name} must be in (0, {MAX_SEPARATION_LIMIT_RAD:g}] rad, got {limit:g} "
+                "(in rad: pi, not 180)"
+            )
         widest = self._widest_start
         if widest is not None and not limit > widest[1]:
             i, dev = widest

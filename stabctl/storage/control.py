@@ -45,6 +45,9 @@ from stabctl.errors import (
 
 #: largest voltage gate of the bang-bang law (pu)
 MAX_V_GATE_PU = 2.0
+#: the widest deadband and hysteresis (Hz) a controller takes (the CLI's --deadband-hz
+#: range): BangBangCOI(deadband_hz=100), 100 mHz meant, left every device idle
+MAX_DEADBAND_HZ = 10.0
 
 #: law kinds of the compiled loop
 NO_STORAGE, BANG_BANG, LINEAR, EXTERNAL = 0, 1, 2, 3
@@ -110,7 +113,7 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
     Parameters
     ----------
     deadband_hz : float
-        abs(f_i - f_COI) below which the device is idle (Hz), >= 0.
+        abs(f_i - f_COI) below which the device is idle (Hz), in [0, MAX_DEADBAND_HZ].
     v_gate_pu : float
         Minimum bus voltage for the device to act (pu), in [0, MAX_V_GATE_PU].
     coi : {"system", "rest", "critical"}
@@ -156,11 +159,12 @@ class BangBangCOI:  # fields of a dataclass: numpydoc ignore=PR02
             raise WrongTypeError(f"BangBangCOI(critical): machine numbers, got {critical!r}")
         object.__setattr__(self, "critical", tuple(int(m) for m in critical))
         if not (
-            0 <= self.deadband_hz < float("inf") and 0 <= self.hysteresis_hz <= self.deadband_hz
+            0 <= self.deadband_hz <= MAX_DEADBAND_HZ and 0 <= self.hysteresis_hz <= self.deadband_hz
         ):
             raise InputError(
                 f"deadband {self.deadband_hz:g} Hz, hysteresis {self.hysteresis_hz:g} Hz: "
-                "need a finite deadband >= 0 and 0 <= hysteresis <= deadband "
+                f"need 0 <= deadband <= {MAX_DEADBAND_HZ:g} Hz (in Hz: 0.1 is 100 mHz) and "
+                "0 <= hysteresis <= deadband "
                 + advice("(deadband_hz, hysteresis_hz)", "(--deadband-hz, --hysteresis-hz)")
             )
         if not 0 <= self.v_gate_pu <= MAX_V_GATE_PU:
