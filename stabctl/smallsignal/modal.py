@@ -56,6 +56,10 @@ STATE_GROUPS = (
     "motor",
     "compensator",
 )
+#: the STATE_GROUPS index of each block a state's name starts with, up to its first '_'
+#: (`state_group`: a machine's angle and speed are its rotor angle/speed, its other states
+#: its rotor flux; a torsional shaft's masses are rotor angles and speeds too)
+BLOCK_GROUPS = {"mac": 1, "shaft": 0, "exc": 2, "pss": 3, "tg": 4, "ibr": 5, "motor": 6, "svc": 7}
 #: |Im lambda| / |lambda| at or below which an eigenvalue is real (`eigen`)
 REAL_TOL = 1e-9
 #: condition number of the right-eigenvector matrix above which A counts as defective
@@ -307,13 +311,25 @@ def state_group(name: str) -> str:
     'ibr_Ip_C1' (a converter-interfaced device, `stabctl.models.converters`) or
     'shaft_wHP_G1' (a torsional shaft's mass, `stabctl.models.shafts`: rotor angle/speed);
     'svc_thyristor_V1' is a static var compensator's (`stabctl.models.svcs`)."""
-    block, var = name.split("_", 2)[:2]
-    if block == "mac":
-        return STATE_GROUPS[0] if var in ("delta", "omega") else STATE_GROUPS[1]
-    if block == "shaft":  # a torsional shaft's masses: rotor angles and speeds too
+    block, _, rest = name.partition("_")
+    if block == "mac" and rest.partition("_")[0] in ("delta", "omega"):
         return STATE_GROUPS[0]
-    groups = {"exc": 2, "pss": 3, "tg": 4, "ibr": 5, "motor": 6, "svc": 7}
-    return STATE_GROUPS[groups[block]]
+    return STATE_GROUPS[BLOCK_GROUPS[block]]
+
+
+def _continuous_model(sys, caller: str) -> None:
+    """`WrongTypeError` naming `caller` unless `sys` is a state-space model with state names,
+    `InputError` unless it is a continuous-time one (dt = 0)."""
+    if not hasattr(sys, "state_labels"):  # a matrix: no state names to find machines by
+        raise WrongTypeError(
+            f"{caller}(sys): a control.StateSpace with named states is needed "
+            f"(stabctl.linearise's), got {type(sys).__name__}"
+        )
+    if sys.dt != 0:  # a discrete-time model's eigenvalues are not the s-plane modes
+        raise InputError(
+            f"{caller}(sys): a continuous-time model (dt = 0, as stabctl.linearise's) is "
+            f"needed, got a discrete-time one (dt = {sys.dt})"
+        )
 
 
 def modal_analysis(
@@ -350,11 +366,15 @@ def modal_analysis(
     Raises
     ------
     InputError
-        A model without machine speed states, n_areas out of range, areas missing a
-        machine, inertia not one finite weight >= 0 per machine.
-    TypeError
+        A discrete-time model (`sys.dt` not 0); states not named as `linearise` names
+        them (python-control's x[i] after indexing the model); a model without machine
+        speed states given inertia; n_areas out of range; areas missing a machine or
+        naming one the model lacks; inertia not one finite weight >= 0 per machine or all
+        0.
+    WrongTypeError
         `sys` not a state-space model with state names (a bare A matrix); `n_areas` not a
-        whole number or `areas` not a dict (`stabctl.errors.WrongTypeError`).
+        whole number; `areas` not a dict or a key of it not a machine number (a
+        `TypeError` too).
 
     Examples
     --------
@@ -374,12 +394,16 @@ def modal_analysis(
         raise WrongTypeError(
             f"modal_analysis(areas): a dict machine number -> area label or None, got {areas!r}"
         )
-    if not hasattr(sys, "state_labels"):  # a matrix: no state names to find machines by
-        raise TypeError(
-            "modal_analysis(sys): a control.StateSpace with named states is needed "
-            f"(stabctl.linearise's), got {type(sys).__name__}"
-        )
+    _continuous_model(sys, "modal_analysis")
     states = np.array(sys.state_labels)
+    unnamed = [str(n) for n in states if n.partition("_")[0] not in BLOCK_GROUPS]
+    if unnamed:
+        got = ", ".join(unnamed[:3]) + (", ..." if len(unnamed) > 3 else "")
+        raise InputError(
+            "modal_analysis(sys): its states are not named as stabctl.linearise names them "
+            f"('mac_omega_G1', ...; got {got}), so the machines' states cannot be told; pass "
+            "the model linearise returned (indexing it, sys[...], renames its states x[i])"
+        )
     speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")], int)
     angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")], int)
     machines = np.array([int(states[i].rsplit("_G", 1)[1]) for i in speed])
@@ -399,10 +423,14 @@ def modal_analysis(
         if not np.any(inertia):  # the COI is an infinite bus: no weight on the others
             inertia = np.ones(speed.size)
     inertia = np.asarray(inertia, float)
-    if inertia.shape != (speed.size,) or not np.all(np.isfinite(inertia) & (inertia >= 0)):
+    if (
+        inertia.shape != (speed.size,)
+        or not np.all(np.isfinite(inertia) & (inertia >= 0))
+        or (speed.size > 0 and not inertia.any())
+    ):
         raise InputError(
-            f"modal_analysis(inertia): {speed.size} finite weights >= 0 (H * MVA, one per "
-            f"machine in the order of the speed states) are needed, got {inertia!r}"
+            f"modal_analysis(inertia): {speed.size} finite weights >= 0, not all 0 (H * MVA, "
+            f"one per machine in the order of the speed states) are needed, got {inertia!r}"
         )
     lam, right, left = eigen(np.asarray(sys.A))
     P = participation_factors(right, left)
@@ -569,11 +597,21 @@ def _by_first_machine(labels: np.ndarray) -> np.ndarray:
     return rank[inverse]
 
 
-def _given_areas(areas: dict, machines: np.ndarray) -> np.ndarray:
-    """Labels 0..r-1 per machine from a machine number -> area mapping."""
+def _given_areas(areas: Mapping, machines: np.ndarray) -> np.ndarray:
+    """Labels 0..r-1 per machine from a machine number -> area mapping (every machine of
+    the model and no other)."""
+    wrong = [k for k in areas if not is_whole_number(k)]
+    if wrong:
+        raise WrongTypeError(f"modal_analysis(areas): machine numbers are its keys, got {wrong!r}")
+    unknown = sorted(int(k) for k in areas if int(k) not in machines)
+    if unknown:
+        raise InputError(
+            f"modal_analysis(areas): no machine {unknown} in the model (its machines: "
+            f"{machines.tolist()})"
+        )
     missing = [int(k) for k in machines if int(k) not in areas]
     if missing:
-        raise InputError(f"areas: no area given for machine(s) {missing}")
+        raise InputError(f"modal_analysis(areas): no area given for machine(s) {missing}")
     _, labels = np.unique([str(areas[int(k)]) for k in machines], return_inverse=True)
     return labels
 
@@ -647,12 +685,47 @@ def mode_sensitivity(
     power input to every relative speed).  G(s) = D + sum over all eigenvalues of
     R_i / (s - lambda_i) (the conjugate modes contribute conj(R_i) / (s - conj(lambda_i))).
 
-    Raises InputError when no input or output matches.
+    Parameters
+    ----------
+    sys : control.StateSpace
+        The model, `stabctl.smallsignal.linearise`'s.
+    ma : ModalAnalysis
+        Its modes, ``modal_analysis(sys)``.
+    inputs, outputs : str, optional
+        The start of the names of the inputs and of the outputs.
+
+    Returns
+    -------
+    ModeSensitivity
+
+    Raises
+    ------
+    InputError
+        A discrete-time model (`sys.dt` not 0); `ma` the modal analysis of another model
+        (its states not those of `sys`); no input or output matching.
+    WrongTypeError
+        `sys` not a state-space model with state names or `ma` not a ModalAnalysis (the
+        two swapped; a `TypeError` too).
     """
+    _continuous_model(sys, "mode_sensitivity")
+    if not isinstance(ma, ModalAnalysis):
+        raise WrongTypeError(
+            f"mode_sensitivity(ma): a ModalAnalysis (modal_analysis(sys)'s) is needed, got "
+            f"{type(ma).__name__}"
+        )
+    if list(ma.states) != list(sys.state_labels):
+        raise InputError(
+            f"mode_sensitivity(ma): the modal analysis of another model: its {ma.states.size} "
+            f"states are not the {len(sys.state_labels)} of sys, name for name; pass "
+            "modal_analysis(sys)"
+        )
     ins = [j for j, n in enumerate(sys.input_labels) if n.startswith(inputs)]
     outs = [k for k, n in enumerate(sys.output_labels) if n.startswith(outputs)]
     if not ins or not outs:
-        raise InputError(f"no input starting with {inputs!r} or output with {outputs!r}")
+        raise InputError(
+            f"mode_sensitivity(inputs, outputs): no input starting with {inputs!r} or "
+            f"output with {outputs!r}"
+        )
     cphi = np.asarray(sys.C)[outs] @ ma.right  # (n_out, m)
     psib = ma.left @ np.asarray(sys.B)[:, ins]  # (m, n_in)
     R = cphi.T[:, :, None] * psib[:, None, :]

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from stabctl.case import PssTable
 from stabctl.cli import main
-from stabctl.errors import InputError
+from stabctl.errors import InputError, WrongTypeError
 from stabctl.io import load_case
 from stabctl.smallsignal.linearise import linearise
 from stabctl.smallsignal.modal import (
@@ -168,7 +168,8 @@ def test_bad_input(sys_k, ma_k):
 def test_a_model_rebuilt_from_its_matrices_is_told_what_it_lacks(sys_k, ma_k):
     """A StateSpace rebuilt from linearise's matrices keeps its state names but not its
     outputs: the COI weights are then asked for (a bare ValueError before); given, the
-    modes are the linearised model's own.  Unnamed states have no machine to weigh."""
+    modes are the linearised model's own.  Unnamed states are refused as such; named ones
+    without a machine speed state have no machine to weigh."""
     import control
 
     rebuilt = control.ss(sys_k.A, sys_k.B, sys_k.C, sys_k.D, states=sys_k.state_labels)
@@ -179,8 +180,81 @@ def test_a_model_rebuilt_from_its_matrices_is_told_what_it_lacks(sys_k, ma_k):
     ma = modal_analysis(rebuilt, inertia=weights[speed])
     assert np.allclose(np.sort_complex(ma.eigenvalues), np.sort_complex(ma_k.eigenvalues))
     assert list(ma.kind) == list(ma_k.kind)
-    with pytest.raises(InputError, match="no machine speed state"):
+    with pytest.raises(InputError, match=r"modal_analysis\(sys\): its states are not named"):
         modal_analysis(control.ss(sys_k.A, sys_k.B, sys_k.C, sys_k.D), inertia=np.ones(4))
+    converter = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]], states=["ibr_Ip_C1"])
+    with pytest.raises(InputError, match="no machine speed state"):
+        modal_analysis(converter, inertia=np.ones(4))
+
+
+def test_a_discrete_time_model_is_refused(sys_k, ma_k):
+    """A discrete-time model (python-control's c2d) was taken as continuous: Kundur's
+    eigenvalues of exp(A dt) showed no electromechanical mode, every damping -1."""
+    import control
+
+    discrete = control.c2d(sys_k, 0.01)
+    with pytest.raises(InputError, match=r"modal_analysis\(sys\): a continuous-time .*dt = 0.01"):
+        modal_analysis(discrete)
+    with pytest.raises(InputError, match=r"mode_sensitivity\(sys\): a continuous-time .*dt = 0.01"):
+        mode_sensitivity(discrete, ma_k)
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize(
+    "inertia",
+    [[0, 0, 0, 0], [1, -1, 1, 1], [np.nan, 1, 1, 1], [1, 1, 1]],
+    ids=["all 0", "negative", "NaN", "too few"],
+)
+def test_bad_inertia_weights_are_refused(sys_k, inertia):
+    """All-zero weights divided by zero (numpy's RuntimeWarning, eta NaN, Kundur's
+    inter-area mode relabelled 'local'); they are refused as `coi_speed` refuses them."""
+    with pytest.raises(InputError, match=r"modal_analysis\(inertia\): .* not all 0"):
+        modal_analysis(sys_k, inertia=inertia)
+
+
+def test_a_model_whose_states_lost_their_names_is_refused(sys_k):
+    """python-control's indexing renames the states x[i]: a bare ValueError ("not enough
+    values to unpack") from `state_group` before."""
+    with pytest.raises(
+        InputError,
+        match=r"modal_analysis\(sys\): its states are not named as stabctl.linearise names "
+        r"them .*got x\[0\], x\[1\], x\[2\], \.\.\.\).*pass the model linearise returned",
+    ):
+        modal_analysis(sys_k[:, :2])
+
+
+def test_mode_sensitivity_of_another_model_or_swapped_arguments(sys_k, ma_k, sys_k_nopss):
+    """A modal analysis of another model (Kundur without its PSSs: 44 states, not 56) failed
+    in numpy's matmul; the arguments swapped, with an AttributeError."""
+    with pytest.raises(
+        InputError,
+        match=r"mode_sensitivity\(ma\): the modal analysis of another model: its "
+        r"44 states are not the 56 of sys",
+    ):
+        mode_sensitivity(sys_k, modal_analysis(sys_k_nopss))
+    with pytest.raises(WrongTypeError, match=r"mode_sensitivity\(sys\): .* got ModalAnalysis"):
+        mode_sensitivity(ma_k, sys_k)
+    with pytest.raises(WrongTypeError, match=r"mode_sensitivity\(ma\): .* got StateSpace"):
+        mode_sensitivity(sys_k, sys_k)
+
+
+def test_areas_naming_an_unknown_machine_or_with_text_keys_are_refused(sys_k):
+    """An unknown machine's area was dropped silently; text keys were told only that no
+    area was given for machines 1-4."""
+    with pytest.raises(
+        InputError,
+        match=r"modal_analysis\(areas\): no machine \[99\] in the model \(its "
+        r"machines: \[1, 2, 3, 4\]\)",
+    ):
+        modal_analysis(sys_k, areas={1: "a", 2: "a", 3: "b", 4: "b", 99: "c"})
+    with pytest.raises(
+        WrongTypeError,
+        match=r"modal_analysis\(areas\): machine numbers are its keys, got "
+        r"\['1', '2', '3', '4'\]",
+    ):
+        modal_analysis(sys_k, areas={"1": "a", "2": "a", "3": "b", "4": "b"})
+    ma = modal_analysis(sys_k, areas={1.0: "a", 2: "a", 3: "b", np.int64(4): "b"})
+    assert list(ma.areas) == [0, 0, 1, 1]
 
 
 # -------------------------------------------------------------------------- stabctl eig
