@@ -680,13 +680,19 @@ def _verdict(result) -> str:
 
 
 def _step_check(result, h: float) -> dict:
-    """The run at half the step (`--check-step`), for the summary: its step (s), verdict
-    and separation time (s, None if none)."""
+    """The run at half the step (`--check-step`), for the summary: its step (s), verdict,
+    separation time (s, None if none) and largest angle from the COI (rad)."""
     return {
         "step_s": h,
         "verdict": _verdict(result),
         "t_separation_s": None if result.stable else result.t_separation,
+        "max_angle_from_coi_rad": result.max_angle_from_coi,
     }
+
+
+#: relative difference of the largest angle between the step and half of it above which
+#: `--check-step` says the figure depends on the step
+ANGLE_CHECK_REL = 0.01
 
 
 def _step_check_line(result, halved: dict) -> str:
@@ -694,7 +700,17 @@ def _step_check_line(result, halved: dict) -> str:
     clearing within the step's error of the CCT)."""
     at = f"at half the step (h = {step_text(halved['step_s'])})"
     if halved["verdict"] == _verdict(result):
-        return f"step check: {halved['verdict']} {at} too"
+        line = f"step check: {halved['verdict']} {at} too"
+        if halved["verdict"] != "stable":
+            return line
+        a, b = result.max_angle_from_coi, halved["max_angle_from_coi_rad"]
+        line += f"; largest angle from the COI {b:.4f} rad there ({b - a:+.4f} rad)"
+        if abs(b - a) > ANGLE_CHECK_REL * abs(b):
+            line += (
+                f": it depends on the step by {abs(b - a) / abs(b):.1%} (halve it again, or "
+                "--method trapezoid for a lightly damped swing)"
+            )
+        return line
     return (
         f"step check: {halved['verdict']} {at}, {_verdict(result)} at the step: the verdict "
         "depends on the step (a clearing within its error of the CCT; `stabctl cct` gives "

@@ -42,6 +42,7 @@ from stabctl.dynamics.bounded import BoundedCache
 from stabctl.dynamics.coi import coi_of_islands
 from stabctl.dynamics.grid import (
     STIFF_STEP_PER_TIME_CONSTANT,
+    check_heun_growth,
     check_step,
     check_step_count,
     default_step,
@@ -723,6 +724,8 @@ class Simulator:
         check_step_count(t_end, h, self.case, n_buses)
         starts, configs = ev_.stages(self.case, events, t_end, self.op.V)
         nets = [m.network(c) for c in configs]
+        if method == "heun":
+            check_heun_growth(self.case, np.abs(np.diagonal(nets[0].Y11)), h, t_end)
         pstess = self.conventions == "pstess"  # PSTess's grid, bit for bit
         h_max = None if pstess else [h / self.stiff_substeps(m, net) for net in nets]
         grid = time_grid(starts, t_end, h, pstess, h_max)

@@ -2,6 +2,7 @@
 the CLI, and bad input (exit status 2, one `error:` line, no file written)."""
 
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -791,10 +792,39 @@ def test_check_step_reports_the_verdict_at_half_the_step():
     res = run("simulate", *fault, *near, "--json")
     d = json.loads(res.stdout)
     assert not d["stable"]
-    assert d["step_check"] == {"step_s": 0.005, "verdict": "stable", "t_separation_s": None}
+    check = d["step_check"]
+    assert check.pop("max_angle_from_coi_rad") > 1.0
+    assert check == {"step_s": 0.005, "verdict": "stable", "t_separation_s": None}
     res = run("simulate", *fault, "--clear-cycles", "6", "--far-clear-cycles", "6")
     assert res.exit_code == 0, res.output
-    assert "step check: stable at half the step (h = 5 ms) too" in res.output
+    assert "step check: stable at half the step (h = 5 ms) too; largest angle" in res.output
+    assert "depends on the step by" not in res.output
+
+
+def test_heun_s_growth_of_an_undamped_swing_is_warned_and_shown_by_the_step_check(tmp_path):
+    """Heun multiplies an undamped swing by sqrt(1 + (w h)^4 / 4) a step.  PSS/E's SMIB
+    with H = 0.5 s (a 3.9 Hz swing, no damping), 21 s at 8.3 ms: the largest angle 0.837
+    rad against 0.773 at h/2 and 0.75 converged, with no word and "--check-step: stable
+    too".  The run warns (the growth from the closed form, about 30 %), the step check
+    gives both figures, and the trapezoid is near the converged figure."""
+    data = Path(__file__).resolve().parents[1] / "data" / "psse"
+    (tmp_path / "h.dyr").write_text(
+        (data / "smib.dyr").read_text().replace("3.0  0.0 /", "0.5  0.0 /")
+    )
+    made = run("import-psse", data / "smib_v33.raw", tmp_path / "h.dyr", "-o", tmp_path / "h.json")
+    assert made.exit_code == 0, made.output
+    args = ("simulate", tmp_path / "h.json", "--bus-fault", 1, 1, 1.03, "--tf", 21)
+    res = run(*args, "--check-step")
+    assert res.exit_code == 0, res.output
+    assert re.search(r"heun's step 0.00833333 s lets an undamped swing grow: one of about "
+                     r"3.2 Hz \(G1 .*by about 30 % over the 21 s run", res.stderr)  # fmt: skip
+    assert "stable: largest angle from the COI 0.8374 rad" in res.stdout
+    assert re.search(
+        r"0.7729 rad there \(-0.0645 rad\): it depends on the step by 8.3%", res.stdout
+    )
+    trap = run(*args, "--method", "trapezoid", "--json")
+    assert "heun" not in trap.stderr
+    assert json.loads(trap.stdout)["max_angle_from_coi_rad"] == pytest.approx(0.76, abs=0.02)
 
 
 def test_a_stable_run_that_ends_far_from_a_normal_operating_point_says_so(tmp_path):
