@@ -650,3 +650,27 @@ def test_the_api_takes_the_cli_s_ranges_of_the_separation_limit_and_the_deadband
     with pytest.raises(InputError, match=r"0 <= deadband <= 10 Hz \(in Hz: 0.1 is 100 mHz\)"):
         BangBangCOI(deadband_hz=100)
     assert BangBangCOI(deadband_hz=10).deadband_hz == 10
+
+
+def test_api_findings_of_round_36_are_refused_by_name(tmp_path):
+    """A bus fault given far_clear_cycles (the CLI refuses --far-clear-cycles without
+    --far-bus; the API dropped it), screen() given a loaded Case (blamed load_case),
+    SimulationResult.machine('1') ('not in the result') and speed_at(1.5) (numpy's
+    AxisError)."""
+    from stabctl.errors import WrongTypeError
+    from stabctl.stability.screening import screen
+
+    case = stabctl.load_case("kundur")
+    with pytest.raises(InputError, match=r"fault_with_clearing\(far_clear_cycles\): 8 cycles"):
+        stabctl.fault_with_clearing(case, 3, None, 1.0, 6, far_clear_cycles=8)
+    assert stabctl.fault_with_clearing(case, 3, None, 1.0, 6, far_clear_cycles=6).clear_far == (
+        pytest.approx(1.1)
+    )
+    with pytest.raises(WrongTypeError, match=r"screen\(case_name\): .*got Case"):
+        screen(case, tmp_path / "s.jsonl", buses=[3])
+    r = stabctl.Simulator(case).run([], t_end=1.0)
+    with pytest.raises(WrongTypeError, match=r"machine\(number\): a machine number, got '1'"):
+        r.machine("1")
+    assert r.machine(2) == 1
+    assert r.speed_at(0.5) == pytest.approx(r.speed_at(np.array([0.5]))[0])
+    assert r.speed_at(0.5).shape == (4,)

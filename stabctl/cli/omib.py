@@ -50,7 +50,7 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
 
     \b
     Example:
-      stabctl omib --clear-s 0.2
+      stabctl omib --fault-cycles 6 12 15 --H 3.5
     """
     from stabctl.smib.omib import BISECTION_T_MAX, OMIB, clearing_table, eac_summary
 

@@ -317,8 +317,8 @@ def fault_with_clearing(
     ------
     InputError
         `clear_cycles` negative or not finite, `far_clear_cycles` below `clear_cycles`, both
-        0 (a fault of no length), a `circuit` other than 1 without `far_bus`, a fault time
-        that is negative or not finite.
+        0 (a fault of no length), a `circuit` other than 1 or a `far_clear_cycles` other than
+        `clear_cycles` without `far_bus`, a fault time that is negative or not finite.
     UnknownBusError, CaseError
         No bus `bus`, or no circuit `circuit` between `bus` and `far_bus`.
     TypeError
@@ -344,6 +344,12 @@ def fault_with_clearing(
         raise InputError(
             f"fault_with_clearing(circuit): circuit {circuit} given without far_bus (a bus "
             "fault loses no line)"
+        )
+    if far_bus is None and far_clear_cycles is not None and far != near:
+        raise InputError(
+            f"fault_with_clearing(far_clear_cycles): {far:g} cycles given without far_bus: "
+            "a bus fault has no far end (it is cleared at clear_cycles); give the line's "
+            "far_bus, or leave far_clear_cycles out"
         )
     cyc = 1.0 / case.freq_hz
     t_fault = require_number(t_fault, "fault_with_clearing(t_fault)", "s")

@@ -24,7 +24,7 @@ from stabctl.dynamics.partition import (
     relative_to_islands,
     stage_at,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, WrongTypeError, is_whole_number
 from stabctl.parallel import atomic_write
 
 #: the `Partition` fields written to a .npz (`SimulationResult.to_npz`), in its order
@@ -103,6 +103,13 @@ END_VOLTAGE_PU = 0.8
 END_FREQUENCY_HZ = 0.6
 
 
+def _whole(number, what: str) -> None:
+    """Refuse a `SimulationResult.machine` / `bus` number that is not a whole number: text
+    ('1') was looked up and reported 'not in the result'."""
+    if not is_whole_number(number):
+        raise WrongTypeError(f"SimulationResult.{what}(number): a {what} number, got {number!r}")
+
+
 @dataclass
 class SimulationResult:
     """Trajectories of one run (`Simulator.run`), per machine, bus and storage device.
@@ -140,7 +147,8 @@ class SimulationResult:
     vang : ndarray, shape (n_t, n_bus)
         Bus voltage angles, rad.
     inertia : ndarray, shape (n_mac,)
-        COI weights H * MVA per machine, MW s (MJ).
+        COI weights per machine: H * MVA, MW s (MJ); with an infinite bus in an island, 1
+        for it and 0 for the island's other machines (`stabctl.dynamics.coi.coi_inertia`).
     island : ndarray of int, shape (n_mac,), optional
         Each machine's island in the network before the disturbance
         (`stabctl.network.topology.machine_islands`); default all 0 (connected).
@@ -367,20 +375,22 @@ class SimulationResult:
         t = self.t[-1:] if self.t.size else np.zeros(1)
         return self.partitions[int(stage_at(t, self.partitions)[0])]
 
-    def speed_at(self, t: np.ndarray) -> np.ndarray:
+    def speed_at(self, t: np.ndarray | float) -> np.ndarray:
         """Rotor speeds at given times, by linear interpolation in the trajectory.
 
         Parameters
         ----------
-        t : ndarray, shape (n,)
+        t : ndarray, shape (n,), or float
             Times, s, within ``[t[0], t[-1]]`` (outside: the end values).
 
         Returns
         -------
-        ndarray, shape (n, n_mac)
+        ndarray, shape (n, n_mac), or (n_mac,) for one time given as a number
             Speeds, pu; at a time recorded twice (a zero-length interval) the value
             after it.
         """
+        if np.ndim(t) == 0:
+            return self.speed_at(np.atleast_1d(t))[0]
         keep = np.r_[np.diff(self.t) > 0, True]
         return np.stack(
             [np.interp(t, self.t[keep], self.speed[keep, k]) for k in range(self.speed.shape[1])],
@@ -404,7 +414,10 @@ class SimulationResult:
         ------
         KeyError
             The machine is not in the result; the message names it.
+        WrongTypeError
+            `number` not a whole number (``'1'``: text).
         """
+        _whole(number, "machine")
         hit = np.nonzero(self.machines == number)[0]
         if hit.size == 0:
             raise KeyError(f"machine {number} is not in the result")
@@ -427,7 +440,10 @@ class SimulationResult:
         ------
         KeyError
             The bus is not in the result; the message names it.
+        WrongTypeError
+            `number` not a whole number (``'1'``: text).
         """
+        _whole(number, "bus")
         hit = np.nonzero(self.buses == number)[0]
         if hit.size == 0:
             raise KeyError(f"bus {number} is not in the result")

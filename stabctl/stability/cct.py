@@ -1529,6 +1529,31 @@ def storage_fleet(case, esd_pct: float | None):
     return storage.uniform_fleet(case, esd_pct)
 
 
+def require_case_name(value, name: str) -> None:
+    """Refuse a sweep's case that is not a name or a path: its jobs load the case in each
+    worker by name, so a loaded `Case` cannot be given (it was refused as "load_case
+    (name_or_path): ...", naming a function the caller never called).
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    name : str
+        The argument, as the message names it (``"screen(case_name)"``).
+
+    Raises
+    ------
+    WrongTypeError
+        `value` not a str or os.PathLike.
+    """
+    if not isinstance(value, (str, os.PathLike)):
+        raise WrongTypeError(
+            f"{name}: a built-in case name or a case file's path (each job loads it in its "
+            f"worker), got {type(value).__name__}; give the name or file the case was loaded "
+            "from"
+        )
+
+
 def job_case(case_name: str, digest: str | None = None) -> Case:
     """The case a job names, read where the job runs (once per process and content,
     `_read_case`), and checked to be the one its client read (the digest of its content,
@@ -1971,6 +1996,7 @@ def cct_jobs(
     from stabctl.parallel import Job
 
     check_search_range(search)
+    require_case_name(case_name, "cct_jobs(case_name)")
     ratings = checked_ratings(ratings)
     case = job_case(case_name)  # the content its jobs run on in this process, and digest
     faults = list(faults)

@@ -38,7 +38,13 @@ from stabctl.errors import (
 from stabctl.io import load_case
 from stabctl.network.topology import splits_machines
 from stabctl.parallel import RunnerOptions
-from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs, fault_of_inputs
+from stabctl.stability.cct import (
+    LineFault,
+    SearchOptions,
+    cct_jobs,
+    fault_of_inputs,
+    require_case_name,
+)
 
 
 def _whose(rec: dict, jobs=()) -> str:
@@ -277,6 +283,7 @@ def screen(
         `stabctl.parallel.warn_others`), named (the first OTHERS_SHOWN): kept in the
         file, left out of the table.
     """
+    require_case_name(case_name, "screen(case_name)")
     buses, search, model, runner = _checked(
         out, buses, lines, guess, retry_failed, search, model, runner
     )

@@ -193,6 +193,21 @@ def test_examples_in_help_keep_their_lines():
             assert not re.search(r"Examples?:\s+\S", line), (name, line)
 
 
+def test_examples_in_help_name_only_options_of_their_command():
+    """`stabctl omib --help` showed ``stabctl omib --clear-s 0.2``: no such option.  Every
+    option an example line of a command's help gives is one of that command's."""
+    for name, cmd in _commands():
+        known = {o for p in cmd.params for o in (*p.opts, *p.secondary_opts)} | {"--help"}
+        out = CliRunner().invoke(main, [*name.split(), "--help"]).output
+        for line in out.splitlines():
+            words = line.split()
+            if words[: 1 + len(name.split())] != ["stabctl", *name.split()]:
+                continue
+            given = {w.split("=")[0] for w in words if w.startswith("-") and w[1:2].isalpha()}
+            given |= {w for w in words if w.startswith("--") and len(w) > 2}
+            assert given <= known, (name, line, sorted(given - known))
+
+
 def test_coi_offers_critical_only_where_it_is_taken():
     """`simulate`, `estimate *` and `pmu plant/control` offered --coi critical and then
     refused it ("cct only"): only `cct` and `place`, which find the critical machines
