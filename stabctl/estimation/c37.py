@@ -40,6 +40,8 @@ import numpy as np
 
 from stabctl.errors import InputError
 from stabctl.estimation.pmu import Frame
+from stabctl.estimation.settings import check_rate
+from stabctl.parallel import atomic_write
 
 TIME_BASE = 1_000_000  # FRACSEC counts per second (1 us)
 #: FORMAT (Table 9): phasor polar, phasor float, analog float, FREQ/DFREQ float
@@ -106,9 +108,10 @@ def stream_config(
     Raises
     ------
     InputError
-        No PMU, a rate that is not a whole number of frames per second in [1, 240], an
-        IDCODE that leaves no room for the PMUs' own, a bus with no rated kV, or a nominal
-        frequency other than 50 or 60 Hz (FNOM has no other).
+        No PMU, a rate that is not a whole number of frames per second in [1, 240] or not
+        a reporting rate of the case's frequency (`check_rate`: a 50 Hz case's stream
+        described as 60 frames/s), an IDCODE that leaves no room for the PMUs' own, a bus
+        with no rated kV, or a nominal frequency other than 50 or 60 Hz (FNOM has no other).
     """
     pmus = tuple(pmus)
     if not pmus:
@@ -123,6 +126,7 @@ def stream_config(
         )
     if case.freq_hz not in (50.0, 60.0):
         raise InputError(f"C37.118.2 FNOM is 50 or 60 Hz, the case has {case.freq_hz:g} Hz")
+    check_rate(rate, case.freq_hz, "stream_config(rate={})", "give {}")
     kv = np.array([case.buses.kv[case.bus_index(p.bus)] for p in pmus], float)
     if np.any(kv <= 0):
         bus = pmus[int(np.argmax(kv <= 0))].bus
@@ -957,14 +961,34 @@ def on_wire(cfg: StreamConfig, frames) -> list[Frame]:
 
 def record(path, cfg: StreamConfig, frames) -> int:
     """Write a recording: the CFG-2 frame then one data frame per `pmu.Frame` of
-    `frames`; returns the number of data frames."""
+    `frames`; returns the number of data frames.  Written whole or not at all
+    (`stabctl.parallel.atomic_write`).
+
+    Raises
+    ------
+    InputError
+        A frame whose time stamp is not a reporting instant of cfg's rate (k / rate s: a
+        50 frames/s stream recorded under a CFG-2 of 60 was written, and read back by
+        `replay`, without a word), naming it.
+    """
     cfg2 = config_frame(cfg)
     n = 0
-    with open(path, "wb") as fh:
+
+    def write(fh) -> None:
+        nonlocal n
         fh.write(cfg2.convert2bytes())
         for frame in frames:
+            k = frame.t * cfg.rate
+            if abs(k - round(k)) > 1e-6 * max(1.0, abs(k)):
+                raise InputError(
+                    f"record({path}): frame {n + 1} at t = {frame.t:.6g} s is no reporting "
+                    f"instant of the stream's {cfg.rate} frames/s (k / {cfg.rate} s): frames "
+                    "of another rate than its configuration's"
+                )
             fh.write(data_frame(cfg, cfg2, frame))
             n += 1
+
+    atomic_write(path, write, mode="wb")
     return n
 
 
@@ -1358,13 +1382,16 @@ def replay(path, cfg: StreamConfig) -> list[Frame]:
     ------
     InputError
         No configuration frame first, one that does not describe cfg (`check_config`,
-        naming the field), or a data frame that is not readable.
+        naming the field), a data frame that is not readable, or time stamps off the
+        reporting instants of its DATA_RATE, repeated or going back (`order_faults`).
     """
     cfg2, data = recorded_frames(path)
     try:
         check_config(cfg2, cfg)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
+    if faults := order_faults(data, cfg2, str(path)):
+        raise InputError(faults[0][1])
     return [
         f._replace(t=f.t + int(leap))
         for f, leap in zip((parse_frame(cfg, cfg2, d) for d in data), leap_offsets(data, cfg2))

@@ -239,3 +239,24 @@ def test_a_file_that_is_no_recording_is_named():
     """A CSV given as a recording: the message names the file, not only 'recording'."""
     with pytest.raises(InputError, match=r"^faults\.csv: no frame SYNC at byte 0"):
         c37.split_frames(b"bus,far_bus\n", "faults.csv")
+
+
+def test_a_stream_of_another_rate_than_its_configuration_is_refused(wecc_stream, tmp_path):
+    """A 50 Hz case's stream described as 60 frames/s was configured, recorded and read
+    back whole (the CLI refused the file): stream_config takes only the case's rates,
+    record only frames at its reporting instants (writing nothing), and replay refuses
+    repeated or backward time stamps as the CLI's sources do."""
+    case, cfg, stream = wecc_stream
+    with pytest.raises(InputError, match=r"stream_config\(rate=50\): must be one of 10, 12"):
+        c37.stream_config(case, cfg.pmus, 50)
+    slow = c37.stream_config(case, cfg.pmus, 30)
+    path = tmp_path / "slow.c37"
+    with pytest.raises(InputError, match=r"frame 2 at t = 0.0166667 s is no reporting instant"):
+        c37.record(path, slow, stream)
+    assert not path.exists() and list(tmp_path.iterdir()) == []
+    frames = list(stream)
+    assert c37.record(path, slow, frames[::2]) == len(frames[::2])
+    twice = [frames[0], frames[1], frames[1], frames[2]]
+    c37.record(tmp_path / "twice.c37", cfg, twice)
+    with pytest.raises(InputError, match=r"twice.c37: .*data frame 3 .*repeat"):
+        c37.replay(tmp_path / "twice.c37", cfg)
