@@ -298,18 +298,9 @@ def rmse(
         source=src,
     )
     out = {
-        "case": case.name,
-        "fault": {
-            "bus": fault,
-            "far_bus": far_bus,
-            "t_fault_s": t_fault,
-            "clear_cycles": clear_cycles,
-        },
-        "esd_pct": esd_pct,
+        **_what_ran(case, (fault, far_bus, t_fault, clear_cycles), esd_pct, settings, seed),
         "esd_model": esd_model,
-        "pmu": {**settings.__dict__, "at": pmu_at},
         "runs": 1 if src else runs,
-        "seed": seed,
         "source": d.get("source"),
         "window_s": d["window_s"],
         "stable": d["stable"],
@@ -323,6 +314,7 @@ def rmse(
             "runs": ambient_runs,
         },
     }
+    out["pmu"]["at"] = pmu_at
     if as_json:
         print_json(out)
         return
@@ -435,6 +427,8 @@ def closed_loop(
         transport=transport,
     )
     out = {
+        **_what_ran(case, (fault, far_bus, t_fault, clear_cycles), esd_pct, settings, seed),
+        "control": {"deadband_hz": deadband_hz, "v_gate_pu": v_gate, "coi": coi},
         "closed_loop": rows,
         "transport": transport,
         "esd_model": esd_model,
@@ -513,6 +507,8 @@ def cct(
         why = sorted({e for row in table.values() for e in row["errors"]})
         raise InputError(f"every CCT search failed: {'; '.join(why) or 'no reason recorded'}")
     out = {
+        **_what_ran(case, (fault, far_bus, None, None), esd_pct, settings, seed),
+        "runs": runs,
         "cct_cycles": table,
         "esd_model": esd_model,
         "lines": estimator_cct_lines(
@@ -520,6 +516,25 @@ def cct(
         ),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
+
+
+def _what_ran(case, fault: tuple, esd_pct, settings, seed) -> dict:
+    """The head of an `estimate` command's JSON: the case, the fault (bus, far bus, start
+    s and clearing cycles; None where the command searches them), the storage rating, the
+    PMU settings and the noise seed (closed-loop's and cct's JSON had none of these)."""
+    bus, far_bus, t_fault, clear_cycles = fault
+    return {
+        "case": case.name,
+        "fault": {
+            "bus": bus,
+            "far_bus": far_bus,
+            "t_fault_s": t_fault,
+            "clear_cycles": clear_cycles,
+        },
+        "esd_pct": esd_pct,
+        "pmu": dict(settings.__dict__),
+        "seed": seed,
+    }
 
 
 def _check_estimable(case, model) -> None:

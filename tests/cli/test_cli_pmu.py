@@ -150,8 +150,14 @@ def test_estimate_closed_loop_says_how_many_frames_the_controller_used():
     args += ["--clear-cycles", "7", "--tf", "3", "--esd-pct", "10", "--json"]
     res = CliRunner().invoke(main, [*args, "--drop", "0.999"])
     assert res.exit_code == 0, res.output
-    rows = json.loads(res.stdout)["closed_loop"]
+    d = json.loads(res.stdout)
+    rows = d["closed_loop"]
     assert rows["ideal"]["frames_formed"] == rows["ideal"]["frames"] > 150
+    # what ran, as estimate rmse's JSON gives it (round 36: closed-loop's had none of it)
+    assert d["case"] == "kundur" and d["esd_pct"] == 10 and d["seed"] == 0
+    assert d["fault"] == {"bus": 3, "far_bus": 101, "t_fault_s": 1.0, "clear_cycles": 7.0}
+    assert d["pmu"]["drop_prob"] == 0.999 and d["pmu"]["rate"] == 60
+    assert d["control"] == {"deadband_hz": 0.1, "v_gate_pu": 0.8, "coi": "system"}
     for e in ("raw", "kf", "ekf"):
         assert rows[e]["frames"] == rows["ideal"]["frames"] and rows[e]["frames_formed"] < 10
     lines = json.loads(res.stdout)["lines"]
