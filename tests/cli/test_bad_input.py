@@ -67,8 +67,8 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         # a hysteresis above the deadband: both values and both options named
         (
             FAULT + ("--esd-pct", 5, "--hysteresis-hz", 0.5),
-            "deadband 0.1 Hz, hysteresis 0.5 Hz: need a finite deadband >= 0 and 0 <= "
-            "hysteresis <= deadband (--deadband-hz, --hysteresis-hz)",
+            "deadband 0.1 Hz, hysteresis 0.5 Hz: need 0 <= deadband <= 10 Hz (in Hz: 0.1 is "
+            "100 mHz) and 0 <= hysteresis <= deadband (--deadband-hz, --hysteresis-hz)",
         ),
         # a value just outside the range is named as given, not rounded into the range
         (
