@@ -27,6 +27,7 @@ than risk removing a live process's; one whose locks are each machine's own (NFS
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import fcntl
 import hashlib
@@ -62,8 +63,8 @@ PID_READS = 100
 #: the longest file name most file systems take (ext4, xfs, tmpfs: 255 bytes)
 NAME_MAX = 255
 #: room kept in a helper file's name for what a temporary file adds (`temp_file`: 8 random
-#: characters, the mark, ".new") and an output's suffix of up to 18 bytes (``.jsonl``)
-_RANDOM = 31
+#: characters, the mark, ".new") and an output's suffix of up to 16 bytes (``.jsonl``)
+_RANDOM = 36
 
 
 def beside(name: str, suffix: str) -> str:
@@ -203,8 +204,11 @@ _RANDOM_PART = "[a-z0-9_]{8}"
 #: the end of a temporary file's or directory's name until its maker has locked it
 _UNLOCKED = ".new"
 #: what follows the random part of a name made here (before a file's suffix): whatever
-#: lacks it (another program's, or an earlier stabctl's, never locked) is never removed
-_MARK = "~"
+#: lacks it (another program's, an editor's backup ``notes~``, or an earlier stabctl's,
+#: never locked) is never removed
+_MARK = "~stabctl"
+#: the random characters mkstemp and mkdtemp put in a name
+_RANDOM_CHARS = 8
 #: names tried for a temporary file or directory (one taken between making and naming)
 _NAMES = 100
 
@@ -284,9 +288,10 @@ def _lock(fd: int) -> bool:
 
 
 def temp_file(directory: str | Path, prefix: str, suffix: str = "") -> tuple[int, Held]:
-    """A new temporary file ``<prefix><8 random characters><suffix>`` in `directory`
-    (``tempfile.mkstemp``, mode 0600), locked, after removing killed runs' files of the
-    same name pattern there (`remove_stale`).
+    """A new temporary file ``<prefix><8 random characters>~stabctl<suffix>`` in
+    `directory` (``tempfile.mkstemp``, mode 0600), locked, after removing killed runs'
+    files of the same name pattern there (`remove_stale`).  A `suffix` that would make the
+    name longer than NAME_MAX is left out (a format chosen by extension has a short one).
 
     Parameters
     ----------
@@ -306,23 +311,24 @@ def temp_file(directory: str | Path, prefix: str, suffix: str = "") -> tuple[int
     Raises
     ------
     OSError
-        The file cannot be made.
+        The file cannot be made (`directory` gone: named).
     """
-    remove_stale(directory, prefix, suffix)
+    room = NAME_MAX - len(os.fsencode(prefix + _MARK + _UNLOCKED)) - _RANDOM_CHARS
+    suffix = suffix if len(os.fsencode(suffix)) <= room else ""
+    remove_stale(directory, prefix, suffix, kind="file")
+    ends = _MARK + suffix + _UNLOCKED
     for _ in range(_NAMES):
-        fd, made = tempfile.mkstemp(dir=directory, prefix=prefix, suffix=_MARK + suffix + _UNLOCKED)
+        fd, made = _made(lambda: tempfile.mkstemp(ends, prefix, directory), directory)
         lock = os.dup(fd)
-        path = _named(made, lock)
+        path = _named(made, lock, fd)
         if path is not None:
             return fd, Held(path, lock)
-        os.close(fd)
-        os.close(lock)
     raise FileExistsError(errno.EEXIST, "no free temporary file name", str(directory))
 
 
 def temp_dir(prefix: str, directory: str | Path | None = None) -> Held:
-    """A new temporary directory ``<prefix><8 random characters>`` in `directory` (the
-    temporary directory by default; ``tempfile.mkdtemp``, mode 0700), locked, after
+    """A new temporary directory ``<prefix><8 random characters>~stabctl`` in `directory`
+    (the temporary directory by default; ``tempfile.mkdtemp``, mode 0700), locked, after
     removing killed runs' directories of the same name pattern there (`remove_stale`).
     Used as a context manager it is removed, contents and all, when the block ends.
 
@@ -341,42 +347,74 @@ def temp_dir(prefix: str, directory: str | Path | None = None) -> Held:
     Raises
     ------
     OSError
-        The directory cannot be made.
+        The directory cannot be made (`directory` gone: named, with TMPDIR for the
+        temporary directory).
     """
     where = str(directory) if directory is not None else tempfile.gettempdir()
-    remove_stale(where, prefix)
+    remove_stale(where, prefix, kind="directory")
     for _ in range(_NAMES):
-        made = tempfile.mkdtemp(prefix=prefix, suffix=_MARK + _UNLOCKED, dir=where)
+        made = _made(lambda: tempfile.mkdtemp(_MARK + _UNLOCKED, prefix, where), where,
+                     directory is None)  # fmt: skip
         fd = os.open(made, os.O_RDONLY | os.O_DIRECTORY)
         path = _named(made, fd)
         if path is not None:
             return Held(path, fd)
-        os.close(fd)
     raise FileExistsError(errno.EEXIST, "no free temporary directory name", where)
 
 
-def _named(made: str, fd: int) -> str | None:
+def _made(make, where, tmpdir: bool = False):
+    """``make()`` (mkstemp, mkdtemp), its failure for a directory that is gone said so:
+    "No such file or directory" named the temporary's own name (TMPDIR removed while a
+    run went on, a sweep's output directory removed)."""
+    try:
+        return make()
+    except FileNotFoundError:
+        if os.path.isdir(where):
+            raise
+        hint = " (the temporary directory: set TMPDIR to one that exists)" if tmpdir else ""
+        raise FileNotFoundError(
+            errno.ENOENT, f"the directory is gone (removed while stabctl ran?){hint}", str(where)
+        ) from None
+
+
+def _named(made: str, fd: int, also: int | None = None) -> str | None:
     """Lock the new temporary file or directory `made` (through its descriptor `fd`) and
     only then give it its name, `made` without `_UNLOCKED`, so that whatever bears such a
-    name unlocked is a killed run's; None (`made` removed) if that name is taken."""
-    _lock(fd)
-    path = made[: -len(_UNLOCKED)]
-    if not os.path.lexists(path):
-        os.rename(made, path)
-        return path
-    if os.path.isdir(made):
-        os.rmdir(made)
-    else:
-        os.unlink(made)
+    name unlocked is a killed run's; None (`made` removed, `fd` and `also` closed) if that
+    name is taken.  Interrupted (Ctrl-C) meanwhile, it removes `made` and closes both."""
+    try:
+        _lock(fd)
+        path = made[: -len(_UNLOCKED)]
+        if not os.path.lexists(path):
+            os.rename(made, path)
+            return path
+    except BaseException:
+        _discard(made, fd, also)
+        raise
+    _discard(made, fd, also)
     return None
 
 
-def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[str]:
-    """Remove the temporary files and directories a killed run left in `directory`:
-    those named ``<prefix><8 random characters><suffix>`` (as `temp_file` and `temp_dir`
-    name them once locked), this user's, not symbolic links, whose lock is free; those
-    still named as first made (ending ``.new``) only once older than `STALE_AFTER_S`.
-    Nothing is raised: one that cannot be read, locked or removed stays.
+def _discard(made: str, *fds: int | None) -> None:
+    """Remove the new temporary `made` and close its descriptors."""
+    with contextlib.suppress(OSError):
+        if os.path.isdir(made):
+            os.rmdir(made)
+        else:
+            os.unlink(made)
+    for fd in fds:
+        if fd is not None:
+            os.close(fd)
+
+
+def remove_stale(
+    directory: str | Path, prefix: str, suffix: str = "", kind: str = "file"
+) -> list[str]:
+    """Remove the temporary files (or directories) a killed run left in `directory`:
+    those named ``<prefix><8 random characters>~stabctl<suffix>`` (as `temp_file` and
+    `temp_dir` name them once locked), of `kind`, this user's, not symbolic links, whose
+    lock is free; those still named as first made (ending ``.new``) only once older than
+    `STALE_AFTER_S`.  Nothing is raised: one that cannot be read, locked or removed stays.
 
     Parameters
     ----------
@@ -384,6 +422,8 @@ def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[s
         Where to look (not below it).
     prefix, suffix : str
         The names' start and end.
+    kind : {"file", "directory"}
+        What is removed (a user's directory named like a temporary file stays).
 
     Returns
     -------
@@ -404,20 +444,21 @@ def remove_stale(directory: str | Path, prefix: str, suffix: str = "") -> list[s
     removed = []
     for name in names:
         path = os.path.join(directory, name)
-        if _remove_if_stale(path):
+        if _remove_if_stale(path, kind == "directory"):
             removed.append(path)
     return removed
 
 
-def _remove_if_stale(path: str) -> bool:
-    """Remove `path` if it is a killed run's (`remove_stale`); True if removed."""
+def _remove_if_stale(path: str, want_dir: bool) -> bool:
+    """Remove `path` if it is a killed run's (`remove_stale`): a directory if `want_dir`,
+    else a regular file; True if removed."""
     try:
         st = os.lstat(path)
     except OSError:
         return False
     is_dir = stat.S_ISDIR(st.st_mode)
     if (
-        not (is_dir or stat.S_ISREG(st.st_mode))
+        not (is_dir if want_dir else stat.S_ISREG(st.st_mode))
         or st.st_uid != os.getuid()
         or (path.endswith(_UNLOCKED) and time.time() - st.st_mtime < STALE_AFTER_S)
     ):

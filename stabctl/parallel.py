@@ -481,6 +481,10 @@ def atomic_write(
     A path that is neither a file nor a directory (a device or pipe: ``/dev/stdout``, a
     FIFO) is written in place, as no file can replace it; so is a temporary file this
     process holds (`stabctl.locking.is_held`: the writer of `atomic_writes` given its own).
+    One of this process's open streams (``/dev/stdout``, ``/dev/fd/N``, a link to one:
+    `stream_fd`) is written through its descriptor, at its position and in its mode:
+    stdout sent to a log with ``>>`` was replaced by the output, the log's earlier lines
+    lost.
 
     Parameters
     ----------
@@ -511,6 +515,10 @@ def atomic_write(
     """
     given = Path(path)
     with naming(given):
+        fd = stream_fd(given)
+        if fd is not None:
+            _write_to_stream(fd, write, mode)
+            return given
         path = Path(os.path.realpath(given, strict=True)) if given.is_symlink() else given
         if is_held(path) or (path.exists() and not (path.is_file() or path.is_dir())):
             if mode is None:
@@ -545,6 +553,58 @@ def atomic_write(
         if later is None:
             held.release()
     return given
+
+
+#: how a path names one of this process's open streams (`stream_fd`)
+_STREAM_PATHS = re.compile(r"/dev/std(in|out|err)|/dev/fd/(\d+)|/proc/(self|\d+)/fd/(\d+)")
+_STD_FDS = {"in": 0, "out": 1, "err": 2}
+
+
+def stream_fd(path: str | Path) -> int | None:
+    """The descriptor of this process that `path` names, or None: ``/dev/stdout``,
+    ``/dev/stderr``, ``/dev/fd/N``, ``/proc/self/fd/N`` (``/proc/<this pid>/fd/N``), or a
+    chain of symbolic links through one of them, up to 40.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    int or None
+    """
+    p = os.path.abspath(path)
+    for _ in range(40):
+        hit = _STREAM_PATHS.fullmatch(p)
+        if hit:
+            std, n, pid, m = hit.groups()
+            if std:
+                return _STD_FDS[std]
+            if n is not None:
+                return int(n)
+            return int(m) if pid == "self" or int(pid) == os.getpid() else None
+        try:
+            target = os.readlink(p)
+        except OSError:
+            return None
+        p = os.path.abspath(os.path.join(os.path.dirname(p), target))
+    return None
+
+
+def _write_to_stream(fd: int, write: Callable, mode: str | None) -> None:
+    """`atomic_write` into this process's open descriptor fd, through a copy of it (its
+    position and mode kept: a log opened with ``>>`` is appended to): ``write(f)`` on it,
+    or, with ``mode=None``, ``write(tmp_path)`` on a temporary file whose bytes are then
+    copied to it (a writer given a path opens it afresh, truncating what it names)."""
+    with os.fdopen(os.dup(fd), "wb" if mode is None else mode) as out:
+        if mode is not None:
+            write(out)
+            return
+        with temp_dir("stabctl-stream-") as tmp:
+            name = os.path.join(tmp.path, "out")
+            write(name)
+            with open(name, "rb") as src:
+                shutil.copyfileobj(src, out)
 
 
 def atomic_writes(outputs) -> None:
@@ -1468,7 +1528,9 @@ class _appender:
 
     def _check_still_there(self) -> io.FileIO | None:
         """None when the path still names the file this sweep appends to, or when it was
-        deleted (made again from what the sweep holds open, with a warning); replaced by
+        deleted, its directory with it or not (made again from what the sweep holds open,
+        with a warning: a removed directory ended the sweep naming a '.kept' file the user
+        never made); replaced by
         another file: a copy of the held records beside it, for the sweep to stop
         (`_replaced`).  Before, every later record went to the deleted file (a rerun did
         all the work again) or to one the path no longer names, and the sweep said
@@ -1481,6 +1543,9 @@ class _appender:
             now = None
         if now is not None and (now.st_dev, now.st_ino) == (held.st_dev, held.st_ino):
             return None
+        gone = "" if self.path.parent.is_dir() else " (its directory too, made again)"
+        if gone:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
         copy = self._copy_held()
         if now is None:
             try:
@@ -1492,8 +1557,8 @@ class _appender:
                 self.f.close()
                 self.f = copy
                 warnings.warn(
-                    f"{self.path}: deleted while the sweep ran: made again from the records "
-                    "the sweep held open, and the sweep goes on",
+                    f"{self.path}: deleted while the sweep ran{gone}: made again from the "
+                    "records the sweep held open, and the sweep goes on",
                     stacklevel=3,
                 )
                 return None

@@ -2246,6 +2246,26 @@ def test_a_records_file_deleted_mid_sweep_is_made_again(tmp_path):
     assert not list(tmp_path.glob("*.kept"))
 
 
+def test_a_records_file_whose_directory_is_removed_mid_sweep_is_made_again(tmp_path):
+    """The records file's directory removed after the first record (round 37): the sweep
+    ended "error: .../r.jsonl.XXXX.kept: No such file or directory", naming a file the
+    user never made.  Directory and file are made again from the records held open."""
+    import shutil
+
+    out = tmp_path / "D" / "r.jsonl"
+    out.parent.mkdir()
+    jobs = _three_cct_jobs()
+
+    def remove_after_the_first(done, total):
+        if done == 1:
+            shutil.rmtree(out.parent)
+
+    with pytest.warns(UserWarning, match=r"deleted while the sweep ran \(its directory too"):
+        rep = run_sweep(jobs, out, workers=1, progress=remove_after_the_first)
+    assert rep.ran == 3
+    assert sorted(r["key"] for r in read_records(out).values()) == sorted(j.key for j in jobs)
+
+
 def test_a_records_file_replaced_mid_sweep_stops_it_with_its_records_kept(tmp_path):
     """The records file replaced by another (an empty file moved over it) after the first
     record: the sweep stops, naming where its records are kept (the two it had finished),

@@ -14,6 +14,7 @@ import click
 
 from stabctl.errors import InputError
 from stabctl.locking import temp_file
+from stabctl.parallel import stream_fd
 
 
 def _check_name(text: str, option: str) -> None:
@@ -94,8 +95,10 @@ def check_writable(path, option: str, directory: bool = False, records: bool = F
         )
     try:
         fd, held = temp_file(where, ".stabctl-write-test.")
-        os.close(fd)
-        held.remove()
+        try:
+            os.close(fd)
+        finally:
+            held.remove()
     except OSError as exc:
         raise InputError(
             f"{option} {path}: cannot write in {where} ({exc.strerror or exc})"
@@ -110,7 +113,7 @@ def _leads_somewhere(path: Path, option: str, kind: str) -> None:
     """An output given as a symbolic link must lead to something that exists (a file
     written through it, a directory written into): a broken link or a loop of links is
     refused, naming it and the `kind` ("file" or "directory") to give instead."""
-    if not path.is_symlink():
+    if not path.is_symlink() or stream_fd(path) is not None:  # a link to stdout: a pipe
         return
     try:
         os.path.realpath(path, strict=True)
