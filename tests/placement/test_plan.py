@@ -694,3 +694,33 @@ def test_place_coi_critical_names_its_law_in_its_header_and_json(tmp_path):
     assert row["cct_s"] >= row["required_s"] == pytest.approx(0.185)
     text = CliRunner().invoke(main, argv).output
     assert "each contingency's critical machines without storage (--coi critical)" in text
+
+
+def test_a_stable_clearing_above_the_cct_meets_no_requirement(tmp_path):
+    """Kundur's 13-101 at the default step: CCT 0.408 s, unstable cleared at 0.409-0.600 s
+    and stable again at 0.601 s (its swing turns at 3.133 rad).  A required CCT of 0.601 s
+    (47.3 % above its CCT) was 'VERIFIED (every contingency is stable without storage)',
+    0 MW, from one run at 0.601 s: the requirement is refused by name, or the contingency
+    set aside with its reason."""
+    import json
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n13,101\n")
+    args = ["place", "kundur", "--faults", str(faults), "--workers", "1"]
+    for req in (["--target-cct-gain", "47.3"], ["--target-cct-s", "0.601"]):
+        res = CliRunner().invoke(main, [*args, *req])
+        assert res.exit_code == 2, res.output
+        assert (
+            "error: not monotone: 13-101: stable cleared at its required 0.601 s without "
+            "storage, yet its CCT without storage is 0.408 s" in res.output
+        )
+    res = CliRunner().invoke(main, [*args, "--target-cct-s", "0.601", "--set-aside-infeasible",
+                                    "--json"])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    plan = json.loads(res.stdout)
+    assert plan["set_aside"] == ["13-101"] and plan["total_mw"] == 0.0
+    assert plan["infeasible"][0].startswith("not monotone: 13-101")
