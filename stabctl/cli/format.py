@@ -161,7 +161,7 @@ def print_storage(esd: dict, result) -> None:
         f"  {counted(sum(d['switchings'] for d in info), 'switching')}, {len(active)} of "
         f"{counted(len(info), 'device')} acted; absorbed "
         f"{sum(d['energy_absorbed_mj'] for d in info):.1f} MJ, delivered "
-        f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ"
+        f"{sum(d['energy_delivered_mj'] for d in info):.1f} MJ" + _chattering(info)
     )
     if active:
         click.echo(
@@ -174,6 +174,21 @@ def print_storage(esd: dict, result) -> None:
             f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
             f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}"
         )
+
+
+def _chattering(info: list) -> str:
+    """The storage summary's words for chattering (switchings within CHATTER_S of the
+    device's previous one, `stabctl.dynamics.driver.CHATTER_S`; the JSON's per device):
+    the text never said it, though 8 of a run's 18 switchings chattered."""
+    from stabctl.dynamics.driver import CHATTER_S
+
+    n = sum(d.get("chattering", 0) for d in info)
+    if not n:
+        return ""
+    return (
+        f"; {n} of the switchings chattering (within {CHATTER_S * 1e3:g} ms of the device's "
+        "previous one)"
+    )
 
 
 def machine_list(case, numbers) -> str:
@@ -782,8 +797,24 @@ _LAWS = {
 
 
 def _law_named(d: dict) -> str:
-    """The plan header's words for its law: none for the paper's (the system's COI)."""
-    return _LAWS.get(d.get("settings", {}).get("controller", {}).get("coi", "system"), "")
+    """The plan header's words for its law: none for the paper's (the system's COI, a
+    100 mHz deadband, a 0.8 pu gate, no hysteresis); a plan sized for another deadband,
+    gate or hysteresis printed like the paper's."""
+    law = d.get("settings", {}).get("controller", {})
+    words = _LAWS.get(law.get("coi", "system"), "")
+    for key, paper, text in _LAW_SETTINGS:
+        if key in law and law[key] != paper:
+            words += text.format(law[key])
+    return words
+
+
+#: the bang-bang law's settings a plan header names when they are not the paper's:
+#: (JSON key, the paper's value, the header's words)
+_LAW_SETTINGS = (
+    ("deadband_hz", 0.1, ", deadband {:g} Hz (--deadband-hz)"),
+    ("v_gate_pu", 0.8, ", voltage gate {:g} pu (--v-gate)"),
+    ("hysteresis_hz", 0.0, ", hysteresis {:g} Hz (--hysteresis-hz)"),
+)
 
 
 def critical_group_line(case, group: dict, decimals: int = 3) -> str:

@@ -63,7 +63,7 @@ def size_energy(pl: PlanContext, cons, mw, checks) -> tuple:
             e["delivered_mj"] = max(e.get("delivered_mj", 0.0), d)
             if need >= mwh[j]:
                 mwh[j], setter[j] = need, c
-                e["excursion_mwh"] = need
+                e["need_mwh"] = need
     mwh = np.where(mw > 0, np.ceil(100 * (1 + ENERGY_MARGIN) * mwh - 1e-9) / 100, 0.0)
     mwh = np.where(mw > 0, np.maximum(mwh, 0.01), 0.0)
     for j in used:
@@ -99,15 +99,11 @@ def energy_half_step(checks: dict, mw, mwh, energy) -> dict:
             "energy_covered_half": None,
         }
     half = {j: energy_need(checks[energy[j]["set_by"]], k) for k, j in enumerate(used)}
-    diff = {j: abs(half[j] - energy[j]["excursion_mwh"]) for j in used}
+    diff = {j: abs(half[j] - energy[j]["need_mwh"]) for j in used}
     return {
         "max_energy_diff_mwh": max(diff.values()),
         "max_energy_diff_pct": max(
-            (
-                100 * diff[j] / energy[j]["excursion_mwh"]
-                for j in used
-                if energy[j]["excursion_mwh"] > 0
-            ),
+            (100 * diff[j] / energy[j]["need_mwh"] for j in used if energy[j]["need_mwh"] > 0),
             default=None,
         ),
         "energy_covered_half": all(half[j] <= mwh[j] for j in used),

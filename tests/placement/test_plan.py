@@ -210,7 +210,7 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     assert hs["h_s"] == Simulator(load_case("kundur")).default_h
     # the sized energies converge too: the half-step change of each site's energy need is
     # inside the ENERGY_MARGIN added on top of it
-    need = [e["excursion_mwh"] for e in res.energy if e]
+    need = [e["need_mwh"] for e in res.energy if e]
     assert 0 <= hs["max_energy_diff_mwh"] <= ENERGY_MARGIN * min(need)
     assert hs["max_energy_diff_pct"] <= 100 * ENERGY_MARGIN and hs["energy_covered_half"]
     # the least uniform fleet (the reference row of the placement reports), checked the
@@ -233,10 +233,10 @@ def testenergy_half_step_figures_by_hand():
 
     mw = np.array([10.0, 0.0, 5.0, 2.0])
     energy = [
-        {"set_by": "a", "excursion_mwh": 0.02},
+        {"set_by": "a", "need_mwh": 0.02},
         {},
-        {"set_by": "b", "excursion_mwh": 0.01},
-        {"set_by": "b", "excursion_mwh": 0.0},
+        {"set_by": "b", "need_mwh": 0.01},
+        {"set_by": "b", "need_mwh": 0.0},
     ]
     # the k-th site with storage reads row k of its setter's run (sites 0, 2, 3)
     half = {
@@ -724,3 +724,22 @@ def test_a_stable_clearing_above_the_cct_meets_no_requirement(tmp_path):
     plan = json.loads(res.stdout)
     assert plan["set_aside"] == ["13-101"] and plan["total_mw"] == 0.0
     assert plan["infeasible"][0].startswith("not monotone: 13-101")
+
+
+def test_a_plan_s_header_names_a_law_other_than_the_paper_s(tmp_path):
+    """A plan sized for a 0.7 pu gate and a 50 mHz deadband printed like the paper's law:
+    the header names each setting that is not the paper's (round 37)."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n13,101\n")
+    args = ["place", "kundur", "--faults", str(faults), "--target-cct-s", "0.3", "--workers", "1"]
+    head = CliRunner().invoke(main, [*args, "--v-gate", "0.7", "--deadband-hz", "0.05"])
+    assert head.exit_code == 0, head.output
+    assert "ESDs, deadband 0.05 Hz (--deadband-hz), voltage gate 0.7 pu (--v-gate)):" in (
+        head.output
+    )
+    paper = CliRunner().invoke(main, args)
+    assert "(CCT 300 ms; load levels 1; ESDs):" in paper.output
