@@ -840,6 +840,23 @@ def critical_group_line(case, group: dict, decimals: int = 3) -> str:
     )
 
 
+def _half_step_line(hs: dict) -> str:
+    """The plan's check at half the step (`stabctl.placement.references.half_step`): its
+    contingencies' verdicts at their required time, CCTs and energies."""
+    from stabctl.placement.energy import energy_note
+
+    rows = hs["rows"]
+    stable = sum(r["stable_half"] for r in rows)
+    ccts = any(r["cct_s"] is not None for r in rows)
+    return (
+        f"half the step ({step_text(hs['h_s'] / 2)}): {stable} of "
+        f"{counted(len(rows), 'contingency', 'contingencies')} stable at their required time"
+        + ("" if stable == len(rows) else " (NOT all: the plan depends on the step)")
+        + (f"; CCTs within {1000 * hs['max_cct_diff_s']:.0f} ms" if ccts else "")
+        + energy_note(hs)
+    )
+
+
 def print_plan(case, d) -> None:
     """Print the `place` result as text: the plan's line, its sites (each at its bus,
     beside its machine, named as every output names machines: `Case.machine_name`; no
@@ -897,6 +914,8 @@ def print_plan(case, d) -> None:
             f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
             f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}"
         )
+    if d.get("half_step"):
+        click.echo(_half_step_line(d["half_step"]))
     if d.get("out_of_scope"):
         click.echo("out of scope (unstable when cleared at once): " + ", ".join(d["out_of_scope"]))
     for proof in d.get("infeasible") or []:

@@ -309,6 +309,7 @@ def place(
         uniform=uniform_reference,
         alone=alone,
         drop_infeasible=set_aside_infeasible,
+        half_step_verdicts=True,  # a plan's verdicts shown converged in the step
         place=PlaceOptions(
             zeta_min=zeta_min, amplitude_hz=amplitude_hz, max_sites=max_sites, max_iter=max_iter
         ),

@@ -228,6 +228,11 @@ class PlanOptions:
     half_step_n : int
         Also simulate the half_step_n contingencies of least clearing margin again at
         half the integration step (`half_step`); default 0: not done.
+    half_step_verdicts : bool
+        Also simulate every contingency of a verified plan again at half the step,
+        cleared at its required time with the allocation (`half_step`: its verdict shown
+        converged, as `stabctl place` does; a plan's margins are often 0 ms); default
+        False.
 
     Raises
     ------
@@ -253,6 +258,7 @@ class PlanOptions:
     scope_stable_at_once: bool = True
     drop_infeasible: bool = False
     half_step_n: int = 0
+    half_step_verdicts: bool = False
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -571,8 +577,10 @@ def _references(
     def margins_and_half_step():
         if o.margins_tol is not None:
             margins(pl, cons, result, o.margins_tol, o.margins_cap_s, kw)
-        if o.half_step_n > 0 and result.verified:
-            result.half_step = half_step(pl, cons, result, o.half_step_n, kw)
+        if (o.half_step_n > 0 or o.half_step_verdicts) and result.verified:
+            result.half_step = half_step(
+                pl, cons, result, o.half_step_n, kw, verdicts=o.half_step_verdicts
+            )
 
     with ThreadPoolExecutor(max_workers=3) as threads:
         m = threads.submit(margins_and_half_step)

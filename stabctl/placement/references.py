@@ -66,7 +66,7 @@ def margins(pl: PlanContext, cons, result, tol: float, cap_s: float, kw) -> None
         )
 
 
-def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
+def half_step(pl: PlanContext, cons, result, n: int, kw, verdicts: bool = False) -> dict:
     """The allocation's n contingencies of least clearing margin (those with a simulated
     CCT) simulated again at half the integration step: each cleared at its required time
     (the verdict), and its CCT with the allocation to the plan's tolerance, the bisection
@@ -74,12 +74,15 @@ def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
     in the step, as every figure that depends on it).
 
     The runs that set each site's energy (`size_energy`) are simulated again at half the
-    step too: the energy is shown converged in the step as well.
+    step too: the energy is shown converged in the step as well.  With `verdicts`, every
+    other contingency of the plan is too, cleared at its required time (a row without
+    CCTs: `stabctl place`, whose plans have no clearing margins to rank by).
 
     Returns {"h_s" (the full step, s), "rows": [{"name", "required_s", "cct_s" (full
     step), "cct_tol_s" (its resolution), "cct_half_s", "stable_half" (at the required
-    time)}], "all_stable", "max_cct_diff_s" (largest |cct_half - cct| beyond the coarser
-    resolution, s), and the energy's half-step figures (`energy_half_step`)}."""
+    time)}] (a verdict's row: its CCTs None), "all_stable", "max_cct_diff_s" (largest
+    |cct_half - cct| beyond the coarser resolution, s), and the energy's half-step figures
+    (`energy_half_step`)}."""
     h = pl.step_s()
     by_name = {c.name: c for c in cons}
     rows = sorted(
@@ -87,9 +90,16 @@ def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
     )[:n]
     tight = [by_name[r["name"]] for r in rows]
     res_of = {r["name"]: r.get("cct_tol_s", pl.tol) for r in rows}
-    # one batch: the tightest contingencies and those that set an energy (often the same)
+    others = (
+        [by_name[r["name"]] for r in result.contingencies if r["name"] in by_name]
+        if verdicts
+        else []
+    )
+    # one batch: the tightest contingencies, those that set an energy (often the same), and
+    # with verdicts every other one
     setters = energy_setters(by_name, result.mw, result.energy)
-    checks = pl.check(list({c.name: c for c in tight + setters}.values()), result.mw, h=h / 2)
+    batch = list({c.name: c for c in tight + setters + others}.values())
+    checks = pl.check(batch, result.mw, h=h / 2)
     ev = evaluations(
         pl.case,
         tight,
@@ -114,13 +124,32 @@ def half_step(pl: PlanContext, cons, result, n: int, kw) -> dict:
         }
         for r in rows
     ]
+    done = {o["name"] for o in out}
+    out += [
+        {
+            "name": c.name,
+            "required_s": c.target_cct_s,
+            "cct_s": None,
+            "cct_tol_s": None,
+            "cct_half_s": None,
+            "stable_half": bool(checks[c.name]["stable_at_check"]),
+        }
+        for c in others
+        if c.name not in done
+    ]
     diff = max(
-        (max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"]) for o in out), default=0.0
+        (
+            max(0.0, abs(o["cct_half_s"] - o["cct_s"]) - o["cct_tol_s"])
+            for o in out
+            if o["cct_s"] is not None
+        ),
+        default=0.0,
     )
     ok = all(o["stable_half"] for o in out)
     energy = energy_half_step(checks, result.mw, result.mwh, result.energy)
     pl.say(
-        f"half step ({1000 * h / 2:.3g} ms): {len(out)} tightest contingencies "
+        f"half step ({1000 * h / 2:.3g} ms): {len(out)} {'' if verdicts else 'tightest '}"
+        "contingencies "
         f"{'all stable' if ok else 'NOT all stable'} at their required time; CCTs within "
         f"{1000 * diff:.0f} ms beyond their resolution" + energy_note(energy)
     )

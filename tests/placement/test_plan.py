@@ -743,3 +743,26 @@ def test_a_plan_s_header_names_a_law_other_than_the_paper_s(tmp_path):
     )
     paper = CliRunner().invoke(main, args)
     assert "(CCT 300 ms; load levels 1; ESDs):" in paper.output
+
+
+def test_a_plan_s_verdicts_are_shown_at_half_the_step(tmp_path):
+    """`place` never checked its plan at half the step (its margins are often 0 ms, 13-101
+    required 0.449 s and met at 0.449 s): every contingency is run again at h/2, cleared at
+    its required time with the allocation, and the text and JSON say so (round 37)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n3,101\n13,101\n")
+    args = ["place", "kundur", "--faults", str(faults), "--target-cct-gain", "10", "--workers", "1"]
+    res = CliRunner().invoke(main, [*args, "--json"])
+    assert res.exit_code == 0, res.output
+    hs = json.loads(res.stdout)["half_step"]
+    assert hs["h_s"] == 0.005 and hs["all_stable"] and hs["energy_covered_half"]
+    assert sorted(r["name"] for r in hs["rows"]) == ["13-101", "3-101"]
+    assert all(r["stable_half"] and r["cct_half_s"] is None for r in hs["rows"])
+    text = CliRunner().invoke(main, args).output
+    assert "half the step (2.5 ms): 2 of 2 contingencies stable at their required time" in text
