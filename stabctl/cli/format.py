@@ -916,6 +916,14 @@ def print_plan(case, d) -> None:
         )
     if d.get("half_step"):
         click.echo(_half_step_line(d["half_step"]))
+    for r in d["contingencies"]:
+        if r.get("critical_group"):
+            click.echo(f"  {r['name']}: the law armed on {machine_list(case, r['critical_group'])}")
+        if r.get("chattering"):
+            click.echo(
+                f"  {r['name']}: at its required time, {r['switchings']} switchings"
+                + _chattering([r])
+            )
     if d.get("out_of_scope"):
         click.echo("out of scope (unstable when cleared at once): " + ", ".join(d["out_of_scope"]))
     for proof in d.get("infeasible") or []:

@@ -341,11 +341,17 @@ def _check_run(sim, f: LineFault, fleet, t_clear: float, sites, ctrl) -> dict:
         for j in range(modes.shape[1]):
             e = energy_excursion(r.t, modes[:, j].astype(float))
             per_mw.append(max(e["soc_high_mj"], -e["soc_low_mj"]))
+    devices = r.meta.get("storage", []) if fleet else []
     return {
         "stable_at_check": bool(r.stable),
         "check_s": t_clear,
         "energy_mj": energy,
         "site_excursion_s": per_mw,
+        # switchings within CHATTER_S of the device's previous one, and the group the law
+        # was armed on (coi "critical"): a plan reported neither
+        "switchings": sum(d["switchings"] for d in devices),
+        "chattering": sum(d["chattering"] for d in devices),
+        "critical_group": list(ctrl.critical) if ctrl.coi == "critical" else None,
     }
 
 

@@ -901,7 +901,9 @@ def _uniform_start(pl: PlanContext, st: _Rounds, rnd: int, kw: Study) -> bool:
 def _rows(cons, checks, evs, base) -> list:
     """One row per contingency: name, fault, load, required time, stable at it, CCT
     without storage (and whether it is only known above t_max) and with the allocation
-    where simulated, margin (s)."""
+    where simulated, margin (s); from its run at the required time with the allocation,
+    the devices' switchings and those chattering, and the machines the law was armed on
+    (``place --coi critical``; None otherwise or without such a run)."""
     out = []
     for c in cons:
         cct = evs.get(c.name, {}).get("cct_s")
@@ -919,6 +921,10 @@ def _rows(cons, checks, evs, base) -> list:
                 "cct_s": cct,
                 "margin_s": None if cct is None else cct - c.target_cct_s,
                 "margin_at_least": False,
+                # its run at the required time with the allocation (None: not run)
+                "switchings": checks[c.name].get("switchings"),
+                "chattering": checks[c.name].get("chattering"),
+                "critical_group": checks[c.name].get("critical_group"),
             }
         )
     return out
