@@ -57,6 +57,7 @@ from stabctl.placement.program import (
     candidate_sites,
     solve_allocation,
     sparse_allocation,
+    total_mw,
 )
 from stabctl.stability.cct import SearchOptions, cached_simulator
 from stabctl.storage.control import BangBangCOI
@@ -1005,7 +1006,7 @@ def _record(it, setup: _Setup, p: _Point, alloc: Allocation, rho, radius, which=
     which = setup.contingencies if which is None else which
     return {
         "iteration": it,
-        "total_mw": float(p.mw.sum()),
+        "total_mw": total_mw(p.mw),
         "n_sites": int(np.count_nonzero(p.mw)),
         "mw_by_site": [float(x) for x in p.mw],
         "meets_targets": p.feasible,

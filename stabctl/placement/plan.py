@@ -56,7 +56,7 @@ from stabctl.placement.loop import (
     evaluations,
     place,
 )
-from stabctl.placement.program import InfeasibleError, candidate_sites
+from stabctl.placement.program import InfeasibleError, candidate_sites, total_mw
 from stabctl.placement.references import (
     faults_alone,
     half_step,
@@ -831,7 +831,7 @@ def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
         {
             "round": rnd,
             "active": [c.name for c in st.active],
-            "total_mw": float(st.mw.sum()),
+            "total_mw": total_mw(st.mw),
             "loop_verified": res.verified,
             "loop_message": res.message,
             "failing": [c.name for c in fails],

@@ -48,6 +48,22 @@ class InfeasibleError(StabctlError):
         self.contingencies = tuple(contingencies)
 
 
+def total_mw(mw) -> float:
+    """Ratings summed (MW), to the watt: each is on a 0.1 MW grid, and a float sum printed
+    134.10000000000002 in a plan's JSON.
+
+    Parameters
+    ----------
+    mw : array_like of float
+        Ratings, MW.
+
+    Returns
+    -------
+    float
+    """
+    return round(float(np.sum(mw)), 6)
+
+
 @dataclass(frozen=True)
 class Site:
     """A candidate ESD site: `bus`, the `machine` (number) driving its bang-bang control,
@@ -158,7 +174,7 @@ class Allocation:
 
     @property
     def total_mw(self) -> float:
-        return float(self.mw.sum())
+        return total_mw(self.mw)
 
     @property
     def n_sites(self) -> int:

@@ -22,7 +22,7 @@ from stabctl.placement.context import PlanContext
 from stabctl.placement.energy import energy_half_step, energy_note, energy_setters, size_energy
 from stabctl.placement.evaluation import VerifyOptions
 from stabctl.placement.loop import PlaceOptions, WarmStart, _rounded, evaluations, place
-from stabctl.placement.program import InfeasibleError
+from stabctl.placement.program import InfeasibleError, total_mw
 
 #: Uniform fleet bisection: resolution (% of MVA).
 UNIFORM_RES_PCT = 0.1
@@ -282,7 +282,7 @@ def _uniform_result(pl: PlanContext, cons, pct: float, mw, ok: bool, checks) -> 
     )
     return {
         "pct": pct,
-        "total_mw": float(mw.sum()),
+        "total_mw": total_mw(mw),
         "mw_by_site": mw.tolist(),
         "mwh": float(mwh.sum()),
         "cost": pl.cost.split(pl.sites, mw, mwh),

@@ -794,3 +794,11 @@ def test_a_plan_names_its_armed_groups_and_its_chattering():
         "  3-101: at its required time, 342 switchings; 293 of the switchings chattering "
         "(within 20 ms of the device's previous one)" in text.output
     )
+
+
+def test_a_plan_s_total_is_summed_to_the_watt():
+    """A plan's JSON gave total_mw 134.10000000000002 for three sites of 44.7 MW."""
+    from stabctl.placement.program import total_mw
+
+    assert sum([44.7, 44.7, 44.7]) != 134.1
+    assert total_mw([44.7, 44.7, 44.7]) == 134.1 and total_mw([]) == 0.0
