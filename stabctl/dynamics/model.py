@@ -1286,9 +1286,13 @@ def _freeze_tripped(p, EP, GP, Z_mac, dxm, dxe, dxp, dxg, dxt):
     current |psi|, an electrical power |psi|^2: Kundur's G4 tripped at 1 s read 1.15-1.48
     pu and ran away).  An exciter integrated in sub-intervals (`stabctl.dynamics.subinterval`)
     runs on, its output feeding nothing."""
+    tripped = False
     for m in range(p.n_mac):
         if Z_mac[m] == 0:
             dxm[:, m] = 0.0
+            tripped = True
+    if not tripped:  # every evaluation of every run: the controls' loops only after a trip
+        return
     for i in range(p.n_exc):
         if Z_mac[int(EP[i, exc.E.MAC])] == 0:
             dxe[:, i] = 0.0
