@@ -23,6 +23,14 @@ maker may be about to lock it).  They hold nothing of the user's: a half-written
 no output.  A file system whose locks cannot be taken (some NFS mounts) keeps them rather
 than risk removing a live process's; one whose locks are each machine's own (NFS with
 ``local_lock=flock``) must not be shared by two machines writing the same output at once.
+
+Work kept across an interrupt (`kept_path`: a plan's finished simulations,
+`stabctl.placement.memo`; `estimate cct`'s finished searches) lives in this user's own
+directory, ``$XDG_CACHE_HOME/<kind>/`` (``~/.cache`` when XDG_CACHE_HOME is unset), or,
+where that cannot be made (a read-only home), ``<temporary directory>/<kind>-<uid>/``; each
+made with mode 0700 and refused when it belongs to another user or others may write into it
+(`unsafe_reason`, as numba's kernel cache, `stabctl._jit.cache`): whoever can write kept
+results could hand a run results it never simulated.
 """
 
 from __future__ import annotations
@@ -481,3 +489,128 @@ def _remove_if_stale(path: str, want_dir: bool) -> bool:
         return True
     finally:
         os.close(fd)
+
+
+# -- files kept across an interrupt: this user's own directories ------------------------
+
+
+def unsafe_reason(directory: Path) -> str:
+    """Why numba must not load kernels from `directory` ('' if it may): it belongs to
+    another user than this one or root, or others than its owner may write into it (a
+    kernel index is a pickle: whoever can plant one runs code in every process that
+    loads it).
+
+    Parameters
+    ----------
+    directory : Path
+        A cache directory (a link to one followed); one not there yet is safe (numba
+        makes it with this process's umask).
+
+    Returns
+    -------
+    str
+        The reason, naming the directory, or ''.
+    """
+    try:
+        st = directory.stat()
+    except OSError:
+        return ""
+    return _unsafe_owner_or_mode(directory, st)
+
+
+def unsafe_entry_reason(path: Path) -> str:
+    """Why numba must not unpickle the cache file `path` (a kernel's ``*.nbi`` index or
+    ``*.nbc`` data; '' if it may): it is not a regular file (a symbolic link, even to a
+    safe file: its target is whatever the link's writer chose), or, as a directory
+    (`unsafe_reason`), it belongs to another user than this one or root or is writable by
+    others than its owner (whoever can write it runs code in the process that loads it).
+
+    Parameters
+    ----------
+    path : Path
+        The file; one that is missing is safe (numba finds no entry).
+
+    Returns
+    -------
+    str
+        The reason, naming the file, or ''.
+    """
+    try:
+        st = path.lstat()
+    except OSError:
+        return ""  # missing or unreadable: numba's own open of it says so
+    if not stat.S_ISREG(st.st_mode):
+        return f"{path} is not a regular file"
+    return _unsafe_owner_or_mode(path, st)
+
+
+def _unsafe_owner_or_mode(path: Path, st: os.stat_result) -> str:
+    """The reason a cache directory or file of status `st` is unsafe by its owner (another
+    user than this one or root) or its mode (writable by others than its owner), or ''."""
+    if st.st_uid not in (os.geteuid(), 0):
+        return f"{path} belongs to user {st.st_uid}"
+    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return f"{path} is writable by others than its owner"
+    return ""
+
+
+def private_file(path: str | os.PathLike) -> Path:
+    """`path` once its directory is made (mode 0700, parents too) and both are checked.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (it need not be there yet).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        The directory cannot be made, belongs to another user or may be written by others
+        than its owner, or the file is there and is not a regular file (a link) or is
+        another user's or writable by others; naming which.
+    """
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+    except OSError as exc:
+        raise InputError(f"{path.parent}: cannot be made ({exc.strerror})") from None
+    why = unsafe_reason(path.parent) or unsafe_entry_reason(path)
+    if why:
+        raise InputError(f"{why}: not used to keep finished work")
+    return path
+
+
+def kept_path(kind: str, name: str) -> Path:
+    """The file `name` of this user's directory for `kind` (module docstring): the cache
+    directory's, else the temporary directory's.
+
+    Parameters
+    ----------
+    kind : str
+        The directory's name, e.g. ``"stabctl-place"``.
+    name : str
+        The file's name.
+
+    Returns
+    -------
+    Path
+        Checked by `private_file`.
+
+    Raises
+    ------
+    InputError
+        Neither directory can be used, naming both reasons.
+    """
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / kind
+    temp = Path(tempfile.gettempdir()) / f"{kind}-{os.geteuid()}"
+    why = []
+    for directory in (cache, temp):
+        try:
+            return private_file(directory / name)
+        except InputError as exc:
+            why.append(str(exc))
+    raise InputError("; ".join(why))

@@ -862,8 +862,9 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
     ------
     callable
         ``map(func, jobs: list[dict], done=None) -> list``; func must be a module-level
-        function taking one dict; ``done(k, n)``, if given, is called in this process as
-        each job finishes (k of the n jobs done, in the order they finish).
+        function taking one dict; ``done(k, n, i, result)``, if given, is called in this
+        process as each job finishes (k of the n jobs done, in the order they finish; i
+        the job's index in jobs, result its result: a caller may keep it at once).
 
     Raises
     ------
@@ -899,7 +900,8 @@ class _RestartedPool:
         self.pool = stack.enter_context(pooled(workers))
 
     def map(self, func, jobs: list, done=None) -> list:
-        """func(job) for each job, results in job order; done(k, n) as each finishes."""
+        """func(job) for each job, results in job order; done(k, n, i, result) as each
+        finishes."""
         results: dict = {}
         left, restarts = list(range(len(jobs))), 0
         while True:
@@ -923,13 +925,14 @@ class _RestartedPool:
                 break
         lost = left[len(futures) :]  # not sent
         for fut in _as_finished(futures, self.pool):
+            k = futures[fut]
             try:
-                results[futures[fut]] = fut.result()
+                results[k] = fut.result()
             except BrokenProcessPool:
-                lost.append(futures[fut])
+                lost.append(k)
                 continue
             if done is not None:
-                done(len(results), len(jobs))
+                done(len(results), len(jobs), k, results[k])
         return sorted(lost)
 
 
@@ -1013,13 +1016,14 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
     try:
         workers = _DaskWorkers(client)
         for fut in _finished(futures, workers):
+            k = futures[fut]
             try:
-                results[futures[fut]] = _dask_result(fut, workers)
+                results[k] = _dask_result(fut, workers)
             finally:
                 fut.release()
             del futures[fut]
             if done is not None:
-                done(len(jobs) - len(futures), len(jobs))
+                done(len(jobs) - len(futures), len(jobs), k, results[k])
     except _NoWorker as exc:
         raise SweepIncomplete(
             f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at {address} {exc.why}"
@@ -1056,7 +1060,7 @@ def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:
     for j in jobs:
         out.append(func(j))
         if done is not None:
-            done(len(out), len(jobs))
+            done(len(out), len(jobs), len(out) - 1, out[-1])
     return out
 
 

@@ -94,10 +94,12 @@ def test_worker_pool_tells_each_finished_job_in_process_and_in_processes():
     for workers in (1, 2):
         seen: list = []
         with worker_pool(workers) as run:
-            out = run(json.dumps, jobs, done=lambda k, n, seen=seen: seen.append((k, n)))
+            out = run(json.dumps, jobs, done=lambda *a, seen=seen: seen.append(a))
             assert run(json.dumps, jobs) == out  # without done, as before
         assert out == [json.dumps(j) for j in jobs]  # job order, whatever the finishing order
-        assert seen == [(k, 5) for k in range(1, 6)]
+        assert [s[:2] for s in seen] == [(k, 5) for k in range(1, 6)]
+        # each finished job's index and result (kept at once: `stabctl.placement.memo`)
+        assert sorted((i, r) for *_, i, r in seen) == list(enumerate(out))
 
 
 def test_a_plans_batch_says_its_fraction_done_and_time_left():

@@ -44,7 +44,7 @@ from typing import ClassVar
 import numba
 from numba.core.caching import CompileResultCacheImpl, FunctionCache, IndexDataCacheFile
 
-from stabctl.locking import temp_dir
+from stabctl.locking import temp_dir, unsafe_entry_reason, unsafe_reason
 
 _PKG = Path(__file__).resolve().parents[1]
 
@@ -445,66 +445,6 @@ def guard(dispatcher):
     """
     dispatcher._cache = GuardedCache(dispatcher.py_func)
     return dispatcher
-
-
-def unsafe_reason(directory: Path) -> str:
-    """Why numba must not load kernels from `directory` ('' if it may): it belongs to
-    another user than this one or root, or others than its owner may write into it (a
-    kernel index is a pickle: whoever can plant one runs code in every process that
-    loads it).
-
-    Parameters
-    ----------
-    directory : Path
-        A cache directory (a link to one followed); one not there yet is safe (numba
-        makes it with this process's umask).
-
-    Returns
-    -------
-    str
-        The reason, naming the directory, or ''.
-    """
-    try:
-        st = directory.stat()
-    except OSError:
-        return ""
-    return _unsafe_owner_or_mode(directory, st)
-
-
-def unsafe_entry_reason(path: Path) -> str:
-    """Why numba must not unpickle the cache file `path` (a kernel's ``*.nbi`` index or
-    ``*.nbc`` data; '' if it may): it is not a regular file (a symbolic link, even to a
-    safe file: its target is whatever the link's writer chose), or, as a directory
-    (`unsafe_reason`), it belongs to another user than this one or root or is writable by
-    others than its owner (whoever can write it runs code in the process that loads it).
-
-    Parameters
-    ----------
-    path : Path
-        The file; one that is missing is safe (numba finds no entry).
-
-    Returns
-    -------
-    str
-        The reason, naming the file, or ''.
-    """
-    try:
-        st = path.lstat()
-    except OSError:
-        return ""  # missing or unreadable: numba's own open of it says so
-    if not stat.S_ISREG(st.st_mode):
-        return f"{path} is not a regular file"
-    return _unsafe_owner_or_mode(path, st)
-
-
-def _unsafe_owner_or_mode(path: Path, st: os.stat_result) -> str:
-    """The reason a cache directory or file of status `st` is unsafe by its owner (another
-    user than this one or root) or its mode (writable by others than its owner), or ''."""
-    if st.st_uid not in (os.geteuid(), 0):
-        return f"{path} belongs to user {st.st_uid}"
-    if st.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
-        return f"{path} is writable by others than its owner"
-    return ""
 
 
 def private_cache_dir() -> tuple[Path, str]:

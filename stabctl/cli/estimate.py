@@ -7,6 +7,7 @@ the old flags ``--closed-loop`` / ``--cct`` the subcommand of that name.
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import click
@@ -33,6 +34,7 @@ from stabctl.cli.options import (
     fault_options,
     given_options,
     json_option,
+    kept_until_done,
     model_options,
     out_file_option,
     q_limits_option,
@@ -60,7 +62,7 @@ from stabctl.cli.pmu_options import (
     write_kept,
     write_recording,
 )
-from stabctl.errors import InputError
+from stabctl.errors import InputError, StabctlError
 
 #: the storage settings that mean nothing without --esd-pct here (--coi also picks the
 #: centre of inertia the relative speeds are taken from)
@@ -492,16 +494,32 @@ def cct(
     model = model_settings(conventions, step, q_limits)
     check_step_given(case, model, t_end)  # before the searches: not one failure per run
     _check_estimable(case, model)
-    table = estimator_ccts(
-        case_name,  # the file given, not the case's name: an edited copy of a built-in
-        fault,
-        far_bus,
-        esd_pct=esd_pct,
-        runs=runs,
-        seed=seed,
-        settings=settings,
-        model=model,
-        esd_model=esd_model,
+    search = {
+        "case": case.digest(),
+        "fault": [fault, far_bus],
+        "esd_pct": esd_pct,
+        "runs": runs,
+        "seed": seed,
+        "pmu": dict(settings.__dict__),
+        "model": model.to_inputs(),
+        "esd_model": esd_model,
+    }
+    records = _kept_records(search)
+    table = kept_until_done(
+        lambda: _kept_searches(records),
+        lambda: records.unlink(missing_ok=True),
+        lambda: estimator_ccts(
+            case_name,  # the file given, not the case's name: an edited copy of a built-in
+            fault,
+            far_bus,
+            esd_pct=esd_pct,
+            runs=runs,
+            seed=seed,
+            settings=settings,
+            model=model,
+            esd_model=esd_model,
+            records=records,
+        ),
     )
     if all(row["failed"] == row["runs"] for row in table.values()):
         why = sorted({e for row in table.values() for e in row["errors"]})
@@ -516,6 +534,50 @@ def cct(
         ),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
+
+
+def _kept_records(search: dict):
+    """The records file of `estimate cct`'s searches (this user's
+    `stabctl.locking.kept_path`, named by the package's code and the search's every
+    setting, `search`), so that the same command after an interrupt runs only the
+    searches not yet recorded; telling on stderr how many it holds.  Raises InputError
+    where it cannot be kept."""
+    import hashlib
+
+    from stabctl._jit.cache import package_digest
+    from stabctl.locking import kept_path
+    from stabctl.parallel import read_records
+
+    text = json.dumps([package_digest(), search], sort_keys=True, default=str)
+    path = kept_path("stabctl-estimate", hashlib.sha256(text.encode()).hexdigest()[:32] + ".jsonl")
+    if path.exists():
+        try:
+            n = len(read_records(path))
+        except (StabctlError, OSError) as exc:
+            warnings.warn(f"{exc}: the searches it kept are run again", stacklevel=2)
+            path.unlink(missing_ok=True)
+            return path
+        click.echo(
+            f"{n} finished CCT search(es) of an interrupted run of this command read from "
+            f"{path}: not run again",
+            err=True,
+        )
+    return path
+
+
+def _kept_searches(records) -> str:
+    """What an interrupted `estimate cct` keeps, in words."""
+    from stabctl.parallel import read_records
+
+    try:
+        n = len(read_records(records)) if records.exists() else 0
+    except (StabctlError, OSError):
+        n = 0
+    if not n:
+        return f"no CCT search had finished, so nothing is kept (in {records})"
+    return (
+        f"{n} finished CCT search(es) are kept in {records}; the same command runs only the others"
+    )
 
 
 def _what_ran(case, fault: tuple, esd_pct, settings, seed) -> dict:

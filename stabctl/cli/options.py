@@ -289,12 +289,14 @@ def reports_errors(func):
 def _reported(func, args, kwargs):
     """`reports_errors`'s call of the command ``func(*args, **kwargs)``."""
     _WRITTEN.clear()  # this command's
+    _KEEPING.clear()
     with (
         warnings.catch_warnings(record=True) as caught,
         _sigterm_as_interrupt(),
         on_command_line(),
     ):
         warnings.simplefilter("default")
+        _CAUGHT[:] = [caught]  # this command's
         try:
             try:
                 _check_numbers(kwargs)
@@ -348,8 +350,30 @@ def _say(caught) -> None:
     """The warnings held back while a command ran, one ``warning:`` line each, a warning
     given again from another place (a setting checked by the command, then by each of
     its runs) once."""
-    for text in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
+    for text in _texts(caught):
         click.echo(f"warning: {text}", err=True)
+
+
+def _texts(caught) -> list[str]:
+    """The texts of the warnings `caught`, each once, on one line each."""
+    return list(dict.fromkeys(" ".join(str(w.message).split()) for w in caught))
+
+
+#: the warnings the running command has been given so far (`_reported`'s list)
+_CAUGHT: list = []
+
+
+def warnings_so_far() -> list[str]:
+    """The warnings the running command has been given so far, each once, as its
+    ``warning:`` lines will give them: for a JSON output, whose reader sees no stderr
+    (``simulate --json``'s ``warnings``: a trapezoid step of 0.2 s gave a wrong verdict
+    whose warning only stderr carried).
+
+    Returns
+    -------
+    list of str
+    """
+    return _texts(_CAUGHT[-1]) if _CAUGHT else []
 
 
 # -- numeric options checked at the edge -------------------------------------------------
@@ -623,6 +647,51 @@ def note_written(path) -> None:
     _WRITTEN.append(str(path))
 
 
+#: what the running command keeps should it be interrupted, in words (`note_keeping`)
+_KEEPING: list = []
+
+
+def note_keeping(what) -> None:
+    """Note what the running command keeps should it be interrupted: an interrupt says
+    ``interrupted: <what()>; run again with: <command>`` (`place`'s finished simulations).
+
+    Parameters
+    ----------
+    what : callable
+        ``what() -> str``, called when the interrupt is reported.
+    """
+    _KEEPING.append(what)
+
+
+def kept_until_done(kept, remove, run):
+    """``run()`` (a command's long work), what it keeps told by an interrupt
+    (`note_keeping`), and ``remove()`` called once the work has ended: returned, or refused
+    with a StabctlError other than SweepIncomplete (its workers lost: the same command
+    then reuses what had finished, as after an interrupt).
+
+    Parameters
+    ----------
+    kept : callable
+        ``kept() -> str``: what is kept, in words.
+    remove : callable
+        Removes what was kept.
+    run : callable
+        The work; its result is returned.
+    """
+    from stabctl.parallel import SweepIncomplete
+
+    note_keeping(kept)
+    try:
+        result = run()
+    except SweepIncomplete:
+        raise
+    except StabctlError:
+        remove()
+        raise
+    remove()
+    return result
+
+
 def _paper_records(out) -> bool:
     """Whether an interrupted `stabctl paper` kept sweep records to resume from (in its
     output directory's work directory, `stabctl.studies.paper.WORK_DIR`)."""
@@ -644,6 +713,8 @@ def _interrupted(kwargs, exc: BaseException | None = None) -> str:
     argv = ["stabctl", *sys.argv[1:]]
     if said := getattr(exc, "kept", None):
         return f"interrupted: {said}; run again with: {shlex.join(argv)}"
+    if _KEEPING:
+        return f"interrupted: {_KEEPING[-1]()}; run again with: {shlex.join(argv)}"
     if name == "paper" and "--resume" not in argv:
         argv.append("--resume")
     out = kwargs.get("out_path") or kwargs.get("out_dir") or ""

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 
 import click
 
@@ -19,6 +20,7 @@ from stabctl.cli.options import (
     esd_model_option,
     faults_option,
     json_option,
+    kept_until_done,
     model_options,
     out_file_option,
     parallel_options,
@@ -310,6 +312,7 @@ def place(
         alone=alone,
         drop_infeasible=set_aside_infeasible,
         half_step_verdicts=True,  # a plan's verdicts shown converged in the step
+        memo=_memo(case),  # an interrupted plan run again simulates only the rest
         place=PlaceOptions(
             zeta_min=zeta_min, amplitude_hz=amplitude_hz, max_sites=max_sites, max_iter=max_iter
         ),
@@ -324,8 +327,11 @@ def place(
         runner=RunnerOptions(n, scheduler),
         esd_model=esd_model,
     )
-    result = plan(
-        case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
+    result = _kept_plan(
+        options.memo,
+        lambda: plan(
+            case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
+        ),
     )
     out = {"case": case.name, "esd_model": esd_model, "settings": _settings(study, case_name)}
     out.update(result.to_dict())
@@ -337,6 +343,47 @@ def place(
         atomic_write(out_path, lambda f: json.dump(out, f, indent=1, default=float))
     if not result.verified:
         sys.exit(1)
+
+
+def _memo(case):
+    """The `stabctl.placement.memo.Memo` of a plan of `case` (this user's
+    `stabctl.locking.kept_path`), telling on stderr how many finished simulations of an
+    interrupted plan it holds; None, with a warning, where it cannot be kept."""
+    from stabctl.locking import kept_path
+    from stabctl.placement.memo import Memo
+
+    try:
+        memo = Memo(kept_path("stabctl-place", f"{case.digest()}.jsonl"))
+    except InputError as exc:
+        warnings.warn(
+            f"{exc}: the plan's finished simulations are not kept (an interrupted plan "
+            "starts again from the beginning)",
+            stacklevel=2,
+        )
+        return None
+    if memo.n_read:
+        damaged = f" ({memo.n_damaged} line(s) not whole passed over)" if memo.n_damaged else ""
+        click.echo(
+            f"{memo.n_read} finished simulation job(s) of an interrupted plan of this case "
+            f"read from {memo.path}{damaged}: those of this plan are not run again",
+            err=True,
+        )
+    return memo
+
+
+def _kept_plan(memo, run):
+    """`run()` (the plan), its memo kept when it is interrupted or its workers were lost
+    (the same command then simulates only the rest), removed once the plan has ended."""
+    if memo is None:
+        return run()
+    result = kept_until_done(memo.kept, memo.remove, run)
+    if memo.n_reused:
+        click.echo(
+            f"{memo.n_reused} simulation job(s) taken from the interrupted plan "
+            f"({memo.path}, now removed), not run again",
+            err=True,
+        )
+    return result
 
 
 def _settings(study, case_name: str) -> dict:

@@ -148,7 +148,7 @@ class PlanContext:
             beat.note(f"{len(jobs)} {func.__name__} job(s) running, {before}")
             t0 = time.monotonic()
 
-            def done(k, n):
+            def done(k, n, *_):
                 left = (time.monotonic() - t0) * (n - k) / k
                 beat.note(
                     f"{func.__name__}: {k} of {n} job(s) done ({k / n:.0%}), about "

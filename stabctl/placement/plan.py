@@ -56,6 +56,7 @@ from stabctl.placement.loop import (
     evaluations,
     place,
 )
+from stabctl.placement.memo import Memo
 from stabctl.placement.program import InfeasibleError, candidate_sites, total_mw
 from stabctl.placement.references import (
     faults_alone,
@@ -233,6 +234,10 @@ class PlanOptions:
         cleared at its required time with the allocation (`half_step`: its verdict shown
         converged, as `stabctl place` does; a plan's margins are often 0 ms); default
         False.
+    memo : Memo or None
+        Keeps each simulation job's result as it finishes and hands back those it holds
+        (`stabctl.placement.memo`): the same plan run again after an interrupt simulates
+        only what had not finished, and gives the same plan; default None: not kept.
 
     Raises
     ------
@@ -259,11 +264,14 @@ class PlanOptions:
     drop_infeasible: bool = False
     half_step_n: int = 0
     half_step_verdicts: bool = False
+    memo: Memo | None = None
 
     def __post_init__(self) -> None:
         check_fields(self)
         object.__setattr__(self, "load_levels", _load_levels(self.load_levels))
         require_instance(self.place, PlaceOptions, "PlanOptions(place)")
+        if self.memo is not None:
+            require_instance(self.memo, Memo, "PlanOptions(memo)")
         for name in ("n_active", "max_rounds"):
             if getattr(self, name) < 1:
                 raise InputError(f"PlanOptions({name}): must be >= 1, got {getattr(self, name)}")
@@ -365,7 +373,7 @@ def _planned(case, faults, requirement, o: PlanOptions, study, say, freq_hz, sit
             esd_model=study.esd_model,
             critical_reference=study.critical_reference,
         )
-        pl.run_map = pl.counting(pool_map, say)
+        pl.run_map = pl.counting(o.memo.wrap(pool_map) if o.memo else pool_map, say)
         kw = replace(
             study,
             sites=sites,

@@ -11,6 +11,8 @@
 
 from __future__ import annotations
 
+import os
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -196,6 +198,12 @@ def _received(case, res, settings, source, mc: ErrorRuns, window) -> dict:
         raise InputError(
             f"--source {source} is short of the run's {res.t[-1]:g} s: {'; '.join(got.short)}"
         )
+    if len(got.frames) and (first := float(got.frames.t[0])) > 0.5 / settings.rate:
+        raise InputError(  # as one cut at its end (round 38: its start was never counted)
+            f"--source {source} starts at t = {first:.4f} s, {round(first * settings.rate)} "
+            "reporting instant(s) after the run's first (t = 0, the CFG-2's time stamp): the "
+            "run's start is not in it (a recording cut at its beginning)"
+        )
     if got.breaks:
         raise InputError(
             f"--source {source}: {sources.gap_line(got)}: a gap longer than "
@@ -352,6 +360,7 @@ def estimator_ccts(
     settings,
     model=None,
     esd_model: str = "ideal",
+    records: str | os.PathLike | None = None,
 ) -> dict:
     """CCT of a line fault with each estimator in the loop, over ``runs`` noise seeds.
 
@@ -372,13 +381,15 @@ def estimator_ccts(
         Conventions, step and Q limits (None: the defaults).
     esd_model : {"ideal", "wecc"}
         The storage devices' model (`stabctl.storage.devices.StorageFleet.model`).
+    records : str, os.PathLike or None
+        The searches' JSON-lines records, kept there (a search already recorded is not
+        run again: an interrupted study resumes); None: a temporary file, removed.
 
     Returns
     -------
     dict
         Estimator -> statistics of the CCT in cycles (mean, std, min, max, runs, failed),
-        :func:`stabctl.estimation.closed_loop.cct_study` (its records in a temporary
-        file, removed).
+        :func:`stabctl.estimation.closed_loop.cct_study`.
 
     Raises
     ------
@@ -394,17 +405,16 @@ def estimator_ccts(
     pmu = PMUSettings(
         rate=settings.rate, latency_s=settings.latency_s, window_cycles=settings.window_cycles
     )
-    with temp_dir("stabctl-estimate-") as held:
-        tmp = held.path
+    with nullcontext(None) if records is not None else temp_dir("stabctl-estimate-") as held:
         return cl.cct_study(
             case_name,
             LineFault(bus, far_bus),
             [esd_pct],
             runs,
-            Path(tmp) / "cct.jsonl",
+            Path(held.path) / "cct.jsonl" if held is not None else records,
             seed=seed,
             pmu=pmu,
             model=model,
             esd_model=esd_model,
-            label="estimate cct",  # its records file is a temporary one the user never sees
+            label="estimate cct",  # its records file is not the user's to open
         )[esd_pct]

@@ -639,3 +639,26 @@ def test_a_pdc_that_has_its_cfg2_is_served_after_another_ended_whole(kundur_stre
             assert len(_frames_until_close(b, len(data))) == len(data)
         assert _until(server.done)
     assert [x.whole for x in server.sessions] == [True, True]
+
+
+def test_a_recording_that_starts_late_is_refused_as_one_cut_at_its_end(kundur_stream, tmp_path):
+    """`estimate rmse --source` of a recording whose first frame is 0.5 s into the run
+    (round 38: accepted, "0 missing", its errors over what came as over the whole run) is
+    refused, naming when it starts; the whole recording is read."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    _, _, cfg, cfg2, frames = kundur_stream
+    args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101", "--t-fault", "0.5"]
+    args += ["--clear-cycles", "7", "--tf", "1", "--seed", "1", "--source"]
+    for name, kept in (("late.c37", frames[30:]), ("whole.c37", frames)):
+        (tmp_path / name).write_bytes(cfg2.convert2bytes() + b"".join(_encoded(cfg, cfg2, kept)))
+    res = CliRunner().invoke(main, [*args, str(tmp_path / "late.c37")])
+    assert res.exit_code == 2, res.output
+    assert (
+        f"error: --source {tmp_path / 'late.c37'} starts at t = 0.5000 s, 30 reporting "
+        "instant(s) after the run's first (t = 0, the CFG-2's time stamp)"
+    ) in res.stderr
+    res = CliRunner().invoke(main, [*args, str(tmp_path / "whole.c37")])
+    assert res.exit_code == 0, res.output
