@@ -48,6 +48,7 @@ from stabctl.cli.options import (
     storage_options,
     subintervals_chosen,
     tf_option,
+    warnings_so_far,
 )
 from stabctl.errors import InputError, counted
 from stabctl.io.inputs import plain_number
@@ -613,6 +614,7 @@ def simulate(
                 **({"converter_names": names} if (names := _converter_names(case, fleet)) else {}),
                 "files": written,
                 **({} if halved is None else {"step_check": halved}),
+                "warnings": warnings_so_far(),  # (stderr's warning: lines, for its reader)
             }
         )
         return
@@ -661,7 +663,7 @@ def simulate(
             + (" (run stopped)" if stop_at_separation else "")
         )
     if halved is not None:
-        click.echo(_step_check_line(result, halved))
+        click.echo(_step_check_line(result, halved, method))
     for w in written:
         click.echo(f"wrote {shown(w)}")
 
@@ -695,9 +697,11 @@ def _step_check(result, h: float) -> dict:
 ANGLE_CHECK_REL = 0.01
 
 
-def _step_check_line(result, halved: dict) -> str:
+def _step_check_line(result, halved: dict, method: str = "heun") -> str:
     """`--check-step`'s line: the verdict holds at h/2, or it changes there (the
-    clearing within the step's error of the CCT)."""
+    clearing within the step's error of the CCT); a largest angle that moves beyond
+    ANGLE_CHECK_REL says so, with what to do (the trapezoid only to a run of another
+    method)."""
     at = f"at half the step (h = {step_text(halved['step_s'])})"
     if halved["verdict"] == _verdict(result):
         line = f"step check: {halved['verdict']} {at} too"
@@ -706,10 +710,8 @@ def _step_check_line(result, halved: dict) -> str:
         a, b = result.max_angle_from_coi, halved["max_angle_from_coi_rad"]
         line += f"; largest angle from the COI {b:.4f} rad there ({b - a:+.4f} rad)"
         if abs(b - a) > ANGLE_CHECK_REL * abs(b):
-            line += (
-                f": it depends on the step by {abs(b - a) / abs(b):.1%} (halve it again, or "
-                "--method trapezoid for a lightly damped swing)"
-            )
+            other = ", or --method trapezoid for a lightly damped swing" * (method != "trapezoid")
+            line += f": it depends on the step by {abs(b - a) / abs(b):.1%} (halve it again{other})"
         return line
     return (
         f"step check: {halved['verdict']} {at}, {_verdict(result)} at the step: the verdict "

@@ -489,11 +489,12 @@ def run(
             x, bad = step.halving(x, f_x, s, h, step.start(f_x) if s == s_step else None)
             s_step = s
         except SimulationError as e:
-            _fail(sim, grid, rec, k, wall, limit, e, SimulationError, partitions, nets)
+            why = _at_step(str(e), h, sim.default_h)
+            _fail(sim, grid, rec, k, wall, limit, why, SimulationError, partitions, nets)
         finally:
             f.lock(False)
         if bad == NO_NETWORK:
-            why = "the network/load equations did not converge"
+            why = _at_step("the network/load equations did not converge", h, sim.default_h)
             _fail(sim, grid, rec, k, wall, limit, why, SimulationError, partitions, nets)
         why = "Newton's iteration did not converge"
         if bad < 0:
@@ -507,6 +508,16 @@ def run(
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError, partitions)
     return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions)
+
+
+def _at_step(why: str, h: float, default_h: float) -> str:
+    """`why` a step failed, with the step named, and, for a step above twice the case's
+    default, that a smaller one may succeed (at 0.5 s the network's failure was the
+    step's, not the grid's, and nothing said so)."""
+    if h > 2 * default_h:
+        ratio = f"{h / default_h:.3g} times the case's default: a smaller --step may converge"
+        return f"{why} (a step of {h:g} s, {ratio})"
+    return f"{why} (a step of {h:g} s)"
 
 
 def _too_slow(before, now, it) -> bool:

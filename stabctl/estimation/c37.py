@@ -652,24 +652,33 @@ def _frequency(b: Block, data: bytes, at: int) -> tuple[float, float]:
 V_PLAUSIBLE_PU = 3.0
 I_PLAUSIBLE_PU = 1000.0
 ROCOF_PLAUSIBLE_HZ_S = 327.67
+#: a frequency this far from nominal (Hz) is no measurement either: twice the widest
+#: range C37.118.1 has PMUs measure in (M class, FNOM +- 5 Hz), 0.17 pu of speed at 60 Hz,
+#: beyond any machine still in step; one sample of 75 Hz on a 60 Hz case (a byte error)
+#: had the raw estimator command every device for its frame
+FREQ_PLAUSIBLE_HZ = 10.0
 #: the reason `plausible` gives
 IMPLAUSIBLE = (
-    f"|V| > {V_PLAUSIBLE_PU:g} pu, |I| > {I_PLAUSIBLE_PU:g} pu or |ROCOF| > "
-    f"{ROCOF_PLAUSIBLE_HZ_S:g} Hz/s"
+    f"|V| > {V_PLAUSIBLE_PU:g} pu, |I| > {I_PLAUSIBLE_PU:g} pu, |ROCOF| > "
+    f"{ROCOF_PLAUSIBLE_HZ_S:g} Hz/s or a frequency more than {FREQ_PLAUSIBLE_HZ:g} Hz from "
+    "nominal"
 )
 
 
-def plausible(frames):
+def plausible(frames, f0_hz: float):
     """Frames (a `Frame`, or `pmu.Frames` held column by column) with each PMU value that
     no measurement gives (beyond `V_PLAUSIBLE_PU`, `I_PLAUSIBLE_PU`,
-    `ROCOF_PLAUSIBLE_HZ_S`) made invalid, its values NaN, as a STAT saying absent data
-    makes them: one such sample (1e30 pu, or a voltage a million times its value) drove
-    an estimator to 1e28 Hz.
+    `ROCOF_PLAUSIBLE_HZ_S`, or a frequency more than `FREQ_PLAUSIBLE_HZ` from nominal)
+    made invalid, its values NaN, as a STAT saying absent data makes them: one such
+    sample (1e30 pu, or a voltage a million times its value) drove an estimator to
+    1e28 Hz.
 
     Parameters
     ----------
     frames : Frame or pmu.Frames
         Parsed (`parse_frame`).
+    f0_hz : float
+        The stream's nominal frequency (Hz; `StreamConfig.f0`).
 
     Returns
     -------
@@ -682,6 +691,7 @@ def plausible(frames):
             (np.abs(frames.v) > V_PLAUSIBLE_PU)
             | (np.abs(frames.i) > I_PLAUSIBLE_PU)
             | (np.abs(frames.rocof) > ROCOF_PLAUSIBLE_HZ_S)
+            | (np.abs(frames.freq - f0_hz) > FREQ_PLAUSIBLE_HZ)
         )
     n = int(np.count_nonzero(bad))
     if not n:

@@ -528,7 +528,7 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
                         "frames the controller keeps"
                     )
                 try:  # a data frame, checked (`c37.check_data_frame`), on the rate's grid
-                    frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, data))
+                    frame, odd = c37.plausible(c37.parse_frame(cfg, cfg2, data), cfg.f0)
                     if odd:
                         flagged[c37.IMPLAUSIBLE] += odd
                     first, prev = (ends[0], ends[-1]) if ends else (None, None)

@@ -622,7 +622,7 @@ def merge(case, pmus, rate: float, streams, stream_names=None) -> Received:
             flagged.update(why for why in c37.flags(cfg2, d) if why)
         # after the frames' own checks (`c37.check_data_frame`), as a receiver makes them
         check_order(data, cfg2, f"stream {s + 1}")
-        frames, odd = c37.plausible(frames)
+        frames, odd = c37.plausible(frames, cfg.f0)
         if odd:
             flagged[c37.IMPLAUSIBLE] += odd
         parsed.append((cols, frames))

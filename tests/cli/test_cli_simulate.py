@@ -744,6 +744,35 @@ def test_a_trapezoid_step_above_one_cycle_is_a_warning():
     assert at == {"0.005": True, "0.01": True}
     coarse = run(*near, "--step", "0.02")
     assert "warning: trapezoid step 0.02 s is above 0.01667 s (one cycle at 60 Hz)" in coarse.stderr
+    # the JSON carries the warnings too (round 38: its reader saw a wrong verdict, unmarked)
+    said = json.loads(coarse.stdout)["warnings"]
+    assert any(w.startswith("trapezoid step 0.02 s is above 0.01667 s") for w in said), said
+    assert json.loads(run(*near, "--step", "0.005").stdout)["warnings"] == []
+
+
+def test_a_trapezoid_step_whose_network_fails_names_the_step_and_its_check_no_trapezoid():
+    """Round 38: at 0.5 s the trapezoid's network failed in words that did not name the
+    step; and `--check-step` of a trapezoid run told it to use the trapezoid."""
+    args = ["simulate", "kundur", "--fault", "3", "--far-bus", "101", "--clear-cycles", "6"]
+    res = run(*args, "--method", "trapezoid", "--step", "0.5")
+    assert res.exit_code == 2
+    assert (
+        "did not converge (a step of 0.49 s, 98 times the case's default: a smaller --step "
+        "may converge) in the step ending at t = 2.0800 s"
+    ) in res.stderr, res.stderr
+    args = [*args[:-1], "9.1", "--step", "0.0166", "--check-step", "--method", "trapezoid"]
+    res = run(*args)
+    assert res.exit_code == 0 and "it depends on the step by" in res.stdout, res.output
+    assert "(halve it again)" in res.stdout and "--method trapezoid" not in res.stdout
+    from types import SimpleNamespace
+
+    from stabctl.cli.simulate import _step_check_line
+
+    ran = SimpleNamespace(stable=True, de_energised_s=None, max_angle_from_coi=1.0)
+    halved = {"step_s": 0.005, "verdict": "stable", "max_angle_from_coi_rad": 1.1}
+    assert _step_check_line(ran, halved, "heun").endswith(
+        "by 9.1% (halve it again, or --method trapezoid for a lightly damped swing)"
+    )
 
 
 def test_the_trapezoid_s_one_cycle_is_the_case_s_frequency_s():

@@ -349,23 +349,29 @@ def test_a_value_beyond_any_measurement_is_not_used(kundur_run):
             for x in ("v", "i", "freq", "rocof")
         },
     )
+    # one FREQ sample 15 Hz off a 60 Hz case (round 38: the raw estimator commanded every
+    # device for its frame)
+    fast = list(frames)
+    fast[70] = f._replace(freq=np.where(np.arange(len(pmus)) == 0, 75.0, f.freq))
     cfg = c37.stream_config(case, pmus, 60)
     cfg2 = c37.config_frame(cfg)
     tracks = []
-    for stream in (spiked, holed):
+    for stream in (spiked, holed, fast):
         got = sources.merge(
             case, pmus, 60, [(cfg2, [c37.data_frame(cfg, cfg2, x) for x in stream])]
         )
         tracks.append(cl.track(cl.LoopController(case, (), "ekf", SETTINGS, 0, 1.0), got.frames))
-        if stream is spiked:
+        if stream is not holed:
             assert got.flagged[c37.IMPLAUSIBLE] == 1 and not got.frames[70].valid[0]
             absent = got.flagged["test mode or absent (STAT bits 15-14 = 10)"]  # the frames dropped
             assert sources.unused_values(got.flagged) == (
                 f"{absent + 1} PMU values not used by their STAT, or beyond any measurement "
                 f"({absent} test mode or absent (STAT bits 15-14 = 10), 1 |V| > 3 pu, "
-                "|I| > 1000 pu or |ROCOF| > 327.67 Hz/s)"
+                "|I| > 1000 pu, |ROCOF| > 327.67 Hz/s or a frequency more than 10 Hz from "
+                "nominal)"
             )
     assert np.array_equal(tracks[0].freq, tracks[1].freq)
+    assert np.array_equal(tracks[2].freq, tracks[1].freq)
     assert np.abs(tracks[0].rel).max() < 1.0  # Hz
 
 
