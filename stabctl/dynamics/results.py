@@ -672,30 +672,37 @@ def _no_default(f) -> bool:
 def _npz_arrays(path) -> dict:
     """The arrays of an npz result file, checked: an npz archive, its arrays' declared
     sizes within MAX_NPZ_BYTES before any is read, none an object array (a pickle: never
-    loaded)."""
-    try:
-        with zipfile.ZipFile(path) as zf:
-            size = sum(info.file_size for info in zf.infolist())
-            packed = sum(info.compress_size for info in zf.infolist())
-    except (zipfile.BadZipFile, EOFError):
-        size = packed = 0
-    if size > MAX_NPZ_BYTES or (size > BOMB_BYTES and size > BOMB_RATIO * packed):
-        raise InputError(
-            f"{path}: its arrays unpack to {size} bytes from {packed}, more than a result "
-            f"file holds (at most {MAX_NPZ_BYTES} bytes, {BOMB_RATIO} times its packed "
-            f"size beyond {BOMB_BYTES}): refused before reading them"
-        )
-    try:
-        z = np.load(path)
-    except (ValueError, zipfile.BadZipFile, EOFError):  # numpy's words invite a pickle
-        raise InputError(
-            f"{path}: not a result written by SimulationResult.to_npz (not an npz archive)"
-        ) from None
-    if not isinstance(z, np.lib.npyio.NpzFile):
-        raise InputError(
-            f"{path}: not a result written by SimulationResult.to_npz (one .npy array, "
-            "not an npz archive)"
-        )
+    loaded).  The file is opened once: the sizes checked are those of the bytes read."""
+    with open(path, "rb") as fh:
+        try:
+            with zipfile.ZipFile(fh) as zf:
+                size = sum(info.file_size for info in zf.infolist())
+                packed = sum(info.compress_size for info in zf.infolist())
+        except (zipfile.BadZipFile, EOFError):
+            size = packed = 0
+        if size > MAX_NPZ_BYTES or (size > BOMB_BYTES and size > BOMB_RATIO * packed):
+            raise InputError(
+                f"{path}: its arrays unpack to {size} bytes from {packed}, more than a result "
+                f"file holds (at most {MAX_NPZ_BYTES} bytes, {BOMB_RATIO} times its packed "
+                f"size beyond {BOMB_BYTES}): refused before reading them"
+            )
+        fh.seek(0)
+        try:
+            z = np.load(fh)
+        except (ValueError, zipfile.BadZipFile, EOFError):  # numpy's words invite a pickle
+            raise InputError(
+                f"{path}: not a result written by SimulationResult.to_npz (not an npz archive)"
+            ) from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            raise InputError(
+                f"{path}: not a result written by SimulationResult.to_npz (one .npy array, "
+                "not an npz archive)"
+            )
+        return _npz_members(path, z)
+
+
+def _npz_members(path, z) -> dict:
+    """The arrays of an open npz archive `z` of file `path`, none an object array."""
     d = {}
     with z:
         for k in z.files:
