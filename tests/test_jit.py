@@ -291,6 +291,35 @@ _LOAD = (
 )
 
 
+def test_a_cache_that_cannot_be_written_compiles_in_memory_with_one_warning(tmp_path):
+    """Round 38: a cache on a full disk (here ``ulimit -f 1``: EFBIG as ENOSPC) failed
+    every command that compiled a kernel ("error: File too large", a traceback from the
+    API).  The kernel now runs, compiled for this process only, with one warning naming
+    the cache and why; nothing of it is saved."""
+    import os
+    import resource
+    import subprocess
+    import sys
+
+    from stabctl.models.blocks import rectifier_loading
+
+    code = _LOAD + "from stabctl.models.blocks import clip\nprint(clip(2.0, 0.0, 1.0))\n"
+    child = subprocess.run(
+        [sys.executable, "-W", "default", "-c", code],
+        env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)},
+        capture_output=True,
+        text=True,
+        timeout=600,
+        preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (1, 1)),
+    )
+    assert child.returncode == 0, child.stderr
+    out = child.stdout.split()
+    assert float(out[0]) == rectifier_loading(0.5) and out[-1] == "1.0"  # two kernels
+    said = [line for line in child.stderr.splitlines() if "numba cache:" in line]
+    assert len(said) == 1 and "cannot be written (File too large): kernels are compiled" in said[0]
+    assert not list(tmp_path.rglob("*.nbi")) and not list(tmp_path.rglob("*.nbc"))
+
+
 def test_a_damaged_cache_entry_is_compiled_again(tmp_path):
     """A kernel's cache index truncated or garbage (the finding: `simulate` died with an
     UnpicklingError): the next process compiles the kernel again and answers."""

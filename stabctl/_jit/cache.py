@@ -421,12 +421,32 @@ class GuardedCache(FunctionCache):
 
     def save_overload(self, sig, data):
         """Save a compiled kernel, the cache's key (`stamp_cache`) first; not if an entry
-        in its place cannot be replaced (`load_overload`)."""
+        in its place cannot be replaced (`load_overload`), nor where the cache cannot be
+        written (a full disk, a quota, ``ulimit -f``: the kernel is used all the same,
+        compiled for this process only, with one RuntimeWarning a process; every command
+        that compiled a kernel failed with "error: File too large")."""
         _say_moved()
         if self._kept_out:
             return None
-        stamp_cache()
-        return super().save_overload(sig, data)
+        try:
+            stamp_cache()
+            return super().save_overload(sig, data)
+        except OSError as exc:
+            self._kept_out = f"{self._cache_path} cannot be written ({exc.strerror or exc})"
+            if exc.errno not in _UNWRITABLE_SAID:
+                _UNWRITABLE_SAID.add(exc.errno)
+                warnings.warn(
+                    f"numba cache: {self._kept_out}: kernels are compiled for this process "
+                    "only, not saved (each run compiles them again until the cache can be "
+                    "written: free space, or set NUMBA_CACHE_DIR elsewhere)",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+            return None
+
+
+#: the errors (errno) of a cache that cannot be written already warned of in this process
+_UNWRITABLE_SAID: set = set()
 
 
 def guard(dispatcher):

@@ -45,6 +45,14 @@ from stabctl.models.svcs import DYR as SVC_RECORDS
 from stabctl.models.svcs import SVC
 
 _TOKEN = re.compile(r"'[^']*'|/|[^\s,/']+")
+#: the fields a record may have (bus, model, id and its parameters): PSS/E's largest
+#: models have a few hundred (CMLDBLU2 about 130 CONs); a record of 10 million zeros was
+#: held whole, some 900 MB, before its count was refused
+MAX_RECORD_FIELDS = 2000
+#: the line ends of `str.splitlines`, for reading a file's lines one at a time (a list of
+#: ten million lines of one number each took about 1 GB)
+_ENDS = "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"
+_LINE = re.compile(f"[^{_ENDS}]*(?:\r\n|[{_ENDS}]|\\Z)")
 #: table kind -> the declaration of its columns and DYR models (stabctl.models)
 FAMILY: dict[str, Family] = {
     "machine": MACHINE,
@@ -185,7 +193,7 @@ def read_dyr(path) -> list[DyrRecord]:
     records: list = []
     tokens: list = []
     start = 0
-    for n, line in enumerate(text.splitlines(), 1):
+    for n, line in enumerate(_lines(text), 1):
         col = _stray_quote(line)
         if col is not None:  # the tokens skip it: 'GENROU read as GENROU, unnamed
             raise CaseError(  # a comment whose record lacks its '/' is read as data
@@ -204,6 +212,12 @@ def read_dyr(path) -> list[DyrRecord]:
             if not tokens:
                 start = n
             tokens.append(tok)
+            if len(tokens) > MAX_RECORD_FIELDS:
+                raise CaseError(
+                    f"{path.name}:{start}: record {' '.join(tokens[:3])[:60]} ... has more "
+                    f"than {MAX_RECORD_FIELDS} fields by line {n}, more than any PSS/E model "
+                    "takes: its '/' is missing, or the file is no DYR file"
+                )
     if tokens:
         raise CaseError(f"{path.name}:{start}: record not terminated by '/'")
     if not records:  # a DYR file given gives the dynamic models: none is a wrong file
@@ -214,6 +228,14 @@ def read_dyr(path) -> list[DyrRecord]:
             "model; give the case's DYR file, or none for a power-flow case"
         )
     return records
+
+
+def _lines(text: str):
+    """The lines of `text` as ``text.splitlines()`` gives them, one at a time."""
+    for m in _LINE.finditer(text):
+        if m.start() == len(text):
+            return
+        yield m.group().rstrip(_ENDS)
 
 
 def _stray_quote(line: str) -> int | None:

@@ -1312,3 +1312,27 @@ def test_a_second_ieeevc_for_one_machine_is_refused_as_a_second_model(tmp_path):
     recs = read_dyr(write(tmp_path, text))
     with pytest.raises(CaseError, match=r":4.*second compensator model for this generator.*:3"):
         dyr_tables(recs, kundur_generators()[:1], on_unsupported="skip")
+
+
+def test_a_record_of_millions_of_fields_is_refused_before_it_is_held(tmp_path):
+    """Round 38: a GENCLS record of ten million zeros (20 MB, on one line or one a line)
+    was held whole, about 900 MB, before its count was refused.  It is refused once it
+    passes MAX_RECORD_FIELDS, naming its line; the lines are read one at a time, as
+    `str.splitlines` splits them (its line ends, CR LF, form feeds)."""
+    import tracemalloc
+
+    from stabctl.io import dyr
+
+    for sep, line in ((" ", 1), ("\n", dyr.MAX_RECORD_FIELDS - 1)):
+        path = tmp_path / "g.dyr"
+        path.write_text("1 'GENCLS' 1" + sep + sep.join(["0"] * 2_000_000) + " /\n")
+        tracemalloc.start()
+        with pytest.raises(CaseError, match=r"g.dyr:1: record 1 'GENCLS' 1 \.\.\. has more "):
+            read_dyr(path)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert peak < 40 * path.stat().st_size // 4, peak  # not a list of every field
+        with pytest.raises(CaseError, match=rf"than 2000 fields by line {line}, more than any"):
+            read_dyr(path)
+    for text in ("", "a", "a\n", "a\r\nb", "a\rb\n\nc", "x\x0cy\u2028z\r\n\r\n", "a\r\r\n"):
+        assert list(dyr._lines(text)) == text.splitlines()
