@@ -292,9 +292,10 @@ def serve(
     closed the connection, reset it with frames unread, took no frame for --timeout s,
     stayed connected after the last frame) and the frames sent; each peer refused or
     dropped is named as it is.  At most 8 peers are connected at once: a ninth takes the
-    place of the one that has waited longest without a valid command, and is refused
-    when all 8 have sent one.  Exits once a PDC has been sent the stream whole and none
-    is streaming (exit status 0, "sent N of N frames"); if
+    place of the one that has waited longest without a valid command, else of the one
+    connected longest, beyond --timeout, without starting a stream, and is refused when
+    all 8 are streaming or within their first --timeout s.  Exits once a PDC has been
+    sent the stream whole and none is streaming (exit status 0, "sent N of N frames"); if
     every session was cut and no peer comes for --wait s after the last, exits with an
     error naming each cut session (exit status 2: the stream was not sent whole).
 

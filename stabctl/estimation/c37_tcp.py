@@ -66,8 +66,10 @@ class Guard:
     max_peers : int
         Peers served at once.  With every place taken, a new peer takes the place of the
         peer that has waited longest without sending a valid command (silent since it
-        connected; a peer streaming keeps its place), which is dropped and named; with
-        none such, the new peer is closed at once.
+        connected), else of the one connected longest, beyond `timeout`, without starting
+        a stream (asking for the header or CFG-2 over and over); it is dropped and named.
+        A peer streaming keeps its place; with none to drop, the new peer is closed at
+        once.
     wait : float
         Once every streaming session so far was cut (`StreamServer.done`), the longest
         wait for another peer (s) before the server is done.
@@ -472,7 +474,11 @@ class StreamServer:
                 with contextlib.suppress(OSError):  # wakes its thread: it ends, named
                     victim.conn.shutdown(socket.SHUT_RDWR)
             if me is None:
-                self._refuse(peer, f"{self.guard.max_peers} peers served, each has sent a command")
+                self._refuse(
+                    peer,
+                    f"{self.guard.max_peers} peers served, each streaming or within its first "
+                    f"{self.guard.timeout:g} s",
+                )
                 conn.close()
             else:
                 threading.Thread(target=self._session, args=(me, peer), daemon=True).start()
@@ -480,12 +486,17 @@ class StreamServer:
     def _admit(self, conn: socket.socket):
         """(the new peer's `_Peer`, or None if refused; the peer dropped for it, or None):
         with `Guard.max_peers` connected, the one that has waited longest without a valid
-        command gives its place (`Guard.max_peers`)."""
+        command gives its place, else the one connected longest beyond `Guard.timeout`
+        without starting a stream (`Guard.max_peers`: eight peers asking for the header
+        every 2 s held every place, and a PDC was refused for as long as they kept on)."""
         me, victim = _Peer(conn, time.monotonic()), None
         with self._lock:
             live = [p for p in self._live.values() if not p.evicted]
             if len(live) >= self.guard.max_peers:
-                idle = [p for p in live if not p.commanded]
+                late = me.since - self.guard.timeout
+                idle = [p for p in live if not p.commanded] or [
+                    p for p in live if not p.streamed and p.since < late
+                ]
                 if not idle:
                     return None, None
                 victim = min(idle, key=lambda p: p.since)
@@ -525,9 +536,10 @@ class StreamServer:
                 if self._open == 0:
                     self._idle_since = time.monotonic()
         if ended is None and me.evicted:
+            what = "started no stream" if me.commanded else "sent no command"
             self._refuse(
                 peer,
-                f"sent no command in {time.monotonic() - me.since:.1f} s, with "
+                f"{what} in {time.monotonic() - me.since:.1f} s, with "
                 f"{self.guard.max_peers} peers connected: its place given to a new peer",
             )
         elif ended is None and asked and not dropped:
@@ -570,6 +582,7 @@ class StreamServer:
             me.ignored += not command
             me.commanded = me.commanded or bool(command)
             if command == "start":
+                me.streamed = True
                 if shown is None:
                     shown = _Shown([math.nan] * len(self._data), [math.nan] * len(self._data))
                     with self._lock:
@@ -739,13 +752,15 @@ def _accept_failed(exc: OSError) -> str:
 @dataclass(eq=False)
 class _Peer:
     """A connected peer: its connection, when it connected (`time.monotonic()`), whether
-    it has sent a valid command, whether its place was given to a new peer, and how many
+    it has sent a valid command and whether 'start', whether its place was given to a new
+    peer, and how many
     frames it sent that the server ignores (not a command, a CRC that fails, a command
     word this server does not know)."""
 
     conn: socket.socket
     since: float
     commanded: bool = False
+    streamed: bool = False
     evicted: bool = False
     ignored: int = 0
 

@@ -6,6 +6,7 @@ takes as controller only an allowed peer that completes the handshake and refuse
 outside {-1, 0, +1}; recordings whose time stamps repeat or go back, or whose every value
 is absent, are refused by name."""
 
+import contextlib
 import re
 import socket
 import threading
@@ -540,10 +541,51 @@ def test_silent_peers_give_their_places_to_a_pdc(kundur_stream):
             assert _frames_until_close(peer, 0) == [] and peer.recv(1000)  # the CFG-2
         with pytest.raises(InputError, match="serves no more peers at once, does not allow"):
             receive(*server.address, End(frames=10), timeout=5)
-        full = "2 peers served, each has sent a command"
+        full = "2 peers served, each streaming or within its first 5 s"
         assert _until(lambda: any(full in r for r in server.refused))
         for peer in busy:
             peer.close()
+
+
+def test_peers_that_ask_and_never_stream_give_their_places_to_a_pdc(kundur_stream):
+    """Round 38: peers asking for the header every half second, never 'start', held every
+    place for as long as they kept on, and a PDC was refused.  Once connected beyond the
+    time-out without a stream, the longest connected gives its place, named."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames[:10])
+    stop = threading.Event()
+
+    def ask(peer):
+        while not stop.is_set():
+            with contextlib.suppress(OSError):
+                peer.sendall(CommandFrame(1, "header").convert2bytes())
+                peer.recv(65536)
+            stop.wait(0.5)
+
+    guard = Guard(timeout=2, max_peers=2)
+    with StreamServer(cfg2, data, speed=float("inf"), guard=guard) as server:
+        askers = [socket.create_connection(server.address, timeout=5) for _ in range(2)]
+        threads = [threading.Thread(target=ask, args=(p,), daemon=True) for p in askers]
+        for t in threads:
+            t.start()
+        try:
+            time.sleep(0.5)  # within the time-out: their places are theirs
+            with pytest.raises(InputError, match="serves no more peers at once"):
+                receive(*server.address, End(frames=10), timeout=5)
+            time.sleep(2.5)
+            assert len(receive(*server.address, End(frames=10), timeout=5).data) == 10
+            first = f"127.0.0.1:{askers[0].getsockname()[1]}"
+            assert _until(
+                lambda: any(r.startswith(f"{first}: started no stream in ") for r in server.refused)
+            )
+        finally:
+            stop.set()
+            for t in threads:
+                t.join(5)
+            for p in askers:
+                p.close()
 
 
 def test_a_server_short_of_file_descriptors_says_so_and_serves_on(kundur_stream, monkeypatch):
