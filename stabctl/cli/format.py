@@ -305,6 +305,23 @@ def end_note(t_s: float, concerns) -> str:
     )
 
 
+def q_limits_text(on: bool) -> str:
+    """The Q-limit setting of the runs in words, for a settings line: a CCT moves with it
+    (IEEE 14's 1-2: 0.252 s with the PV buses' Q limits, 0.203 s without), and the text
+    outputs did not say which (round 39).
+
+    Parameters
+    ----------
+    on : bool
+        Whether the power flow held the PV buses' Q limits (`--no-q-limits` off).
+
+    Returns
+    -------
+    str
+    """
+    return "PV Q limits held" if on else "no PV Q limits (--no-q-limits)"
+
+
 def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 
@@ -340,7 +357,8 @@ def print_cct(case, rating, d) -> None:
         f"CCT {d['cct_s']:.{n}f} s = {d['cct_cycles']:.{c}f} cycles (stable at "
         f"{d['t_stable_s']:.{n}f} s, unstable at {d['t_unstable_s']:.{n}f} s = "
         f"{d['t_unstable_cycles']:.{c}f} cycles; tolerance {1000 * d['tol_s']:g} ms, "
-        f"step {step_text(d['step_s'])}"
+        + (f"search limit {d['t_max_s']:g} s, " if "t_max_s" in d else "")
+        + f"step {step_text(d['step_s'])}"
         + (
             f" ({step_text(d['stiff_step_s'])} in intervals where a machine's subtransient "
             "time constant is shorter)"
@@ -352,7 +370,8 @@ def print_cct(case, rating, d) -> None:
             if d.get("sub_stepped_exciters")
             else ""
         )
-        + f", {d['conventions']} conventions)"
+        + f", {d['conventions']} conventions"
+        + (f", {q_limits_text(d['q_limits'])})" if "q_limits" in d else ")")
     )
     if d["numerical_error_s"] is not None:
         click.echo(
@@ -399,6 +418,9 @@ def sweep_line(key, rec) -> str:
             return f"{key:<34} above the search limit t_max = {rec['inputs']['t_max']:g} s (robust)"
         if verdict(rec) == INSECURE:
             insecure = "N-1 insecure: unstable even when cleared at once"
+            said = rec.get("reason", "")
+            if "; yet stable when cleared at" in said:  # not monotone (`cct`'s window)
+                insecure += "; " + said.split("; ", 1)[1].split(":", 1)[0]
             return f"{key:<34} {0.0:7.3f} {0.0:8.2f}  {insecure}"
         return f"{key:<34} failed: {rec['error']}"
     r, wall = rec["result"], rec.get("wall_time_s")  # none in a reproducible copy
@@ -411,27 +433,44 @@ def sweep_line(key, rec) -> str:
     )
 
 
-def print_sweep(rep, n_jobs: int) -> None:
+def print_sweep(rep, n_jobs: int, case=None) -> None:
     """Print the `sweep-cct` table and its summary line, then, if jobs recorded as failed
-    before were not run again, how many and that ``--retry-failed`` reruns them.
+    before were not run again, how many and that ``--retry-failed`` reruns them.  Each
+    job whose contingency islands buses or machines says so above its row, as `screen`
+    does, and the summary counts them (round 39: only the records said so).
 
     Parameters
     ----------
     rep : stabctl.parallel.SweepReport
     n_jobs : int
         Jobs in the sweep.
+    case : Case or None, optional
+        The case swept (its machines named, its base for the load shed); None: the
+        islanding is not shown.
     """
     click.echo(f"{'job':<34} {'CCT s':>7} {'cycles':>8} {'err ms':>6} {'sims':>5} {'wall s':>7}")
+    n_load = n_machines = 0
     for key, rec in rep.records.items():
+        islanded = (rec.get("result") or rec).get("islanded") or []
+        n_load += any("load_shed_pu" in e for e in islanded)
+        n_machines += any(e.get("machines") for e in islanded)
+        for line in islanding_lines(case, islanded, timed=False) if case is not None else ():
+            click.echo(f"{key:<34} the contingency's trip: {line}")
         click.echo(sweep_line(key, rec))
     from stabctl.stability.screening import ABOVE, INSECURE, verdict
 
     verdicts = [verdict(r) for r in rep.records.values()]
+    islands = (
+        f"; {n_load} islanding load buses (their load shed), {n_machines} islanding machines "
+        "(lost; the verdicts judge the rest)"
+        if n_load or n_machines
+        else ""
+    )
     click.echo(
         f"{n_jobs} job(s): {run_counts(rep.ran, rep.skipped, rep.out)}; "
         f"{verdicts.count('cct')} CCT(s) found, {verdicts.count(ABOVE)} above the search "
         f"limit (robust), {verdicts.count(INSECURE)} N-1 insecure (CCT 0), "
-        f"{verdicts.count('failed')} failed; wall {rep.wall_time_s:.1f} s"
+        f"{verdicts.count('failed')} failed{islands}; wall {rep.wall_time_s:.1f} s"
     )
     if rep.failed_before:
         click.echo(
@@ -597,7 +636,7 @@ def _source_compare(src: dict, figures: dict) -> None:
     )
     for name, fig in figures.items():
         got, wire, drawn = (
-            x if x is None else f"{x:.4f}"
+            "-" if x is None else f"{x:.4f}"  # none: no relative speed formed (round 39)
             for x in (
                 fig["rel_rmse_mhz"]["mean"],
                 src["on_wire"][name]["rel_rmse_mhz"],

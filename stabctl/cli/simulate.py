@@ -18,6 +18,7 @@ from stabctl.cli.format import (
     plot_writer,
     print_json,
     print_storage,
+    q_limits_text,
     shown,
     step_text,
 )
@@ -625,7 +626,7 @@ def simulate(
         + (", shorter where said below" if result.meta.get("stiff_intervals") else "")
         + f", {method}"
         + (f" with {sub} exciter(s) in sub-intervals" if sub else "")
-        + f", {conventions} conventions), "
+        + f", {conventions} conventions, {q_limits_text(q_limits)}), "
         f"wall {summary.get('wall_time_s', float('nan')):.2f} s"
     )
     for e in [described(e, case) for e in _in_time_order(events)] or ["flat run (no disturbance)"]:

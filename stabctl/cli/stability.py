@@ -24,6 +24,8 @@ from stabctl.cli.format import (
     print_json,
     print_screening,
     print_sweep,
+    q_limits_text,
+    step_text,
 )
 from stabctl.cli.options import (
     INT,
@@ -458,7 +460,8 @@ def sweep_cct(
             }
         )
     else:
-        print_sweep(rep, len(jobs))
+        click.echo(_settings_line(case_name, model, search))
+        print_sweep(rep, len(jobs), case)
     from stabctl.stability.screening import verdict
 
     failed = [r for r in rep.records.values() if verdict(r) == "failed"]
@@ -567,13 +570,14 @@ def screen(
     model = model_settings(conventions, step, q_limits)
     check_power_flow(case, model)  # before any search: not one failure per fault
     check_step_given(case, model, screening.T_FAULT + T_AFTER_FAULT)
+    search = replace(search_settings(tol_ms, t_max, None, tf_option=False), method=method)
     rows = run_screen(
         case_name,
         out_path,
         buses=bus_list,
         lines=lines,
         guess=guess,
-        search=replace(search_settings(tol_ms, t_max, None, tf_option=False), method=method),
+        search=search,
         model=model,
         runner=RunnerOptions(workers, scheduler),
         retry_failed=retry_failed,
@@ -587,9 +591,25 @@ def screen(
     if as_json:
         print_json(rows)
     else:
+        click.echo(_settings_line(case_name, model, search))
         print_screening(case, rows, tol_ms / 1000, out_path)
     failed = [r for r in rows if r["verdict"] == "failed"]
     _exit_on_failures(failed, out_path, ("search", "searches"))
+
+
+def _settings_line(case_name, model, search) -> str:
+    """The settings of a batch's searches in one line (`sweep-cct`, `screen`): tolerance,
+    search limit, step (the case's default when none is given), conventions and Q limits,
+    as `cct` prints them (round 39: a screening's text said none of them, and the Q limits
+    move a CCT)."""
+    from stabctl.stability.cct import cached_simulator
+
+    step = model.h if model.h is not None else cached_simulator(case_name, model).default_h
+    return (
+        f"settings: tolerance {1000 * search.tol:g} ms, search limit {search.t_max:g} s, "
+        f"step {step_text(step)}, {model.conventions} conventions, "
+        f"{q_limits_text(model.q_limits)}"
+    )
 
 
 def _exit_on_failures(failed: list, out, what: tuple[str, str]) -> None:

@@ -701,14 +701,14 @@ def _search(probe: _Probes, bounds) -> tuple[int, int, tuple[int, int]]:
     sime, guess = probe.o.method == "sime", probe.o.guess_s
     if guess is not None and k_max - k_lo >= 2:  # room for a guessed cell and its neighbours
         if not sime and not probe.stable_at(k_lo):  # bisection's own check
-            _lower_bound_unstable(k_lo, fault, tol)
+            _lower_bound_unstable(k_lo, fault, tol, probe.stable_whole, k_max, freq)
         found = _around_guess(probe, bounds, round(guess / tol))
         if found is not None:
             return (*_bisect_confirmed(probe, *found), found)
         probe.reuse()  # the search without the guess, its verdicts read again
     if sime:
         return _sime_search(probe, bounds, fault, tol, freq)
-    k_lo, k_hi = _bracket(probe.stable_at, k_lo, k_hi, k_max, fault, tol, freq)
+    k_lo, k_hi = _bracket(probe, k_lo, k_hi, k_max, fault, tol, freq)
     return (*_bisect_confirmed(probe, k_lo, k_hi), (k_lo, k_hi))
 
 
@@ -863,6 +863,11 @@ class _Probes:
         if k in self.provisional:
             self._keep(k, (started[0], len(res.t)))
         return ok
+
+    def stable_whole(self, k: int) -> bool:
+        """The verdict at clearing time k*tol (s) of a run to t_end (a provisionally
+        stable probe confirmed)."""
+        return self.stable_at(k) and self.confirm(k)
 
     def confirm(self, k: int) -> bool:
         """Whether the stable end k of a closed cell stays stable to t_end: a
@@ -1116,7 +1121,7 @@ def _sime_search(probe: _Probes, bounds, fault: LineFault, tol, freq):
         u = min((j for j, ok in known.items() if not ok), default=None)
         if u is not None and not any(ok for j, ok in known.items() if j < u):
             if not stable_at(k_lo):  # no stable probe yet: the check at k_lo
-                _lower_bound_unstable(k_lo, fault, tol)
+                _lower_bound_unstable(k_lo, fault, tol, probe.stable_whole, k_max, freq)
             known[k_lo] = True
         s = max(j for j, ok in known.items() if ok and (u is None or j < u))
         if u is None:  # stable so far (s the last probe): double
@@ -1425,10 +1430,11 @@ def _lattice_bounds(tol, t_lo, t_hi, t_max) -> tuple[int, int, int]:
     return k_lo, k_hi, k_max
 
 
-def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple[int, int]:
+def _bracket(probe, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple[int, int]:
     """Check stable at k_lo, then double k_hi (up to k_max) until it is unstable."""
+    stable_at = probe.stable_at
     if not stable_at(k_lo):
-        _lower_bound_unstable(k_lo, fault, tol)
+        _lower_bound_unstable(k_lo, fault, tol, probe.stable_whole, k_max, freq)
     while stable_at(k_hi):
         if k_hi == k_max:
             _above_limit(k_max, fault, tol, freq)
@@ -1436,13 +1442,33 @@ def _bracket(stable_at, k_lo, k_hi, k_max, fault: LineFault, tol, freq) -> tuple
     return k_lo, k_hi
 
 
-def _lower_bound_unstable(k_lo: int, fault: LineFault, tol):
-    """Raise for a search whose lower bound is unstable: InsecureContingency at 0."""
+#: clearing times (cycles) a fault unstable when cleared at once is also run at, so that
+#: its N-1 insecure verdict names a stable window above (Kundur's 3-4, whose trip islands
+#: bus 4: unstable cleared at once or after 6 cycles, stable after 1 to 3)
+INSECURE_WINDOW_CYCLES = (1, 2, 3, 6)
+
+
+def _lower_bound_unstable(k_lo: int, fault: LineFault, tol, stable_at=None, k_max=0, freq=60.0):
+    """Raise for a search whose lower bound is unstable: InsecureContingency at 0, naming
+    the clearing times of INSECURE_WINDOW_CYCLES (below the search limit k_max) at which
+    the fault is stable all the same (a verdict not monotone in the clearing time;
+    `stable_at` runs them)."""
     if k_lo == 0:
+        window = []
+        if stable_at is not None:
+            cells = sorted({round(c / freq / tol) for c in INSECURE_WINDOW_CYCLES})
+            window = [k for k in cells if 0 < k < k_max and stable_at(k)]
+        also = ""
+        if window:
+            at = ", ".join(f"{_lattice(k, tol):g}" for k in window)
+            also = (
+                f"; yet stable when cleared at {at} s: a verdict not monotone in the "
+                "clearing time (simulate those clearings to see it)"
+            )
         raise InsecureContingency(
             f"{fault.describe()}: unstable even when cleared instantly "
             "(the line trip alone loses synchronism, or leaves no machine in service): "
-            "N-1 insecure, CCT 0"
+            f"N-1 insecure, CCT 0{also}"
         )
     raise InputError(
         f"{fault.describe()}: unstable already at the lower bound "
