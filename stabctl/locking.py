@@ -584,14 +584,36 @@ def private_file(path: str | os.PathLike) -> Path:
     return path
 
 
-def kept_path(kind: str, name: str) -> Path:
-    """The file `name` of this user's directory for `kind` (module docstring): the cache
-    directory's, else the temporary directory's.
+def kept_paths(kind: str, name: str) -> tuple[Path, Path]:
+    """The two places of the file `name` of this user's directory for `kind` (module
+    docstring), first choice first: the cache directory's, the temporary directory's.
 
     Parameters
     ----------
     kind : str
         The directory's name, e.g. ``"stabctl-place"``.
+    name : str
+        The file's name.
+
+    Returns
+    -------
+    tuple of Path
+        Neither made nor checked (`private_file` does both).
+    """
+    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / kind
+    temp = Path(tempfile.gettempdir()) / f"{kind}-{os.geteuid()}"
+    return cache / name, temp / name
+
+
+def kept_path(kind: str, name: str) -> Path:
+    """The file `name` of this user's directory for `kind` (module docstring): the cache
+    directory's, else the temporary directory's (`kept_paths`), whichever can be made
+    and written first.
+
+    Parameters
+    ----------
+    kind : str
+        The directory's name, e.g. ``"stabctl-estimate"``.
     name : str
         The file's name.
 
@@ -603,14 +625,19 @@ def kept_path(kind: str, name: str) -> Path:
     Raises
     ------
     InputError
-        Neither directory can be used, naming both reasons.
+        Neither place can be used, naming both reasons.
     """
-    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / kind
-    temp = Path(tempfile.gettempdir()) / f"{kind}-{os.geteuid()}"
     why = []
-    for directory in (cache, temp):
+    for path in kept_paths(kind, name):
         try:
-            return private_file(directory / name)
+            private_file(path)
+            fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
         except InputError as exc:
             why.append(str(exc))
+            continue
+        except OSError as exc:  # a read-only file system, a directory of another kind
+            why.append(f"{path}: cannot be written ({exc.strerror})")
+            continue
+        os.close(fd)
+        return path
     raise InputError("; ".join(why))

@@ -6,6 +6,7 @@ the old flags ``--closed-loop`` / ``--cct`` the subcommand of that name.
 
 from __future__ import annotations
 
+import glob
 import json
 import warnings
 from pathlib import Path
@@ -34,7 +35,7 @@ from stabctl.cli.options import (
     fault_options,
     given_options,
     json_option,
-    kept_until_done,
+    keep_until_end,
     model_options,
     out_file_option,
     q_limits_option,
@@ -504,11 +505,11 @@ def cct(
         "model": model.to_inputs(),
         "esd_model": esd_model,
     }
-    records = _kept_records(search)
-    table = kept_until_done(
-        lambda: _kept_searches(records),
-        lambda: records.unlink(missing_ok=True),
-        lambda: estimator_ccts(
+    records = _kept_records(search)  # None: in a temporary file, removed
+    if records is not None:
+        keep_until_end(lambda: _kept_searches(records), lambda: _remove_kept(records))
+    try:
+        table = estimator_ccts(
             case_name,  # the file given, not the case's name: an edited copy of a built-in
             fault,
             far_bus,
@@ -519,8 +520,15 @@ def cct(
             model=model,
             esd_model=esd_model,
             records=records,
-        ),
-    )
+        )
+    except InputError as exc:  # its records held: by the same command, running
+        if records is None or not str(exc).startswith(f"{records}: another stabctl process"):
+            raise
+        pid = str(exc).split("(pid ", 1)[1].split(")", 1)[0]
+        raise InputError(
+            f"the same estimate cct is running (pid {pid}), keeping its searches in "
+            f"{records}: wait for it to end, or run this one with other settings"
+        ) from None
     if all(row["failed"] == row["runs"] for row in table.values()):
         why = sorted({e for row in table.values() for e in row["errors"]})
         raise InputError(f"every CCT search failed: {'; '.join(why) or 'no reason recorded'}")
@@ -540,8 +548,9 @@ def _kept_records(search: dict):
     """The records file of `estimate cct`'s searches (this user's
     `stabctl.locking.kept_path`, named by the package's code and the search's every
     setting, `search`), so that the same command after an interrupt runs only the
-    searches not yet recorded; telling on stderr how many it holds.  Raises InputError
-    where it cannot be kept."""
+    searches not yet recorded; telling on stderr how many it holds.  None, with a
+    warning, where none can be kept (a read-only cache and temporary directory): the
+    searches are then recorded in a temporary file, as before."""
     import hashlib
 
     from stabctl._jit.cache import package_digest
@@ -549,13 +558,21 @@ def _kept_records(search: dict):
     from stabctl.parallel import read_records
 
     text = json.dumps([package_digest(), search], sort_keys=True, default=str)
-    path = kept_path("stabctl-estimate", hashlib.sha256(text.encode()).hexdigest()[:32] + ".jsonl")
-    if path.exists():
+    name = hashlib.sha256(text.encode()).hexdigest()[:32] + ".jsonl"
+    try:
+        path = kept_path("stabctl-estimate", name)
+    except InputError as exc:
+        warnings.warn(
+            f"{exc}: the searches are not kept (an interrupted run starts again)",
+            stacklevel=2,
+        )
+        return None
+    if path.stat().st_size:
         try:
             n = len(read_records(path))
         except (StabctlError, OSError) as exc:
             warnings.warn(f"{exc}: the searches it kept are run again", stacklevel=2)
-            path.unlink(missing_ok=True)
+            _remove_kept(path)
             return path
         click.echo(
             f"{n} finished CCT search(es) of an interrupted run of this command read from "
@@ -563,6 +580,13 @@ def _kept_records(search: dict):
             err=True,
         )
     return path
+
+
+def _remove_kept(records) -> None:
+    """Remove `estimate cct`'s kept records and what reading them set aside
+    (``<records>.damaged``: `stabctl.parallel.set_aside_damaged`)."""
+    for path in (records, *records.parent.glob(glob.escape(records.name) + ".damaged*")):
+        path.unlink(missing_ok=True)
 
 
 def _kept_searches(records) -> str:

@@ -287,9 +287,20 @@ def reports_errors(func):
 
 
 def _reported(func, args, kwargs):
-    """`reports_errors`'s call of the command ``func(*args, **kwargs)``."""
+    """`reports_errors`'s call of the command ``func(*args, **kwargs)``, what it kept let
+    go at its end (`keep_until_end`)."""
+    try:
+        return _reported_once(func, args, kwargs)
+    finally:
+        _released()
+
+
+def _reported_once(func, args, kwargs):
+    """`_reported`'s call of the command."""
     _WRITTEN.clear()  # this command's
     _KEEPING.clear()
+    _ON_END.clear()
+    _RELEASE.clear()
     with (
         warnings.catch_warnings(record=True) as caught,
         _sigterm_as_interrupt(),
@@ -309,6 +320,7 @@ def _reported(func, args, kwargs):
                     raise
                 raise stop from exc
         except StabctlError as exc:
+            _ended(exc)
             click.echo(f"error: {one_line(exc)}", err=True)
             sys.exit(2)
         except StdoutError as exc:  # stdout closed, its disk full
@@ -334,8 +346,10 @@ def _reported(func, args, kwargs):
             click.echo(_interrupted(kwargs, exc), err=True)
             sys.exit(_status(exc))
         except SystemExit:  # the command's own status (`compile --check`'s 1)
+            _ended()
             _say(caught)
             raise
+    _ended()
     _say(caught)
     return out
 
@@ -663,11 +677,17 @@ def note_keeping(what) -> None:
     _KEEPING.append(what)
 
 
-def kept_until_done(kept, remove, run):
-    """``run()`` (a command's long work), what it keeps told by an interrupt
-    (`note_keeping`), and ``remove()`` called once the work has ended: returned, or refused
-    with a StabctlError other than SweepIncomplete (its workers lost: the same command
-    then reuses what had finished, as after an interrupt).
+#: what removes the running command's kept work once the command has ended (`keep_until_end`)
+_ON_END: list = []
+
+
+def keep_until_end(kept, remove, release=None) -> None:
+    """Note what the running command keeps should it be interrupted (`note_keeping`), and
+    that ``remove()`` is called once the command has ended: its output delivered (it
+    returned, or exited with its own status, `place`'s 1 "not verified"), or refused
+    with a StabctlError other than SweepIncomplete.  Interrupted, its output not written
+    (a full disk) or its workers lost, the work stays: the same command then reuses it
+    (round 39: it was removed as the plan returned, before its output was written).
 
     Parameters
     ----------
@@ -675,21 +695,35 @@ def kept_until_done(kept, remove, run):
         ``kept() -> str``: what is kept, in words.
     remove : callable
         Removes what was kept.
-    run : callable
-        The work; its result is returned.
+    release : callable or None, optional
+        Lets the kept work go (its file closed, its lock released) however the command
+        ends, after `remove` if that is called.
     """
+    note_keeping(kept)
+    _ON_END.append(remove)
+    if release is not None:
+        _RELEASE.append(release)
+
+
+#: what lets the running command's kept work go however it ends (`keep_until_end`)
+_RELEASE: list = []
+
+
+def _released() -> None:
+    """Call the `keep_until_end` releases (every command's end)."""
+    while _RELEASE:
+        _RELEASE.pop()()
+
+
+def _ended(exc: BaseException | None = None) -> None:
+    """Call the `keep_until_end` removals of a command that has ended (`exc` the
+    StabctlError it was refused with, if it was; a SweepIncomplete keeps them)."""
     from stabctl.parallel import SweepIncomplete
 
-    note_keeping(kept)
-    try:
-        result = run()
-    except SweepIncomplete:
-        raise
-    except StabctlError:
-        remove()
-        raise
-    remove()
-    return result
+    if isinstance(exc, SweepIncomplete):
+        return
+    while _ON_END:
+        _ON_END.pop()()
 
 
 def _paper_records(out) -> bool:
@@ -713,8 +747,10 @@ def _interrupted(kwargs, exc: BaseException | None = None) -> str:
     argv = ["stabctl", *sys.argv[1:]]
     if said := getattr(exc, "kept", None):
         return f"interrupted: {said}; run again with: {shlex.join(argv)}"
-    if _KEEPING:
-        return f"interrupted: {_KEEPING[-1]()}; run again with: {shlex.join(argv)}"
+    if _KEEPING:  # kept work the same command resumes from, or nothing kept after all
+        said = _KEEPING[-1]()
+        again = "run again with" if "nothing is kept" in said else "resume with"
+        return f"interrupted: {said}; {again}: {shlex.join(argv)}"
     if name == "paper" and "--resume" not in argv:
         argv.append("--resume")
     out = kwargs.get("out_path") or kwargs.get("out_dir") or ""

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import sys
 import warnings
+from dataclasses import replace
 
 import click
 
@@ -20,7 +21,7 @@ from stabctl.cli.options import (
     esd_model_option,
     faults_option,
     json_option,
-    kept_until_done,
+    keep_until_end,
     model_options,
     out_file_option,
     parallel_options,
@@ -312,7 +313,6 @@ def place(
         alone=alone,
         drop_infeasible=set_aside_infeasible,
         half_step_verdicts=True,  # a plan's verdicts shown converged in the step
-        memo=_memo(case),  # an interrupted plan run again simulates only the rest
         place=PlaceOptions(
             zeta_min=zeta_min, amplitude_hz=amplitude_hz, max_sites=max_sites, max_iter=max_iter
         ),
@@ -327,8 +327,12 @@ def place(
         runner=RunnerOptions(n, scheduler),
         esd_model=esd_model,
     )
+    # an interrupted plan run again simulates only the rest: its memo is named by what
+    # the plan's results depend on (not by its workers)
+    memo = _memo(case, (faults, req, options, replace(study, runner=RunnerOptions())))
+    options = replace(options, memo=memo)
     result = _kept_plan(
-        options.memo,
+        memo,
         lambda: plan(
             case_name, faults, req, options, study, progress=(lambda msg: None) if as_json else None
         ),
@@ -345,24 +349,36 @@ def place(
         sys.exit(1)
 
 
-def _memo(case):
+def _memo(case, plan_inputs):
     """The `stabctl.placement.memo.Memo` of a plan of `case` (this user's
-    `stabctl.locking.kept_path`), telling on stderr how many finished simulations of an
-    interrupted plan it holds; None, with a warning, where it cannot be kept."""
-    from stabctl.locking import kept_path
+    `stabctl.locking.kept_path`, named by the case's digest and the plan's inputs,
+    `plan_inputs`: another plan of the case has its own), telling on stderr how many
+    finished simulations of an interrupted plan it holds; None, with a warning, where it
+    cannot be kept (the plan runs all the same)."""
+    import hashlib
+
+    from stabctl.locking import kept_paths
     from stabctl.placement.memo import Memo
 
-    try:
-        memo = Memo(kept_path("stabctl-place", f"{case.digest()}.jsonl"))
-    except InputError as exc:
+    name = hashlib.sha256(f"{case.digest()}\n{plan_inputs!r}".encode()).hexdigest()[:32]
+    why = []
+    for path in kept_paths("stabctl-place", f"{name}.jsonl"):
+        try:
+            memo = Memo(path)
+            break
+        except InputError as exc:  # the next place, or none
+            why.append(str(exc))
+    else:
         warnings.warn(
-            f"{exc}: the plan's finished simulations are not kept (an interrupted plan "
-            "starts again from the beginning)",
+            f"{'; '.join(why)}: the plan's finished simulations are not kept (an "
+            "interrupted plan starts again from the beginning)",
             stacklevel=2,
         )
         return None
-    if memo.n_read:
-        damaged = f" ({memo.n_damaged} line(s) not whole passed over)" if memo.n_damaged else ""
+    if memo.n_read or memo.n_damaged:
+        damaged = (
+            f" ({memo.n_damaged} line(s) not as written passed over)" if memo.n_damaged else ""
+        )
         click.echo(
             f"{memo.n_read} finished simulation job(s) of an interrupted plan of this case "
             f"read from {memo.path}{damaged}: those of this plan are not run again",
@@ -372,15 +388,17 @@ def _memo(case):
 
 
 def _kept_plan(memo, run):
-    """`run()` (the plan), its memo kept when it is interrupted or its workers were lost
-    (the same command then simulates only the rest), removed once the plan has ended."""
+    """`run()` (the plan), its memo kept when it is interrupted, its output is not
+    written or its workers were lost (the same command then simulates only the rest),
+    removed once the command has ended (`keep_until_end`)."""
     if memo is None:
         return run()
-    result = kept_until_done(memo.kept, memo.remove, run)
+    keep_until_end(memo.kept, memo.remove, memo.close)
+    result = run()
     if memo.n_reused:
         click.echo(
             f"{memo.n_reused} simulation job(s) taken from the interrupted plan "
-            f"({memo.path}, now removed), not run again",
+            f"({memo.path}), not run again",
             err=True,
         )
     return result

@@ -22,8 +22,8 @@ import fcntl
 import hashlib
 import json
 import os
+import warnings
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 from stabctl._jit.cache import package_digest
@@ -58,12 +58,15 @@ def job_key(func: Callable, job: dict) -> str:
 
 class Memo:
     """The finished worker jobs of a plan, read from and written to one JSON-lines file
-    (one ``{"key": ..., "result": ...}`` a line).
+    (one ``{"key": ..., "sha": ..., "result": ...}`` a line, ``sha`` the SHA-256 of the
+    key and the result's canonical JSON: a line edited or damaged is passed over, not
+    handed back).  The file is held (an exclusive ``flock``) for as long as the memo is
+    open, so that no two plans write it at once.
 
     Parameters
     ----------
     path : str or os.PathLike
-        The file; its directory is made (mode 0700) when missing.
+        The file; it and its directory (mode 0700) are made when missing.
 
     Attributes
     ----------
@@ -72,49 +75,71 @@ class Memo:
         Key -> result of every job kept.
     n_read, n_reused, n_written, n_damaged : int
         Results read from the file when opened, handed back instead of a run, written by
-        this plan, and lines passed over as not whole (a writer killed while writing).
+        this plan, and lines passed over (not whole: a writer killed while writing; or
+        not as written: edited).
+    unwritable : str
+        Why the file took no more results ('' while it takes them): a full disk, a quota;
+        the plan goes on, its later results not kept (a RuntimeWarning says so once).
 
     Raises
     ------
     InputError
         The file or its directory belongs to another user or may be written by others
-        than its owner, is not a regular file, is larger than MAX_MEMO_BYTES, or cannot
-        be made or read; each naming it.
+        than its owner, is not a regular file, is larger than MAX_MEMO_BYTES, cannot be
+        made, read or written (a read-only file system), or is held by another running
+        plan; each naming it.
     """
 
     def __init__(self, path: str | os.PathLike) -> None:
-        self.path = Path(path)
+        self._fd: int | None = None
+        self.path = private_file(path)
         self.results: dict[str, Any] = {}
         self.n_read = self.n_reused = self.n_written = self.n_damaged = 0
-        private_file(self.path)
-        self._read()
-
-    def _read(self) -> None:
-        """Load the file's whole lines (a missing file holds nothing)."""
+        self.unwritable = ""
         try:
-            with open(self.path, "rb") as fh:
-                size = os.fstat(fh.fileno()).st_size
-                if size > MAX_MEMO_BYTES:
-                    raise InputError(
-                        f"{self.path}: {size} bytes, more than a plan's simulations take "
-                        f"(at most {MAX_MEMO_BYTES}): not read"
-                    )
-                lines = fh.read().splitlines()
-        except FileNotFoundError:
-            return
+            fd = os.open(self.path, os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
         except OSError as exc:
-            raise InputError(f"{self.path}: cannot be read ({exc.strerror})") from None
-        for line in lines:
+            raise InputError(f"{self.path}: cannot be written ({exc.strerror})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            raise InputError(
+                f"{self.path}: held by another plan of the same case and settings, running"
+            ) from None
+        self._fd = fd
+        self._whole = self._read(fd)
+
+    def _read(self, fd: int) -> bool:
+        """Load the file's whole lines whose sha matches; whether it ends with a whole
+        line (an empty file does)."""
+        size = os.fstat(fd).st_size
+        if size > MAX_MEMO_BYTES:
+            self.close()
+            raise InputError(
+                f"{self.path}: {size} bytes, more than a plan's simulations take (at most "
+                f"{MAX_MEMO_BYTES}): not read"
+            )
+        text = os.pread(fd, size, 0) if size else b""
+        for line in text.splitlines():
             try:
                 rec = json.loads(line)
-                self.results[rec["key"]] = rec["result"]
+                key, result = rec["key"], rec["result"]
+                whole = rec["sha"] == _sha(key, result)
             except (ValueError, TypeError, KeyError, RecursionError):
+                whole = False
+            if whole:
+                self.results[key] = result
+            else:
                 self.n_damaged += 1
         self.n_read = len(self.results)
+        return not text or text.endswith(b"\n")
 
     def add(self, key: str, result: Any) -> None:
-        """Append one finished job's result (one write of a whole line, under an exclusive
-        lock of the file, so that two plans of one case never interleave lines).
+        """Append one finished job's result (one write of a whole line; after a line a
+        killed writer left unfinished, a line end first).  A write the system refuses (a
+        full disk, a quota) keeps the result for this plan only and stops writing
+        (`unwritable`, one RuntimeWarning).
 
         Parameters
         ----------
@@ -123,14 +148,29 @@ class Memo:
         result : JSON-able
             Its result.
         """
-        line = json.dumps({"key": key, "result": result}, default=_jsonable) + "\n"
-        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX)
-            os.write(fd, line.encode())
-        finally:
-            os.close(fd)
         self.results[key] = result
+        if self._fd is None or self.unwritable:
+            return
+        line = json.dumps(
+            {"key": key, "sha": _sha(key, result), "result": result}, default=_jsonable
+        )
+        data = ("" if self._whole else "\n") + line + "\n"
+        try:
+            written = os.write(self._fd, data.encode())
+        except OSError as exc:
+            written, why = 0, exc.strerror or str(exc)
+        else:
+            why = "" if written == len(data.encode()) else "a short write (a full disk)"
+        self._whole = not why
+        if why:
+            self.unwritable = why
+            warnings.warn(
+                f"{self.path} cannot be written ({why}): the plan goes on, its simulations "
+                "from now on not kept (an interrupt then keeps only those before)",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            return
         self.n_written += 1
 
     def wrap(self, run_map: Callable) -> Callable:
@@ -166,19 +206,45 @@ class Memo:
 
         return mapped
 
+    def close(self) -> None:
+        """Let the file go (its lock released), keeping it for the same plan run again."""
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> Memo:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        self.close()
+
     def remove(self) -> None:
-        """Remove the file (the plan has ended: nothing to resume)."""
-        self.path.unlink(missing_ok=True)
+        """Remove the file (the plan has ended: nothing to resume) and let it go."""
+        if self._fd is not None:
+            self.path.unlink(missing_ok=True)
+        self.close()
 
     def kept(self) -> str:
-        """What an interrupted plan keeps, in words (the CLI's "interrupted:" line)."""
-        n = len(self.results)
+        """What an interrupted plan keeps in its file, in words (the CLI's "interrupted:"
+        line): the results read from it and written to it whole."""
+        n = self.n_read + self.n_written if self._fd is not None else 0
         if not n:
             return f"no simulation had finished, so nothing is kept (in {self.path})"
+        short = f" (later ones not: {self.unwritable})" if self.unwritable else ""
         return (
-            f"{n} finished simulation job(s) are kept in {self.path}; the same command "
-            "runs only the others"
+            f"{n} finished simulation job(s) are kept in {self.path}{short}; the same "
+            "command runs only the others"
         )
+
+
+def _sha(key: str, result) -> str:
+    """The SHA-256 (hex) of a job's key and its result's canonical JSON: what a memo line
+    carries, so that a line edited or damaged is not handed back."""
+    text = json.dumps(result, sort_keys=True, separators=(",", ":"), default=_jsonable)
+    return hashlib.sha256(f"{key}\n{text}".encode()).hexdigest()
 
 
 def _jsonable(x):

@@ -104,3 +104,16 @@ def test_a_count_of_one_takes_the_singular():
         )
     assert res.exit_code == 0, res.output
     assert "wrote c.json: 2 buses, 1 branch, 2 machines, 0 exciters," in res.stdout
+
+
+def test_a_relative_speed_rmse_never_formed_prints_as_a_dash(capsys):
+    """Round 39: a PMU implausible in every frame leaves the raw estimator no relative
+    speed; `estimate rmse --source` printed "raw None / 19.8852 / 19.8831"."""
+    from stabctl.cli.format import _source_compare
+
+    src = {
+        "on_wire": {"raw": {"rel_rmse_mhz": 19.88521}},
+        "in_process": {"raw": {"rel_rmse_mhz": 19.88312}},
+    }
+    _source_compare(src, {"raw": {"rel_rmse_mhz": {"mean": None}}})
+    assert capsys.readouterr().out.splitlines()[-1] == "  raw      - / 19.8852 / 19.8831"

@@ -44,7 +44,10 @@ def test_kept_results_come_back_as_written_and_their_jobs_are_not_run_again(tmp_
             done(i + 1, len(jobs), i, out[-1])
         return out
 
-    first = Memo(path).wrap(run_map)(_square, [{"x": 3}, {"x": 0.1}])
+    with Memo(path) as memo:
+        first = memo.wrap(run_map)(_square, [{"x": 3}, {"x": 0.1}])
+        with pytest.raises(InputError, match="held by another plan of the same case"):
+            Memo(path)  # while it is open, no other plan writes it
     assert ran == [3, 0.1] and oct(path.parent.stat().st_mode & 0o777) == "0o700"
     again = Memo(path)
     assert again.n_read == 2
@@ -59,14 +62,45 @@ def test_kept_results_come_back_as_written_and_their_jobs_are_not_run_again(tmp_
     assert second == [first[1], {"y": 25, "pair": [5, 0.5]}, first[0]]
 
 
-def test_a_line_a_killed_writer_left_unfinished_is_passed_over_and_counted(tmp_path):
+def test_a_line_cut_or_edited_is_passed_over_and_the_next_is_written_whole(tmp_path):
+    """A line a killed writer left unfinished, or one edited by hand (its result no longer
+    the one its sha was made of: round 39, a result "garbage" crashed `place` with a
+    traceback on every run), is passed over and counted; a line added after a cut one
+    starts on a line of its own (round 39: it was glued on, and lost)."""
     path = tmp_path / "c.jsonl"
-    memo = Memo(path)
-    memo.add("k1", {"cct_s": 0.154})
-    with open(path, "a") as fh:
-        fh.write('{"key": "k2", "result": {"cct')  # SIGKILL in the middle of a write
-    again = Memo(path)
-    assert again.results == {"k1": {"cct_s": 0.154}} and again.n_damaged == 1
+    with Memo(path) as memo:
+        memo.add("k1", {"cct_s": 0.154})
+        memo.add("k2", {"cct_s": 0.408})
+    lines = path.read_text().splitlines()
+    edited = lines[1].replace("0.408", "0.816")
+    path.write_text(f"{lines[0]}\n{edited}\n" + '{"key": "k3", "result": {"cct')  # a cut
+    with Memo(path) as again:
+        assert again.results == {"k1": {"cct_s": 0.154}} and again.n_damaged == 2
+        again.add("k4", {"cct_s": 0.2})
+        assert again.kept().startswith("2 finished simulation job(s) are kept in ")
+    with Memo(path) as last:
+        assert last.results == {"k1": {"cct_s": 0.154}, "k4": {"cct_s": 0.2}}
+
+
+def test_a_memo_that_cannot_be_written_keeps_the_plan_going(tmp_path, monkeypatch):
+    """A full disk or a quota while a plan runs (round 39: the plan failed): the result
+    is kept for this plan, the file takes no more, one warning says so, and what an
+    interrupt keeps is what the file holds."""
+    path = tmp_path / "c.jsonl"
+    with Memo(path) as memo:
+        memo.add("k1", {"cct_s": 0.154})
+
+        def full(fd, data):
+            raise OSError(28, "No space left on device")
+
+        monkeypatch.setattr(memo_module.os, "write", full)
+        with pytest.warns(RuntimeWarning, match="cannot be written \\(No space left on device\\)"):
+            memo.add("k2", {"cct_s": 0.408})
+        memo.add("k3", {"cct_s": 0.5})  # no second warning, no write
+        monkeypatch.undo()
+        assert set(memo.results) == {"k1", "k2", "k3"}
+        assert memo.kept().startswith("1 finished simulation job(s) are kept in ")
+        assert "(later ones not: No space left on device)" in memo.kept()
 
 
 def test_a_memo_another_may_write_or_a_link_or_a_huge_file_is_refused(tmp_path, monkeypatch):
@@ -127,8 +161,8 @@ def test_an_interrupted_plan_run_again_simulates_only_the_rest_and_gives_the_sam
         whole = plan("kundur", faults, req, PlanOptions(), Study(run_map=run_map))
         cut = _Interrupting(after=7)
         path = tmp_path / "kundur.jsonl"
-        with pytest.raises(KeyboardInterrupt):
-            plan("kundur", faults, req, PlanOptions(memo=Memo(path)), Study(run_map=cut))
+        with pytest.raises(KeyboardInterrupt), Memo(path) as memo:
+            plan("kundur", faults, req, PlanOptions(memo=memo), Study(run_map=cut))
         kept = Memo(path)
         assert kept.n_read == 7  # every job finished before the interrupt, the batch's too
         counted = _Interrupting(after=10**9)
@@ -150,8 +184,12 @@ def test_cli_place_says_what_an_interrupt_keeps_and_uses_it_when_run_again(tmp_p
     assert res.exit_code == 130, res.output
     line = res.stderr.strip().splitlines()[-1]
     assert line.startswith("interrupted: 5 finished simulation job(s) are kept in ")
-    assert line.endswith("; run again with: stabctl " + " ".join(args))
+    assert line.endswith("; resume with: stabctl " + " ".join(args))
     (kept,) = (tmp_path / "cache" / "stabctl-place").glob("*.jsonl")
+    # a plan of other settings has a file of its own (round 39: a plan of the case that
+    # ended removed the one another plan had kept)
+    other = CliRunner().invoke(main, [*args[:-3], "20", "--workers", "1"])
+    assert other.exit_code == 130 and len(list(kept.parent.glob("*.jsonl"))) == 2
     monkeypatch.setattr(
         "stabctl.placement.loop.worker_pool", lambda *a: _Held(_Interrupting(after=10**9))
     )
@@ -163,6 +201,31 @@ def test_cli_place_says_what_an_interrupt_keeps_and_uses_it_when_run_again(tmp_p
     )
     assert "5 simulation job(s) taken from the interrupted plan" in res.stderr
     assert json.loads(res.stdout)["verified"] and not kept.exists()  # removed once it ended
+
+
+def test_cli_place_keeps_its_memo_until_its_output_is_written(tmp_path, monkeypatch):
+    """Round 39: the memo was removed as the plan returned, before `--out` was written: a
+    full disk there (or Ctrl-C while the output went out) lost every simulation.  It is
+    removed once the command has ended; an output that fails keeps it."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    args = ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10", "--workers", "1"]
+
+    def full(path, write, *a, **k):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr("stabctl.parallel.atomic_write", full)
+    res = CliRunner().invoke(main, [*args, "--out", "plan.json"])
+    assert res.exit_code == 2 and "plan.json: No space left on device" in res.stderr
+    (kept,) = (tmp_path / "cache" / "stabctl-place").glob("*.jsonl")
+    monkeypatch.undo()
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    res = CliRunner().invoke(main, [*args, "--out", "plan.json"])
+    assert res.exit_code == 0 and "simulation job(s) taken from the interrupted plan" in (
+        res.stderr
+    )
+    assert json.loads((tmp_path / "plan.json").read_text())["verified"] and not kept.exists()
 
 
 class _Held:
@@ -202,7 +265,7 @@ def test_cli_estimate_cct_keeps_its_finished_searches_when_interrupted(tmp_path,
     assert kept.parent == tmp_path / "cache" / "stabctl-estimate" and kept.exists()
     assert res.stderr.strip().splitlines()[-1] == (
         f"interrupted: 1 finished CCT search(es) are kept in {kept}; the same command runs "
-        f"only the others; run again with: stabctl {' '.join(args)}"
+        f"only the others; resume with: stabctl {' '.join(args)}"
     )
     row = {"mean": 12.0, "std": 0.0, "min": 12.0, "max": 12.0, "runs": 1, "failed": 0}
     row |= {"values": [12.0], "errors": [], "half_width": None}
