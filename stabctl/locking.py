@@ -38,6 +38,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import glob
 import hashlib
 import os
 import re
@@ -52,15 +53,23 @@ from pathlib import Path
 from stabctl.errors import InputError
 
 __all__ = [
+    "KEPT_DAYS",
     "STALE_AFTER_S",
     "Held",
     "beside",
     "exclusive",
+    "holder",
     "is_held",
+    "kept_path",
+    "kept_paths",
     "lock_path",
+    "private_file",
+    "remove_old_kept",
     "remove_stale",
     "temp_dir",
     "temp_file",
+    "unsafe_entry_reason",
+    "unsafe_reason",
 ]
 
 #: a holder writes its pid just after it takes the lock: a refused writer reads it this
@@ -139,6 +148,35 @@ def exclusive(path: str | os.PathLike) -> Iterator[Path]:
         os.close(fd)  # releases the lock
         if own is not None:
             os.close(own)
+
+
+def holder(path: str | os.PathLike) -> str | None:
+    """Who holds the exclusive lock of output ``path`` (`exclusive`) now: the pid its
+    holder wrote ("unknown" if none came), or None when no one holds it (a missing lock
+    file included).  A look only: the lock may be taken or let go just after.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output.
+
+    Returns
+    -------
+    str or None
+    """
+    try:
+        fd = os.open(lock_path(path), os.O_RDONLY)
+    except OSError:
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return _holder(fd)
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
+    return None
 
 
 def _file_locked(path) -> int | None:
@@ -584,7 +622,7 @@ def private_file(path: str | os.PathLike) -> Path:
     return path
 
 
-def kept_paths(kind: str, name: str) -> tuple[Path, Path]:
+def kept_paths(kind: str, name: str) -> tuple[Path, ...]:
     """The two places of the file `name` of this user's directory for `kind` (module
     docstring), first choice first: the cache directory's, the temporary directory's.
 
@@ -598,11 +636,17 @@ def kept_paths(kind: str, name: str) -> tuple[Path, Path]:
     Returns
     -------
     tuple of Path
-        Neither made nor checked (`private_file` does both).
+        Neither made nor checked (`private_file` does both); the temporary directory's
+        alone when there is no cache directory (no home: HOME unset and no passwd entry).
     """
-    cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / kind
-    temp = Path(tempfile.gettempdir()) / f"{kind}-{os.geteuid()}"
-    return cache / name, temp / name
+    temp = Path(tempfile.gettempdir()) / f"{kind}-{os.geteuid()}" / name
+    xdg = os.environ.get("XDG_CACHE_HOME", "")
+    if os.path.isabs(xdg):  # a relative one is to be ignored (XDG Base Directory)
+        return Path(xdg) / kind / name, temp
+    try:
+        return Path.home() / ".cache" / kind / name, temp
+    except RuntimeError:  # no home directory to be found
+        return (temp,)
 
 
 def kept_path(kind: str, name: str) -> Path:
@@ -641,3 +685,51 @@ def kept_path(kind: str, name: str) -> Path:
         os.close(fd)
         return path
     raise InputError("; ".join(why))
+
+
+#: kept work untouched for this many days is removed by the next command that keeps work
+#: of its kind there (`remove_old_kept`): a plan refused, or never run again, leaves its
+#: file, which nothing else removes
+KEPT_DAYS = 30
+
+
+def remove_old_kept(directory: str | os.PathLike, pattern: str = "*.jsonl") -> list[Path]:
+    """Remove the files `pattern` of a directory of kept work (`kept_paths`) not modified
+    for KEPT_DAYS days and not held by a running command (``flock``), with the files
+    their reading set aside beside them (``<name>.damaged...``).
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        This user's directory of kept work of one kind (a missing one holds nothing).
+    pattern : str, optional
+        The kept files' names.
+
+    Returns
+    -------
+    list of Path
+        The files removed.
+    """
+    old = time.time() - KEPT_DAYS * 86400
+    gone = []
+    for path in Path(directory).glob(pattern):
+        try:
+            if path.is_symlink() or path.stat().st_mtime > old:
+                continue
+            fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # held: a command keeps work there now
+            os.close(fd)
+            continue
+        try:
+            for also in (path, *path.parent.glob(glob.escape(path.name) + ".damaged*")):
+                also.unlink(missing_ok=True)
+            gone.append(path)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+    return gone

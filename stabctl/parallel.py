@@ -45,6 +45,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import fcntl
+import inspect
 import io
 import json
 import logging
@@ -864,7 +865,8 @@ def worker_pool(workers: int, scheduler: str | None = None) -> Iterator[Callable
         ``map(func, jobs: list[dict], done=None) -> list``; func must be a module-level
         function taking one dict; ``done(k, n, i, result)``, if given, is called in this
         process as each job finishes (k of the n jobs done, in the order they finish; i
-        the job's index in jobs, result its result: a caller may keep it at once).
+        the job's index in jobs, result its result: a caller may keep it at once); a
+        ``done`` of two parameters is called ``done(k, n)``.
 
     Raises
     ------
@@ -932,7 +934,7 @@ class _RestartedPool:
                 lost.append(k)
                 continue
             if done is not None:
-                done(len(results), len(jobs), k, results[k])
+                _tell(done, len(results), len(jobs), k, results[k])
         return sorted(lost)
 
 
@@ -1023,7 +1025,7 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
                 fut.release()
             del futures[fut]
             if done is not None:
-                done(len(jobs) - len(futures), len(jobs), k, results[k])
+                _tell(done, len(jobs) - len(futures), len(jobs), k, results[k])
     except _NoWorker as exc:
         raise SweepIncomplete(
             f"{len(futures)} of {len(jobs)} jobs not run: the Dask cluster at {address} {exc.why}"
@@ -1054,13 +1056,26 @@ def _lost_by_cluster(exc: BaseException) -> bool:
     return type(exc).__module__.split(".")[0] in ("distributed", "tornado")
 
 
+def _tell(done: Callable, k: int, n: int, i: int, result) -> None:
+    """Call a map's ``done`` callback with k of n jobs done and the job's index and
+    result, or, a callback of two parameters (the earlier ``done(k, n)``), with k, n."""
+    try:
+        inspect.signature(done).bind(k, n, i, result)
+    except TypeError:
+        done(k, n)
+    except ValueError:  # no signature to read (a builtin): the full call
+        done(k, n, i, result)
+    else:
+        done(k, n, i, result)
+
+
 def _in_process(func: Callable[[dict], Any], jobs: list, done=None) -> list:
     """`worker_pool`'s map for one worker: each job in turn in this process."""
     out = []
     for j in jobs:
         out.append(func(j))
         if done is not None:
-            done(len(out), len(jobs), len(out) - 1, out[-1])
+            _tell(done, len(out), len(jobs), len(out) - 1, out[-1])
     return out
 
 

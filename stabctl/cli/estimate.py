@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import glob
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -506,7 +507,7 @@ def cct(
         "esd_model": esd_model,
     }
     records = _kept_records(search)  # None: in a temporary file, removed
-    if records is not None:
+    if records is not None:  # (held by no one: `_kept_records`)
         keep_until_end(lambda: _kept_searches(records), lambda: _remove_kept(records))
     try:
         table = estimator_ccts(
@@ -521,14 +522,10 @@ def cct(
             esd_model=esd_model,
             records=records,
         )
-    except InputError as exc:  # its records held: by the same command, running
-        if records is None or not str(exc).startswith(f"{records}: another stabctl process"):
+    except InputError as exc:  # its records taken meanwhile: by the same command
+        if records is None or not str(exc).startswith(f"{records}: another stabctl"):
             raise
-        pid = str(exc).split("(pid ", 1)[1].split(")", 1)[0]
-        raise InputError(
-            f"the same estimate cct is running (pid {pid}), keeping its searches in "
-            f"{records}: wait for it to end, or run this one with other settings"
-        ) from None
+        raise _running(records, re.search(r"\(pid (\w+)\)", str(exc))) from None
     if all(row["failed"] == row["runs"] for row in table.values()):
         why = sorted({e for row in table.values() for e in row["errors"]})
         raise InputError(f"every CCT search failed: {'; '.join(why) or 'no reason recorded'}")
@@ -554,7 +551,7 @@ def _kept_records(search: dict):
     import hashlib
 
     from stabctl._jit.cache import package_digest
-    from stabctl.locking import kept_path
+    from stabctl.locking import holder, kept_path, remove_old_kept
     from stabctl.parallel import read_records
 
     text = json.dumps([package_digest(), search], sort_keys=True, default=str)
@@ -567,6 +564,9 @@ def _kept_records(search: dict):
             stacklevel=2,
         )
         return None
+    if (pid := holder(path)) is not None:  # before its records are read or kept
+        raise _running(path, pid)
+    remove_old_kept(path.parent)
     if path.stat().st_size:
         try:
             n = len(read_records(path))
@@ -580,6 +580,17 @@ def _kept_records(search: dict):
             err=True,
         )
     return path
+
+
+def _running(records, pid) -> InputError:
+    """The error of an `estimate cct` whose kept records another process holds: the same
+    command running (pid: a text, a regular-expression match of it, or None)."""
+    if isinstance(pid, re.Match):
+        pid = pid.group(1)
+    return InputError(
+        f"the same estimate cct is running (pid {pid or 'unknown'}), keeping its searches "
+        f"in {records}: wait for it to end, or run this one with other settings"
+    )
 
 
 def _remove_kept(records) -> None:

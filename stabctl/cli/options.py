@@ -320,7 +320,6 @@ def _reported_once(func, args, kwargs):
                     raise
                 raise stop from exc
         except StabctlError as exc:
-            _ended(exc)
             click.echo(f"error: {one_line(exc)}", err=True)
             sys.exit(2)
         except StdoutError as exc:  # stdout closed, its disk full
@@ -683,11 +682,13 @@ _ON_END: list = []
 
 def keep_until_end(kept, remove, release=None) -> None:
     """Note what the running command keeps should it be interrupted (`note_keeping`), and
-    that ``remove()`` is called once the command has ended: its output delivered (it
-    returned, or exited with its own status, `place`'s 1 "not verified"), or refused
-    with a StabctlError other than SweepIncomplete.  Interrupted, its output not written
-    (a full disk) or its workers lost, the work stays: the same command then reuses it
-    (round 39: it was removed as the plan returned, before its output was written).
+    that ``remove()`` is called once the command has ended with its output delivered (it
+    returned, or exited with its own status, `place`'s 1 "not verified").  Interrupted,
+    refused (a scheduler not answering, a plan infeasible), its output not written (a
+    full disk) or its workers lost, the work stays: the same command then reuses it
+    (round 39: it was removed as the plan returned, before its output was written, and
+    on any refusal; kept work untouched for `stabctl.locking.KEPT_DAYS` days is removed by
+    the next command of its kind).  A removal that fails is a warning.
 
     Parameters
     ----------
@@ -715,15 +716,14 @@ def _released() -> None:
         _RELEASE.pop()()
 
 
-def _ended(exc: BaseException | None = None) -> None:
-    """Call the `keep_until_end` removals of a command that has ended (`exc` the
-    StabctlError it was refused with, if it was; a SweepIncomplete keeps them)."""
-    from stabctl.parallel import SweepIncomplete
-
-    if isinstance(exc, SweepIncomplete):
-        return
+def _ended() -> None:
+    """Call the `keep_until_end` removals of a command that has ended with its output
+    delivered; one that fails (a directory made read-only) is a warning."""
     while _ON_END:
-        _ON_END.pop()()
+        try:
+            _ON_END.pop()()
+        except OSError as exc:  # (after the command's warnings were gathered)
+            click.echo(f"warning: kept work not removed: {exc}", err=True)
 
 
 def _paper_records(out) -> bool:

@@ -357,8 +357,8 @@ def _memo(case, plan_inputs):
     cannot be kept (the plan runs all the same)."""
     import hashlib
 
-    from stabctl.locking import kept_paths
-    from stabctl.placement.memo import Memo
+    from stabctl.locking import kept_paths, remove_old_kept
+    from stabctl.placement.memo import Memo, MemoHeld
 
     name = hashlib.sha256(f"{case.digest()}\n{plan_inputs!r}".encode()).hexdigest()[:32]
     why = []
@@ -366,6 +366,12 @@ def _memo(case, plan_inputs):
         try:
             memo = Memo(path)
             break
+        except MemoHeld as exc:  # the same plan running: this one must not run on alone
+            warnings.warn(
+                f"{exc} (the same command, started before): this plan's simulations are not kept",
+                stacklevel=2,
+            )
+            return None
         except InputError as exc:  # the next place, or none
             why.append(str(exc))
     else:
@@ -375,6 +381,7 @@ def _memo(case, plan_inputs):
             stacklevel=2,
         )
         return None
+    remove_old_kept(memo.path.parent)  # plans refused or never run again, long ago
     if memo.n_read or memo.n_damaged:
         damaged = (
             f" ({memo.n_damaged} line(s) not as written passed over)" if memo.n_damaged else ""

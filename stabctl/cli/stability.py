@@ -444,6 +444,7 @@ def sweep_cct(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )
     _say_others(out_path, jobs)
+    settings = _settings_line(case_name, model, search)  # before the jobs, once
     rep = run_sweep(
         jobs, out_path, workers=workers, scheduler=scheduler, retry_failed=retry_failed
     )  # Ctrl-C: reports_errors, exit 130
@@ -460,7 +461,7 @@ def sweep_cct(
             }
         )
     else:
-        click.echo(_settings_line(case_name, model, search))
+        click.echo(settings)
         print_sweep(rep, len(jobs), case)
     from stabctl.stability.screening import verdict
 
@@ -571,6 +572,7 @@ def screen(
     check_power_flow(case, model)  # before any search: not one failure per fault
     check_step_given(case, model, screening.T_FAULT + T_AFTER_FAULT)
     search = replace(search_settings(tol_ms, t_max, None, tf_option=False), method=method)
+    settings = _settings_line(case_name, model, search)  # before the searches, once
     rows = run_screen(
         case_name,
         out_path,
@@ -591,7 +593,7 @@ def screen(
     if as_json:
         print_json(rows)
     else:
-        click.echo(_settings_line(case_name, model, search))
+        click.echo(settings)
         print_screening(case, rows, tol_ms / 1000, out_path)
     failed = [r for r in rows if r["verdict"] == "failed"]
     _exit_on_failures(failed, out_path, ("search", "searches"))

@@ -582,7 +582,8 @@ class StreamServer:
             me.ignored += not command
             me.commanded = me.commanded or bool(command)
             if command == "start":
-                me.streamed = True
+                with self._lock:  # (read by `_admit` under it)
+                    me.streamed = True
                 if shown is None:
                     shown = _Shown([math.nan] * len(self._data), [math.nan] * len(self._data))
                     with self._lock:

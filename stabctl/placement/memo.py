@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import fcntl
 import hashlib
+import inspect
 import json
 import os
 import warnings
@@ -96,19 +97,37 @@ class Memo:
         self.results: dict[str, Any] = {}
         self.n_read = self.n_reused = self.n_written = self.n_damaged = 0
         self.unwritable = ""
-        try:
-            fd = os.open(self.path, os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
-        except OSError as exc:
-            raise InputError(f"{self.path}: cannot be written ({exc.strerror})") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(fd)
-            raise InputError(
-                f"{self.path}: held by another plan of the same case and settings, running"
-            ) from None
-        self._fd = fd
-        self._whole = self._read(fd)
+        self._removed = False
+        self._fd = self._held()
+        self._whole = self._read(self._fd)
+
+    def _held(self) -> int:
+        """A descriptor of the file holding its exclusive lock; the file locked is the one
+        at the path (one its holder removed meanwhile is opened again).  Raises
+        InputError: the file cannot be made or written, or is held by another plan
+        (`MemoHeld`), or cannot be locked."""
+        while True:
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+            except OSError as exc:
+                raise InputError(f"{self.path}: cannot be written ({exc.strerror})") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(fd)
+                raise MemoHeld(
+                    f"{self.path}: held by another plan of the same case and settings, running"
+                ) from None
+            except OSError as exc:  # a file system without locks (NFS without lockd)
+                os.close(fd)
+                raise InputError(f"{self.path}: cannot be locked ({exc.strerror})") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                return fd
+            os.close(fd)  # removed by the plan that held it, as it ended: the new one
 
     def _read(self, fd: int) -> bool:
         """Load the file's whole lines whose sha matches; whether it ends with a whole
@@ -120,7 +139,11 @@ class Memo:
                 f"{self.path}: {size} bytes, more than a plan's simulations take (at most "
                 f"{MAX_MEMO_BYTES}): not read"
             )
-        text = os.pread(fd, size, 0) if size else b""
+        try:
+            text = os.pread(fd, size, 0) if size else b""
+        except OSError as exc:
+            self.close()
+            raise InputError(f"{self.path}: cannot be read ({exc.strerror})") from None
         for line in text.splitlines():
             try:
                 rec = json.loads(line)
@@ -190,18 +213,25 @@ class Memo:
             The same signature; ``done`` is told of the jobs run only.
         """
 
+        takes_done = "done" in inspect.signature(run_map).parameters
+
         def mapped(func, jobs, done=None):
             keys = [job_key(func, j) for j in jobs]
             todo = [i for i, k in enumerate(keys) if k not in self.results]
-            self.n_reused += len(jobs) - len(todo)
+            reused = len(jobs) - len(todo)
+            self.n_reused += reused
 
-            def finished(k, n, i, result):
+            def finished(k, n, i, result):  # as the caller's jobs count: reused ones done
                 self.add(keys[todo[i]], result)
                 if done is not None:
-                    done(k, n, i, result)
+                    done(reused + k, len(jobs), todo[i], result)
 
             if todo:
-                run_map(func, [jobs[i] for i in todo], done=finished)
+                run = [jobs[i] for i in todo]
+                out = run_map(func, run, done=finished) if takes_done else run_map(func, run)
+                for i, result in zip(todo, out):  # a map that tells of none as it ends
+                    if keys[i] not in self.results:
+                        self.add(keys[i], result)
             return [_loaded(self.results[k]) for k in keys]
 
         return mapped
@@ -225,12 +255,18 @@ class Memo:
         """Remove the file (the plan has ended: nothing to resume) and let it go."""
         if self._fd is not None:
             self.path.unlink(missing_ok=True)
+            self._removed = True
         self.close()
+
+    def __getstate__(self) -> dict:
+        """A copy holds no descriptor (it is this process's): it reads nothing more,
+        writes nothing and closes nothing."""
+        return {**self.__dict__, "_fd": None}
 
     def kept(self) -> str:
         """What an interrupted plan keeps in its file, in words (the CLI's "interrupted:"
         line): the results read from it and written to it whole."""
-        n = self.n_read + self.n_written if self._fd is not None else 0
+        n = 0 if self._removed else self.n_read + self.n_written
         if not n:
             return f"no simulation had finished, so nothing is kept (in {self.path})"
         short = f" (later ones not: {self.unwritable})" if self.unwritable else ""
@@ -238,6 +274,10 @@ class Memo:
             f"{n} finished simulation job(s) are kept in {self.path}{short}; the same "
             "command runs only the others"
         )
+
+
+class MemoHeld(InputError):
+    """A memo file held by another running plan (`Memo`): the same plan started twice."""
 
 
 def _sha(key: str, result) -> str:
@@ -259,4 +299,4 @@ def _loaded(result):
     return json.loads(json.dumps(result, default=_jsonable))
 
 
-__all__ = ["MAX_MEMO_BYTES", "Memo", "job_key"]
+__all__ = ["MAX_MEMO_BYTES", "Memo", "MemoHeld", "job_key"]

@@ -284,3 +284,131 @@ def test_cli_estimate_cct_keeps_its_finished_searches_when_interrupted(tmp_path,
     # another setting, another file
     res = CliRunner().invoke(main, [*args, "--seed", "1"])
     assert res.exit_code == 0 and seen[2] != kept
+
+
+# -- round 39's review of the above ------------------------------------------------------
+
+
+def test_a_wrapped_map_tells_the_caller_s_indices_and_takes_a_map_without_done(tmp_path):
+    """`done` is told of each job by its index in the caller's jobs, counting the jobs
+    handed back as done; a map that takes no ``done`` (a `Study.run_map` of its own) is
+    called without it, its results kept from what it returns."""
+    seen = []
+    with Memo(tmp_path / "c.jsonl") as memo:
+        plain = lambda func, jobs: [func(j) for j in jobs]  # noqa: E731
+        memo.wrap(plain)(_square, [{"x": 1}, {"x": 3}])
+        with_done = lambda func, jobs, done=None: [  # noqa: E731
+            done(k + 1, len(jobs), k, func(j)) or func(j) for k, j in enumerate(jobs)
+        ]
+        out = memo.wrap(with_done)(
+            _square, [{"x": 1}, {"x": 2}, {"x": 3}, {"x": 4}], done=lambda *a: seen.append(a)
+        )
+    assert [o["y"] for o in out] == [1, 4, 9, 16]
+    assert [(k, n, i, r["y"]) for k, n, i, r in seen] == [(3, 4, 1, 4), (4, 4, 3, 16)]
+
+
+def test_what_a_memo_keeps_is_what_its_file_holds_closed_or_removed(tmp_path):
+    path = tmp_path / "c.jsonl"
+    memo = Memo(path)
+    memo.add("k1", {"cct_s": 0.1})
+    memo.close()  # (let go at the command's end, before a late interrupt is reported)
+    assert memo.kept().startswith("1 finished simulation job(s) are kept in ")
+    again = Memo(path)
+    again.remove()
+    assert again.kept().startswith("no simulation had finished, so nothing is kept")
+    assert not path.exists()
+
+
+def test_two_parameter_done_callbacks_are_still_called(tmp_path):
+    """worker_pool's ``done(k, n)`` of before is called so; one of four parameters gets
+    the job's index and result (round 39's review: a two-parameter callback raised)."""
+    seen = []
+    with worker_pool(1) as run:
+        run(_square, [{"x": 1}, {"x": 2}], done=lambda k, n: seen.append((k, n)))
+    assert seen == [(1, 2), (2, 2)]
+
+
+def test_an_insecure_window_run_that_fails_leaves_the_verdict(monkeypatch):
+    """A run of the insecure window that fails (the fault on beyond what the model
+    solves) is no window, and never turns the N-1 insecure verdict into a failure."""
+    from stabctl.errors import InsecureContingency, SimulationError
+    from stabctl.stability import cct
+
+    def fails(k):
+        raise SimulationError("the network has no solution while the fault is on")
+
+    with pytest.raises(InsecureContingency) as said:
+        cct._lower_bound_unstable(0, LineFault(3, 4), 1e-3, fails, 500, 60.0)
+    assert str(said.value).endswith("N-1 insecure, CCT 0")
+
+
+def test_a_refused_plan_keeps_its_memo_and_old_memos_go(tmp_path, monkeypatch):
+    """A plan refused (a scheduler not answering when it is run again, round 39's review:
+    its kept simulations were removed) keeps its memo; a memo untouched for KEPT_DAYS
+    days and held by no one is removed by the next plan."""
+    from stabctl import locking
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    args = ["place", "kundur", "--faults", "DEFAULT", "--target-cct-gain", "10", "--workers", "1"]
+    old = tmp_path / "cache" / "stabctl-place" / "old.jsonl"
+    old.parent.mkdir(parents=True, mode=0o700)
+    old.write_text("")
+    os.utime(old, (0, 0))
+
+    class Refusing(_Interrupting):
+        def __call__(self, func, jobs, done=None):
+            out = []
+            for i, j in enumerate(jobs):
+                if self.n >= self.after:  # the scheduler gone
+                    raise InputError("no Dask scheduler answers at tcp://127.0.0.1:1")
+                out.append(func(j))
+                self.n += 1
+                done(i + 1, len(jobs), i, out[-1])
+            return out
+
+    monkeypatch.setattr("stabctl.placement.loop.worker_pool", lambda *a: _Held(Refusing(5)))
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and "no Dask scheduler answers" in res.stderr
+    (kept,) = old.parent.glob("*.jsonl")  # the old one gone, this plan's kept
+    assert kept != old and kept.read_text().count("\n") >= 5
+    assert locking.KEPT_DAYS == 30
+
+
+def test_a_second_estimate_cct_leaves_the_running_one_s_records(tmp_path, monkeypatch):
+    """The same estimate cct started while one runs is refused by name before it reads
+    or registers anything (round 39's review: its refusal removed the running one's
+    records)."""
+    from stabctl.locking import exclusive
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    args = ["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
+    seen = []
+
+    def interrupted(case, fault, ratings, runs, out, **kw):
+        seen.append(out)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("stabctl.estimation.closed_loop.cct_study", interrupted)
+    assert CliRunner().invoke(main, args).exit_code == 130
+    (records,) = seen
+    records.write_text('{"key": "k", "status": "ok", "result": {}}\n')
+    with exclusive(records):  # the first run, running
+        res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and "the same estimate cct is running (pid " in res.stderr
+    assert records.read_text().count("\n") == 1
+
+
+def test_kept_work_goes_under_the_temporary_directory_without_a_home(tmp_path, monkeypatch):
+    from stabctl.locking import kept_paths
+
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/cache")  # to be ignored (XDG)
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    home, temp = kept_paths("stabctl-place", "a.jsonl")
+    assert home.is_absolute() and home.parts[-3:] == (".cache", "stabctl-place", "a.jsonl")
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+
+    monkeypatch.setattr("pathlib.Path.home", no_home)
+    assert kept_paths("stabctl-place", "a.jsonl") == (temp,)
