@@ -373,13 +373,17 @@ def main():
                     n += 1
                     if st is not True:
                         bad.append(f"{b}-{f}#{c}: CCT {cct} but cleared at {t} s: {st}")
-            elif lab == "N-1 insecure":
+            elif lab == "N-1 insecure":  # stable later only where the verdict says so
+                said = d.get("reason", "")
                 for cyc in (1, 2, 3):
                     st, _ = sim_verdict("kundur", b, f, c, cyc / 60, W)
                     n += 1
-                    if st is not False:
+                    named = (
+                        f"{round(cyc / 60, 3):g}" in said.split("yet stable when cleared at")[-1]
+                    )
+                    if st is not False and not ("yet stable when cleared at" in said and named):
                         bad.append(
-                            f"{b}-{f}#{c}: 'N-1 insecure, CCT 0' but simulate cleared after {cyc} cycle(s): stable"
+                            f"{b}-{f}#{c}: 'N-1 insecure, CCT 0' but simulate cleared after {cyc} cycle(s): stable, unsaid"
                         )
         return (not bad), "; ".join(
             bad

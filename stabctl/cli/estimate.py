@@ -6,6 +6,8 @@ the old flags ``--closed-loop`` / ``--cct`` the subcommand of that name.
 
 from __future__ import annotations
 
+import errno
+import functools
 import glob
 import json
 import re
@@ -509,23 +511,33 @@ def cct(
     records = _kept_records(search)  # None: in a temporary file, removed
     if records is not None:  # (held by no one: `_kept_records`)
         keep_until_end(lambda: _kept_searches(records), lambda: _remove_kept(records))
+    study = functools.partial(
+        estimator_ccts,
+        case_name,  # the file given, not the case's name: an edited copy of a built-in
+        fault,
+        far_bus,
+        esd_pct=esd_pct,
+        runs=runs,
+        seed=seed,
+        settings=settings,
+        model=model,
+        esd_model=esd_model,
+    )
     try:
-        table = estimator_ccts(
-            case_name,  # the file given, not the case's name: an edited copy of a built-in
-            fault,
-            far_bus,
-            esd_pct=esd_pct,
-            runs=runs,
-            seed=seed,
-            settings=settings,
-            model=model,
-            esd_model=esd_model,
-            records=records,
-        )
+        table = study(records=records)
     except InputError as exc:  # its records taken meanwhile: by the same command
         if records is None or not str(exc).startswith(f"{records}: another stabctl"):
             raise
         raise _running(records, re.search(r"\(pid (\w+)\)", str(exc))) from None
+    except OSError as exc:  # its cache full or read-only meanwhile: kept nowhere then
+        if records is None or exc.errno not in _UNWRITABLE:
+            raise
+        warnings.warn(
+            f"{records}: cannot be written ({exc.strerror}): the searches are run again in "
+            "a temporary file, not kept",
+            stacklevel=2,
+        )
+        table = study(records=None)
     if all(row["failed"] == row["runs"] for row in table.values()):
         why = sorted({e for row in table.values() for e in row["errors"]})
         raise InputError(f"every CCT search failed: {'; '.join(why) or 'no reason recorded'}")
@@ -580,6 +592,10 @@ def _kept_records(search: dict):
             err=True,
         )
     return path
+
+
+#: the errors of a cache that takes no more (`estimate cct`'s kept records)
+_UNWRITABLE = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS)
 
 
 def _running(records, pid) -> InputError:

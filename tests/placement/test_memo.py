@@ -412,3 +412,28 @@ def test_kept_work_goes_under_the_temporary_directory_without_a_home(tmp_path, m
 
     monkeypatch.setattr("pathlib.Path.home", no_home)
     assert kept_paths("stabctl-place", "a.jsonl") == (temp,)
+
+
+def test_estimate_cct_whose_cache_fills_runs_its_searches_in_a_temporary_file(
+    tmp_path, monkeypatch
+):
+    """Round 39 (probe K25): a cache that filled while `estimate cct` recorded its
+    searches failed the command ("No space left on device"); they are run again in a
+    temporary file, with a warning."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    args = ["estimate", "cct", "kundur", "--fault", "3", "--far-bus", "101", "--esd-pct", "5"]
+    row = {"mean": 12.0, "std": 0.0, "min": 12.0, "max": 12.0, "runs": 1, "failed": 0}
+    row |= {"values": [12.0], "errors": [], "half_width": None}
+    seen = []
+
+    def study(case, fault, ratings, runs, out, **kw):
+        seen.append(out)
+        if "cache" in str(out):
+            raise OSError(28, "No space left on device", str(out))
+        return {ratings[0]: {"ideal": row}}
+
+    monkeypatch.setattr("stabctl.estimation.closed_loop.cct_study", study)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    assert "cannot be written (No space left on device): the searches are run again" in (res.stderr)
+    assert len(seen) == 2 and "cache" not in str(seen[1])
