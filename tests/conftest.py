@@ -28,9 +28,11 @@ whose cache that compile never filled.
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 
 import pytest
 
@@ -68,15 +70,31 @@ def pytest_configure(config):
     """Under pytest-xdist, in the controller before the workers start: ``stabctl compile``
     (every built-in case's argument types into the shared on-disk cache; a warm cache
     only loads, about a second).  Before it, in every process: the folder of the stabctl
-    under test first on PYTHONPATH, for that compile and every command the tests start."""
+    under test first on PYTHONPATH, for that compile and every command the tests start;
+    and, in the controller (the workers inherit it), XDG_CACHE_HOME a new directory of the
+    run, so that the work a `place` or `estimate cct` keeps (`stabctl.locking.kept_paths`)
+    is the run's own: kept in the user's ~/.cache by one test (a plan refused or
+    interrupted), it was read by another's same plan, whose lines then differed (CI,
+    2026-12-01)."""
+
     root = os.path.dirname(os.path.dirname(os.path.abspath(stabctl.__file__)))
     path = os.environ.get("PYTHONPATH", "")
     if path.split(os.pathsep)[0] != root:
         os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [root, path]))
+    if not hasattr(config, "workerinput"):
+        config.stabctl_kept_work = tempfile.mkdtemp(prefix="stabctl-tests-cache.")
+        os.environ["XDG_CACHE_HOME"] = config.stabctl_kept_work
     if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
         subprocess.run(
             [sys.executable, "-m", "stabctl.cli", "compile"], capture_output=True, timeout=1200
         )
+
+
+def pytest_unconfigure(config):
+    """The run's XDG_CACHE_HOME (`pytest_configure`) removed with what it holds."""
+    kept = getattr(config, "stabctl_kept_work", None)
+    if kept:
+        shutil.rmtree(kept, ignore_errors=True)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -312,6 +312,7 @@ def test_every_long_command_ends_the_same_way_on_ctrl_c(
     tmp_path, monkeypatch, command, target, kept
 ):
     monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))  # no other run's kept work
     module, name = target.rsplit(".", 1)
 
     def interrupted(*a, **k):
