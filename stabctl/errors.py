@@ -7,7 +7,7 @@ noun in agreement in every message and report ("1 contingency", "2 contingencies
 
 import dataclasses
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from contextvars import ContextVar
 from numbers import Integral, Real
 
@@ -59,18 +59,46 @@ def advice(library: str, cli: str = "") -> str:
     return cli if _FRONT.get() == "cli" else library
 
 
-@contextmanager
-def on_command_line() -> Iterator[None]:
+def on_command_line() -> AbstractContextManager[None]:
     """Within this block errors advise command-line options, not Python arguments
     (`advice`): a command of stabctl's command line runs in it
     (`stabctl.cli.options.reports_errors`).
 
+    Returns
+    -------
+    context manager
+        The block runs as a command.
+    """
+    return speaking("cli")
+
+
+def front() -> str:
+    """Whose words messages take here (`advice`): ``"cli"`` inside a command of the
+    command line, else ``"library"``; a worker process of a command is given its parent's
+    (`stabctl.parallel`), whose errors and warnings advised Python arguments.
+
+    Returns
+    -------
+    str
+    """
+    return _FRONT.get()
+
+
+@contextmanager
+def speaking(name: str) -> Iterator[None]:
+    """Within this block messages take the words of `name` (`front`'s values).
+
+    Parameters
+    ----------
+    name : str
+        ``"cli"`` or ``"library"``.
+
     Yields
     ------
     None
-        Nothing: the block runs as a command.
+        Nothing: the block runs in those words.
     """
-    token = _FRONT.set("cli")
+    token = _FRONT.set(name)
     try:
         yield
     finally:

@@ -81,8 +81,10 @@ from stabctl.errors import (
     UnsharedCaseError,
     Verdict,
     WrongTypeError,
+    front,
     is_whole_number,
     require_flag,
+    speaking,
 )
 from stabctl.jsontext import input_file, parse_json
 from stabctl.locking import beside, exclusive, is_held, temp_dir, temp_file
@@ -737,10 +739,51 @@ def _worker_warning(message, category, filename, lineno, file=None, line=None) -
     middle of a progress bar (each worker shows a warning once per place, Python's
     default)."""
     text = " ".join(str(message).split())
-    try:
-        print(f"warning: {text}", file=sys.stderr if file is None else file, flush=True)
-    except (OSError, ValueError):  # stderr closed: nowhere to say it
+    out = sys.stderr if file is None else file
+    try:  # one write: two workers' lines were glued, each cut before its newline
+        out.write(f"warning: {text}\n")
+        out.flush()
+    except (OSError, ValueError, AttributeError):  # stderr closed: nowhere to say it
         pass
+
+
+@dataclass(frozen=True)
+class _Warned:
+    """A worker's job result with the warnings the job gave (`_told`): (category, text)
+    pairs, each once."""
+
+    result: Any
+    said: tuple
+
+
+def _told(words: str, func: Callable, *args) -> _Warned:
+    """``func(*args)`` in a worker process (a pool's or Dask's) in the words of its
+    parent's front (`stabctl.errors.front`: a command's options, not Python arguments),
+    its warnings returned with its result, for the parent to give (`_given`).  Each worker
+    showed them itself, in the library's words: ``estimate cct --step 0.0185`` gave its
+    step warning once from the command and once more from each worker, those glued
+    together between the progress bar's updates.  A job that raises shows its warnings in
+    the worker (`_worker_warning`), as before."""
+    with speaking(words), warnings.catch_warnings(record=True) as caught:
+        try:
+            result = func(*args)
+        except BaseException:
+            for w in caught:
+                _worker_warning(w.message, w.category, w.filename, w.lineno)
+            raise
+    said = dict.fromkeys((w.category, " ".join(str(w.message).split())) for w in caught)
+    return _Warned(result, tuple(said))
+
+
+def _given(value: Any) -> Any:
+    """A job's result as `_told` returned it, its warnings given here (each warned once
+    per text, as this process's own: a command says them with its own, once); any other
+    value (a job run in this process, a Dask worker's `_OtherSource`) as it is."""
+    if not isinstance(value, _Warned):
+        return value
+    for category, text in value.said:
+        warnings.warn(text, category, stacklevel=2)
+    return value.result
 
 
 _PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
@@ -922,14 +965,14 @@ class _RestartedPool:
         futures: dict = {}
         for k in left:
             try:
-                futures[self.pool.submit(func, jobs[k])] = k
+                futures[self.pool.submit(_told, front(), func, jobs[k])] = k
             except BrokenProcessPool:
                 break
         lost = left[len(futures) :]  # not sent
         for fut in _as_finished(futures, self.pool):
             k = futures[fut]
             try:
-                results[k] = fut.result()
+                results[k] = _given(fut.result())
             except BrokenProcessPool:
                 lost.append(k)
                 continue
@@ -1011,7 +1054,8 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
 
     digest = package_digest()
     futures = {
-        client.submit(_on_worker, digest, func, j, pure=False): i for i, j in enumerate(jobs)
+        client.submit(_on_worker, digest, _told, front(), func, j, pure=False): i
+        for i, j in enumerate(jobs)
     }
     results: list = [None] * len(jobs)
     address = client.scheduler.address  # (named when the cluster is gone)
@@ -1020,7 +1064,7 @@ def _dask_map(client, func: Callable[[dict], Any], jobs: list, done=None) -> lis
         for fut in _finished(futures, workers):
             k = futures[fut]
             try:
-                results[k] = _dask_result(fut, workers)
+                results[k] = _given(_dask_result(fut, workers))
             finally:
                 fut.release()
             del futures[fut]
@@ -1719,13 +1763,13 @@ def _completed(pool, jobs: list, marks: str) -> Generator[dict, None, tuple[list
     futures: dict = {}  # future -> index of its job
     for k, j in enumerate(jobs):
         try:
-            futures[pool.submit(_marked, marks, k, j.func, j.key, j.inputs)] = k
+            futures[pool.submit(_told, front(), _marked, marks, k, j.func, j.key, j.inputs)] = k
         except BrokenProcessPool:
             break
     broken = set(range(len(futures), len(jobs)))  # not sent
     for fut in _as_finished(futures, pool):
         try:
-            rec = fut.result()
+            rec = _given(fut.result())
         except BrokenProcessPool:
             broken.add(futures[fut])
             continue
@@ -2204,6 +2248,8 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
             client.submit(
                 _on_worker,
                 digest,
+                _told,
+                front(),
                 run_job,
                 j.func,
                 j.key,
@@ -2217,7 +2263,7 @@ def _dask_records(client, jobs: list) -> Generator[dict, None, None]:
         for fut in _finished(futures, workers):
             job = futures.pop(fut)
             try:
-                rec = _dask_result(fut, workers)
+                rec = _given(_dask_result(fut, workers))
             except KilledWorker as exc:  # the job killed its worker, each time it ran
                 rec = _lost(job, exc)
             except _NoWorker:

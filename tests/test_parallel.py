@@ -101,6 +101,17 @@ def killed_once(inputs):
     return {"y": inputs["x"]}
 
 
+def warns_advice(inputs):
+    """Warns, in its caller's words (`stabctl.errors.advice`), the same text for every
+    job; returns {"y": x}."""
+    import warnings
+
+    from stabctl.errors import advice
+
+    warnings.warn(f"a setting to check: {advice('h=...', '--step')}", UserWarning, stacklevel=1)
+    return {"y": inputs["x"]}
+
+
 def stops_once(inputs):
     """Stopped (SIGSTOP) the first time it runs, its pid written to inputs["flag"]
     first; done, once continued, with {"y": x}."""
@@ -1417,6 +1428,37 @@ def test_worker_pool_on_processes_loses_no_job_when_a_worker_is_killed(tmp_path)
             ),
         ):
             run_map(dies_if, [{"die": True}, {"die": False}])
+
+
+@pytest.mark.parametrize("words", ["library", "cli"])
+def test_a_worker_s_warnings_are_given_once_by_the_parent_in_its_words(tmp_path, capfd, words):
+    """`estimate cct --step 0.0185` gave its step warning once from the command and once
+    more from each worker process (in the library's words, two workers' lines glued
+    together between the progress bar's updates).  A worker's warnings come back with
+    its job's result and are given in the parent, as its own (a command says each text
+    once), worded for the parent's front: a command's options, not Python arguments."""
+    import warnings
+
+    from stabctl import parallel
+    from stabctl.errors import speaking
+
+    jobs = [{"x": k} for k in range(4)]
+    expected = "a setting to check: " + ("--step" if words == "cli" else "h=...")
+    with (
+        speaking(words),
+        parallel.worker_pool(2) as run_map,
+        warnings.catch_warnings(record=True) as got,
+    ):
+        warnings.simplefilter("always")
+        assert run_map(warns_advice, jobs) == [{"y": k} for k in range(4)]
+    assert {str(w.message) for w in got} == {expected} and len(got) == 4  # one per job
+    assert "warning" not in capfd.readouterr().err  # none shown by a worker itself
+    with speaking(words), warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        jobs = [Job(f"w/{k}", warns_advice, {"x": k}) for k in range(3)]
+        run_sweep(jobs, tmp_path / "w.jsonl", workers=2, progress=False)
+    assert {str(w.message) for w in got} == {expected} and len(got) == 3
+    assert "warning" not in capfd.readouterr().err
 
 
 def test_a_stopped_worker_is_named_and_its_job_goes_on_once_continued(
