@@ -5,6 +5,7 @@ log lines on stderr, once however often it runs."""
 from __future__ import annotations
 
 import logging
+import re
 import time
 
 from stabctl.progress import Heartbeat, bar
@@ -121,10 +122,13 @@ def test_a_plans_batch_says_its_fraction_done_and_time_left():
     with worker_pool(1) as run:
         counted = pl.counting(run, beat)
         counted(_simulated, [{"n": 3}, {"n": 4}, {"n": 5}, {"n": 6}])
-    assert beat.notes[0] == "4 _simulated job(s) running, 7 runs simulated before them"
+    ran = r", plan running \d\d:\d\d"  # how long the plan has run (it named no whole)
+    assert re.fullmatch(
+        "4 _simulated job\\(s\\) running, 7 runs simulated before them" + ran, beat.notes[0]
+    )
     for k, note in enumerate(beat.notes[1:], 1):
         assert note.startswith(f"_simulated: {k} of 4 job(s) done ({k / 4:.0%}), about ")
-        assert note.endswith(" s left in this batch, 7 runs simulated before them")
+        assert re.search(" s left in this batch, 7 runs simulated before them" + ran + "$", note)
     assert beat.notes[-1].startswith("_simulated: 4 of 4 job(s) done (100%), about 0 s left")
     assert pl.n_runs == 7 + 18
     # a caller's own map without `done` still runs, with the batch's first status only

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from stabctl.dynamics.options import ModelOptions
 from stabctl.placement.evaluation import (
@@ -69,6 +70,7 @@ class PlanContext:
     esd_model: str = "ideal"
     critical_reference: bool = False
     lock: Any = field(default_factory=threading.Lock)
+    started: float = field(default_factory=time.monotonic)
 
     @functools.cached_property
     def case_digest(self) -> str:
@@ -141,10 +143,13 @@ class PlanContext:
         """run_map that adds the simulations its jobs report to n_runs and tells the
         heartbeat `beat` how far each batch is: jobs done of the batch's and the time
         left at the pace so far (when run_map takes ``done``, as `stabctl.parallel.
-        worker_pool`'s does), repeated while nothing else is said."""
+        worker_pool`'s does), and how long the plan has run (its rounds and iterations
+        are bounded where each round starts: `stabctl.placement.plan`), repeated while
+        nothing else is said."""
 
         def counted(func, jobs):
-            before = f"{self.n_runs} runs simulated before them"
+            ran = tqdm.format_interval(time.monotonic() - self.started)
+            before = f"{self.n_runs} runs simulated before them, plan running {ran}"
             beat.note(f"{len(jobs)} {func.__name__} job(s) running, {before}")
             t0 = time.monotonic()
 

@@ -686,7 +686,7 @@ def _generate(
         pl.add_base(st.active, pl.brackets, kw)
         st.message = f"not verified after {max_rounds} round(s) of constraint generation"
     for rnd in range(1, max_rounds + 1 if failing else 1):
-        if _round(pl, st, rnd, n_active, kw):
+        if _round(pl, st, (rnd, max_rounds), n_active, kw):
             break
     else:
         last = st.rounds[-1] if failing and st.rounds else {}
@@ -712,17 +712,21 @@ def _generate(
     )
 
 
-def _round(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw: Study) -> bool:
-    """Round rnd: the verified loop (`place`) for the active set, priced with the energy
-    per MW of the latest checks, then every contingency checked at its allocation.  A
-    contingency proven infeasible is set aside when the plan drops them.  Returns whether
-    constraint generation ends (st.verified and st.message say how)."""
+def _round(pl: PlanContext, st: _Rounds, of: tuple, n_active: int, kw: Study) -> bool:
+    """Round rnd of at most `of` = (rnd, max_rounds): the verified loop (`place`) for the
+    active set, priced with the energy per MW of the latest checks, then every
+    contingency checked at its allocation.  A contingency proven infeasible is set aside
+    when the plan drops them.  Returns whether constraint generation ends (st.verified
+    and st.message say how).  Its first line bounds what is left (rounds, iterations: a
+    plan's progress named each batch's jobs only, no plan's whole)."""
+    rnd, max_rounds = of
     pl.energy_rate = mwh_per_mw(len(pl.sites), st.checks)
     sites = pl.priced(pl.energy_rate)
     pl.say(
-        f"round {rnd}: solving for {counted(len(st.active), 'contingency', 'contingencies')} ("
+        f"round {rnd} of at most {max_rounds}: solving for "
+        f"{counted(len(st.active), 'contingency', 'contingencies')} ("
         + ", ".join(c.name for c in st.active)
-        + ")"
+        + f"), in at most {counted(pl.place.max_iter, 'iteration')}"
     )
     try:
         res = place(

@@ -182,13 +182,23 @@ def test_constraint_generation_adds_what_the_first_solve_missed_and_ends_verifie
     allocation holds both, as an independent simulation at each required time confirms."""
     faults = [LineFault(3, 101), LineFault(20, None)]
     over = {"20": Requirement(cycles=16)}  # 267 ms for the bus-20 fault
+    said: list[str] = []
     res = plan(
         "kundur",
         faults,
         Requirement(cycles=12),
         PlanOptions(overrides=over, n_active=1, half_step_n=2, uniform=True),
+        progress=said.append,
     )
     assert len(res.rounds) >= 2
+    # each round's first line bounds what is left (a plan's progress named each batch
+    # alone): rounds and iterations, PlanOptions' defaults
+    starts = [m for m in said if " solving for " in m]
+    assert (
+        starts[0]
+        == "round 1 of at most 6: solving for 1 contingency (3-101), in at most 6 iterations"
+    )
+    assert starts[1].startswith("round 2 of at most 6: solving for 2 contingencies (3-101, 20)")
     first = res.rounds[0]
     assert first["active"] == ["3-101"] and "20" in first["failing"]
     assert res.active == ["3-101", "20"]
