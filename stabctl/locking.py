@@ -46,7 +46,7 @@ import shutil
 import stat
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -220,19 +220,60 @@ def _holder(fd: int) -> str:
 
 def _locked(lock: Path, path) -> int:
     """A descriptor of ``lock`` holding its exclusive lock (see `exclusive`)."""
+
+    def refused(fd: int, exc: OSError) -> Exception:
+        if not isinstance(exc, BlockingIOError):
+            return exc
+        return InputError(
+            f"{path}: another stabctl process (pid {_holder(fd)}) is writing it; wait for "
+            "it to end or choose another output"
+        )
+
+    return locked_at(lock, os.O_RDWR, 0o666, refused)
+
+
+def locked_at(path, flags: int, mode: int, refused: Callable[[int, OSError], Exception]) -> int:
+    """A descriptor of the file at `path` holding its exclusive lock (flock, not
+    waiting), the file locked being the one at the path once locked: one its holder
+    removed meanwhile (as it ended) is opened again, the new one.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file, made if missing.
+    flags : int
+        ``os.open`` flags besides O_CREAT (O_RDWR, O_APPEND, O_NOFOLLOW, ...).
+    mode : int
+        Its mode if made.
+    refused : callable(fd, OSError) -> Exception
+        The exception raised when the lock cannot be taken (BlockingIOError: another
+        holds it; another OSError: a file system without locks), given the file's
+        descriptor, closed after the call.
+
+    Returns
+    -------
+    int
+        The descriptor.
+
+    Raises
+    ------
+    OSError
+        The file cannot be opened or made.
+    Exception
+        `refused`'s.
+    """
     while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        fd = os.open(path, flags | os.O_CREAT, mode)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = _holder(fd)
-            os.close(fd)
-            raise InputError(
-                f"{path}: another stabctl process (pid {holder}) is writing it; wait for "
-                "it to end or choose another output"
-            ) from None
+        except OSError as exc:
+            try:
+                why = refused(fd, exc)
+            finally:
+                os.close(fd)
+            raise why from None
         try:
-            same = os.fstat(fd).st_ino == os.stat(lock).st_ino
+            same = os.fstat(fd).st_ino == os.stat(path).st_ino
         except FileNotFoundError:
             same = False
         if same:

@@ -18,7 +18,6 @@ the plan has ended.
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import inspect
 import json
@@ -29,7 +28,7 @@ from typing import Any
 
 from stabctl._jit.cache import package_digest
 from stabctl.errors import InputError
-from stabctl.locking import private_file
+from stabctl.locking import locked_at, private_file
 
 #: the most bytes of a memo file read (a plan of ACTIVSg2000 keeps about 30 MB): a larger
 #: one is refused (a damaged or foreign file), the plan then simulating everything
@@ -106,28 +105,20 @@ class Memo:
         at the path (one its holder removed meanwhile is opened again).  Raises
         InputError: the file cannot be made or written, or is held by another plan
         (`MemoHeld`), or cannot be locked."""
-        while True:
-            try:
-                fd = os.open(self.path, os.O_RDWR | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o600)
-            except OSError as exc:
-                raise InputError(f"{self.path}: cannot be written ({exc.strerror})") from None
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                os.close(fd)
-                raise MemoHeld(
+
+        def refused(fd: int, exc: OSError) -> Exception:
+            if isinstance(exc, BlockingIOError):
+                return MemoHeld(
                     f"{self.path}: held by another plan of the same case and settings, running"
-                ) from None
-            except OSError as exc:  # a file system without locks (NFS without lockd)
-                os.close(fd)
-                raise InputError(f"{self.path}: cannot be locked ({exc.strerror})") from None
-            try:
-                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:
-                return fd
-            os.close(fd)  # removed by the plan that held it, as it ended: the new one
+                )
+            # a file system without locks (NFS without lockd)
+            return InputError(f"{self.path}: cannot be locked ({exc.strerror})")
+
+        flags = os.O_RDWR | os.O_APPEND | os.O_NOFOLLOW
+        try:
+            return locked_at(self.path, flags, 0o600, refused)
+        except OSError as exc:  # the open's: refused's are InputErrors
+            raise InputError(f"{self.path}: cannot be written ({exc.strerror})") from None
 
     def _read(self, fd: int) -> bool:
         """Load the file's whole lines whose sha matches; whether it ends with a whole
