@@ -47,10 +47,15 @@ import numpy as np
 from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.estimation.c37_tcp import (
+    ACCEPT_RETRY_S,
     MAX_STREAM_BYTES,
+    NAMED_PEERS,
+    SHORT_OF,
     End,
     FrameTimeout,
     Guard,
+    _accept_conn,
+    _accept_failed,
     _read_frame,
     command_word,
     hostport,
@@ -214,6 +219,19 @@ class Listen:
     allow: tuple = ()
 
 
+@dataclass(eq=False)
+class _Shake:
+    """A peer in a plant's handshake (`PlantLink._connected`): its connection, address,
+    when it connected (`time.monotonic()`), whether it sent a valid command, whether its
+    place was given to a new peer."""
+
+    conn: socket.socket
+    peer: tuple
+    since: float
+    commanded: bool = False
+    evicted: bool = False
+
+
 class PlantLink:
     """The plant's end: a C37.118.2 server on ``host``:``port`` (0: a free one, see
     `address`) for one controller, and the `CommandFrames` callback that sends each frame
@@ -235,6 +253,10 @@ class PlantLink:
         Controller addresses allowed (default: any).  A peer not allowed, or one that does
         not ask for CFG-2 and say 'start' in valid command frames within the time-out, is
         dropped (named in `refused`) and the plant waits for the next, until `timeout`.
+    max_peers : int, optional
+        Handshakes at once (`Guard.max_peers`, 8): with every place taken, a new peer
+        takes that of the peer connected longest without a valid command, else of the one
+        connected longest.
 
     Raises
     ------
@@ -252,14 +274,17 @@ class PlantLink:
         timeout=30.0,
         speed=float("inf"),
         allow=(),
+        max_peers=Guard.max_peers,
     ):
         if not speed > 0:
             raise InputError(f"speed must be > 0, got {speed}")
         self.ctrl, self.cfg, self.timeout = controller, cfg, float(timeout)
-        self.guard = Guard(tuple(allow), float(timeout))
+        self.guard = Guard(tuple(allow), float(timeout), max_peers=max_peers)
         #: peers dropped, each with the reason: before a controller took the loop, and
-        #: those whose handshake ended after it did
+        #: those whose handshake ended after it did (the first `NAMED_PEERS`; all of them
+        #: counted in `n_refused`)
         self.refused: list[str] = []
+        self.n_refused, self._last_refused, self._short = 0, "", ""
         self.speed, self._start = float(speed), None
         self.cfg2 = c37.config_frame(cfg)
         self._sock = listen(host, port)
@@ -335,59 +360,113 @@ class PlantLink:
     def _connected(self) -> socket.socket:
         """The controller's connection: the first allowed peer that asks for CFG-2 and
         says 'start' (valid command frames) within the time-out, each peer's handshake
-        on a thread of its own (a silent stranger holds no one up); others are dropped."""
+        on a thread of its own (a silent stranger holds no one up); others are dropped.
+        At most `Guard.max_peers` handshakes at once: a new peer takes the place of the
+        one connected longest without a valid command, else of the one connected
+        longest (a flood of silent connections held a thread and a descriptor each until
+        the time-out: 1 100 of them ended the plant with "Too many open files" before its
+        controller came); an accept() short of descriptors or buffers is tried again."""
         if self._conn is not None:
             return self._conn
         deadline = time.monotonic() + self.timeout
-        won: list[socket.socket] = []
+        won: list[_Shake | None] = []
+        live: list[_Shake] = []
         lock = threading.Lock()
 
-        def shake(conn, peer):
+        def shake(me: _Shake) -> None:
             try:
-                self._handshake(conn, deadline)
+                self._handshake(me, deadline)
             except (InputError, OSError) as exc:
-                self.refused.append(f"{hostport(*peer[:2])}: {exc}")
-                conn.close()
+                with lock:
+                    live.remove(me)
+                self._drop(me.peer, self._evicted(me) if me.evicted else str(exc))
+                me.conn.close()
                 return
             with lock:
-                if won:  # another peer took the loop first: dropped, and named
-                    conn.close()
+                live.remove(me)
+                if me.evicted:  # its place given as it said 'start': its socket is shut
+                    me.conn.close()
+                    self._drop(me.peer, self._evicted(me))
+                elif won:  # another peer took the loop first: dropped, and named
+                    me.conn.close()
                     if won[0] is not None:
-                        self.refused.append(
-                            f"{hostport(*peer[:2])}: another peer took the loop first"
-                        )
+                        self._drop(me.peer, "another peer took the loop first")
                 else:
-                    won.append(conn)
+                    won.append(me)
 
         self._sock.settimeout(0.05)
         while not won and time.monotonic() < deadline:
-            try:
-                conn, peer = self._sock.accept()
-            except TimeoutError:
+            me = self._accepted()
+            if me is None:
                 continue
-            if self.guard.admits(peer):
-                threading.Thread(target=shake, args=(conn, peer), daemon=True).start()
-            else:
-                self.refused.append(f"{hostport(*peer[:2])}: not in the allowed peers")
-                conn.close()
+            with lock:
+                kept = [p for p in live if not p.evicted]  # the others are ending
+                if len(kept) >= self.guard.max_peers:
+                    victim = min(kept, key=lambda p: (p.commanded, p.since))
+                    victim.evicted = True
+                    with contextlib.suppress(OSError):  # wakes its thread: it ends, named
+                        victim.conn.shutdown(socket.SHUT_RDWR)
+                live.append(me)
+            threading.Thread(target=shake, args=(me,), daemon=True).start()
         with lock:
             if won:
-                self._conn = won[0]
+                self._conn = won[0].conn  # type: ignore[union-attr]
                 with contextlib.suppress(OSError):  # gone already: the next send says so
                     self._peer = hostport(*self._conn.getpeername()[:2])
                 return self._conn
-            won.append(None)  # type: ignore[arg-type]  # a late handshake closes its peer
-        refused = (
-            f" ({len(self.refused)} peer(s) dropped, the last {self.refused[-1]})"
-            if self.refused
+            won.append(None)  # a late handshake closes its peer
+        dropped = (
+            f" ({self.n_refused} peer(s) dropped, the last {self._last_refused})"
+            if self.n_refused
             else ""
         )
-        raise InputError(f"no controller connected within {self.timeout:g} s{refused}")
+        short = f"; {self._short}" if self._short else ""
+        raise InputError(f"no controller connected within {self.timeout:g} s{dropped}{short}")
 
-    def _handshake(self, conn: socket.socket, deadline: float) -> None:
+    def _accepted(self) -> _Shake | None:
+        """The next allowed peer (None: none came within the listening socket's time-out,
+        one not allowed was dropped, or accept() failed for want of descriptors,
+        buffers or memory, said once in the plant's final error and tried again after
+        `ACCEPT_RETRY_S`)."""
+        try:
+            conn, peer = _accept_conn(self._sock)
+        except TimeoutError:
+            return None
+        except OSError as exc:
+            if exc.errno not in SHORT_OF:
+                raise
+            self._short = self._short or _accept_failed(exc)
+            time.sleep(ACCEPT_RETRY_S)
+            return None
+        if not self.guard.admits(peer):
+            self._drop(peer, "not in the allowed peers")
+            conn.close()
+            return None
+        return _Shake(conn, peer, time.monotonic())
+
+    def _evicted(self, me: _Shake) -> str:
+        """Why a peer's handshake was ended for a new peer (`_connected`)."""
+        what = "said no 'start'" if me.commanded else "sent no command"
+        return (
+            f"{what} in {time.monotonic() - me.since:.1f} s, with {self.guard.max_peers} peers "
+            "connected: its place given to a new peer"
+        )
+
+    def _drop(self, peer, why: str) -> None:
+        """Count a dropped peer and, among the first `NAMED_PEERS`, name it in `refused`
+        (6 000 silent peers made a list of 6 000 lines in the plant's summary)."""
+        line = f"{hostport(*peer[:2])}: {why}"
+        self.n_refused += 1
+        self._last_refused = line
+        if len(self.refused) < NAMED_PEERS:
+            self.refused.append(line)
+
+    def _handshake(self, me: _Shake, deadline: float) -> None:
         """Answer 'cfg2' until 'start' (InputError past the deadline, each frame due
         whole by it, or on a peer that closes, speaks another protocol or addresses
-        another IDCODE than the stream's: `c37_tcp.command_word`)."""
+        another IDCODE than the stream's: `c37_tcp.command_word`); `me.commanded` once
+        a valid command came."""
+        conn = me.conn
         conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         while True:
             conn.settimeout(max(deadline - time.monotonic(), 1e-3))
@@ -398,6 +477,7 @@ class PlantLink:
             if frame is None:
                 raise InputError("closed before 'start'")
             word = command_word(frame, self.cfg.idcode)
+            me.commanded = True
             if word == 2:  # 'start'
                 return
             if word == 5:  # 'cfg2'

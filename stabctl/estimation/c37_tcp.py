@@ -29,6 +29,9 @@ from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.jsontext import MAX_INPUT_BYTES
 
+#: least size of a command frame, bytes: SYNC, FRAMESIZE, IDCODE, SOC, FRACSEC, CMD and
+#: CHK (C37.118.2-2011 Table 15; an extended frame adds to it)
+COMMAND_BYTES = 18
 #: C37.118.2-2011 Table 15 command words this server acts on
 COMMANDS = {1: "stop", 2: "start", 3: "header", 5: "cfg2"}
 #: Table 15 command words for a configuration this server does not send (it sends its
@@ -856,7 +859,10 @@ def command_word(frame: bytes, idcode: int | None = None) -> int:
     Returns
     -------
     int
-        The command word; 0 for any other frame, or a command frame whose CRC fails.
+        The command word; 0 for any other frame, a command frame whose CRC fails, or
+        one shorter than a command frame's 18 bytes (SYNC to CMD, then CHK; Table 15):
+        a 16-byte one, its CRC valid, had its CRC read as its command word, and was
+        obeyed.
 
     Raises
     ------
@@ -865,7 +871,9 @@ def command_word(frame: bytes, idcode: int | None = None) -> int:
     """
     from pyc37.frame import CommonFrame
 
-    if frame[1] & 0x70 != 0x40 or not CommonFrame._check_crc(frame):
+    if len(frame) < COMMAND_BYTES or frame[1] & 0x70 != 0x40:
+        return 0
+    if not CommonFrame._check_crc(frame):
         return 0
     if idcode is not None and (to := int.from_bytes(frame[4:6], "big")) != idcode:
         raise ForeignCommand(f"a command for IDCODE {to}, not this stream's {idcode}")

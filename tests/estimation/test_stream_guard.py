@@ -704,3 +704,65 @@ def test_a_recording_that_starts_late_is_refused_as_one_cut_at_its_end(kundur_st
     ) in res.stderr
     res = CliRunner().invoke(main, [*args, str(tmp_path / "whole.c37")])
     assert res.exit_code == 0, res.output
+
+
+def test_a_flood_of_silent_peers_leaves_the_plant_its_controller():
+    """Round 40: 1 100 silent connections made `pmu plant` hold a thread and a descriptor
+    each until its time-out and die with "Too many open files" before its controller
+    came.  At most `Guard.max_peers` handshakes are held at once, a new peer taking the
+    place of the one silent longest; the controller that comes after 200 silent peers
+    takes the loop, the process's descriptors stay bounded, and the dropped peers are
+    counted, the first `NAMED_PEERS` named."""
+    import os
+
+    from stabctl.estimation.c37_tcp import NAMED_PEERS
+
+    case = stabctl.load_case("kundur")
+    partial = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 7)], t_end=0.1)
+    ctrl, cfg, link = _plant(case, timeout=20)
+    fds = len(os.listdir("/proc/self/fd"))
+    with link:
+        silent: list = []
+        got: list = []
+        ran = threading.Thread(target=lambda: got.append(link(0.05, partial)), daemon=True)
+        ran.start()
+        for _ in range(200):
+            silent.append(socket.create_connection(link.address))
+        time.sleep(0.5)  # each accepted, most given their place to a later one
+        held = len(os.listdir("/proc/self/fd")) - fds - len(silent)
+        threading.Thread(
+            target=lambda: _served_quietly(ctrl, cfg, link.address), daemon=True
+        ).start()
+        ran.join(15)
+        assert got and got[0].shape == (ctrl.mode.size,), link.refused[-3:]
+        for s in silent:
+            s.close()
+    assert held <= Guard.max_peers + 4  # the plant's own: listening socket, a few in flight
+    assert link.n_refused >= 200 - Guard.max_peers and len(link.refused) == NAMED_PEERS
+    assert "sent no command in " in link.refused[0]
+    assert link.refused[0].endswith(
+        f"with {Guard.max_peers} peers connected: its place given to a new peer"
+    )
+
+
+def _served_quietly(ctrl, cfg, address):
+    with contextlib.suppress(InputError, OSError):  # the plant closes after one frame
+        c37_loop.serve_controller(ctrl, cfg, *address, timeout=5)
+
+
+def test_a_command_frame_without_its_command_word_is_not_obeyed():
+    """Round 40: a 16-byte frame marked a command, its CRC valid, has no CMD field (a
+    command frame is 18 bytes at least); its CRC was read as the command word, and a
+    CRC of 2 started a stream.  It is no command."""
+    from stabctl.estimation.c37_tcp import command_word
+
+    for frame, crc in (
+        ("aa410010000100008b93000000000005", 5),
+        ("aa41001000010000b480000000000002", 2),
+    ):
+        raw = bytes.fromhex(frame)
+        assert int.from_bytes(raw[-2:], "big") == crc  # the CRC the server read as CMD
+        assert command_word(raw) == 0 and command_word(raw, 1) == 0
+    from pyc37.frame import CommandFrame
+
+    assert command_word(CommandFrame(1, "start").convert2bytes(), 1) == 2  # a whole one
