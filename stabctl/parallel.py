@@ -454,7 +454,7 @@ def set_aside_damaged(
             f"earlier run (left as it is); {remedy}"
         )
     aside = path.with_name(path.name + ".damaged")
-    with naming(aside), aside.open("a") as f:
+    with naming(aside), aside.open("a", encoding="utf-8") as f:
         f.writelines(line for _, line in bad)
     atomic_write(path, lambda f: f.writelines(line for _, line in good))
     numbers = [n for n, _ in bad]
@@ -527,7 +527,7 @@ def atomic_write(
             if mode is None:
                 write(str(path))
             else:
-                with open(path, mode) as f:
+                with open(path, mode, **_utf8(mode)) as f:
                     write(f)
             return given
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -539,7 +539,7 @@ def atomic_write(
                     os.close(fd)
                     write(tmp)
                 else:
-                    with os.fdopen(fd, mode) as f:
+                    with os.fdopen(fd, mode, **_utf8(mode)) as f:
                         write(f)
                 try:  # the file replaced keeps its mode; a new one as open() makes it
                     keep = stat.S_IMODE(os.stat(path).st_mode) if path.is_file() else None
@@ -599,7 +599,8 @@ def _write_to_stream(fd: int, write: Callable, mode: str | None) -> None:
     position and mode kept: a log opened with ``>>`` is appended to): ``write(f)`` on it,
     or, with ``mode=None``, ``write(tmp_path)`` on a temporary file whose bytes are then
     copied to it (a writer given a path opens it afresh, truncating what it names)."""
-    with os.fdopen(os.dup(fd), "wb" if mode is None else mode) as out:
+    kind = "wb" if mode is None else mode
+    with os.fdopen(os.dup(fd), kind, **_utf8(kind)) as out:
         if mode is not None:
             write(out)
             return
@@ -608,6 +609,13 @@ def _write_to_stream(fd: int, write: Callable, mode: str | None) -> None:
             write(name)
             with open(name, "rb") as src:
                 shutil.copyfileobj(src, out)
+
+
+def _utf8(mode: str) -> dict:
+    """``open``'s keywords for `mode`: a text mode writes UTF-8 whatever the locale (an
+    eigenvalue report's "±" failed with UnicodeEncodeError under LC_ALL=C, and would be
+    another byte under a Latin-1 locale: a report's bytes were the locale's)."""
+    return {} if "b" in mode else {"encoding": "utf-8"}
 
 
 def atomic_writes(outputs) -> None:
@@ -1745,7 +1753,7 @@ def _marked(marks: str, index: int, func, key: str, inputs) -> dict:
     path = os.path.join(marks, str(os.getpid()))
     try:
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o600)
-        with os.fdopen(fd, "w") as fh:
+        with os.fdopen(fd, "w", encoding="ascii") as fh:
             fh.write(str(index))
     except OSError:
         path = ""
@@ -1786,7 +1794,7 @@ def _completed(pool, jobs: list, marks: str) -> Generator[dict, None, tuple[list
     for name in names:  # the workers that died, and those stopped with them
         path = os.path.join(marks, name)
         with contextlib.suppress(OSError, ValueError):
-            running.add(int(Path(path).read_text()))
+            running.add(int(Path(path).read_text("ascii")))
         with contextlib.suppress(OSError):
             os.unlink(path)
     return [jobs[k] for k in sorted(broken)], [jobs[k] for k in sorted(running & broken)]

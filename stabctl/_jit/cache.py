@@ -582,7 +582,7 @@ def stamp_cache() -> None:
         make_private_dirs(stamp.parent)
         flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
         fd = os.open(tmp, flags, 0o644)
-        with os.fdopen(fd, "w") as f:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(_STAMP_DUE)
         os.replace(tmp, stamp)
     except OSError:

@@ -62,5 +62,5 @@ def paper(out_dir, resume, only):
         raise InputError(f"--only: {twice[0]} given twice (each part once)")
     check_writable(out_dir, "--out-dir", directory=True)
     path = write_paper_report(out_dir, resume=resume, only=only)
-    click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text())))
+    click.echo(run_summary(json.loads((path.parent / RUN_LOG).read_text("utf-8"))))
     click.echo(f"wrote {shown(path)}")

@@ -147,7 +147,7 @@ def strip_dyr(
     holding its ``/`` (PSS/E POM, Dynamics Data File)."""
     drop = {m.upper() for m in models}
     kept, record, removed = [], [], []
-    for line in Path(src).read_text().splitlines(keepends=True):
+    for line in Path(src).read_text("latin-1").splitlines(keepends=True):  # bytes kept
         record.append(line)
         if "/" not in line:
             continue
@@ -158,7 +158,7 @@ def strip_dyr(
         else:
             kept.append(_unsaturated(text) if unsaturated and model in _SATURATED else text)
         record = []
-    Path(dst).write_text("".join(kept + record))
+    Path(dst).write_text("".join(kept + record), "latin-1")
     return tuple(removed)
 
 

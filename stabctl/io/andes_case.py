@@ -2661,7 +2661,7 @@ def _psse_yaml() -> dict:
     import andes.io
     import yaml
 
-    with open(Path(andes.io.__file__).parent / "psse-dyr.yaml") as fh:
+    with open(Path(andes.io.__file__).parent / "psse-dyr.yaml", encoding="utf-8") as fh:
         return yaml.safe_load(fh)
 
 

@@ -138,5 +138,5 @@ def step_accuracy_report(out: str | Path = "reports/step_accuracy.md") -> str:
                 ds, da = _errors(run, ref, t_eval)
                 lines.append(f"| {name} | {h0 * f:.5f} | {sem} | {ds:.2e} | {da:.2e} |")
     text = "\n".join(lines) + "\n"
-    Path(out).write_text(text)
+    Path(out).write_text(text, "utf-8")
     return text

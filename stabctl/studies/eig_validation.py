@@ -152,6 +152,6 @@ def write_validation(out: str | Path, ref_dir: Path, progress=None) -> Path:
     ]
     lines += pulse_section(sims) + [""] + summary + [""]
     path = Path(out) / "eig_validation.md"
-    path.write_text("\n".join(lines))
+    path.write_text("\n".join(lines), "utf-8")
     say(f"wrote {path}")
     return path

@@ -142,7 +142,7 @@ def write_report(
         atomic_writes(
             [
                 *(figures if modes else figures[:1]),
-                (md, lambda p: Path(p).write_text(text)),
+                (md, lambda p: Path(p).write_text(text, "utf-8")),
             ]
         )
     return md

@@ -264,6 +264,6 @@ def write_estimation_report(
         records.mkdir(parents=True, exist_ok=True)
         fig = case_figures(name, runs, cct_runs, records, workers, progress)
         path = out_dir / f"estimation_{name}.md"
-        path.write_text(markdown(name, fig, generated_by))
+        path.write_text(markdown(name, fig, generated_by), "utf-8")
         paths.append(path)
     return paths

@@ -555,7 +555,7 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
                     )
                 )
         score, parts[4:] = gather(parts[4:])
-        (tmp / "paper.md").write_text("\n".join(parts[:4] + score + parts[4:]))
+        (tmp / "paper.md").write_text("\n".join(parts[:4] + score + parts[4:]), "utf-8")
         finished = [
             f
             for key in keys
@@ -568,7 +568,7 @@ def _write_locked(out: Path, keys: list, progress, resume: bool) -> Path:
                 **_verdicts(tmp / f.name),
             }
         log["total_s"] = round(time.perf_counter() - t_start, 1)
-        (tmp / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n")
+        (tmp / RUN_LOG).write_text(json.dumps(log, indent=1) + "\n", "utf-8")
         with signals_held():  # an interrupt between two moves left the directory half new
             for f in tmp.iterdir():
                 os.replace(f, out / f.name)

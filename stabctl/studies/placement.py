@@ -451,10 +451,10 @@ def report(d: dict, out_dir: Path, generated_by: str = "stabctl paper") -> Path:
     figure_margins(d, out_dir / figs["margins"])
     figure_pareto(d, out_dir / figs["pareto"])
     (out_dir / f"placement_{case}.json").write_text(
-        json.dumps(strip_run_dependent(d), indent=1, default=float)
+        json.dumps(strip_run_dependent(d), indent=1, default=float), "utf-8"
     )
     path = out_dir / f"placement_{case}.md"
-    path.write_text("\n".join(_markdown(d, figs, generated_by)) + "\n")
+    path.write_text("\n".join(_markdown(d, figs, generated_by)) + "\n", "utf-8")
     return path
 
 

@@ -2764,3 +2764,23 @@ def test_a_voltage_gate_no_device_of_the_command_applies_is_refused(args, tmp_pa
     res = CliRunner().invoke(main, [*args, "--v-gate", "1.5"])
     assert res.exit_code == 2 and "error: --v-gate given to " in res.output
     assert "pmu plant --v-gate" in res.output and not list(tmp_path.iterdir())
+
+
+def test_a_report_is_written_in_utf_8_whatever_the_locale(tmp_path):
+    """Round 40: `eig --report` under LC_ALL=C (no UTF-8 coercion) ended in a traceback
+    (UnicodeEncodeError on the mode table's "±"), and under a Latin-1 locale its bytes
+    would have been another encoding's.  Reports are written in UTF-8 under any locale."""
+    import subprocess
+    import sys
+
+    env = {**os.environ, "LC_ALL": "C", "LANG": "C", "PYTHONCOERCECLOCALE": "0", "PYTHONUTF8": "0"}
+    res = subprocess.run(
+        [sys.executable, "-m", "stabctl", "eig", "kundur", "--report", "--out-dir", "lc"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        timeout=600,
+    )
+    assert res.returncode == 0 and b"Traceback" not in res.stderr, res.stderr[-800:]
+    text = (tmp_path / "lc" / "eig_kundur.md").read_bytes()
+    assert "± j".encode() in text  # UTF-8: b"\xc2\xb1"
