@@ -773,6 +773,27 @@ class MachineTable(Table):
             "Tdopp",
             'T"do must be > 0 s for a subtransient machine (x"d > 0)',
         )
+        # the subtransient circuits are the faster (PSS/E Model Library, GENROU/GENSAL:
+        # T'do > T"do, T'qo > T"qo; round 40: T'do 0.03 s with T"do 8 s was read), where
+        # they act: x'd = x"d (x'q = x"d) leaves the subtransient circuit out, whatever its
+        # time constant (PowerSimulationsDynamics.jl's PSS2A runs: T"do = T"qo = 999 s)
+        self._require_row(
+            ~((self.xd != 0) & (self.xdpp != 0) & (self.Tdopp > 0) & (self.xdp > self.xdpp))
+            | (self.Tdop > self.Tdopp),
+            "Tdopp",
+            lambda r: (
+                f"T\"do must be < T'do = {_fmt(self.Tdop[r])} s (a subtransient machine, "
+                "x'd > x\"d)"
+            ),
+            ("Tdopp", "Tdop"),
+        )
+        self._require_row(
+            ~((self.Tqop > 0) & (self.Tqopp > 0) & (self.xqp > self.xdpp))
+            | (self.Tqop > self.Tqopp),
+            "Tqopp",
+            lambda r: f'T"qo must be < T\'qo = {_fmt(self.Tqop[r])} s (x\'q > x"q = x"d)',
+            ("Tqopp", "Tqop"),
+        )
         # the d-axis reactances as seen ever sooner after a disturbance can only fall
         # (PSS/E Model Library, GENROU/GENSAL: Xd >= X'd >= X"d)
         self._require(

@@ -243,6 +243,18 @@ def test_a_flag_out_of_its_choices_is_refused_naming_the_record(tmp_path, change
         import_psse(RAW, _rena(tmp_path, **change))
 
 
+@pytest.mark.parametrize(
+    "model, field",
+    [("REPCA1", "Kp"), ("REPCA1", "Ki"), ("REPCA1", "Kpg"), ("REPCA1", "Kig"), ("REECB1", "Kqp")]
+    + [("REECB1", "Kvi")],
+)
+def test_a_negative_pi_gain_is_refused_naming_the_record(tmp_path, model, field):
+    """Round 40: REPCA1's Kp of -18 (a positive feedback) was read without a word, where
+    K_A, Kqv and Khv below 0 are refused (WECC REPC_A, REEC_B: the PI gains are >= 0)."""
+    with pytest.raises(CaseError, match=rf"{model} \(bus 103, id 1\): {field} = -\d.*must be >= 0"):
+        import_psse(RAW, _rena(tmp_path, **{model: {field: -1.5}}))
+
+
 def test_repca1_circuit_id_must_be_quoted(tmp_path):
     text = DYR.read_text().replace("'0 '", "0")
     with pytest.raises(CaseError, match=r"REPCA1 \(bus 103, id 1\): CKTID = 0: not a quoted id"):

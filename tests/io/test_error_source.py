@@ -106,6 +106,30 @@ def error_line(res) -> str:
             [],
             "bad.dyr:1 GENROU (bus 1, id 1): X'd = 0.2426, X''d = 0.3: x'd must be >= x\"d",
         ),
+        # round 40: a subtransient circuit slower than the transient one, and a lead
+        # without its lag (TC had no effect on the run), were read without a word
+        (
+            record("GENROU", {"T'do": 0.03, "T''do": 8.0}),
+            [],
+            "bad.dyr:1 GENROU (bus 1, id 1): T''do = 8.0, T'do = 0.03: T\"do must be < T'do "
+            "= 0.03 s (a subtransient machine, x'd > x\"d)",
+        ),
+        (
+            record("GENROU", {"T'qo": 0.05, "T''qo": 0.4}),
+            [],
+            "bad.dyr:1 GENROU (bus 1, id 1): T''qo = 0.4, T'qo = 0.05: T\"qo must be < T'qo",
+        ),
+        (
+            record("GENROU"),
+            [record("EXST1", {"TB": 0, "TC": 10})],
+            "bad.dyr:3 EXST1 (bus 1, id 1): TC = 10, TB = 0: TC must be 0 where TB is below "
+            "0.001 s (no lag: the lead-lag bypassed) (exciter type 4, EXST1",
+        ),
+        (
+            record("GENROU"),
+            [record("EXAC1", {"TB": 0, "TC": 0.5})],
+            "bad.dyr:3 EXAC1 (bus 1, id 1): TC = 0.5, TB = 0: TC must be 0 where TB is below",
+        ),
         (
             record("GENROU"),
             [record("SEXS", {"EMIN": 5, "EMAX": -5})],

@@ -20,7 +20,7 @@ from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_OVER_T, lag, leadlag_input_state, nonwindup_lag, washout
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import REGULATOR_GAIN, E
+from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -30,9 +30,13 @@ KINDS = {DC1: "DC1", DC2: "DC2 (exc_dc12)", T2: "IEEET2 (DC1 with a two-lag rate
 #: the DC exciters' saturation point E2, T_E and (IEEET2) T_F2 >= 0 (IEEE Std 421.5-2016
 #: DC1A, DC2A; PSS/E Model Library IEEET2); K_E may be negative (self-excited)
 LIMITS = {
-    DC1: (Limits("IEEE Std 421.5 DC1A", nonnegative=("E2", "TE")), REGULATOR_GAIN),
-    DC2: (Limits("IEEE Std 421.5 DC2A", nonnegative=("E2", "TE")), REGULATOR_GAIN),
-    T2: (Limits("PSS/E Model Library IEEET2", nonnegative=("E2", "TE", "TF2")), REGULATOR_GAIN),
+    DC1: (Limits("IEEE Std 421.5 DC1A", nonnegative=("E2", "TE")), REGULATOR_GAIN, LEAD_LAG),
+    DC2: (Limits("IEEE Std 421.5 DC2A", nonnegative=("E2", "TE")), REGULATOR_GAIN, LEAD_LAG),
+    T2: (
+        Limits("PSS/E Model Library IEEET2", nonnegative=("E2", "TE", "TF2")),
+        REGULATOR_GAIN,
+        LEAD_LAG,
+    ),
 }
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = False

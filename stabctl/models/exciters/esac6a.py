@@ -22,7 +22,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, leadlag, leadlag_input_state
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
-from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -33,6 +33,7 @@ KINDS = {AC6A: "ESAC6A (IEEE 421.5 AC6A)"}
 LIMITS = (
     Limits("IEEE Std 421.5 AC6A", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
     REGULATOR_GAIN,
+    LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

@@ -20,7 +20,14 @@ from stabctl.models.blocks import GAIN_OVER_T, clip, leadlag_input_state, nonwin
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters import exst1
 from stabctl.models.exciters.exst1 import check_start
-from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import (
+    IEEE_RULE,
+    LEAD_LAG,
+    REGULATOR_GAIN,
+    SECOND_LEAD_LAG,
+    E,
+    upper,
+)
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -31,6 +38,8 @@ KINDS = {ST1A: "ESST1A (IEEE 421.5 ST1A)"}
 LIMITS = (
     Limits("IEEE Std 421.5 ST1A", ordered=(("VImax", "VImin"), ("VAmax", "VAmin"))),
     REGULATOR_GAIN,
+    LEAD_LAG,
+    SECOND_LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

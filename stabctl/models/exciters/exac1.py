@@ -30,7 +30,7 @@ from stabctl.models.blocks import (
 )
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.dc import dc_feedback
-from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -40,10 +40,11 @@ KINDS = {AC1: "EXAC1 (IEEE AC1)", AC1A: "ESAC1A (IEEE 421.5 AC1A)"}
 #: AC1's and AC1A's saturation point E2 and T_E >= 0, AC1A's V_A limits ordered (IEEE Std
 #: 421.5-2016 AC1A; PSS/E Model Library EXAC1)
 LIMITS = {
-    AC1: (Limits("PSS/E Model Library EXAC1", nonnegative=("E2", "TE")), REGULATOR_GAIN),
+    AC1: (Limits("PSS/E Model Library EXAC1", nonnegative=("E2", "TE")), REGULATOR_GAIN, LEAD_LAG),
     AC1A: (
         Limits("IEEE Std 421.5 AC1A", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
         REGULATOR_GAIN,
+        LEAD_LAG,
     ),
 }
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)

@@ -35,7 +35,7 @@ from stabctl.models.blocks import (
 )
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
-from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import IEEE_RULE, LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -50,6 +50,7 @@ KINDS = {AC2: "EXAC2 (IEEE AC2)"}
 LIMITS = (
     Limits("PSS/E Model Library EXAC2", nonnegative=("E2", "TE"), ordered=(("VAmax", "VAmin"),)),
     REGULATOR_GAIN,
+    LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

@@ -12,7 +12,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, lag, leadlag_input_state
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exst1 import check_start
-from stabctl.models.exciters.table import REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -23,6 +23,7 @@ KINDS = {AC4: "EXAC4 (IEEE AC4)"}
 LIMITS = (
     Limits("PSS/E Model Library EXAC4", ordered=(("VImax", "VImin"),)),
     REGULATOR_GAIN,
+    LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

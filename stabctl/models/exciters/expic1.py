@@ -35,7 +35,7 @@ from stabctl.models.blocks import (
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.dc import dc_feedback
 from stabctl.models.exciters.esst4b import source_voltage as rectified_source
-from stabctl.models.exciters.table import REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -51,6 +51,7 @@ LIMITS = (
         ordered=(("VAmax", "VAmin"), ("Efdmax", "Efdmin")),
     ),
     REGULATOR_GAIN,
+    LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

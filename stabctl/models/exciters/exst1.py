@@ -16,7 +16,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.errors import refuse_initial
 from stabctl.models.blocks import GAIN_OVER_T, LBND, clip, lag, leadlag_input_state, washout
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -27,6 +27,7 @@ KINDS = {ST1: "EXST1"}
 LIMITS = (
     Limits("PSS/E Model Library EXST1", ordered=(("VImax", "VImin"),)),
     REGULATOR_GAIN,
+    LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = True

@@ -19,7 +19,7 @@ from stabctl.errors import refuse_initial
 from stabctl.models import machines as mac
 from stabctl.models.blocks import LBND, clip, leadlag_input_state, nonwindup_lag
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import IEEE_RULE, REGULATOR_GAIN, E, potential_source
+from stabctl.models.exciters.table import IEEE_RULE, LEAD_LAG, REGULATOR_GAIN, E, potential_source
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -35,6 +35,7 @@ LIMITS = (
         ordered=(("VImax", "VImin"), ("VAmax", "VAmin")),
     ),
     REGULATOR_GAIN,
+    LEAD_LAG,
 )
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = False

@@ -403,6 +403,18 @@ class StatorQuantities(NamedTuple):
 #: the regulator gain K_A > 0 of the types whose start divides by it (the regulator's
 #: input at rest V_R0/K_A sets V_ref = V_t + V_R0/K_A: a gain of 0 holds no field
 #: voltage; IEEE Std 421.5-2016, PSS/E Model Library: K_A is a regulator gain, > 0)
+#: the lead-lag (1 + s T_C)/(1 + s T_B) of every type that has one: a lead without its lag
+#: (T_B = 0, T_C > 0) is refused, as IEEEST's and PSS2A's are, rather than bypassed without
+#: a word (round 40: EXST1's T_C of 10 s had no effect on the run)
+LEAD_LAG = Limits(
+    "PSS/E Model Library, IEEE Std 421.5: the regulator's lead-lag (1 + s TC)/(1 + s TB)",
+    leads=(("TC", "TB"),),
+)
+#: ESST1A's second lead-lag (1 + s T_C1)/(1 + s T_B1), as the first
+SECOND_LEAD_LAG = Limits(
+    "IEEE Std 421.5 ST1A: the second lead-lag (1 + s TC1)/(1 + s TB1)", leads=(("TC1", "TB1"),)
+)
+#: the regulator gain K_A > 0 of the types whose start divides by it (see above)
 REGULATOR_GAIN = Limits(
     "IEEE Std 421.5: the regulator's input at rest is V_R0/K_A", positive=("KA",)
 )
