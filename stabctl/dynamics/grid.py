@@ -274,7 +274,7 @@ def _growth_text(growth: float) -> str:
 
 #: most memory the recorded trajectory of one run may take, bytes (`check_step_count`): a
 #: smaller step (or a longer run) is refused at once instead of filling the memory with it
-#: (miniWECC, 5.3 kB per step: 188 000 steps; Kundur, 0.6 kB: 1.7 million)
+#: (miniWECC, 5.3 kB per step: about 190 000 steps; Kundur, 0.6 kB: 1.7 million)
 MAX_RECORD_BYTES = 1_000_000_000
 #: most integration steps of one run whatever its size: a run is refused at once instead
 #: of running silently for minutes (Kundur: about 25 us per step)
