@@ -118,6 +118,11 @@ def test_a_cold_cache_from_a_first_run_and_compile_to_warm(tmp_path):
         "integrator": "loaded",
     }, first.stdout
     assert "kernel cache warm" in first.stdout
+    # it says it compiles as it starts, as every command does (round 40: silent for
+    # minutes on a cold cache until its first part ended)
+    assert first.stderr.startswith("stabctl: compiling the kernels of the simulator, "), (
+        first.stderr
+    )
     # the watch ran in the run, its integrator's compile child and the command ...
     assert len(set((spy / "seen.txt.pids").read_text().split())) >= 3
     # ... and no kernel compiled numba's slice-assignment message
@@ -131,6 +136,7 @@ def test_a_cold_cache_from_a_first_run_and_compile_to_warm(tmp_path):
     again = _stabctl("compile", "kundur", cache=cache)
     assert again.returncode == 0, again.stdout + again.stderr
     assert _parts(again.stdout) == dict.fromkeys(PARTS, "loaded"), again.stdout
+    assert "compiling" not in again.stderr  # loading is no compile
 
 
 def test_compile_check_makes_nothing_in_an_empty_cache(tmp_path):
