@@ -911,7 +911,42 @@ def _file_inputs(path: Path, ss) -> _Given:
         f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)}: {how})"
         for (model, name, default, how), rows in missing.items()
     )
+    _check_one_per_machine(path.name, all_rows, sheet_rows, ss)
     return given
+
+
+#: ANDES groups of which a machine (a stabiliser: an exciter) has one device at most, and
+#: the parameter linking a device to it
+_ONE_PER = {"Exciter": ("syn", "exciter"), "TurbineGov": ("syn", "turbine governor")}
+_ONE_PER |= {"PSS": ("avr", "stabiliser")}
+
+
+def _check_one_per_machine(file: str, all_rows: dict, sheet_rows: dict, ss) -> None:
+    """CaseError for a second exciter, turbine governor or stabiliser of one machine
+    (exciter), naming both rows: ANDES said only "Your input data may be inconsistent"
+    for two TGOV1 of one GENROU (round 40), where a DYR's are named
+    (`stabctl.io.dyr`)."""
+    first: dict = {}
+    for sheet, rows in all_rows.items():
+        m = ss.models.get(sheet)
+        m = ss.model_aliases.get(sheet) if m is None else m  # (a model of no device is falsy)
+        if m is None or m.group not in _ONE_PER:
+            continue
+        link, what = _ONE_PER[m.group]
+        lines = sheet_rows.get(sheet, [])
+        for k, row in enumerate(rows, start=1):
+            to = row.get(link)
+            if to is None or (isinstance(to, float) and to != to):
+                continue
+            key = (m.group, int(to) if isinstance(to, float) and to.is_integer() else to)
+            line = f"; spreadsheet row {lines[k - 1]}" if k <= len(lines) else ""
+            here = f"{sheet} row {k} (idx {row.get('idx')}{line})"
+            if key in first:
+                raise CaseError(
+                    f"{file}: {here}: a second {what} of {link} {key[1]!r} (the first: "
+                    f"{first[key]}); ANDES cannot read such a case"
+                )
+            first[key] = here
 
 
 def _reads_as_number(text: str) -> bool:
@@ -1299,10 +1334,30 @@ def _load(path: Path, dyr, said: list):
     except MemoryError:  # no reading of the file: the machine's memory (the CLI says so)
         raise
     except Exception as exc:  # noqa: BLE001 - ANDES raises many kinds for a file it cannot parse
-        raise _dyr_unmatched(path, dyr) or _unreadable(path, said, exc) from None
+        why = _dyr_unmatched(path, dyr) or _twice_on_a_machine(path)
+        raise why or _unreadable(path, said, exc) from None
     if ss is None:
-        raise _dyr_unmatched(path, dyr) or _unreadable(path, said)
+        raise _dyr_unmatched(path, dyr) or _twice_on_a_machine(path) or _unreadable(path, said)
     return ss
+
+
+def _twice_on_a_machine(path: Path) -> CaseError | None:
+    """Why ANDES cannot parse an xlsx or json case whose machine has two exciters,
+    turbine governors or stabilisers (`_check_one_per_machine`, its models' groups from
+    an empty ANDES System); None if none has, or the file's rows cannot be read so."""
+    if path.suffix.lower() not in (".xlsx", ".json"):
+        return None
+    try:
+        all_rows, sheet_rows = _input_rows(path)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            bare = _andes().System(no_output=True, default_config=True)
+        _check_one_per_machine(path.name, all_rows, sheet_rows, bare)
+    except CaseError as exc:
+        return exc
+    except Exception:  # noqa: BLE001 - unreadable so: ANDES's message is the better one
+        return None
+    return None
 
 
 def _dyr_unmatched(path: Path, dyr) -> InputError | None:

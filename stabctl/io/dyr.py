@@ -1080,11 +1080,19 @@ def _local_inputs(rec, *pairs) -> None:
             )
 
 
-def _washout(gain_T, T):
-    if gain_T == 0 or T < 1e-3:
+def _washout(rec, v, gain: str, lag: str) -> None:
+    """Refuse a stabiliser washout (numerator ``v[gain]`` s/(1 + s ``v[lag]``)): a negative
+    time constant as invalid data, naming it (CaseError); a numerator of 0 (a lag, not a
+    washout) or a lag below 1e-3 s as unsupported, naming both with their values (an
+    IEEEST's T6 of -4.2 was "unsupported", named neither)."""
+    for name in dict.fromkeys((gain, lag)):
+        if name in ("T", "T2", "T3", "T4", "T5", "T6") and v[name] < 0:
+            raise CaseError(f"{rec.label()}: {name} = {v[name]:g}: must be >= 0 (a time constant)")
+    if v[gain] == 0 or v[lag] < 1e-3:
+        values = ", ".join(f"{n} = {v[n]:g}" for n in dict.fromkeys((gain, lag)))
         raise _Unsupported(
-            "washout numerator time constant 0 (a lag instead) or washout "
-            "time constant below 1e-3 s"
+            f"washout {values}: a numerator of 0 (a lag instead) or a washout time constant "
+            "below 1e-3 s"
         )
 
 
@@ -1096,7 +1104,7 @@ def _ieeest(rec, gen):
     v = DYR_MODELS["IEEEST"].values(rec.params)
     ics, A = v["ICS"], [v[f"A{k}"] for k in range(1, 7)]
     _local_inputs(rec, ("ICS", "IB"))
-    _washout(v["T5"], v["T6"])
+    _washout(rec, v, "T5", "T6")
     if ics == 0:
         raise _Unsupported("no input (ICS 0)")
     KTw = v["KS"] * v["T5"]
@@ -1128,7 +1136,7 @@ def _pss1a(rec, gen):
     1 (speed) and 3 (electrical power) only, a washout T5 below 1e-3 s unsupported."""
     v = DYR_MODELS["PSS1A"].values(rec.params)
     _local_inputs(rec, ("ICS", None))
-    _washout(v["T5"], v["T5"])
+    _washout(rec, v, "T5", "T5")
     if v["ICS"] == 0:
         raise _Unsupported("no input (ICS 0)")
     return _pss_row(rec, gen, K1=1.0, KTw=v["KS"] * v["T5"])
@@ -1140,7 +1148,7 @@ def _st2cut(rec, gen):
     T5/T6, T7/T8, T9/T10; VCU/VCL: the output cut-off (pss_con columns 25-26)."""
     v = DYR_MODELS["ST2CUT"].values(rec.params)
     _local_inputs(rec, ("MODE", "BUSR"), ("MODE2", "BUSR2"))
-    _washout(v["T3"], v["T4"])
+    _washout(rec, v, "T3", "T4")
     if v["MODE"] == 0:
         raise _Unsupported("no first input (MODE 0)")
     return _pss_row(rec, gen)
@@ -1158,7 +1166,7 @@ def _stab1(rec, gen):
     stabctl.models.pss.stab1): washout K_Tw s/(1 + s T_w) with K_Tw = (K/T) T, T_w = T;
     lead-lags T1 = (T1/T3) T3 over T3 and (T2/T4) T4 over T4; limits [-HLIM, HLIM]."""
     v = DYR_MODELS["STAB1"].values(rec.params)
-    _washout(v["K_T"] * v["T"], v["T"])
+    _washout(rec, v, "K_T", "T")
     return _pss_row(
         rec,
         gen,

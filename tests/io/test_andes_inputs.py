@@ -595,3 +595,19 @@ def test_a_workbook_stabctl_cannot_read_after_andes_did_is_refused(tmp_path, mon
     monkeypatch.setattr(andes_case, "_cell_texts", cannot)
     with pytest.raises(InputError, match=r"kundur_full.xlsx: ANDES reads the workbook, but"):
         read_andes_case(andes.get_case(KUNDUR))
+
+
+@pytest.mark.parametrize("model, what", [("TGOV1", "turbine governor"), ("EXDC2", "exciter")])
+def test_a_second_control_of_one_machine_is_refused_naming_both_rows(tmp_path, model, what):
+    """Round 40: two TGOV1 of one GENROU in an ANDES json: ANDES said only "Your input
+    data may be inconsistent" (two EXDC2 were named, as a DYR's are).  Both rows named."""
+    case = json.loads(Path(andes.get_case("kundur/kundur_full.json")).read_text())
+    case[model][1]["syn"] = case[model][0]["syn"]
+    path = tmp_path / "twice.json"
+    path.write_text(json.dumps(case))
+    with pytest.raises(
+        CaseError,
+        match=rf"^twice.json: {model} row 2 \(idx 2\): a second {what} of syn 1 "
+        rf"\(the first: {model} row 1 \(idx 1\)\)",
+    ):
+        read_andes_case(path)

@@ -130,6 +130,12 @@ def error_line(res) -> str:
             [record("EXAC1", {"TB": 0, "TC": 0.5})],
             "bad.dyr:3 EXAC1 (bus 1, id 1): TC = 0.5, TB = 0: TC must be 0 where TB is below",
         ),
+        # round 40: a negative washout time constant was "unsupported", named neither
+        (
+            record("GENROU"),
+            [record("IEEET1"), record("IEEEST", {"T6": -4.2})],
+            "bad.dyr:4 IEEEST (bus 1, id 1): T6 = -4.2: must be >= 0 (a time constant)",
+        ),
         (
             record("GENROU"),
             [record("SEXS", {"EMIN": 5, "EMAX": -5})],
@@ -249,6 +255,14 @@ def test_a_dyr_value_is_refused_naming_its_record_and_parameters(
     line = error_line(res)
     assert line.startswith(f"error: {expected}"), line
     assert not out.exists()
+
+
+def test_an_unsupported_washout_names_its_parameters(tmp_path):
+    """A washout time constant below 1e-3 s is left out as unsupported (with
+    --skip-unsupported), the record named with its parameters and values."""
+    controls = [record("IEEET1"), record("IEEEST", {"T6": 0})]
+    res, _, _ = imported(tmp_path, [record("GENROU"), INFINITE, *controls])
+    assert "IEEEST" in error_line(res) and "washout T5 = 10, T6 = 0: a numerator of 0" in res.output
 
 
 @pytest.mark.parametrize("code", ["7", "2.5", "-1"])
