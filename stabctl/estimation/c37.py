@@ -1044,8 +1044,9 @@ def leap_offsets(data, cfg2) -> np.ndarray:
     the same second (SOC) as the one before it, earlier by more than half a second (the
     second's SOC again from its rollover: a frame repeated, swapped or replayed steps back
     less), where the frame before flags a leap second pending or the frame a leap second
-    occurred (FRACSEC's time quality, Table 3; neither flagging a deleted one), is 1 s
-    later than stamped, as is every frame after it.
+    occurred (FRACSEC's time quality, Table 3; neither flagging a deleted one), in the
+    last second of a UTC day or the first of the next (the only places a leap second is
+    inserted), is 1 s later than stamped, as is every frame after it.
 
     Parameters
     ----------
@@ -1073,7 +1074,12 @@ def leap_offsets(data, cfg2) -> np.ndarray:
     # the second's SOC again, from its rollover: within half a second of the frame before
     # once the second is added (a repeated or swapped frame steps back less)
     repeat = (stamps[1:] // base == stamps[:-1] // base) & (back + base <= base // 2)
-    leap = (back <= 0) & (back > -base) & repeat & flagged & inserted
+    # only at the end of a UTC day (ITU-R TF.460): the second repeated is the day's last
+    # (23:59:59) or the next day's first (00:00:00, POSIX's reading of 23:59:60); a
+    # "leap second" flagged at 22:13:23 was taken for one (round 40: a replayed second
+    # re-timed 1 s later without a word), now its stamps go back (`order_faults`)
+    day_end = np.isin(stamps[1:] // base % 86400, (0, 86399))
+    leap = (back <= 0) & (back > -base) & repeat & flagged & inserted & day_end
     return np.concatenate([[0], np.cumsum(leap)])
 
 

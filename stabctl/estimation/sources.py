@@ -508,7 +508,12 @@ def unused_values(flagged: dict) -> str:
 
 
 def _recorded_to(end, cfg2, data, name: str) -> tuple:
-    """(cfg2, the recording's data frames up to `end`, what is short of it or '')."""
+    """(cfg2, the recording's data frames up to `end`, what is short of it or ''); the
+    frames past the end checked in order too (`c37.order_faults`; those read are checked
+    as merged): a recording of a run given twice, its second half's stamps going back, was
+    read to the run's end by `estimate rmse` without a word, where `estimate track`
+    refused it."""
+    every = data
     soc, frac = c37.config_stamp(cfg2)  # t = 0
     if end.frames is not None:
         data = data[: end.frames]
@@ -526,6 +531,11 @@ def _recorded_to(end, cfg2, data, name: str) -> tuple:
                     f"{name}: its first data frame is stamped {stamps[0]:.4f} s (t = 0 its "
                     f"CFG-2's time stamp), after the end asked for ({end}): no frame to track"
                 )
+    if len(data) < len(every):  # the frames past the end: in order with those read
+        kept = len(data)
+        tail = [(k, why) for k, why in c37.order_faults(every, cfg2, name) if k >= kept]
+        if tail:
+            raise InputError(f"{tail[0][1]} (after the end asked for, {end})")
     # whichever end comes first, as a TCP stream's (`c37_tcp._data_frames`)
     at = c37.stamp_times(data, cfg2)[-1] - soc - frac if data else None
     whole = not end.given or (end.frames is not None and len(data) == end.frames) or reached_tf

@@ -194,6 +194,13 @@ def _received(case, res, settings, source, mc: ErrorRuns, window) -> dict:
     pmus = pm.machine_pmus(case, mc.pmu_at)
     end = End(tf=float(res.t[-1]) - 0.5 / settings.rate)  # the run's last reporting instant
     got = sources.read_frames(source, case, pmus, settings.rate, end)
+    if len(got.frames) and (first := float(got.frames.t[0])) < -0.5 / settings.rate:
+        raise InputError(  # before "short": a CFG-2 stamped late was named short (round 40)
+            f"--source {source} starts at t = {first:.4f} s, {round(-first * settings.rate)} "
+            "reporting instant(s) before the run's first (t = 0, the CFG-2's time stamp): "
+            "frames of before the run, or a CFG-2 stamped after its first data frame: not "
+            "a stream of this run"
+        )
     if got.short:
         raise InputError(
             f"--source {source} is short of the run's {res.t[-1]:g} s: {'; '.join(got.short)}"

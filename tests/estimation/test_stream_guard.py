@@ -346,6 +346,22 @@ def test_recordings_whose_time_stamps_repeat_or_go_back_are_refused(
         sources.read_frames(sources.parse_source(str(path)), case, pmus, RATE)
 
 
+def test_a_recording_given_twice_is_refused_even_when_read_to_an_end(kundur_stream, tmp_path):
+    """Round 40: a recording concatenated with itself (its CFG-2 again, then stamps going
+    back) was read by `estimate rmse` to the run's end, the rest never read nor named,
+    where `estimate track` refused it.  Read to an end (`End(tf=0.5)`) it is refused too."""
+    from stabctl.estimation.c37_tcp import End
+
+    case, pmus, cfg, cfg2, frames = kundur_stream
+    once = cfg2.convert2bytes() + b"".join(_encoded(cfg, cfg2, list(frames)))
+    path = tmp_path / "twice.c37"
+    path.write_bytes(once + once)
+    source = sources.parse_source(str(path))
+    for end in (None, End(tf=0.5)):
+        with pytest.raises(InputError, match=r"data frame 62 goes back from the time stamp of"):
+            sources.read_frames(source, case, pmus, RATE, end=end)
+
+
 def _restamped(frame: bytes, soc: int, count: int) -> bytes:
     """A data frame's bytes with SOC and FRACSEC's count replaced, its CRC-CCITT redone
     (C37.118.2-2011 Table 2, Annex B)."""
@@ -704,6 +720,17 @@ def test_a_recording_that_starts_late_is_refused_as_one_cut_at_its_end(kundur_st
     ) in res.stderr
     res = CliRunner().invoke(main, [*args, str(tmp_path / "whole.c37")])
     assert res.exit_code == 0, res.output
+    # round 40: every data frame one instant before the CFG-2's stamp (a CFG-2 stamped
+    # late) was called "short of the run's 1 s", its last frame 1/60 s before the end
+    step = c37.TIME_BASE // RATE
+    early = []
+    for f in _encoded(cfg, cfg2, frames):
+        at = int.from_bytes(f[6:10], "big") * c37.TIME_BASE + int.from_bytes(f[11:14], "big")
+        early.append(_restamped(f, *divmod(at - step, c37.TIME_BASE)))
+    (tmp_path / "early.c37").write_bytes(cfg2.convert2bytes() + b"".join(early))
+    res = CliRunner().invoke(main, [*args, str(tmp_path / "early.c37")])
+    assert res.exit_code == 2 and "short of" not in res.stderr, res.output
+    assert "starts at t = -0.0167 s, 1 reporting instant(s) before the run's first" in res.stderr
 
 
 def test_a_flood_of_silent_peers_leaves_the_plant_its_controller():

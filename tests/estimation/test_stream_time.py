@@ -28,6 +28,20 @@ def wire():
     return c37.config_frame(cfg), head, body
 
 
+@pytest.fixture(scope="module")
+def midnight_wire():
+    """`wire` with t = 1 s at 00:00:00 UTC (SOC 1 700 006 400, a multiple of 86 400): a
+    leap second is inserted only at the end of a UTC day (ITU-R TF.460)."""
+    import dataclasses
+
+    from pmu_streams import kundur_stream, on_the_wire
+
+    _, _, cfg, frames = kundur_stream(t_end=1.5)
+    cfg = dataclasses.replace(cfg, epoch=1_700_006_399)
+    head, body = on_the_wire(cfg, frames)
+    return c37.config_frame(cfg), head, body
+
+
 def _crc(frame: bytes) -> bytes:
     return frame[:-2] + binascii.crc_hqx(frame[:-2], 0xFFFF).to_bytes(2, "big")
 
@@ -212,7 +226,7 @@ def test_replay_refuses_a_negative_data_rate_its_frames_do_not_keep(wire, tmp_pa
     check_order(body[::60], c37.read_config(_config(head, rate=-1), "CFG-2"), "ok")
 
 
-def test_a_leap_second_is_read_across_in_order(wire, tmp_path):
+def test_a_leap_second_is_read_across_in_order(midnight_wire, wire, tmp_path):
     """A stream across a positive leap second (frames flagged leap pending, one second's
     SOC repeated, then flagged leap occurred) was refused as "goes back": the repeated
     second is the leap second, so the frames from it on are 1 s later than stamped.  The
@@ -222,7 +236,13 @@ def test_a_leap_second_is_read_across_in_order(wire, tmp_path):
     flagged stream whose frames repeat or go back within a second."""
     from stabctl.estimation.sources import check_order
 
+    # round 40: flags and a repeated second at 22:13:21 UTC, where no leap second is ever
+    # inserted, were read as one (a replayed second re-timed 1 s later, without a word)
     _, head, body = wire
+    res = _track(tmp_path, head, _leaped(body))
+    assert res.exit_code == 2, res.output
+    assert "data frame 61 goes back from the time stamp of frame 60" in res.stderr
+    _, head, body = midnight_wire
     pending = [_quality(f, 0x10) for f in body[:60]]
     again = [_later(_quality(f, 0x20), -1_000_000) for f in body[60:]]
     cfg2 = c37.read_config(head, "CFG-2")
@@ -306,13 +326,13 @@ def _leaped(body: list) -> list:
     ]
 
 
-def test_until_over_tcp_reads_the_time_elapsed_across_a_leap_second(wire, tmp_path):
+def test_until_over_tcp_reads_the_time_elapsed_across_a_leap_second(midnight_wire, tmp_path):
     """`estimate track --until 1.25` of a stream across a leap second over TCP read the
     repeated second's stamps as 0 s again: it never reached 1.25 s, took the whole stream
     (91 frames) and called it short (exit 2), where the same frames from a recording
     ended at 1.25 s.  The TCP end reads the time elapsed as the recording does: 76 frames
     (t = 0 .. 1.25 s), exit 0, the same rows as the recording's track."""
-    _, head, body = wire
+    _, head, body = midnight_wire
     leaped = _leaped(body)
     res = _track(tmp_path, head, leaped)  # the recording whole, for the rows
     path = tmp_path / "r.c37"
