@@ -459,7 +459,9 @@ class SimulationResult:
             ``verdict`` (`verdict`), ``de_energised_s`` (s or None),
             ``t_separation_s`` (s or None), ``separated_machines``
             (machine numbers), ``max_angle_from_coi_rad`` (largest abs(delta_i - delta_COI),
-            rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (recorded times - 1),
+            rad), ``t_end_s`` (last recorded time, s), ``n_steps`` (the intervals of
+            positive length: a zero-length interval, its time recorded twice, is no step;
+            a line fault cleared at both ends at once was "1201 steps" for 6 s at 5 ms),
             then every entry of `meta` but its trajectories (arrays, e.g. the WECC
             batteries' ``pesd_command``: in `meta`, not in a summary).
         """
@@ -472,7 +474,7 @@ class SimulationResult:
             "separated_machines": [int(m) for m in self.separated],
             "max_angle_from_coi_rad": self.max_angle_from_coi,
             "t_end_s": float(self.t[-1]),
-            "n_steps": int(self.t.size - 1),
+            "n_steps": int(np.count_nonzero(np.diff(self.t) > 0)),
             **{k: v for k, v in self.meta.items() if not isinstance(v, np.ndarray)},
         }
 

@@ -966,3 +966,12 @@ def test_the_storage_summary_counts_chattering(tmp_path):
     text = run(*args, "--esd-pct", 50).stdout
     assert "18 switchings, 1 of 1 device acted" in text
     assert "; 8 of the switchings chattering (within 20 ms of the device's previous one)" in text
+
+
+def test_a_line_fault_s_steps_are_its_intervals():
+    """Round 40: a line fault cleared at both ends at once printed "0-6 s, 1201 steps (h =
+    5 ms" (6 s at 5 ms is 1200): the zero-length interval between the two ends' openings
+    (its time recorded twice, as PSTess records it) was counted as a step."""
+    res = CliRunner().invoke(main, ["simulate", "kundur", "--fault", "3", "--far-bus", "101"])
+    assert res.exit_code == 0, res.output
+    assert "0-6 s, 1200 steps (h = 5 ms" in res.stdout, res.stdout
