@@ -603,7 +603,8 @@ def print_modes(st, no_pss: bool) -> None:
     ma = st.ma
     click.echo(
         f"case {st.case.name}{' without PSS' if no_pss else ''}: {st.sys.nstates} "
-        f"states; linearised in {st.t_linearise:.2f} s, analysed in {st.t_analyse:.2f} s"
+        f"states; linearised in {st.t_linearise:.2f} s (the model's set-up and its kernels' "
+        f"loading included), analysed in {st.t_analyse:.2f} s"
     )
     if ma.reference_mode is None:
         click.echo("no angle-reference mode: an infinite bus (H = 0) holds the angles")
