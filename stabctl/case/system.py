@@ -485,9 +485,9 @@ class Table:
                     bad = np.flatnonzero(rows & (a != 0) & (b < LEAD_LAG_MIN))
                     if bad.size:
                         r = bad[0]
-                        rule = (
-                            f"{lead} must be 0 where {lag} is below {LEAD_LAG_MIN:g} s (no lag: "
-                            f"the lead-lag bypassed) ({tail})"
+                        rule = (  # in no table's names: a DYR's message gives its own
+                            f"a lead without its lag (a lag below {LEAD_LAG_MIN:g} s bypasses "
+                            f"the lead-lag) ({tail})"
                         )
                         what = (
                             f"must be 0 where {lag} = {_fmt(b[r])} (below {LEAD_LAG_MIN:g} s: no "

@@ -119,7 +119,14 @@ from stabctl.case.params import FAMILIES
 from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError, advice
 from stabctl.io.andes import _andes, _andes_log, _andes_said
-from stabctl.io.dyr import CONVENTIONS, DYR_MODELS, DyrRecord, dyr_origin, dyr_tables
+from stabctl.io.dyr import (
+    AC8B_UNMODELLED,
+    CONVENTIONS,
+    DYR_MODELS,
+    DyrRecord,
+    dyr_origin,
+    dyr_tables,
+)
 from stabctl.io.inputs import number_ranges, parse_json
 from stabctl.io.provenance import Origin, locate
 from stabctl.io.pst import case_from_matrices
@@ -879,6 +886,11 @@ def _file_inputs(path: Path, ss) -> _Given:
                         )
                         + f" (ANDES would run with its default {p.default!r})"
                     )
+                if (model, name) in _UNREAD:  # never "run at ANDES's default": not run
+                    if not empty and v != AC8B_UNMODELLED[name]:
+                        why = f"{name} = {v:g} has no effect: not modelled (ANDES neither)"
+                        given.changed.append((sheet, str(row.get("idx")), why))
+                    continue
                 if empty:
                     values[name] = p.default
                     if dynamic and any(p.get_property(f) for f in _SIGNED):
@@ -914,6 +926,10 @@ def _file_inputs(path: Path, ss) -> _Given:
     _check_one_per_machine(path.name, all_rows, sheet_rows, ss)
     return given
 
+
+#: (model, parameter) of the ANDES models stabctl maps that no run reads (a given value is
+#: named by the mapping, `stabctl.io.dyr.AC8B_UNMODELLED`)
+_UNREAD = frozenset(("AC8B", name) for name in AC8B_UNMODELLED)
 
 #: ANDES groups of which a machine (a stabiliser: an exciter) has one device at most, and
 #: the parameter linking a device to it

@@ -991,6 +991,21 @@ def _esst1a(rec, gen, andes=False, psse=False):
     return _exc_row(rec, gen)
 
 
+#: AC8B's exciter field-voltage limits, not modelled (IEEE 421.5 AC8B; ANDES 2.0's ac8b.py
+#: leaves them out too): their values of no limit (ANDES's defaults)
+AC8B_UNMODELLED = {"VFEMAX": 999.0, "VEMIN": -999.0}
+
+
+def _ac8b(rec, gen):
+    """AC8B as declared (type 10), a VFEMAX or VEMIN that limits anything named as read
+    without effect (round 41: VFEMAX 1 and VEMIN 0.5 ran as 999 and -999, no word)."""
+    v = DYR_MODELS["AC8B"].values(rec.params)
+    for name, none in AC8B_UNMODELLED.items():
+        if v[name] != none:
+            _read_as(rec, f"{name} = {v[name]:g} has no effect: not modelled (as {none:g})")
+    return _exc_row(rec, gen)
+
+
 def _esst3a(rec, gen):
     """ESST3A: TR VIMAX VIMIN KM TC TB KA TA VRMAX VRMIN KG KP KI VBMAX KC XL VGMAX THETAP TM
     VMMAX VMMIN -> PST exc_st3 (type 3): ST3A's gain KA is PST's K_J, its inner loop KM/(1 +
@@ -1323,6 +1338,7 @@ _MAPPERS = {
     "ESDC1A": _dc("ESDC1A", zero_vrmax_unlimited=True),
     "ESST1A": _esst1a,
     "ESST3A": _esst3a,
+    "AC8B": _ac8b,
     "IEEET3": _ieeet3,
     "ESST4B": _esst4b,
     "IEEET1": _dc("IEEET1", zero_vrmax_unlimited=True),

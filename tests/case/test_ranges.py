@@ -191,3 +191,16 @@ def test_a_stabiliser_cut_off_above_and_below_the_same_voltage_is_refused():
         PssTable.from_matrix([row])
     row[PSS.col("VCU") - 1] = 0.0
     PssTable.from_matrix([row])
+
+
+@pytest.mark.parametrize("kind", [1, 2])
+def test_the_pst_stabiliser_s_second_lead_needs_its_lag(kind):
+    """Round 41: PST's stabiliser (types 1, 2) with T3 = 0.05 s and T4 = 0 ran as without
+    T3 (the second lead-lag bypassed), no word said.  Refused naming both fields."""
+    row = _base_row(PSS, kind)
+    row[PSS.col("T3") - 1], row[PSS.col("T4") - 1] = 0.05, 0.0
+    with pytest.raises(CaseError, match=r"field 'T4'.*a lead without its lag") as err:
+        PssTable.from_matrix([row])
+    assert set(err.value.fields) == {"T4", "T3"}
+    row[PSS.col("T3") - 1] = 0.0
+    PssTable.from_matrix([row])  # no lead: the block bypassed, as PST's

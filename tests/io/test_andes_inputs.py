@@ -611,3 +611,30 @@ def test_a_second_control_of_one_machine_is_refused_naming_both_rows(tmp_path, m
         rf"\(the first: {model} row 1 \(idx 1\)\)",
     ):
         read_andes_case(path)
+
+
+def test_ac8b_limits_it_does_not_model_are_named_not_run_at_a_default(tmp_path):
+    """Round 41: AC8B's VFEMAX 1 and VEMIN 0.5 were read without a word and had no effect
+    on the run, and left out they were "run at ANDES's: AC8B VFEMAX = 999", a value no run
+    uses.  Given, they are named as without effect (kept with --skip-unsupported); left
+    out, not said to run at any value."""
+    import math
+
+    import pandas as pd
+
+    sheets = pd.read_excel(andes.get_case("ieee14/ieee14_ac8b.xlsx"), sheet_name=None)
+    case = {
+        k: [
+            {c: v for c, v in r.items() if not (isinstance(v, float) and math.isnan(v))}
+            for r in df.dropna(axis=0, how="all").to_dict("records")
+        ]
+        for k, df in sheets.items()
+    }
+    path = tmp_path / "ac8b.json"
+    path.write_text(json.dumps(case, default=str))
+    got = read_andes_case(path)
+    assert not [d for d in got.defaulted if "VFEMAX" in d or "VEMIN" in d], got.defaulted
+    case["AC8B"][0] |= {"VFEMAX": 1.0, "VEMIN": 0.5}
+    path.write_text(json.dumps(case, default=str))
+    with pytest.raises(InputError, match=r"VFEMAX = 1 has no effect: not modelled"):
+        read_andes_case(path)

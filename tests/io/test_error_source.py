@@ -122,13 +122,20 @@ def error_line(res) -> str:
         (
             record("GENROU"),
             [record("EXST1", {"TB": 0, "TC": 10})],
-            "bad.dyr:3 EXST1 (bus 1, id 1): TC = 10, TB = 0: TC must be 0 where TB is below "
-            "0.001 s (no lag: the lead-lag bypassed) (exciter type 4, EXST1",
+            "bad.dyr:3 EXST1 (bus 1, id 1): TC = 10, TB = 0: a lead without its lag (a lag "
+            "below 0.001 s bypasses the lead-lag) (exciter type 4, EXST1",
         ),
         (
             record("GENROU"),
             [record("EXAC1", {"TB": 0, "TC": 0.5})],
-            "bad.dyr:3 EXAC1 (bus 1, id 1): TC = 0.5, TB = 0: TC must be 0 where TB is below",
+            "bad.dyr:3 EXAC1 (bus 1, id 1): TC = 0.5, TB = 0: a lead without its lag",
+        ),
+        # round 41: a governor's lead without its lag (no effect on the run) and a
+        # stabiliser's, named in the record's own fields
+        (
+            record("GENROU"),
+            [record("SEXS"), record("IEEEG1", {"T2": 1.0})],
+            "bad.dyr:4 IEEEG1 (bus 1, id 1): T2 = 1.0, T1 = 0: a lead without its lag",
         ),
         # round 40: a negative washout time constant was "unsupported", named neither
         (
@@ -263,6 +270,17 @@ def test_an_unsupported_washout_names_its_parameters(tmp_path):
     controls = [record("IEEET1"), record("IEEEST", {"T6": 0})]
     res, _, _ = imported(tmp_path, [record("GENROU"), INFINITE, *controls])
     assert "IEEEST" in error_line(res) and "washout T5 = 10, T6 = 0: a numerator of 0" in res.output
+
+
+def test_ac8b_limits_it_does_not_model_are_named(tmp_path):
+    """Round 41: AC8B's VFEMAX and VEMIN (not modelled) were read without a word; given
+    as limits, the import names them as without effect (its summary of values read
+    otherwise)."""
+    ac8b = "    1 'AC8B' 1 0 80 5 10 0.1 1 0 35 0 1 0.5 0.02 1 1.2 0.55 1.1 1 6.5 0.3 9 3 /"
+    res, _, _ = imported(tmp_path, [record("GENROU"), INFINITE, ac8b])
+    assert res.exit_code == 0, res.output
+    assert "VFEMAX = 1 has no effect: not modelled (as 999)" in res.output
+    assert "VEMIN = 0.5 has no effect: not modelled (as -999)" in res.output
 
 
 @pytest.mark.parametrize("code", ["7", "2.5", "-1"])

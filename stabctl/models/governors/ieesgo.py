@@ -14,7 +14,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, lag, leadlag
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.governors.table import G, fractions
 
 if TYPE_CHECKING:
@@ -24,6 +24,11 @@ IEESGO = 5
 KINDS = {IEESGO: "IEESGO"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none
 NEEDS: tuple[str, ...] = ()
+#: the lead-lag (1 + s T2)/(1 + s T3) (tg_con T3 over Ts): a lead without its lag is
+#: refused (round 41: T2 without T3 had no effect on the run)
+LIMITS = Limits(
+    "PSS/E Model Library IEESGO: the lead-lag (1 + s T2)/(1 + s T3)", leads=(("T3", "Ts"),)
+)
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
 #: the power limits on the start-up gate
 ORDER_LIMITS = True

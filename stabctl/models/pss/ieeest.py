@@ -137,7 +137,7 @@ def check(s, r) -> str | None:
         )
     for lead_name, lag_name in (("T1", "T2"), ("T3", "T4"), ("T5", "T6")):
         if getattr(s, lag_name)[r] < LBND and getattr(s, lead_name)[r] != 0:
-            return f"field '{lag_name}': lead {lead_name} without lag"
+            return f"fields '{lag_name}', '{lead_name}': a lead without its lag"
     return None
 
 

@@ -124,7 +124,7 @@ def check(s, r) -> str | None:
         )
     for lead, lag_ in (("T1", "T2"), ("T3", "T4"), ("T5", "T6"), ("T12", "T13")):
         if getattr(s, lag_)[r] < LBND and getattr(s, lead)[r] != 0:
-            return f"field '{lag_}': lead {lead} without lag"
+            return f"fields '{lag_}', '{lead}': a lead without its lag"
     return None
 
 

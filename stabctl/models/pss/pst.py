@@ -40,9 +40,12 @@ STATE_NAMES = {PST_SPEED: S._fields, PST_POWER: S._fields}
 
 def check(s, r) -> str | None:
     """Why pss_con row r (0-based) cannot be this type, or None: the first lead-lag needs
-    its lag (PST has no case without it)."""
+    its lag (PST has no case without it); the second, bypassed without its lag, then has
+    no lead (round 41: T3 = 0.05 s with T4 = 0 had no effect on the run)."""
     if s.T2[r] < LBND:
         return f"field 'T2': the first lead-lag needs T2 >= {LBND} s"
+    if s.T4[r] < LBND and s.T3[r] != 0:
+        return f"fields 'T4', 'T3': a lead without its lag (T4 below {LBND} s bypasses the block)"
     return None
 
 
