@@ -1122,6 +1122,7 @@ def _ieeest(rec, gen):
     _washout(rec, v, "T5", "T6")
     if ics == 0:
         raise _Unsupported("no input (ICS 0)")
+    _no_gain(rec, v, "KS")
     KTw = v["KS"] * v["T5"]
     lead_lags = [(v[a], v[b]) for a, b in (("T1", "T2"), ("T3", "T4"))]
     stages = [(a, b) for a, b in lead_lags if a or b]
@@ -1197,7 +1198,16 @@ def _pss2(rec, gen):
     copies of stabctl.models.pss.pss2a, pss2b, pss2c); only local inputs (IB1 = IB2 = 0)
     of speed (1) or electrical power (3)."""
     _local_inputs(rec, ("ICS1", "IB1"), ("ICS2", "IB2"))
+    _no_gain(rec, DYR_MODELS[rec.model].values(rec.params), "KS1")
     return _pss_row(rec, gen)
+
+
+def _no_gain(rec, v, gain: str) -> None:
+    """Name a stabiliser whose gain `gain` is 0 (PSS/E reads it: its output is then 0
+    whatever its input) as one without effect on the run (round 41: an IEEEST of KS 0 was
+    counted "1 PSS" and the run was byte for byte the one without it)."""
+    if v[gain] == 0:
+        _read_as(rec, f"{gain} = 0: its output is always 0, no effect on the run")
 
 
 # -- governors (PST tg_con, GovernorTable) ----------------------------------------------------

@@ -272,6 +272,17 @@ def test_an_unsupported_washout_names_its_parameters(tmp_path):
     assert "IEEEST" in error_line(res) and "washout T5 = 10, T6 = 0: a numerator of 0" in res.output
 
 
+def test_a_stabiliser_of_gain_0_is_named_as_without_effect(tmp_path):
+    """Round 41: an IEEEST of KS 0 was counted "1 PSS" and the run was byte for byte the
+    one without it.  Imported (PSS/E reads it), and named."""
+    pss = record("IEEEST", {"KS": 0})
+    res, _, _ = imported(tmp_path, [record("GENROU"), INFINITE, record("IEEET1"), pss])
+    assert res.exit_code == 0, res.output
+    assert "IEEEST (bus 1, id 1): KS = 0: its output is always 0, no effect on the run" in (
+        res.output
+    )
+
+
 def test_ac8b_limits_it_does_not_model_are_named(tmp_path):
     """Round 41: AC8B's VFEMAX and VEMIN (not modelled) were read without a word; given
     as limits, the import names them as without effect (its summary of values read
