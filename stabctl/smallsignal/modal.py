@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as la
 
-from stabctl.errors import InputError, WrongTypeError, advice, is_whole_number
+from stabctl.errors import InputError, WrongTypeError, advice, counted, is_whole_number
 
 F_MIN_HZ, F_MAX_HZ = 0.1, 2.5  # electromechanical band
 INTER_AREA_ETA = 0.5  # area-momentum fraction above which a mode is inter-area
@@ -76,6 +76,9 @@ class AreaCountError(InputError):
 
 #: the least-damped modes `ModalAnalysis.table` lists when there is no electromechanical one
 LEAST_DAMPED_SHOWN = 5
+#: real part above which a mode is unstable (1/s): the angle-reference mode's, left out,
+#: is a few 1e-9 (central differences' rounding), an unstable mode's 1e-3 and more
+UNSTABLE_REAL_PER_S = 1e-6
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,9 +163,12 @@ class ModalAnalysis:
         Returns
         -------
         str
-            A header line and one line per electromechanical mode; without any, a line
-            saying so (and why, for a model without machines) and the least-damped
-            LEAST_DAMPED_SHOWN modes with their dominant state.
+            A header line and one line per electromechanical mode (an unstable one
+            marked UNSTABLE), the rotor modes above the band, then whether the model is
+            small-signal stable, naming every unstable mode the lines above leave out;
+            without any electromechanical mode, a line saying so (and why, for a model
+            without machines) and the least-damped LEAST_DAMPED_SHOWN modes with their
+            dominant state.
         """
         named = name or (lambda k: f"G{k}")
         em = self.electromechanical
@@ -180,8 +186,41 @@ class ModalAnalysis:
             lines.append(
                 f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {self.kind[i]:<10} "
                 f"{' '.join(named(k) for k in g1[:6])} vs {against}{areas}"
+                + ("  UNSTABLE" if self.damping[i] < 0 else "")
             )
-        return "\n".join(lines + self._outside_band_lines(named))
+        shown = np.concatenate([em, self.rotor_modes_above_band()])
+        return "\n".join(
+            lines + self._outside_band_lines(named) + self._unstable_lines(shown, named)
+        )
+
+    def unstable_modes(self) -> np.ndarray:
+        """Indices of the modes with a positive real part (above `UNSTABLE_REAL_PER_S`),
+        one per conjugate pair, the angle-reference mode left out: every one, whatever its
+        band (an exciter's 3.7 Hz modes at +5.2 1/s were in no table, round 41)."""
+        lam = self.eigenvalues
+        bad = (lam.real > UNSTABLE_REAL_PER_S) & (lam.imag >= 0)
+        if self.reference_mode is not None:
+            bad[self.reference_mode] = False
+        return np.nonzero(bad)[0]
+
+    def _unstable_lines(self, shown: np.ndarray, named) -> list[str]:
+        """`table`'s lines on the unstable modes: those it does not list named with their
+        dominant states (and machines), or a line that every mode is stable."""
+        bad = self.unstable_modes()
+        if not bad.size:
+            return ["small-signal stable: every mode's real part is negative"]
+        lines = [
+            f"SMALL-SIGNAL UNSTABLE: {counted(bad.size, 'mode')} with a positive real part"
+            + (" (marked above)" if np.isin(bad, shown).all() else "")
+        ]
+        for i in bad[~np.isin(bad, shown)]:
+            who = " ".join(named(k) for k in self.dominant_machines(int(i)))
+            top = ", ".join(n for n, _ in self.dominant_states(int(i), 2))
+            lines.append(
+                f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  real part "
+                f"{self.eigenvalues[i].real:+.3g} 1/s; states {top}" + (f"; {who}" if who else "")
+            )
+        return lines
 
     def rotor_modes_above_band(self) -> np.ndarray:
         """Indices of the oscillatory modes above the electromechanical band (F_MAX_HZ)
@@ -283,6 +322,7 @@ class ModalAnalysis:
             "imag_rad_per_s": float(lam.imag),
             "freq_hz": float(self.freq_hz[i]),
             "damping_ratio": float(self.damping[i]),
+            "stable": bool(lam.real <= UNSTABLE_REAL_PER_S or i == self.reference_mode),
             "kind": str(self.kind[i]),
             "dominant_states": [
                 {"state": s, "participation": p} for s, p in self.dominant_states(i)

@@ -16,7 +16,7 @@ import numpy as np
 
 from stabctl.case import Case, PssTable
 from stabctl.dynamics.coi import machine_inertia
-from stabctl.errors import InputError, WrongTypeError
+from stabctl.errors import InputError, WrongTypeError, counted
 from stabctl.outdir import output_directory
 from stabctl.parallel import atomic_writes
 from stabctl.smallsignal.linearise import linearise
@@ -95,6 +95,10 @@ def study_json(st: EigStudy) -> dict:
         "machine_names": {str(int(k)): st.case.machine_name(int(k)) for k in ma.machines},
         "areas": _areas(ma),
         "damping_statistics": ma.damping_statistics(),
+        # every mode of positive real part, whatever its band (round 41: an exciter's
+        # unstable 3.7 Hz modes were in no output but --json's full list)
+        "small_signal_stable": not ma.unstable_modes().size,
+        "unstable_modes": [int(i) for i in ma.unstable_modes()],
         "electromechanical_modes": [int(i) for i in ma.electromechanical],
         "time_linearise_s": st.t_linearise,
         "time_analyse_s": st.t_analyse,
@@ -221,6 +225,19 @@ def report_markdown(
             + (" (unstable)" if s["damping_ratio"] < 0 else "")
             + "."
         )
+    bad = ma.unstable_modes()
+    lines.append(
+        "- Small-signal stable: every mode's real part is negative."
+        if not bad.size
+        else f"- **Small-signal unstable**: {counted(bad.size, 'mode')} with a positive real "
+        "part: "
+        + "; ".join(
+            f"mode {i}, {ma.freq_hz[i]:.3f} Hz, {ma.eigenvalues[i].real:+.4g} 1/s "
+            f"({ma.kind[i] if i in em else ma.dominant_states(int(i), 1)[0][0]})"
+            for i in bad
+        )
+        + "."
+    )
     outside = ma.rotor_modes_above_band()
     if outside.size:
         lines.append(

@@ -106,8 +106,10 @@ def test_kundur_local_and_interarea_modes(nopss, expected, sys_k, sys_k_nopss):
     # the table view: one line per electromechanical mode, by frequency, as `eig` prints
     lines = str(ma).splitlines()
     assert lines[0].split() == ["mode", "f", "Hz", "zeta", "kind", "machines"]
-    assert [float(line.split()[1]) for line in lines[1:]] == [f for f, _ in expected]
-    assert lines[1].endswith("[areas 2 vs 1]") or lines[1].endswith("[areas 1 vs 2]")
+    *rows, verdict = lines[1:]  # then whether every mode is stable (round 41)
+    assert [float(line.split()[1]) for line in rows] == [f for f, _ in expected]
+    assert rows[0].endswith(("[areas 2 vs 1]", "[areas 1 vs 2]", "  UNSTABLE"))
+    assert verdict.startswith("SMALL-SIGNAL UNSTABLE: 1 mode" if nopss else "small-signal stable")
 
 
 def test_areas_numbered_by_their_first_machine():
@@ -478,3 +480,36 @@ def test_a_model_without_machines_lists_its_converter_modes(tmp_path):
     assert f"{least:5d} {ma.freq_hz[least]:7.3f} {ma.damping[least]:8.4f}  ibr_" in res.stdout
     res = run("eig", path, "--json")
     assert res.exit_code == 0 and len(json.loads(res.stdout)["modes"]) == ma.eigenvalues.size
+
+
+def test_every_unstable_mode_is_said_in_every_output(tmp_path):
+    """Round 41: Kundur's exciters at K_A 2000, T_A 0.05 s, T_R 0.2 s have four modes of
+    3.7-4.0 Hz with real parts +1.4 to +7.0 1/s (an exciter-rotor instability: after a
+    0.001 pu Vref step every field voltage swings between its limits); `eig`'s text and
+    report listed three well-damped electromechanical modes and nothing else.  Each
+    output says the model is small-signal unstable and names every unstable mode;
+    Kundur without PSS marks its unstable 0.634 Hz mode; Kundur with PSS is stable."""
+    import stabctl
+
+    data = json.loads((Path(stabctl.__file__).parent / "case" / "data" / "kundur.json").read_text())
+    cols = data["tables"]["exciters"]["columns"]
+    for row in data["tables"]["exciters"]["rows"]:
+        row[cols.index("KA")], row[cols.index("TA")], row[cols.index("TR")] = 2000, 0.05, 0.2
+    data["name"] = "kundur_exc"
+    path = tmp_path / "kexc.json"
+    path.write_text(json.dumps(data))
+    res = CliRunner().invoke(main, ["eig", str(path), "--json"])
+    got = json.loads(res.stdout)
+    bad = got["unstable_modes"]
+    assert not got["small_signal_stable"] and len(bad) == 4, bad
+    assert all(not m["stable"] for m in got["modes"] if m["mode"] in bad)
+    assert all(m["real_per_s"] > 1 for m in got["modes"] if m["mode"] in bad)
+    text = CliRunner().invoke(main, ["eig", str(path)]).stdout
+    assert "SMALL-SIGNAL UNSTABLE: 4 modes with a positive real part" in text
+    assert all(f"\n{i:5d} " in text for i in bad), text
+    res = CliRunner().invoke(main, ["eig", str(path), "--report", "--out-dir", str(tmp_path)])
+    report = (tmp_path / "eig_kexc.md").read_text()
+    assert "**Small-signal unstable**: 4 modes with a positive real part" in report
+    text = CliRunner().invoke(main, ["eig", "kundur", "--no-pss"]).stdout
+    assert "UNSTABLE\n" in text and "(marked above)" in text
+    assert "small-signal stable" in CliRunner().invoke(main, ["eig", "kundur"]).stdout
