@@ -378,6 +378,8 @@ def print_cct(case, rating, d) -> None:
             f"numerical error {1000 * d['numerical_error_s']:.{max(n - 3, 0)}f} ms (CCT at "
             f"half the step {d['cct_half_step_s']:.{n}f} s)"
         )
+    if rc := d.get("run_end_check"):
+        click.echo(run_end_line(rc, d["cct_s"], n))
     if "critical_group" in d:
         click.echo(critical_group_line(case, d["critical_group"], n))
     for line in islanding_lines(case, d.get("islanded", []), timed=False):
@@ -394,6 +396,36 @@ def print_cct(case, rating, d) -> None:
         "half the step, "
         f"{d['early_stops']} ended at an early verdict; {d['search']} search), "
         f"wall {d['wall_time_s']:.2f} s"
+    )
+
+
+def run_end_line(check: dict, cct_s: float, n: int) -> str:
+    """The line of a CCT whose run's end was checked (`stabctl.stability.cct.
+    _run_end_check`: its unstable end separated late in its run).
+
+    Parameters
+    ----------
+    check : dict
+        ``t_end_s`` (the longer run's end, s) and ``t_separation_s`` (s, or None).
+    cct_s : float
+        The CCT (s).
+    n : int
+        Decimals of its times.
+
+    Returns
+    -------
+    str
+    """
+    if check["t_separation_s"] is None:
+        return (
+            f"run's end checked: the unstable end separated late in its run; cleared at the "
+            f"CCT the run stays stable to t = {check['t_end_s']:g} s"
+        )
+    return (
+        f"NOT CONVERGED IN THE RUN'S END: cleared at the CCT ({cct_s:.{n}f} s) the run to "
+        f"t = {check['t_end_s']:g} s loses synchronism at {check['t_separation_s']:.2f} s "
+        "(a slow separation, e.g. of what a trip leaves: the unstable end separated late in "
+        "its run); for a longer study the CCT is lower: search again with a later --tf"
     )
 
 

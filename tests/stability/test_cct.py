@@ -541,3 +541,24 @@ def test_the_texts_name_their_settings_and_a_sweep_names_its_islands(tmp_path, m
     assert "; 1 islanding load buses (their load shed), 1 islanding machines" in lines[-1]
     screen = CliRunner().invoke(main, ["screen", "kundur", "--buses", "3", "--t-max", "0.5"])
     assert screen.stdout.splitlines()[0] == lines[0], screen.output
+
+
+def test_a_cct_whose_unstable_end_separates_late_checks_the_run_s_end():
+    """Round 41: Kundur's 1-10 trip islands G1 and the rest drifts out of step 5-10 s
+    after the fault: its CCT was 0.440 s with the default end (printed error bar 1 ms),
+    0.337 s run to 10 s, 0.001 s to 20 s, no word said.  Its unstable end separates late
+    in its run, so the stable end is run again 5 s longer: it separates there, and the
+    result says the CCT is not converged in the run's end (text and --json).  3-101,
+    whose unstable end separates early, runs nothing more."""
+    args = ["cct", "kundur", "--fault", "1", "--far-bus", "10", "--t-max", "0.5"]
+    d = json.loads(CliRunner().invoke(main, [*args, "--json"]).stdout)
+    check = d["run_end_check"]
+    assert check["t_end_s"] == 11.0 and 6 < check["t_separation_s"] < 11, check
+    text = CliRunner().invoke(main, args).stdout
+    assert f"NOT CONVERGED IN THE RUN'S END: cleared at the CCT ({d['cct_s']:.3f} s)" in text
+    d = json.loads(
+        CliRunner()
+        .invoke(main, ["cct", "kundur", "--fault", "3", "--far-bus", "101", "--json"])
+        .stdout
+    )
+    assert d["run_end_check"] is None and d["cct_s"] == 0.154
