@@ -542,7 +542,8 @@ def cct(
         why = sorted({e for row in table.values() for e in row["errors"]})
         raise InputError(f"every CCT search failed: {'; '.join(why) or 'no reason recorded'}")
     out = {
-        **_what_ran(case, (fault, far_bus, None, None), esd_pct, settings, seed),
+        # the searches fault at 1 s (round 41: null here, as if none had a time)
+        **_what_ran(case, (fault, far_bus, ev.t, None), esd_pct, settings, seed),
         "runs": runs,
         "cct_cycles": table,
         "esd_model": esd_model,

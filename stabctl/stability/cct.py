@@ -1281,9 +1281,14 @@ def _check_settings(fault: LineFault, o: SearchOptions, t_hi, t_end) -> None:
     if not o.tol >= MIN_TOL:
         raise InputError(f"CCT tolerance must be >= {MIN_TOL:g} s (1 us), got {o.tol:g}")
     if not 0 <= o.t_lo < t_hi <= o.t_max:
+        given = (
+            ""
+            if o.t_hi is not None
+            else f" (t_hi not given: min({T_HI:g}, t_max); give one above t_lo)"
+        )
         raise InputError(
             "CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "
-            f"{o.t_lo:g}, {t_hi:g}, {o.t_max:g} s"
+            f"t_lo {o.t_lo:g}, t_hi {t_hi:g}{given}, t_max {o.t_max:g} s"
         )
     if fault.t_fault < 0:
         raise InputError(f"fault time must be >= 0 s, got {fault.t_fault:g}")

@@ -463,6 +463,8 @@ def test_estimate_cct_commands_wecc_batteries():
     )
     assert d["cct_cycles"]["ideal"]["values"] == [pytest.approx(11.5)]
     assert all(max(r["values"]) < 11.75 for r in d["cct_cycles"].values())
+    # the searches' fault time (round 41: null), their clearing searched (null)
+    assert d["fault"] == {"bus": 3, "far_bus": 101, "t_fault_s": 1.0, "clear_cycles": None}
 
 
 def test_swing_filter_accelerates_as_the_simulator_under_each_reading():

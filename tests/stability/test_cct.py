@@ -562,3 +562,14 @@ def test_a_cct_whose_unstable_end_separates_late_checks_the_run_s_end():
         .stdout
     )
     assert d["run_end_check"] is None and d["cct_s"] == 0.154
+
+
+def test_a_search_bound_not_given_is_named_as_the_default():
+    """Round 41: SearchOptions(t_lo=0.2) was refused with "got 0.2, 0.1, 1 s", the 0.1 s
+    a t_hi the caller never gave."""
+    from stabctl.dynamics.driver import Simulator
+
+    with pytest.raises(InputError, match=r"t_hi 0\.1 \(t_hi not given: min\(0\.1, t_max\)"):
+        critical_clearing_time(
+            Simulator(load_case("kundur")), LineFault(3, 101), SearchOptions(t_lo=0.2)
+        )
