@@ -399,7 +399,7 @@ def print_cct(case, rating, d) -> None:
     )
 
 
-def run_end_line(check: dict, cct_s: float, n: int) -> str:
+def run_end_line(check: dict, cct_s: float, n: int, again: str = "with a later --tf") -> str:
     """The line of a CCT whose run's end was checked (`stabctl.stability.cct.
     _run_end_check`: its unstable end separated late in its run).
 
@@ -411,6 +411,8 @@ def run_end_line(check: dict, cct_s: float, n: int) -> str:
         The CCT (s).
     n : int
         Decimals of its times.
+    again : str, optional
+        How to search again (`screen` has no --tf: `cct` does).
 
     Returns
     -------
@@ -425,7 +427,7 @@ def run_end_line(check: dict, cct_s: float, n: int) -> str:
         f"NOT CONVERGED IN THE RUN'S END: cleared at the CCT ({cct_s:.{n}f} s) the run to "
         f"t = {check['t_end_s']:g} s loses synchronism at {check['t_separation_s']:.2f} s "
         "(a slow separation, e.g. of what a trip leaves: the unstable end separated late in "
-        "its run); for a longer study the CCT is lower: search again with a later --tf"
+        f"its run); for a longer study the CCT is lower: search again {again}"
     )
 
 
@@ -586,6 +588,9 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
                 f"{where} ends off a normal operating point: {' and '.join(r['end_concerns'])}"
                 f" at t = {r['end_t_s']:g} s"
             )
+        if (rc := r.get("run_end_check")) and rc.get("t_separation_s") is not None:
+            again = "with `stabctl cct` and a later --tf"
+            click.echo(f"{where} {run_end_line(rc, r['cct_s'], n, again)}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
     n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
     n_off = sum(bool(r.get("end_concerns")) for r in rows)
@@ -608,6 +613,11 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
         click.echo(
             f"{before} search(es) recorded as failed before were not run again; "
             "--retry-failed reruns them"
+        )
+    if stiff := [r["stiff_step_s"] for r in rows if r.get("stiff_step_s")]:
+        click.echo(  # as `cct` says it (round 41: the settings line gave the step alone)
+            f"{len(stiff)} search(es) cut the step to as little as {step_text(min(stiff))} in "
+            "intervals where a machine's subtransient time constant is shorter"
         )
 
 

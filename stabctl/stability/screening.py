@@ -360,6 +360,10 @@ def screen(
                 numerical_error_s=r.get("numerical_error_s"),
                 separated=r["separated_machines"],
                 n_simulations=r["n_simulations"],
+                # the search's step cut for short subtransient time constants, and its
+                # run's end checked (round 41: `cct` said them, `screen` did not)
+                stiff_step_s=r.get("stiff_step_s"),
+                run_end_check=r.get("run_end_check"),
             )
         elif rec["status"] == "verdict":
             row["reason"] = rec.get("reason", "")

@@ -326,3 +326,21 @@ def test_a_bus_fault_has_no_circuit_in_cct_and_screen_json(tmp_path):
     scr = ["screen", "kundur", "--buses", "3", "--workers", "1", "--json"]
     (row,) = json.loads(CliRunner().invoke(main, [*scr, "--out", str(tmp_path / "s.jsonl")]).stdout)
     assert row["circuit"] is None and row["cct_s"] == got["cct_s"]
+
+
+def test_screen_says_a_cct_not_converged_in_the_run_s_end(tmp_path, monkeypatch):
+    """Round 41: `screen` gave Kundur's 1-10 CCT 0.440 s as `cct` did, with no word that
+    run 5 s longer the run cleared there loses synchronism (its trip islands G1 and the
+    rest drifts out of step), and has no --tf: the row says so and how to search again;
+    `--json` rows carry `run_end_check` (and the stiff step, `cct`'s too)."""
+    monkeypatch.chdir(tmp_path)
+    args = ["screen", "kundur", "--buses", "1", "--lines", "--out", "s.jsonl"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    said = [line for line in res.stdout.splitlines() if "NOT CONVERGED" in line]
+    assert any(line.startswith("bus 1 line to 10 ") for line in said), said
+    assert all(line.endswith("with `stabctl cct` and a later --tf") for line in said)
+    rows = json.loads(CliRunner().invoke(main, [*args, "--json"]).stdout)
+    got = {(r["bus"], r["far_bus"]): r for r in rows}
+    assert got[1, 10]["run_end_check"]["t_separation_s"] > 6
+    assert all("stiff_step_s" in r for r in rows if r["status"] == "ok")
