@@ -461,10 +461,13 @@ def sweep_line(key, rec) -> str:
     n, c = time_decimals(r.get("tol_s")), cycle_decimals(r.get("tol_s"))
     err = r.get("numerical_error_s")
     err = "-" if err is None else f"{1000 * err:.{max(n - 3, 0)}f}"
-    return (
+    line = (
         f"{key:<34} {r['cct_s']:7.{n}f} {r['cct_cycles']:8.{c}f} {err:>6} "
         f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}")
     )
+    if (rc := r.get("run_end_check")) and rc.get("t_separation_s") is not None:
+        line += f"\n{'':<34} {run_end_line(rc, r['cct_s'], n)}"  # round 41: said by cct only
+    return line
 
 
 def print_sweep(rep, n_jobs: int, case=None) -> None:

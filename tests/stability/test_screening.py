@@ -344,3 +344,16 @@ def test_screen_says_a_cct_not_converged_in_the_run_s_end(tmp_path, monkeypatch)
     got = {(r["bus"], r["far_bus"]): r for r in rows}
     assert got[1, 10]["run_end_check"]["t_separation_s"] > 6
     assert all("stiff_step_s" in r for r in rows if r["status"] == "ok")
+
+
+def test_sweep_cct_says_a_cct_not_converged_in_the_run_s_end(tmp_path, monkeypatch):
+    """Round 41: `sweep-cct` gave 1-10's CCT as `cct` did without its run's-end check."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text("bus,far_bus\n1,10\n3,101\n")
+    args = ["sweep-cct", "kundur", "--faults", "f.csv", "--out", "w.jsonl", "--t-max", "0.5"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    lines = res.stdout.splitlines()
+    k = next(i for i, line in enumerate(lines) if line.startswith("kundur/1-10/t1/esd-none   "))
+    assert "NOT CONVERGED IN THE RUN'S END: cleared at the CCT (0.440 s)" in lines[k + 1]
+    assert sum("NOT CONVERGED" in line for line in lines) == 1  # 3-101: not in question
