@@ -204,6 +204,13 @@ def import_psse(
             UserWarning,
             stacklevel=3,
         )
+    if raw.noted:
+        warnings.warn(
+            f"{where}: {len(raw.noted)} record(s) kept as written that look wrong: "
+            + "; ".join(str(n) for n in raw.noted),
+            UserWarning,
+            stacklevel=3,
+        )
     if raw.circuit_order:
         warnings.warn(
             f"{where}: parallel circuits are numbered in file order ("

@@ -335,6 +335,10 @@ class RawData:
     solution: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     vreg_con: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     changed: tuple[RawSource, ...] = ()
+    #: records kept as written though they look wrong, each named with why (a bus's
+    #: voltage limits inverted, which stabctl does not use; a branch of negative R, as a
+    #: network equivalent's): PSS/E reads them too (round 41: without a word)
+    noted: tuple[RawSource, ...] = ()
     netted_ids: frozenset[tuple[int, str]] = frozenset()
     held: tuple[Held, ...] = ()
     load_buses: tuple[Held, ...] = ()
@@ -916,6 +920,7 @@ class _Builder:
     #: remote bus
     remote: dict = field(default_factory=dict)
     changed: list = field(default_factory=list)  # RawSource of records read otherwise
+    noted: list = field(default_factory=list)  # RawSource of records kept that look wrong
     held: list = field(default_factory=list)  # Held: controls not modelled, at their setting
     load_buses: list = field(default_factory=list)  # Held: IDE 2 buses read as load buses
     bus_src: dict = field(default_factory=dict)  # bus number -> its record's RawSource
@@ -981,6 +986,14 @@ def _bus(b: _Builder, rec: _Rec):
     if vm <= 0:
         rec.fail(f"bus {num}: VM {rec.written(0, 7)} must be > 0")
     kind = {1: PQ, 2: PV, 3: SWING}[ide]
+    for hi, lo, k in (("NVHI", "NVLO", 9), ("EVHI", "EVLO", 11)):
+        if rec.num(0, k, 1.1) < rec.num(0, k + 1, 0.9):
+            b.noted.append(
+                rec.source(
+                    f"bus {num}: {hi} {rec.written(0, k)} below {lo} {rec.written(0, k + 1)} "
+                    "(voltage limits stabctl does not use: kept)"
+                )
+            )
     b.bus_src[num] = rec.source(f"bus {num}")
     b.solution[num] = (vm, rec.num(0, 8, 0.0))
     b.buses[num] = [
@@ -1246,8 +1259,14 @@ def _branch(b: _Builder, rec: _Rec):
         return
     r, x, bc = rec.num(0, 3), rec.num(0, 4), rec.num(0, 5, 0.0)
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
-    if r == 0 and x == 0:  # R < 0 allowed: equivalents carry it
+    if r == 0 and x == 0:
         rec.fail(f"{what}: R + jX must not be 0")
+    if r < 0:  # allowed, named: network equivalents carry it
+        b.noted.append(
+            rec.source(
+                f"{what}: R {rec.written(0, 3)} pu, negative (kept, as a network equivalent's)"
+            )
+        )
     if gi == 0 and gj == 0 and bi == bj:  # a symmetric susceptance: part of the charging
         b.branches.append([i, j, r, x, bc + bi + bj, 0, 0, 0, 0, 0])
     else:
@@ -1770,6 +1789,7 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         solution=np.array([[n, *vm_va] for n, vm_va in b.solution.items()], float).reshape(-1, 3),
         vreg_con=vreg_con,
         changed=tuple(b.changed),
+        noted=tuple(b.noted),
         netted_ids=frozenset(b.netted_ids),
         held=tuple(sorted(b.held, key=lambda h: h.source.line)),
         load_buses=tuple(b.load_buses),

@@ -1087,3 +1087,24 @@ def test_controls_not_modelled_are_named_as_held_at_their_raw_setting(tmp_path):
         "6 switched shunts held at BINIT (MODSW not 0: not switched in the power flow or the "
         "dynamics), at buses 0, 1, 2, 3, 4, 5"
     ]
+
+
+def test_raw_records_that_look_wrong_are_kept_and_named(tmp_path):
+    """Round 41: a bus whose NVHI 0.9 is below its NVLO 1.1 and a branch of R = -0.01 pu
+    were read without a word.  PSS/E reads both (the limits stabctl does not use; a
+    negative R as a network equivalent's): kept, and named."""
+    from stabctl.io.psse import import_psse
+
+    raw = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU" / "ThreeBusMulti.raw"
+    text = raw.read_text()
+    text = text.replace(
+        "-8.7697,1.10000,0.90000,1.10000,0.90000", "-8.7697,0.90000,1.10000,1.10000,0.90000"
+    )
+    text = text.replace("   101,   102,'1 ', 1.00000E-2,", "   101,   102,'1 ', -1.00000E-2,")
+    path = tmp_path / "odd.raw"
+    path.write_text(text)
+    with pytest.warns(UserWarning, match=r"2 record\(s\) kept as written that look wrong") as got:
+        import_psse(path)
+    said = " ".join(str(w.message) for w in got)
+    assert "bus 103: NVHI 0.90000 below NVLO 1.10000 (voltage limits stabctl does not use" in said
+    assert "odd.raw:14 branch 101-102 '1': R -1.00000E-2 pu, negative (kept" in said
