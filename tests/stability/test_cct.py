@@ -573,3 +573,25 @@ def test_a_search_bound_not_given_is_named_as_the_default():
         critical_clearing_time(
             Simulator(load_case("kundur")), LineFault(3, 101), SearchOptions(t_lo=0.2)
         )
+
+
+def test_an_insecure_fault_s_window_holds_beyond_the_run_s_end():
+    """Round 41: Kundur's 2-20 (its trip islands G2; the trip alone separates the rest
+    4.4 s after it) was "yet stable when cleared at 0.017, 0.033, 0.05 s", and cleared
+    after 1 cycle it separates at 6.3 s run to 20 s.  The window's runs are run 5 s
+    longer when the run cleared at once separated late: 0.017 s leaves the window, the
+    2 and 3 cycles stay (stable to 20 s too, as a run shows)."""
+    d = json.loads(
+        CliRunner()
+        .invoke(main, ["cct", "kundur", "--fault", "2", "--far-bus", "20", "--json"])
+        .stdout
+    )
+    assert d["verdict"] == "N-1 insecure"
+    assert "; yet stable when cleared at 0.033, 0.05 s:" in d["reason"], d["reason"]
+    for cycles, stable in ((1, False), (2, True)):
+        run = CliRunner().invoke(
+            main,
+            ["simulate", "kundur", "--fault", "2", "--far-bus", "20", "--clear-cycles", str(cycles)]
+            + ["--tf", "20", "--json"],
+        )
+        assert json.loads(run.stdout)["stable"] is stable
