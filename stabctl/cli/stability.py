@@ -444,7 +444,7 @@ def sweep_cct(
         case_name, faults, ratings, ctrl, search=search, model=model, esd_model=esd_model
     )
     _say_others(out_path, jobs)
-    settings = _settings_line(case_name, model, search)  # before the jobs, once
+    settings = _settings(case_name, model, search)  # before the jobs, once
     rep = run_sweep(
         jobs, out_path, workers=workers, scheduler=scheduler, retry_failed=retry_failed
     )  # Ctrl-C: reports_errors, exit 130
@@ -457,11 +457,12 @@ def sweep_cct(
                 "failed": rep.failed,
                 "failed_before": rep.failed_before,
                 "wall_time_s": rep.wall_time_s,
+                "settings": settings["json"],
                 "records": list(rep.records.values()),
             }
         )
     else:
-        click.echo(settings)
+        click.echo(settings["line"])
         print_sweep(rep, len(jobs), case)
     from stabctl.stability.screening import verdict
 
@@ -572,7 +573,7 @@ def screen(
     check_power_flow(case, model)  # before any search: not one failure per fault
     check_step_given(case, model, screening.T_FAULT + T_AFTER_FAULT)
     search = replace(search_settings(tol_ms, t_max, None, tf_option=False), method=method)
-    settings = _settings_line(case_name, model, search)  # before the searches, once
+    settings = _settings(case_name, model, search)  # before the searches, once
     rows = run_screen(
         case_name,
         out_path,
@@ -591,27 +592,36 @@ def screen(
         plotting.screening_map(case, rows, plot_p)
     rows = [_with_buses(case, r) for r in rows]
     if as_json:
-        print_json(rows)
+        print_json([{**row, "settings": settings["json"]} for row in rows])
     else:
-        click.echo(settings)
+        click.echo(settings["line"])
         print_screening(case, rows, tol_ms / 1000, out_path)
     failed = [r for r in rows if r["verdict"] == "failed"]
     _exit_on_failures(failed, out_path, ("search", "searches"))
 
 
-def _settings_line(case_name, model, search) -> str:
-    """The settings of a batch's searches in one line (`sweep-cct`, `screen`): tolerance,
-    search limit, step (the case's default when none is given), conventions and Q limits,
-    as `cct` prints them (round 39: a screening's text said none of them, and the Q limits
-    move a CCT)."""
+def _settings(case_name, model, search) -> dict:
+    """The settings of a batch's searches (`sweep-cct`, `screen`): tolerance, search
+    limit, step (the case's default when none is given), conventions and Q limits, as
+    `cct` gives them: ``line``, their text (round 39: a screening's text said none of
+    them, and the Q limits move a CCT), ``json``, their fields (round 41: `screen --json`
+    rows carried none)."""
     from stabctl.stability.cct import cached_simulator
 
     step = model.h if model.h is not None else cached_simulator(case_name, model).default_h
-    return (
+    line = (
         f"settings: tolerance {1000 * search.tol:g} ms, search limit {search.t_max:g} s, "
         f"step {step_text(step)}, {model.conventions} conventions, "
         f"{q_limits_text(model.q_limits)}"
     )
+    fields = {
+        "tol_s": search.tol,
+        "t_max_s": search.t_max,
+        "step_s": step,
+        "conventions": model.conventions,
+        "q_limits": model.q_limits,
+    }
+    return {"line": line, "json": fields}
 
 
 def _exit_on_failures(failed: list, out, what: tuple[str, str]) -> None:

@@ -344,6 +344,14 @@ def test_screen_says_a_cct_not_converged_in_the_run_s_end(tmp_path, monkeypatch)
     got = {(r["bus"], r["far_bus"]): r for r in rows}
     assert got[1, 10]["run_end_check"]["t_separation_s"] > 6
     assert all("stiff_step_s" in r for r in rows if r["status"] == "ok")
+    # each row names the searches' settings, as the text's settings line (round 41: none)
+    assert rows[0]["settings"] == {
+        "tol_s": 0.001,
+        "t_max_s": 0.5,  # screen's default search limit
+        "step_s": 0.005,
+        "conventions": "ieee",
+        "q_limits": True,
+    }
 
 
 def test_sweep_cct_says_a_cct_not_converged_in_the_run_s_end(tmp_path, monkeypatch):
