@@ -51,6 +51,10 @@ INTER_AREA_MAX_HZ = 1.0
 COMMON_SHARE = 0.9
 GAP_RATIO = 1.3  # consecutive EM frequencies this far apart: time-scale gap
 SIGNIFICANT = 0.2  # |speed shape| (of the largest) to count in a coherent group
+#: how far (degrees) from the largest speed component, or from its opposite, a component
+#: may lie and still swing with it, or against it (`ModalAnalysis.groups`); between: in
+#: quadrature, on neither side
+QUADRATURE_DEG = 60.0
 STATE_GROUPS = (
     *("rotor angle/speed", "rotor flux", "exciter", "pss", "governor", "converter"),
     "motor",
@@ -119,12 +123,26 @@ class ModalAnalysis:
     def groups(self, i: int) -> tuple[list[int], list[int]]:
         """Coherent groups of mode i: machine numbers swinging with the largest speed
         component and those swinging against it (components >= SIGNIFICANT of the largest;
-        in phase = within 90 degrees), each sorted by decreasing amplitude."""
+        with it = within QUADRATURE_DEG degrees of it, against it = within QUADRATURE_DEG
+        of its opposite), each sorted by decreasing amplitude; the others are in
+        quadrature (`quadrature`), on neither side."""
         s = self.speed_shape[:, i]
         big = np.abs(s) >= SIGNIFICANT
         order = np.argsort(-np.abs(s))
         sel = lambda m: [int(self.machines[k]) for k in order if big[k] and m[k]]  # noqa: E731
-        return sel(s.real >= 0), sel(s.real < 0)
+        angle = np.degrees(np.abs(np.angle(s)))
+        return sel(angle <= QUADRATURE_DEG), sel(angle >= 180 - QUADRATURE_DEG)
+
+    def quadrature(self, i: int) -> list[int]:
+        """The machines of mode i whose speed component (>= SIGNIFICANT of the largest) is
+        more than QUADRATURE_DEG degrees from both the largest component and its opposite:
+        in neither coherent group (round 41: Kundur's 1.157 Hz local mode without PSS read
+        "G2 G3 vs G1 G4", G3 at 85 degrees and G4 at -96 sorted by the sign of a cosine,
+        where the participation says G2 against G1), by decreasing amplitude."""
+        s = self.speed_shape[:, i]
+        angle = np.degrees(np.abs(np.angle(s)))
+        off = (np.abs(s) >= SIGNIFICANT) & (angle > QUADRATURE_DEG) & (angle < 180 - QUADRATURE_DEG)
+        return [int(self.machines[k]) for k in np.argsort(-np.abs(s)) if off[k]]
 
     def area_groups(self, i: int) -> tuple[list[int], list[int]]:
         """Areas (1-based labels) whose momentum, M s summed over the area, is at least
@@ -180,12 +198,16 @@ class ModalAnalysis:
             against = " ".join(named(k) for k in g2[:6]) or (
                 "none (all in phase: the system's frequency)"
                 if self.kind[i] == "common"
+                else "none"
+                if self.quadrature(i)
                 else "others (each < 0.2)"
             )
             areas = f"  [areas {self.area_sides(i)}]" if self.kind[i] == "inter-area" else ""
+            quad = " ".join(named(k) for k in self.quadrature(i)[:6])
+            quad = f" (in quadrature: {quad})" if quad else ""
             lines.append(
                 f"{i:5d} {self.freq_hz[i]:7.3f} {self.damping[i]:8.4f}  {self.kind[i]:<10} "
-                f"{' '.join(named(k) for k in g1[:6])} vs {against}{areas}"
+                f"{' '.join(named(k) for k in g1[:6])} vs {against}{quad}{areas}"
                 + ("  UNSTABLE" if self.damping[i] < 0 else "")
             )
         shown = np.concatenate([em, self.rotor_modes_above_band()])
@@ -335,6 +357,7 @@ class ModalAnalysis:
                 dominant_machines=self.dominant_machines(i),
                 group=g1,
                 against=g2,
+                quadrature=self.quadrature(i),
                 areas=a1,
                 areas_against=a2,
                 area_momentum_fraction=float(self.eta[i]),

@@ -1310,7 +1310,7 @@ def _check_settings(fault: LineFault, o: SearchOptions, t_hi, t_end) -> None:
         given = (
             ""
             if o.t_hi is not None
-            else f" (t_hi not given: min({T_HI:g}, t_max); give one above t_lo)"
+            else f" (t_hi not given: its default, min({T_HI:g}, t_max); give one above t_lo)"
         )
         raise InputError(
             "CCT search bounds need 0 <= t_lo < t_hi <= t_max, got "

@@ -166,9 +166,12 @@ def _file_stem(stem) -> str:
     return stem
 
 
-def _nothing_against(kind: str) -> str:
-    """The report's word for a mode without machines swinging against its largest."""
-    return "none, all in phase" if kind == "common" else "others, each < 0.2"
+def _nothing_against(kind: str, quadrature: bool = False) -> str:
+    """The report's word for a mode without machines swinging against its largest (one
+    with machines in quadrature: none, they are named)."""
+    if kind == "common":
+        return "none, all in phase"
+    return "none" if quadrature else "others, each < 0.2"
 
 
 def _machines(numbers, most: int = 8, none: str = "-", name=None) -> str:
@@ -274,13 +277,16 @@ def report_markdown(
     for i in em[np.argsort(ma.freq_hz[em])]:
         lam = ma.eigenvalues[i]
         g1, g2 = ma.groups(i)
+        quad = ma.quadrature(i)
         bus, r = best_esd(st, i)
         lines.append(
             f"| {i} | {lam.real:.4f} ± j{lam.imag:.4f} | {ma.freq_hz[i]:.4f} | "
             f"{ma.damping[i]:.4f} | {ma.kind[i]} | {ma.eta[i]:.2f} | {ma.area_sides(i)} | "
             f"{_machines(ma.dominant_machines(i), name=named)} | "
             f"{_machines(g1, name=named)} | "
-            f"{_machines(g2, none=_nothing_against(ma.kind[i]), name=named)} | "
+            f"{_machines(g2, none=_nothing_against(ma.kind[i], bool(quad)), name=named)}"
+            + (f" (in quadrature: {_machines(quad, name=named)})" if quad else "")
+            + " | "
             f"{bus} ({r:.2e}) |"
         )
     lines += [
@@ -291,8 +297,9 @@ def report_markdown(
         "0.2 of the largest area's, in phase with it vs against it. "
         "Dominant machines: participation at least half the largest machine's "
         "(states and controls of a machine summed). Groups: speed mode-shape components "
-        "of at least 0.2 of the largest, in phase (within 90 degrees) with it or against "
-        "it; 'others, each < 0.2' when the machines swinging against it each move less "
+        "of at least 0.2 of the largest, within 60 degrees of it (together) or of its "
+        "opposite (against), the others 'in quadrature', on neither side; "
+        "'others, each < 0.2' when the machines swinging against it each move less "
         "(a single machine against the system, or a heavy area against a light one); "
         "'none, all in phase' for a common mode, the centre of inertia itself swinging "
         f"(the centre of inertia's share of the mode's kinetic energy above {COMMON_SHARE:g}: "

@@ -513,3 +513,20 @@ def test_every_unstable_mode_is_said_in_every_output(tmp_path):
     text = CliRunner().invoke(main, ["eig", "kundur", "--no-pss"]).stdout
     assert "UNSTABLE\n" in text and "(marked above)" in text
     assert "small-signal stable" in CliRunner().invoke(main, ["eig", "kundur"]).stdout
+
+
+def test_a_machine_in_quadrature_is_on_neither_side_of_a_mode():
+    """Round 41: Kundur's 1.157 Hz local mode without PSS read "G2 G3 vs G1 G4", G3 at 85
+    degrees and G4 at -96 from G2 sorted by the sign of a cosine, where the participation
+    says G2 against G1.  Components more than 60 degrees from both sides are named in
+    quadrature, on neither side (text and --json)."""
+    d = json.loads(CliRunner().invoke(main, ["eig", "kundur", "--no-pss", "--json"]).stdout)
+    mode = min(
+        (m for m in d["modes"] if m["kind"] == "local"), key=lambda m: abs(m["freq_hz"] - 1.157)
+    )
+    assert (mode["group"], mode["against"], sorted(mode["quadrature"])) == ([2], [1], [3, 4])
+    for k in mode["group"] + mode["against"]:
+        angle = abs(mode["speed_shape"][f"G{k}"][1])
+        assert angle <= 60 or angle >= 120
+    text = CliRunner().invoke(main, ["eig", "kundur", "--no-pss"]).stdout
+    assert "G2 (bus 2) vs G1 (bus 1) (in quadrature: G4 (bus 12) G3 (bus 11))" in text

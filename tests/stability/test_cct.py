@@ -569,7 +569,8 @@ def test_a_search_bound_not_given_is_named_as_the_default():
     a t_hi the caller never gave."""
     from stabctl.dynamics.driver import Simulator
 
-    with pytest.raises(InputError, match=r"t_hi 0\.1 \(t_hi not given: min\(0\.1, t_max\)"):
+    given = r"t_hi 0\.1 \(t_hi not given: its default, min\(0\.1, t_max\)"
+    with pytest.raises(InputError, match=given):
         critical_clearing_time(
             Simulator(load_case("kundur")), LineFault(3, 101), SearchOptions(t_lo=0.2)
         )
