@@ -790,7 +790,10 @@ def _given(value: Any) -> Any:
     if not isinstance(value, _Warned):
         return value
     for category, text in value.said:
-        warnings.warn(text, category, stacklevel=2)
+        try:
+            warnings.warn(text, category, stacklevel=2)
+        except TypeError:  # a category whose constructor takes more than the text
+            warnings.warn(f"{category.__name__}: {text}", UserWarning, stacklevel=2)
     return value.result
 
 
