@@ -360,7 +360,7 @@ def import_probes():
             "ieeest_lead",
             "    102 'SEXS' 1 0.4 5.0 20.0 1.0 -50.0 50.0 /\n"
             "    102 'IEEEST' 1 1 0 0 0 0 0 0 0.0 5 0 0 0.02 1.65 1.65 100 0.1 -0.1 0 0 /\n",
-            r"lead T1 without lag",
+            r"T2 = 0, T1 = 5: a lead without its lag",  # round 41: in the record's fields
         ),
     )
 
