@@ -29,7 +29,7 @@ def _killed_maker(tmp_path, code: str) -> str:
     )
     path = os.path.join(tmp_path, child.stdout.readline().strip())
     child.send_signal(signal.SIGKILL)
-    child.wait()
+    child.communicate()  # reaps it and closes its pipe
     return path
 
 

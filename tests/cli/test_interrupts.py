@@ -150,6 +150,7 @@ def test_sigkill_of_a_sweep_leaves_no_worker_running(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+        proc.communicate()  # reaps it and closes its pipes
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc: Linux")
