@@ -120,7 +120,6 @@ from stabctl.case.system import SWITCHED_GROUPS
 from stabctl.errors import CaseError, InputError, advice
 from stabctl.io.andes import _andes, _andes_log, _andes_said
 from stabctl.io.dyr import (
-    AC8B_UNMODELLED,
     CONVENTIONS,
     DYR_MODELS,
     DyrRecord,
@@ -150,6 +149,7 @@ from stabctl.models.converters import (
 )
 from stabctl.models.converters.rules import RULES as CONVERTER_RULES
 from stabctl.models.converters.rules import SHARES, share_sums
+from stabctl.models.exciters import ac8b
 from stabctl.models.machines import MACHINE
 from stabctl.models.motors import MOTOR
 from stabctl.models.shafts import SHAFT
@@ -887,8 +887,7 @@ def _file_inputs(path: Path, ss) -> _Given:
                         + f" (ANDES would run with its default {p.default!r})"
                     )
                 if (model, name) in _UNREAD:  # never "run at ANDES's default": not run
-                    if not empty and v != AC8B_UNMODELLED[name]:
-                        why = f"{name} = {v:g} has no effect: not modelled (ANDES neither)"
+                    if not empty and (why := ac8b.without_effect(name, v)):
                         given.changed.append((sheet, str(row.get("idx")), why))
                     continue
                 if empty:
@@ -928,8 +927,8 @@ def _file_inputs(path: Path, ss) -> _Given:
 
 
 #: (model, parameter) of the ANDES models stabctl maps that no run reads (a given value is
-#: named by the mapping, `stabctl.io.dyr.AC8B_UNMODELLED`)
-_UNREAD = frozenset(("AC8B", name) for name in AC8B_UNMODELLED)
+#: named by the mapping, `stabctl.models.exciters.ac8b.without_effect`)
+_UNREAD = frozenset(("AC8B", name) for name in ac8b.UNMODELLED)
 
 #: ANDES groups of which a machine (a stabiliser: an exciter) has one device at most, and
 #: the parameter linking a device to it

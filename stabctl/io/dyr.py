@@ -37,7 +37,7 @@ from stabctl.io.inputs import case_text, input_file, plain_float
 from stabctl.io.provenance import Origin, Written
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
-from stabctl.models.exciters import EXCITER
+from stabctl.models.exciters import EXCITER, ac8b
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
 from stabctl.models.pss import PSS
@@ -991,18 +991,13 @@ def _esst1a(rec, gen, andes=False, psse=False):
     return _exc_row(rec, gen)
 
 
-#: AC8B's exciter field-voltage limits, not modelled (IEEE 421.5 AC8B; ANDES 2.0's ac8b.py
-#: leaves them out too): their values of no limit (ANDES's defaults)
-AC8B_UNMODELLED = {"VFEMAX": 999.0, "VEMIN": -999.0}
-
-
 def _ac8b(rec, gen):
     """AC8B as declared (type 10), a VFEMAX or VEMIN that limits anything named as read
-    without effect (round 41: VFEMAX 1 and VEMIN 0.5 ran as 999 and -999, no word)."""
+    without effect (`stabctl.models.exciters.ac8b.without_effect`)."""
     v = DYR_MODELS["AC8B"].values(rec.params)
-    for name, none in AC8B_UNMODELLED.items():
-        if v[name] != none:
-            _read_as(rec, f"{name} = {v[name]:g} has no effect: not modelled (as {none:g})")
+    for name in ac8b.UNMODELLED:
+        if said := ac8b.without_effect(name, v[name]):
+            _read_as(rec, said)
     return _exc_row(rec, gen)
 
 

@@ -733,17 +733,7 @@ def _longer_run(probe: _Probes, k: int) -> tuple[float, float | None]:
     """The probe cleared at k run to t_end + T_AFTER_FAULT (counted): (that end, when it
     separated, s, or None: stable)."""
     longer = probe.t_end + T_AFTER_FAULT
-    t_clear = _lattice(k, probe.o.tol)
-    run = functools.partial(
-        probe.sim.run,
-        probe.fault.events(t_clear),
-        longer,
-        h=probe.h,
-        separation_limit=probe.o.separation_limit,
-        stop_at_separation=True,
-        **probe.extra,
-    )
-    res, diverged = _outcome(probe.fault, t_clear, run)
+    res, diverged = probe._whole(_lattice(k, probe.o.tol), probe.h, t_end=longer)
     probe.reruns += 1
     probe.n_steps += _steps(res)
     if not diverged and probe._said(res):
@@ -975,21 +965,26 @@ class _Probes:
         not)."""
         return max(j for j, ok in self.verdicts.items() if ok and j < k)
 
-    def _whole(self, t_clear: float, step: float) -> tuple[SimulationResult, bool]:
+    def _whole(
+        self, t_clear: float, step: float, t_end: float | None = None
+    ) -> tuple[SimulationResult, bool]:
         """A whole run (to t_end or its stop), with its early verdict's monitor when the
-        search ends runs early."""
-        extra = self.extra
-        if self.early:
+        search ends runs early; given `t_end` (s, a run longer than the search's,
+        `_longer_run`), without early verdicts and stopped at separation."""
+        extra, stop = self.extra, self.stop
+        if t_end is not None:
+            stop = True
+        elif self.early:
             t_cl, case = self.fault.t_fault + t_clear, self.sim.case
             monitor = EarlyVerdict(t_cl, self.t_end, case.freq_hz, self.o.separation_limit)
             extra = {**extra, "monitor": monitor}
         run = functools.partial(
             self.sim.run,
             self.fault.events(t_clear),
-            self.t_end,
+            self.t_end if t_end is None else t_end,
             h=step,
             separation_limit=self.o.separation_limit,
-            stop_at_separation=self.stop,
+            stop_at_separation=stop,
             **extra,
         )
         return _outcome(self.fault, t_clear, run)

@@ -44,6 +44,20 @@ EXCITER_COLUMNS = "quadratic"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TA", "TA"), ("TE", "TE"))
 
+#: AC8B's exciter field-voltage limits, not modelled (IEEE 421.5 AC8B; ANDES 2.0's ac8b.py
+#: leaves them out too): their values of no limit (ANDES's defaults)
+UNMODELLED = {"VFEMAX": 999.0, "VEMIN": -999.0}
+
+
+def without_effect(name: str, value: float) -> str:
+    """What an import says of AC8B's `name` (a key of UNMODELLED) given as `value`: "" at
+    its value of no limit, else that it has no effect (round 41: VFEMAX 1 and VEMIN 0.5
+    ran as 999 and -999 without a word).  Both import routes say it (`stabctl.io.dyr`,
+    `stabctl.io.andes_case`)."""
+    none = UNMODELLED[name]
+    return "" if value == none else f"{name} = {value:g} has no effect: not modelled (as {none:g})"
+
+
 DYR = (
     # AC8B -> type 10 (IEEE 421.5 AC8B as PowerWorld's AC8B record and ANDES 2.0
     # ac8b.py): ANDES's parameter names and order; VFEMAX and VEMIN, which ANDES's
