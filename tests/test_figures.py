@@ -82,6 +82,38 @@ def test_a_screening_of_some_buses_maps_them_readably(kept):
     assert sorted(named) == sorted(int(r["bus"]) for r in every[:10])  # the ten most critical
 
 
+def test_a_screening_map_draws_the_branch_faults_and_their_verdicts(kept):
+    """Round 42: `screen --lines --plot` drew the bus faults only, so WECC-179's 13 N-1
+    insecure lines and its islanding trips showed nowhere on the map.  Each branch fault
+    is now a square at its branch's middle (the mean of its two buses' places), on the
+    bus faults' colour scale, robust ones open and N-1 insecure ones red crosses, each
+    kind named in the legend, the title counting them."""
+    from stabctl.plotting.layout import spectral_layout
+
+    case = stabctl.load_case("kundur")
+    rows = [
+        {"bus": 3, "far_bus": None, "verdict": "cct", "cct_s": 0.238},
+        {"bus": 3, "far_bus": 101, "verdict": "cct", "cct_s": 0.154},
+        {"bus": 13, "far_bus": 120, "verdict": "above t_max", "t_max_s": 0.5},
+        {"bus": 2, "far_bus": 20, "verdict": "N-1 insecure"},
+    ]
+    figures.screening_map(case, rows, "unused.png")
+    ax = kept[-1].axes[0]
+    assert "and of 3 branch fault(s) (squares, mid-branch)" in ax.get_title()
+    assert legend_texts(ax) == [
+        "not screened",
+        "CCT above the search limit 0.5 s (robust) (branch fault)",
+        "N-1 insecure: unstable even when cleared at once (CCT 0) (branch fault)",
+    ]
+    xy = spectral_layout(case)
+    red = next(c for c in ax.collections if c.get_label().startswith("N-1 insecure"))
+    np.testing.assert_allclose(red.get_offsets()[0], xy[case.bus_indices([2, 20])].mean(axis=0))
+    coloured = [c for c in ax.collections if c.get_array() is not None and len(c.get_array())]
+    cycles = sorted(float(v) for c in coloured for v in c.get_array())
+    np.testing.assert_allclose(cycles, [0.154 * 60, 0.238 * 60])  # one scale for both
+    assert {c.norm.vmin for c in coloured} == {0.154 * 60}
+
+
 @pytest.mark.parametrize("suffix", ["png", "pdf", "svg"])
 def test_a_figure_written_twice_is_the_same_bytes(suffix, tmp_path, monkeypatch):
     """`simulate --plot r.pdf` (or .svg, and `screen --plot s.svg`) differed from run to

@@ -235,7 +235,7 @@ def islanding_lines(case, islanded, tripped=(), timed: bool = True) -> list[str]
             P, Q = entry["load_shed_pu"]
             lines.append(
                 f"{at}bus(es) {entry['buses']} islanded from every generator: de-energised, "
-                f"load shed {P * case.base_mva:.1f} MW, {Q * case.base_mva:.1f} Mvar"
+                + _shed(P * case.base_mva, Q * case.base_mva)
             )
         elif "buses" in entry:
             lines.append(
@@ -322,6 +322,14 @@ def q_limits_text(on: bool) -> str:
     return "PV Q limits held" if on else "no PV Q limits (--no-q-limits)"
 
 
+#: said of a CCT searched with storage none of whose devices switched in any of the
+#: search's runs (`CCTResult.storage_acted`)
+NO_DEVICE_ACTED = (
+    "note: no storage device switched in any of the search's runs (their deadband or "
+    "voltage gate kept them idle): this CCT is the one without storage"
+)
+
+
 def print_cct(case, rating, d) -> None:
     """Print the `cct` result as text.
 
@@ -380,6 +388,8 @@ def print_cct(case, rating, d) -> None:
         )
     if rc := d.get("run_end_check"):
         click.echo(run_end_line(rc, d["cct_s"], n))
+    if d.get("storage_acted") is False:
+        click.echo(NO_DEVICE_ACTED)
     if "critical_group" in d:
         click.echo(critical_group_line(case, d["critical_group"], n))
     for line in islanding_lines(case, d.get("islanded", []), timed=False):
@@ -467,6 +477,8 @@ def sweep_line(key, rec) -> str:
     )
     if (rc := r.get("run_end_check")) and rc.get("t_separation_s") is not None:
         line += f"\n{'':<34} {run_end_line(rc, r['cct_s'], n)}"  # round 41: said by cct only
+    if r.get("storage_acted") is False:
+        line += f"\n{'':<34} {NO_DEVICE_ACTED}"
     return line
 
 
@@ -537,6 +549,26 @@ def run_counts(ran: int, reused: int, out) -> str:
     return f"{ran} run now, {reused} already in {out}"
 
 
+def _shed(p_mw: float, q_mvar: float) -> str:
+    """What an island of de-energised buses loses: its load shed, or (negative load: net
+    generation written as load) the infeed lost (round 42: bus 72 of WECC-179 said "load
+    shed -1525.0 MW")."""
+    if p_mw >= 0:
+        return f"load shed {p_mw:.1f} MW, {q_mvar:.1f} Mvar"
+    return f"infeed lost {-p_mw:.1f} MW, {-q_mvar:.1f} Mvar (negative load)"
+
+
+def _islanding_counts(rows: list[dict], key: str, what: str, why: str, sep: str = "") -> str:
+    """The screening summary's count of the faults whose rows name islanded `what` under
+    `key`, and of those (distinct) in all (round 42: a row islanding two machines was
+    counted as one "island machines"); "" when a later part (`sep` given) counts none."""
+    faults = [r[key] for r in rows if r.get(key)]
+    if not faults and sep:
+        return ""
+    n = len({x for names in faults for x in names})
+    return f"{sep}{len(faults)} fault(s) island {what} ({n} in all; {why})"
+
+
 def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
     """Print the `screen` table, one row per fault in the given order.
 
@@ -595,16 +627,19 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
             again = "with `stabctl cct` and a later --tf"
             click.echo(f"{where} {run_end_line(rc, r['cct_s'], n, again)}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
-    n_lost = sum(bool(r.get("islanded_machines")) for r in rows)
     n_off = sum(bool(r.get("end_concerns")) for r in rows)
     ran = sum(bool(r.get("run_now")) for r in rows)
     reused = "" if out is None else f"{run_counts(ran, len(rows) - ran, out)}; "
     click.echo(
         f"{len(rows)} fault(s): {reused}{counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
         f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
-        f"{counts['failed']} failed; {sum(bool(r.get('islanded')) for r in rows)} island "
-        "load buses (their load shed, counted in the verdicts above)"
-        + (f", {n_lost} island machines (lost; the verdicts judge the rest)" if n_lost else "")
+        f"{counts['failed']} failed; "
+        + _islanding_counts(
+            rows, "islanded", "load bus(es)", "their load shed, counted in the verdicts above"
+        )
+        + _islanding_counts(
+            rows, "islanded_machines", "machine(s)", "lost; the verdicts judge the rest", ", "
+        )
         + (
             f"; {n_off} stable by the angle criterion ending off a normal operating point "
             f"(below {END_VOLTAGE_PU:g} pu or beyond +-{END_FREQUENCY_HZ:g} Hz: see their rows)"

@@ -499,7 +499,10 @@ def sweep_cct(
     "JSON lines, one per finished search (rerunning resumes) [default: "
     "screening_<CASE>.jsonl, CASE's file name without .json].",
 )
-@plot_option("network map with buses coloured by CCT")
+@plot_option(
+    "network map: bus faults (circles) and branch faults (squares, mid-branch) coloured by "
+    "CCT, robust, N-1 insecure and failed ones marked"
+)
 @parallel_options
 @click.option("--retry-failed", is_flag=True, help="Rerun the searches recorded as failed.")
 @search_option

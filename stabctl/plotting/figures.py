@@ -592,11 +592,27 @@ LABEL_ALL, SUBSET_ZOOM = 40, 0.25
 
 def screening_map(case, rows, path: Path) -> None:
     """Network drawn with `stabctl.plotting.layout.spectral_layout`, each bus coloured by the CCT
-    of a fault there (open circles: CCT above the search limit, a robust fault; grey
-    crosses: failed search), with a legend; bus numbers on the most critical ones.  A
-    screening of some buses only (``stabctl screen --buses``) shows the others as small grey
-    points, labels every screened bus when they are at most LABEL_ALL, zooms to them when
-    they are under SUBSET_ZOOM of the buses, and says "k of n buses" in its title."""
+    of a fault there (circles) and each branch fault by its CCT at its branch's middle
+    (squares; round 42: branch faults were left off the map, their N-1 insecure verdicts
+    and islanding trips shown nowhere), on one colour scale; open markers: CCT above the
+    search limit (robust); red crosses: N-1 insecure (CCT 0); grey crosses: failed search;
+    a legend; bus numbers on the most critical buses.  A screening of some buses only
+    (``stabctl screen --buses``) shows the others as small grey points, labels every
+    screened bus when they are at most LABEL_ALL, zooms to the screened faults when they
+    are under SUBSET_ZOOM of the buses, and says "k of n buses" in its title.
+
+    Parameters
+    ----------
+    case : Case
+        The case screened.
+    rows : list of dict
+        The screening's rows (`stabctl.stability.screening`): ``bus``, ``far_bus`` (None:
+        a bus fault), ``verdict``, ``cct_s`` (s), ``t_max_s`` (s, robust rows).
+    path : Path
+        The figure's file.
+    """
+    from matplotlib.colors import Normalize
+
     from stabctl.plotting.layout import spectral_layout
 
     xy = spectral_layout(case)
@@ -604,63 +620,73 @@ def screening_map(case, rows, path: Path) -> None:
     f, t = case.bus_indices(case.branches.from_bus), case.bus_indices(case.branches.to_bus)
     for a, b in zip(f, t):
         ax.plot(xy[[a, b], 0], xy[[a, b], 1], color="0.8", lw=0.7, zorder=1)
-    bus_rows = {r["bus"]: r for r in rows if r["far_bus"] is None}
-    idx = case.bus_indices(list(bus_rows))
+    bus_rows = [r for r in rows if r["far_bus"] is None]
+    branch_rows = [r for r in rows if r["far_bus"] is not None]
+    idx = case.bus_indices([r["bus"] for r in bus_rows])
+    ends = [case.bus_indices([r["bus"], r["far_bus"]]) for r in branch_rows]
+    mid = np.array([xy[e].mean(axis=0) for e in ends]).reshape(-1, 2)
     subset = len(idx) < case.n_bus
     if subset:
         rest = np.setdiff1d(np.arange(case.n_bus), idx)
         ax.scatter(xy[rest, 0], xy[rest, 1], c="0.6", s=4, zorder=1, label="not screened")
-    cct = np.array([r.get("cct_s", np.nan) for r in bus_rows.values()])
-    ok = np.isfinite(cct)
-    sc = ax.scatter(
-        xy[idx[ok], 0],
-        xy[idx[ok], 1],
-        c=cct[ok] * case.freq_hz,
-        cmap="RdYlGn",
-        s=40,
-        zorder=2,
-        edgecolors="k",
-        linewidths=0.3,
-    )
-    above = np.array([r.get("verdict") == "above t_max" for r in bus_rows.values()], bool)
-    if above.any():
-        t_max = max(r["t_max_s"] for r in bus_rows.values() if r.get("verdict") == "above t_max")
-        ax.scatter(
-            xy[idx[above], 0],
-            xy[idx[above], 1],
-            facecolors="none",
-            edgecolors="darkgreen",
-            s=40,
-            zorder=2,
-            label=f"CCT above the search limit {t_max:g} s (robust)",
-        )
-    failed = ~ok & ~above
-    if failed.any():
-        ax.scatter(
-            xy[idx[failed], 0],
-            xy[idx[failed], 1],
-            c="0.5",
-            s=40,
-            zorder=2,
-            marker="x",
-            label="search failed (no verdict)",
-        )
-    if above.any() or failed.any() or subset:
+    ccts = [r["cct_s"] for r in rows if r.get("verdict") == "cct"] or [0.0]
+    norm = Normalize(min(ccts) * case.freq_hz, max(ccts) * case.freq_hz)
+    sc = _verdict_markers(ax, case, xy[idx], bus_rows, norm, "o", 40, "")
+    _verdict_markers(ax, case, mid, branch_rows, norm, "s", 22, " (branch fault)")
+    if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="lower right", fontsize=8)
+    cct = np.array([r["cct_s"] if r.get("verdict") == "cct" else np.inf for r in bus_rows])
     labelled = len(idx) if len(idx) <= LABEL_ALL else 10
-    zoom = subset and len(idx) < SUBSET_ZOOM * case.n_bus
-    shown = xy[idx] if zoom else xy
-    order = np.argsort(np.where(ok, cct, np.inf))[:labelled]
+    screened = np.vstack([xy[idx], mid])
+    zoom = subset and len(screened) and len(screened) < SUBSET_ZOOM * case.n_bus
+    shown = screened if zoom else xy
+    order = np.argsort(cct, kind="stable")[:labelled]
     for at, names in _label_groups(xy[idx[order]], case.buses.number[idx[order]], shown):
         ax.annotate(names, at, fontsize=7, xytext=(3, 3), textcoords="offset points")
-    fig.colorbar(sc, ax=ax, label="CCT of a bus fault (cycles)")
+    fig.colorbar(sc, ax=ax, label="CCT of the fault (cycles)")
     where = f"each of {len(idx)} of {case.n_bus} buses" if subset else "each bus"
-    ax.set(title=f"{case.name}: critical clearing time of a fault at {where}", xticks=[], yticks=[])
+    title = f"{case.name}: critical clearing time of a fault at {where}"
+    if branch_rows:
+        title += f"\nand of {len(branch_rows)} branch fault(s) (squares, mid-branch)"
+    ax.set(title=title, xticks=[], yticks=[])
     if zoom:
-        lo, hi = xy[idx].min(axis=0), xy[idx].max(axis=0)
+        lo, hi = screened.min(axis=0), screened.max(axis=0)
         pad = 0.15 * np.maximum(hi - lo, 0.05 * np.ptp(xy, axis=0))
         ax.set(xlim=(lo[0] - pad[0], hi[0] + pad[0]), ylim=(lo[1] - pad[1], hi[1] + pad[1]))
     save_figure(fig, path)
+
+
+def _verdict_markers(ax, case, at, rows, norm, marker, size, what):
+    """The screening map's markers of `rows` at positions `at` (n, 2): CCTs coloured on
+    `norm` (cycles), robust open, N-1 insecure red crosses, failed grey crosses, each
+    kind in the legend once with `what` after it; returns the CCTs' scatter."""
+    verdicts = np.array([r.get("verdict") for r in rows], dtype=object)
+    kinds = {"cct": verdicts == "cct", "above": verdicts == "above t_max"}
+    kinds["insecure"] = verdicts == "N-1 insecure"
+    kinds["failed"] = ~(kinds["cct"] | kinds["above"] | kinds["insecure"])
+    ok = kinds["cct"]
+    cct = np.array([r["cct_s"] * case.freq_hz for r, k in zip(rows, ok) if k])
+    sc = ax.scatter(
+        at[ok, 0], at[ok, 1], c=cct, cmap="RdYlGn", norm=norm, s=size, zorder=2,
+        marker=marker, edgecolors="k", linewidths=0.3,
+    )  # fmt: skip
+    if kinds["above"].any():
+        t_max = max(r["t_max_s"] for r, k in zip(rows, kinds["above"]) if k)
+        ax.scatter(
+            at[kinds["above"], 0], at[kinds["above"], 1], facecolors="none",
+            edgecolors="darkgreen", s=size, zorder=2, marker=marker,
+            label=f"CCT above the search limit {t_max:g} s (robust){what}",
+        )  # fmt: skip
+    for kind, color, label in (
+        ("insecure", "red", "N-1 insecure: unstable even when cleared at once (CCT 0)"),
+        ("failed", "0.5", "search failed (no verdict)"),
+    ):
+        if kinds[kind].any():
+            ax.scatter(
+                at[kinds[kind], 0], at[kinds[kind], 1], c=color, s=size, zorder=3,
+                marker="x", label=label + what,
+            )  # fmt: skip
+    return sc
 
 
 #: buses closer than this fraction of the drawing's extent share one label (`_label_groups`)

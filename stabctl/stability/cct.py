@@ -356,6 +356,10 @@ class CCTResult:
     #: cleared at the CCT separated in it, s, or None: it stayed stable); None: the
     #: unstable end separated early enough that the end was not in question
     run_end_check: tuple[float, float | None] | None = None
+    #: with storage, whether any device switched in any of the search's runs (False: the
+    #: CCT is the one without storage, round 42: a gate of 1.5 pu or a 5 Hz deadband
+    #: printed the CCT without storage as the one with it); None: no storage
+    storage_acted: bool | None = None
 
     @property
     def numerical_error_s(self) -> float | None:
@@ -413,6 +417,7 @@ class CCTResult:
                 if self.run_end_check is None
                 else dict(zip(("t_end_s", "t_separation_s"), self.run_end_check))
             ),
+            "storage_acted": self.storage_acted,
             "probes": [[t, ok] for t, ok in self.probes],
             "half_step_probes": [[t, ok] for t, ok in self.half_step_probes],
         }
@@ -700,6 +705,7 @@ def critical_clearing_time(
         resumed=probe.resumed,
         overturned=probe.overturned,
         run_end_check=run_end,
+        storage_acted=probe.storage_acted,
     )
 
 
@@ -858,6 +864,8 @@ class _Probes:
         self.crit = no_separation if o.criterion is None else o.criterion
         self.stop = o.criterion is None if o.stop_at_separation is None else o.stop_at_separation
         self.extra = {} if storage is None else {"storage": storage}
+        #: with storage, whether a device switched in any run so far (None: no storage)
+        self.storage_acted: bool | None = None if storage is None else False
         if o.criterion is None and getattr(sim, "takes_monitor", False):
             self.extra["voltages"] = False  # the default criterion reads the machines only
         self.early = o.early_stop and o.criterion is None and getattr(sim, "takes_monitor", False)
@@ -1022,6 +1030,9 @@ class _Probes:
         ok = not diverged and not dead and (verdict == "stable" if verdict else self._said(res))
         if record:
             self.probes[step].append((t_clear, ok))
+        if self.storage_acted is False:
+            devices = getattr(res, "meta", {}).get("storage", ())
+            self.storage_acted = any(d["switchings"] for d in devices)
         if not self.islanded:
             self.islanded.extend(res.meta.get("islanded", []))
         if step != self.h:

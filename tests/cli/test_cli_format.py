@@ -117,3 +117,19 @@ def test_a_relative_speed_rmse_never_formed_prints_as_a_dash(capsys):
     }
     _source_compare(src, {"raw": {"rel_rmse_mhz": {"mean": None}}})
     assert capsys.readouterr().out.splitlines()[-1] == "  raw      - / 19.8852 / 19.8831"
+
+
+def test_an_island_of_negative_load_says_its_infeed_lost_not_a_negative_load_shed():
+    """Round 42: WECC-179's bus 72 (load -1525 MW, generation written as load) islanded by
+    its line 72-74's trip was said "load shed -1525.0 MW, -50.0 Mvar"; the island's power
+    is its load in pu on the case's base (Kundur: 100 MVA)."""
+    from stabctl.cli.format import islanding_lines
+
+    case = load_case("kundur")
+    lost = {"t_s": 1.0, "buses": [72], "load_shed_pu": [-15.25, -0.5]}
+    shed = {"t_s": 1.0, "buses": [4], "load_shed_pu": [9.76, 1.0]}
+    assert islanding_lines(case, [lost, shed], timed=False) == [
+        "bus(es) [72] islanded from every generator: de-energised, infeed lost 1525.0 MW, "
+        "50.0 Mvar (negative load)",
+        "bus(es) [4] islanded from every generator: de-energised, load shed 976.0 MW, 100.0 Mvar",
+    ]

@@ -596,3 +596,31 @@ def test_an_insecure_fault_s_window_holds_beyond_the_run_s_end():
             + ["--tf", "20", "--json"],
         )
         assert json.loads(run.stdout)["stable"] is stable
+
+
+def test_a_cct_with_storage_none_of_whose_devices_switched_says_it_is_the_one_without(tmp_path):
+    """Round 42: `cct kundur --fault 3 --far-bus 101 --esd-pct 5 --v-gate 1.5` (no bus ever
+    above the gate, so no device may act) printed "storage 5 % ... CCT 0.154 s", the CCT
+    without storage (the paper's Case 1, 0.154 s), as the one with storage.  The search
+    now says whether a device switched in any of its runs: with the default gate (0.8 pu)
+    they do and the CCT rises (0.199 s); gated out, it is the CCT without storage, said so
+    by `cct` (text and --json) and `sweep-cct`."""
+    args = ["cct", "kundur", "--fault", "3", "--far-bus", "101"]
+    plain = json.loads(CliRunner().invoke(main, [*args, "--json"]).stdout)
+    acting = json.loads(CliRunner().invoke(main, [*args, "--esd-pct", "5", "--json"]).stdout)
+    gated = CliRunner().invoke(main, [*args, "--esd-pct", "5", "--v-gate", "1.5", "--json"])
+    gated = json.loads(gated.stdout)
+    assert plain["storage_acted"] is None and acting["storage_acted"] is True
+    assert gated["storage_acted"] is False and gated["cct_s"] == plain["cct_s"] == 0.154
+    assert acting["cct_s"] > plain["cct_s"]
+    text = CliRunner().invoke(main, [*args, "--esd-pct", "5", "--v-gate", "1.5"]).stdout
+    assert "note: no storage device switched in any of the search's runs" in text
+    assert "no storage device" not in CliRunner().invoke(main, [*args, "--esd-pct", "5"]).stdout
+    (tmp_path / "f.csv").write_text("bus,far_bus\n3,101\n")
+    sweep = CliRunner().invoke(
+        main,
+        ["sweep-cct", "kundur", "--faults", str(tmp_path / "f.csv"), "--esd-pct", "none,5"]
+        + ["--deadband-hz", "5", "--workers", "1", "--out", str(tmp_path / "s.jsonl")],
+    )
+    assert sweep.exit_code == 0, sweep.output
+    assert sweep.stdout.count("this CCT is the one without storage") == 1  # esd-5's line

@@ -193,7 +193,7 @@ def test_a_contingency_that_islands_a_load_bus_names_it_in_its_verdict(tmp_path,
     print_screening(load_case("kundur"), rows)
     text = capsys.readouterr().out
     assert "bus 3 line to 4        islands bus(es) [4] (their load shed)" in text
-    assert "1 N-1 insecure (CCT 0), 0 failed; 1 island load buses" in text
+    assert "1 N-1 insecure (CCT 0), 0 failed; 1 fault(s) island load bus(es) (1 in all;" in text
 
 
 def rest_after_trip_stable(sim, machine, t_clear):
@@ -258,7 +258,14 @@ def test_a_screening_names_the_generators_its_line_faults_island(tmp_path, capsy
         "judged):" in text
     )
     assert "bus 12 line to 120     islands machine(s) G4 (bus 12) with bus(es) [12]" in text
-    assert "2 island load buses (their load shed, counted in the verdicts above), 8 island " in text
+    # faults and distinct buses and machines apart (round 42: rows were called machines)
+    n_buses = len({b for r in rows for b in r["islanded"]})
+    n_machines = len({m for r in rows for m in r["islanded_machines"]})
+    assert n_machines == 4  # each of Kundur's machines by its step-up transformer's fault
+    assert (
+        f"2 fault(s) island load bus(es) ({n_buses} in all; their load shed, counted in the "
+        f"verdicts above), 8 fault(s) island machine(s) ({n_machines} in all; lost; " in text
+    )
 
 
 def test_a_robust_split_whose_rest_ends_off_a_normal_operating_point_says_so(tmp_path, capsys):
