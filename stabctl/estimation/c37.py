@@ -1015,13 +1015,18 @@ def split_frames(data: bytes, what: str = "C37.118.2 recording") -> list[bytes]:
     out, at = [], 0
     while at < len(data):
         if data[at] != 0xAA or at + 4 > len(data):
-            raise InputError(f"{what}: no frame SYNC at byte {at} (not a C37.118.2 recording)")
+            raise _no_sync(what, at)
         size = int.from_bytes(data[at + 2 : at + 4], "big")
         if size < 16 or at + size > len(data):
             raise InputError(f"{what}: frame at byte {at} cut short")
         out.append(data[at : at + size])
         at += size
     return out
+
+
+def _no_sync(what: str, at: int) -> InputError:
+    """The error of bytes `what` holding no frame SYNC (0xAA) at byte `at`."""
+    return InputError(f"{what}: no frame SYNC at byte {at} (not a C37.118.2 recording)")
 
 
 def frame_time(data: bytes, cfg2) -> float:
@@ -1300,7 +1305,12 @@ def recorded_frames(path) -> tuple:
         CFG-2 that changes the configuration, named by its place (the data frames before
         it) and the field that changed (`config_change`).
     """
-    frames = split_frames(Path(path).read_bytes(), f"C37.118.2 recording {path}")
+    what = f"C37.118.2 recording {path}"
+    with open(path, "rb") as fh:  # round 42: 200 MB of NUL bytes read whole (400 MiB) first
+        head = fh.read(4)
+    if head and head[0] != 0xAA:
+        raise _no_sync(what, 0)
+    frames = split_frames(Path(path).read_bytes(), what)
     if not frames:
         raise InputError(f"{path}: empty C37.118.2 recording")
     cfg2, data = read_config(frames[0], f"{path}: first frame"), []

@@ -369,6 +369,11 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     if path.suffix.lower() == ".json" and path.is_file():
         _check_json_layout(path)  # before ANDES reads another layout without sense
     ss = _load(path, dyr, said)
+    if not ss.Line.n:  # else named by the matrix reader: "the data defines no 'line' matrix"
+        raise CaseError(
+            f"{path.name}: no Line record (ANDES's lines and transformers): a network "
+            "without branches cannot be simulated"
+        )
     given = _file_inputs(path, ss)
     _corrections(path.name, ss)
     _set_up(ss, path, said, dyr)

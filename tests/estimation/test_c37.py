@@ -260,3 +260,22 @@ def test_a_stream_of_another_rate_than_its_configuration_is_refused(wecc_stream,
     c37.record(tmp_path / "twice.c37", cfg, twice)
     with pytest.raises(InputError, match=r"twice.c37: .*data frame 3 .*repeat"):
         c37.replay(tmp_path / "twice.c37", cfg)
+
+
+def test_a_recording_not_starting_with_a_sync_is_refused_before_it_is_read_whole(
+    tmp_path, monkeypatch
+):
+    """Round 42: 200 MB of NUL bytes given as a recording were read whole (about 400 MiB)
+    before "no frame SYNC at byte 0"; its first byte decides (C37.118.2-2011 6.2: every
+    frame starts with SYNC 0xAA), so the file is not read further."""
+    from pathlib import Path
+
+    junk = tmp_path / "zeros.c37"
+    junk.write_bytes(b"\x00" * 4096)
+
+    def whole(self):
+        raise AssertionError(f"{self} read whole")
+
+    monkeypatch.setattr(Path, "read_bytes", whole)
+    with pytest.raises(InputError, match=r"zeros\.c37: no frame SYNC at byte 0 \(not a C37"):
+        c37.recorded_frames(junk)

@@ -414,6 +414,22 @@ def test_a_json_file_not_in_andes_s_layout_is_named_for_what_it_is(tmp_path):
         read_andes_case(other)
 
 
+def test_an_andes_case_without_a_line_is_named_so(tmp_path):
+    """Round 42: an ANDES json of buses alone ended in "small: the data defines no 'line'
+    matrix", the wording of a PSTess matrix file; IEEE 14 without its Line sheet (its 20
+    branches, the transformers among them) is named for its lack of branches."""
+    import json
+
+    from stabctl.errors import CaseError
+
+    ieee14 = json.loads(Path(andes.get_case("ieee14/ieee14.json")).read_text())
+    assert len(ieee14["Line"]) == 20
+    bare = tmp_path / "bare.json"
+    bare.write_text(json.dumps({k: v for k, v in ieee14.items() if k != "Line"}))
+    with pytest.raises(CaseError, match=r"^bare.json: no Line record \(ANDES's lines and tr"):
+        read_andes_case(bare)
+
+
 def test_an_andes_json_giving_a_key_twice_is_refused(tmp_path):
     """ANDES's json reader keeps the last of a model given twice: the first's devices were
     left out without a word."""
