@@ -700,6 +700,26 @@ def _check_json_layout(path: Path) -> None:
                 f"{path.name}: key {key!r} holds {what}, not a list of device records: not "
                 f"an ANDES case ({_ANDES_JSON})"
             )
+        if key != "_config":
+            _check_texts(path, key, value)
+
+
+#: the longest text of a field of an ANDES json case read (a name or idx is a few tens of
+#: characters): round 42, a Bus idx of 266 million characters took 2 GB in ANDES's copies
+MAX_FIELD_TEXT = 1024
+
+
+def _check_texts(path: Path, key: str, rows: list[dict]) -> None:
+    """InputError for a field of `key`'s device records (`rows`) holding a text longer
+    than MAX_FIELD_TEXT characters, naming its row (1-based) and field, before ANDES
+    copies it."""
+    for k, row in enumerate(rows, 1):
+        for name, v in row.items():
+            if isinstance(v, str) and len(v) > MAX_FIELD_TEXT:
+                raise InputError(
+                    f"{path.name}: {key} row {k}: {name} holds a text of {len(v)} characters,"
+                    f" more than {MAX_FIELD_TEXT} (no name or parameter is so long): not read"
+                )
 
 
 def _json_kind(value) -> str:

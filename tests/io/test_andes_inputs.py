@@ -430,6 +430,26 @@ def test_an_andes_case_without_a_line_is_named_so(tmp_path):
         read_andes_case(bare)
 
 
+def test_an_andes_json_field_text_beyond_any_name_is_refused_before_andes_copies_it(
+    tmp_path, monkeypatch
+):
+    """Round 42: a Bus idx of 266 million characters (a 254 MB file, under the input cap)
+    took 2 GB in ANDES's copies before "no 'line' matrix"; a text of more than 1024
+    characters in a device record is refused naming its row and field, and ANDES never
+    reads the file."""
+    import json
+
+    from stabctl.io import andes_case
+
+    ieee14 = json.loads(Path(andes.get_case("ieee14/ieee14.json")).read_text())
+    ieee14["PQ"][2]["name"] = "x" * 1025
+    long = tmp_path / "long.json"
+    long.write_text(json.dumps(ieee14))
+    monkeypatch.setattr(andes_case, "_load", lambda *a: pytest.fail("ANDES read it"))
+    with pytest.raises(InputError, match=r"^long.json: PQ row 3: name holds a text of 1025 ch"):
+        read_andes_case(long)
+
+
 def test_an_andes_json_giving_a_key_twice_is_refused(tmp_path):
     """ANDES's json reader keeps the last of a model given twice: the first's devices were
     left out without a word."""
