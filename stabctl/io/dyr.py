@@ -700,6 +700,12 @@ def compensator_rows(records, generators) -> Compensators:
                 "var compensator's generator carries no real power (PG 0)"
             )
         v = model.values(rec.params)
+        for field, name in model.copy.items():
+            # the svc_con bounds, refused naming the record (round 42: a negative CSVGN1
+            # time constant was refused naming "svc_con row 1 (compensator 1)" only)
+            lo = SVC.param(field).lo
+            if lo is not None and v[name] < lo:
+                raise CaseError(f"{rec.label()}: {name} = {v[name]:g}: must be >= {lo:g}")
         row = {
             "number": len(out.rows) + 1,
             "bus": int(gen["bus"]),
@@ -1118,6 +1124,12 @@ def _ieeest(rec, gen):
     if ics == 0:
         raise _Unsupported("no input (ICS 0)")
     _no_gain(rec, v, "KS")
+    for name in ("T1", "T2", "T3", "T4"):
+        # refused here, by its own name: an empty first stage moves T3/T4 into pss_con's
+        # T1/T2, where the table's bound named T1 (round 42: "T1 = 0.0 (giving pss_con 'T1'
+        # = -0.5)" for T3 = -0.5)
+        if v[name] < 0:
+            raise CaseError(f"{rec.label()}: {name} = {v[name]:g}: must be >= 0 (a time constant)")
     KTw = v["KS"] * v["T5"]
     lead_lags = [(v[a], v[b]) for a, b in (("T1", "T2"), ("T3", "T4"))]
     stages = [(a, b) for a, b in lead_lags if a or b]

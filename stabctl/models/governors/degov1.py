@@ -33,7 +33,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, lag
-from stabctl.models.declaration import DyrModel, Param, states
+from stabctl.models.declaration import DyrModel, Limits, Param, states
 from stabctl.models.governors import degov
 from stabctl.models.governors.table import G, own
 
@@ -45,6 +45,9 @@ KINDS = {DEGOV1: "DEGOV1"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none, an absent
 #: lag drops its block
 NEEDS: tuple[str, ...] = ()
+#: the leads T3 (control box) and T4 (actuator) are time constants, >= 0: tg_con T3 and T4
+#: have no bound of their own (round 42: T3 = -0.018 and T4 = -5.1 were run as given)
+LIMITS = Limits("PSS/E Model Library DEGOV1: the leads T3, T4", nonnegative=("T3", "T4"))
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
 #: the torque limits TMAX, TMIN on the start-up torque
 ORDER_LIMITS = True

@@ -23,10 +23,11 @@ if TYPE_CHECKING:
 
 IEEEG1 = 3
 KINDS = {IEEEG1: "IEEEG1"}
-#: IEEEG1's steam chest time constant T4 >= 0 (PSS/E Model Library IEEEG1)
+#: IEEEG1's steam chest time constant T4 >= 0 (PSS/E Model Library IEEEG1), and its lead
+#: T2 (tg_con T3, which has no bound of its own; round 42: T2 = -0.5 was run as given)
 LIMITS = Limits(
     "PSS/E Model Library IEEEG1: the lead-lag K (1 + s T2)/(1 + s T1)",
-    nonnegative=("T4",),
+    nonnegative=("T4", "T3"),
     leads=(("T3", "Tc"),),  # DYR T2 over T1 (round 41: T2 without T1 had no effect)
 )
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)

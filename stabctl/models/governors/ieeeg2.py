@@ -32,8 +32,9 @@ if TYPE_CHECKING:
 IEEEG2 = 14
 KINDS = {IEEEG2: "IEEEG2"}
 #: the speed set point w_f (`table.AT_RATED_SPEED`) and the water time constant T_W >= 0
-#: (PSS/E Model Library IEEEG2)
-LIMITS = (AT_RATED_SPEED, Limits("PSS/E Model Library IEEEG2", nonnegative=("Tw",)))
+#: (PSS/E Model Library IEEEG2); the lead T2 (tg_con T3, no bound of its own) >= 0 (round
+#: 42: T2 = -0.5 was run as given)
+LIMITS = (AT_RATED_SPEED, Limits("PSS/E Model Library IEEEG2", nonnegative=("Tw", "T3")))
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none (each lag
 #: may be absent)
 NEEDS: tuple[str, ...] = ()

@@ -25,9 +25,13 @@ KINDS = {IEESGO: "IEESGO"}
 #: the time constants that must be >= 1e-3 s (declared tg_con fields): none
 NEEDS: tuple[str, ...] = ()
 #: the lead-lag (1 + s T2)/(1 + s T3) (tg_con T3 over Ts): a lead without its lag is
-#: refused (round 41: T2 without T3 had no effect on the run)
+#: refused (round 41: T2 without T3 had no effect on the run); the lead T2 (tg_con T3)
+#: and the lags T4, T5, T6 are time constants, >= 0 (round 42: T4 = -0.3 ran as T4 = 0,
+#: the lag bypassed; tg_con T4 has no bound of its own, hydro types read it otherwise)
 LIMITS = Limits(
-    "PSS/E Model Library IEESGO: the lead-lag (1 + s T2)/(1 + s T3)", leads=(("T3", "Ts"),)
+    "PSS/E Model Library IEESGO: the lead-lag (1 + s T2)/(1 + s T3)",
+    nonnegative=("T3", "T4", "T5", "T6"),
+    leads=(("T3", "Ts"),),
 )
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
 #: the power limits on the start-up gate

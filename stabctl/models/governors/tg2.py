@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import clip, leadlag
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.governors.table import AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
@@ -19,8 +19,12 @@ if TYPE_CHECKING:
 
 TG2 = 7
 KINDS = {TG2: "TG2 (ANDES)"}
-#: the speed set point w_f (`table.AT_RATED_SPEED`)
-LIMITS = AT_RATED_SPEED
+#: the speed set point w_f (`table.AT_RATED_SPEED`); the lead T1 (tg_con T3, no bound of
+#: its own) >= 0 (round 42: T1 = -0.2 was run as given)
+LIMITS = (
+    AT_RATED_SPEED,
+    Limits("ANDES 2.0 TG2: the lead-lag (1 + s T1)/(1 + s T2)", nonnegative=("T3",)),
+)
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Tc",)
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:

@@ -13,7 +13,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, leadlag, nonwindup_lag
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.governors.table import AT_LIMIT, AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
@@ -21,8 +21,12 @@ if TYPE_CHECKING:
 
 TGOV1 = 2
 KINDS = {TGOV1: "TGOV1"}
-#: the speed set point w_f (`table.AT_RATED_SPEED`)
-LIMITS = AT_RATED_SPEED
+#: the speed set point w_f (`table.AT_RATED_SPEED`); the lead T2 (tg_con T3, which has
+#: no bound of its own) a time constant, >= 0 (round 42: T2 = -0.3 was run as given)
+LIMITS = (
+    AT_RATED_SPEED,
+    Limits("PSS/E Model Library TGOV1: the lead-lag (1 + s T2)/(1 + s T3)", nonnegative=("T3",)),
+)
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts", "Tc")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
