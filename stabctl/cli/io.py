@@ -493,6 +493,7 @@ def import_psse(
         netted_controls=list(imported.netted_controls),
         changed=list(imported.changed),
         held=list(imported.held),
+        unused=list(imported.unused),
         infeasible=list(infeasible),
         islands=list(islands),
         powerflow_against_raw=against_raw,
@@ -555,6 +556,7 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
         ("left out with its netted generator", imported.netted_controls),
         ("changed", imported.changed_summary),
         ("held", imported.held_summary),
+        ("read, of no use to a run (names, schedules, ratings)", imported.unused),
     ):
         for item in items:
             click.echo(f"  {what}: {item}")

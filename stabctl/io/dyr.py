@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from collections.abc import Mapping
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -823,6 +824,21 @@ def _mac_row(rec, gen, **cols) -> list:
     return MACHINE.dyr_row(DYR_MODELS[rec.model], rec.params, **cols)
 
 
+def _leakage_noted(rec, v) -> None:
+    """Warn of a subtransient machine record whose Xl lies above its X''d (but below X'd,
+    which `stabctl.case.system` requires): PSS/E's Model Library wants Xl < X''d; the
+    model runs with it (ANDES's ieee39_full has two such units), so it is kept as
+    written, and named (round 42: without a word)."""
+    xl, xdpp = v["Xl"], v["X''d"]
+    if xdpp < xl < v["X'd"]:
+        warnings.warn(
+            f"{rec.label()}: Xl {xl:g} above X''d {xdpp:g} (PSS/E's Model Library "
+            "wants Xl < X''d; the model runs with Xl < X'd): kept as written",
+            UserWarning,
+            stacklevel=2,
+        )
+
+
 def _positive_h(rec, H) -> None:
     if H <= 0:
         raise CaseError(
@@ -836,6 +852,7 @@ def _genrou(rec, gen):
     -> mac_sub with x''q = x''d (as PSS/E)."""
     v = DYR_MODELS[rec.model].values(rec.params)
     _positive_h(rec, v["H"])
+    _leakage_noted(rec, v)
     return _mac_row(rec, gen, xqpp=v["X''d"])
 
 
@@ -844,6 +861,7 @@ def _gensal(rec, gen):
     without the q-axis transient circuit: x'q = x_q, T'qo = 0 (E'd stays 0, docs 12.1)."""
     v = DYR_MODELS[rec.model].values(rec.params)
     _positive_h(rec, v["H"])
+    _leakage_noted(rec, v)
     return _mac_row(rec, gen, xqp=v["Xq"], xqpp=v["X''d"], Tqop=0.0)
 
 
@@ -1436,6 +1454,7 @@ def _gensal_andes(rec, gen):
     T'qo = T'do and X''q = X''d."""
     v = DYR_MODELS["GENSAL"].values(rec.params)
     _positive_h(rec, v["H"])
+    _leakage_noted(rec, v)
     return _mac_row(rec, gen, xqp=v["X'd"], Tqop=v["T'do"], xqpp=v["X''d"])
 
 

@@ -74,6 +74,9 @@ class PsseImport(NamedTuple):
     held: tuple[str, ...] = ()
     held_summary: tuple[str, ...] = ()
     changed_summary: tuple[str, ...] = ()
+    #: the RAW's records of no use to a run, one text a section
+    #: (:attr:`stabctl.io.psse_raw.RawData.unused`)
+    unused: tuple[str, ...] = ()
 
 
 def load_psse(
@@ -242,6 +245,7 @@ def import_psse(
             *held_lines(raw.load_buses),
             *changed[len(raw.changed) + len(raw.load_buses) :],
         ),
+        raw.unused,
     )
 
 

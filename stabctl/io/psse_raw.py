@@ -85,9 +85,11 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt; one
   with MODSW other than 0, which PSS/E would switch, is named in :attr:`RawData.held`.
 
-Skipped without a word: area, zone, owner and inter-area transfer data, substations
-without node-breaker data, v36 switching device rating sets, load types, interfaces and
-interface elements (names, ratings and monitoring definitions), and the system-wide data
+Read without use, counted by section in :attr:`RawData.unused` (the import's summary
+names them): area, zone, owner and inter-area transfer data, substations without
+node-breaker data (a name and a place), v36 switching device rating sets, load types,
+interfaces and interface elements (names, ratings and monitoring definitions).  Skipped
+without a word: the system-wide data
 (v34 and later: solution settings GENERAL, GAUSS, NEWTON, ADJUST, TYSL, SOLVER and
 rating-set names RATING, SWDRATNAM, which do not change the case; each record must start
 with its keyword, so a file without the ``0 /`` record that ends them is refused rather
@@ -339,6 +341,10 @@ class RawData:
     #: voltage limits inverted, which stabctl does not use; a branch of negative R, as a
     #: network equivalent's): PSS/E reads them too (round 41: without a word)
     noted: tuple[RawSource, ...] = ()
+    #: the records of each section read but of no use to a run (area, zone, owner and
+    #: inter-area transfer data, ...: `_SKIPPED`), one text a section: "N area record(s)
+    #: (FILE:a-b)" (round 42: left out without a word)
+    unused: tuple[str, ...] = ()
     netted_ids: frozenset[tuple[int, str]] = frozenset()
     held: tuple[Held, ...] = ()
     load_buses: tuple[Held, ...] = ()
@@ -924,6 +930,8 @@ class _Builder:
     held: list = field(default_factory=list)  # Held: controls not modelled, at their setting
     load_buses: list = field(default_factory=list)  # Held: IDE 2 buses read as load buses
     bus_src: dict = field(default_factory=dict)  # bus number -> its record's RawSource
+    #: section -> the lines of its records read but without use in a run (`_SKIPPED`)
+    unused: dict = field(default_factory=dict)
 
     def once(self, rec: _Rec, key: tuple, what: str):
         """CaseError when a record with the same identity came before (a duplicated
@@ -1033,7 +1041,9 @@ def _substation(b: _Builder, rec: _Rec):
     device and terminal data (node-breaker topology). A substation without them is
     skipped; one with them is unsupported (stabctl reads the bus-branch records only)."""
     data = [line for line in rec.lines[1:] if line and line[:1] != ["0"]]
-    if data:
+    if not data:  # a name and a place
+        b.unused.setdefault(rec.section, []).append(rec.line)
+    else:
         what = f"substation {rec.int(0, 0)} '{rec.text(0, 1, '')}'"
         b.skip(
             rec,
@@ -1119,6 +1129,15 @@ def _generator(b: _Builder, rec: _Rec):
         rec.fail(f"{what}: {rec.given(0, 6)}: VS must be > 0")
     if wind is None and rec.num(0, 4, 9999.0) < rec.num(0, 5, -9999.0):
         rec.fail(f"{what}: {rec.given(0, 4, 5)}: QT must be >= QB")
+    pg, pt, pb = rec.num(0, 2, 0.0), rec.num(0, 16 + o, 9999.0), rec.num(0, 17 + o, -9999.0)
+    if not pb <= pg <= pt:  # PSS/E solves it as dispatched too (round 42: without a word)
+        b.noted.append(
+            rec.source(
+                f"{what}: PG {rec.written(0, 2)} MW {'above PT' if pg > pt else 'below PB'} "
+                f"{rec.written(0, 16 + o if pg > pt else 17 + o)} MW (dispatched outside its "
+                "power limits: kept, as PSS/E solves it)"
+            )
+        )
     why = None if b.net is None else b.net(num, gid)
     if why:
         b.netted_ids.append((num, gid))
@@ -1752,7 +1771,9 @@ def _dispatch(b: _Builder, rec: _Rec):
         except (OverflowError, ZeroDivisionError) as exc:  # values no case can hold
             rec.fail(f"the values give no finite per-unit data ({exc})")
         _check_numbers(rec)
-    elif rec.section not in _SKIPPED:
+    elif rec.section in _SKIPPED:
+        b.unused.setdefault(rec.section, []).append(rec.line)
+    else:
         b.skip(rec, f"{rec.section} record")
 
 
@@ -1790,11 +1811,20 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         vreg_con=vreg_con,
         changed=tuple(b.changed),
         noted=tuple(b.noted),
+        unused=tuple(
+            f"{len(lines)} {section} record(s) ({path.name}:{_line_span(lines)})"
+            for section, lines in b.unused.items()
+        ),
         netted_ids=frozenset(b.netted_ids),
         held=tuple(sorted(b.held, key=lambda h: h.source.line)),
         load_buses=tuple(b.load_buses),
         circuit_order=_circuit_order(b),
     )
+
+
+def _line_span(lines: list[int]) -> str:
+    """Line numbers in order as "a" or "a-b" (one section's records are consecutive)."""
+    return str(lines[0]) if len(lines) == 1 else f"{lines[0]}-{lines[-1]}"
 
 
 def _circuit_order(b: _Builder) -> tuple[str, ...]:

@@ -1089,6 +1089,69 @@ def test_controls_not_modelled_are_named_as_held_at_their_raw_setting(tmp_path):
     ]
 
 
+def test_raw_generators_outside_their_power_limits_and_unused_records_are_named(tmp_path):
+    """Round 42: generator 101 dispatched at PG 153.335 MW with PT 50 MW, and an area
+    interchange record, were read without a word (the import's help says each record not
+    read is named).  PSS/E solves the dispatch as written: kept, and named; the area
+    record (a name and an interchange schedule, of no use to a run) is counted with its
+    lines in the summary (`import-psse`'s text and --json)."""
+    from stabctl.io.psse import import_psse
+
+    raw = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU" / "ThreeBusMulti.raw"
+    text = raw.read_text().replace(
+        "   318.000,     0.000,   1,1.0000", "    50.000,     0.000,   1,1.0000", 1
+    )
+    text = text.replace(
+        "Begin Area interchange data\n",
+        "Begin Area interchange data\n   1,   101,    80.000,    10.000,'AREA1'\n",
+    )
+    path = tmp_path / "odd.raw"
+    path.write_text(text)
+    with pytest.warns(UserWarning, match=r"1 record\(s\) kept as written that look wrong") as got:
+        imported = import_psse(path)
+    said = " ".join(str(w.message) for w in got)
+    assert "odd.raw:11 generator at bus 101 '1': PG 153.335 MW above PT 50.000 MW" in said
+    assert imported.unused == ("1 area record(s) (odd.raw:19)",)
+    res = run("import-psse", path, "--static", "-o", tmp_path / "o.json", "--json")
+    assert json.loads(res.stdout)["unused"] == ["1 area record(s) (odd.raw:19)"]
+    res = run("import-psse", path, "--static", "-o", tmp_path / "o.json")
+    assert (
+        "read, of no use to a run (names, schedules, ratings): 1 area record(s) (odd.raw:19)"
+        in res.stdout
+    )
+    assert import_psse(raw).unused == ()
+
+
+def test_a_machine_whose_leakage_lies_above_its_subtransient_reactance_is_named(tmp_path):
+    """Round 42: a GENROU with X''d 0.25 < Xl 0.28 < X'd 0.3 was read without a word
+    (PSS/E's Model Library wants Xl < X''d; stabctl's model needs Xl < X'd only, and
+    ANDES's ieee39_full has two such units): kept, and named with both values; Xl 0.2
+    says nothing."""
+    import warnings
+
+    from stabctl.io.psse import import_psse
+
+    raw = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU" / "ThreeBusMulti.raw"
+    genrou = "8.0 0.03 0.4 0.05 6.175 0.05 1.8 1.7 0.3 0.55 0.25 {xl} 0.1 0.8"
+    for xl, said in (("0.28", True), ("0.2", False)):
+        dyr = tmp_path / f"x{xl}.dyr"
+        dyr.write_text(
+            f"    101 'GENCLS' 1 0.0 0.0 /\n    102 'GENROU' 1 {genrou.format(xl=xl)} /\n"
+        )
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            import_psse(raw, dyr)
+        named = [str(w.message) for w in got if "Xl" in str(w.message)]
+        assert named == (
+            [
+                f"x{xl}.dyr:2 GENROU (bus 102, id 1): Xl 0.28 above X''d 0.25 (PSS/E's Model "
+                "Library wants Xl < X''d; the model runs with Xl < X'd): kept as written"
+            ]
+            if said
+            else []
+        )
+
+
 def test_raw_records_that_look_wrong_are_kept_and_named(tmp_path):
     """Round 41: a bus whose NVHI 0.9 is below its NVLO 1.1 and a branch of R = -0.01 pu
     were read without a word.  PSS/E reads both (the limits stabctl does not use; a
