@@ -73,9 +73,11 @@ class Memo:
     path : Path
     results : dict
         Key -> result of every job kept.
-    n_read, n_reused, n_written, n_damaged : int
-        Results read from the file when opened, handed back instead of a run, written by
-        this plan, and lines passed over (not whole: a writer killed while writing; or
+    n_read, n_reused, n_repeated, n_written, n_damaged : int
+        Results read from the file when opened (an earlier, interrupted plan's); jobs
+        handed back from those instead of a run; jobs handed back that this plan had run
+        already (a repeat within the plan, not an earlier plan's work); results written
+        by this plan; and lines passed over (not whole: a writer killed while writing; or
         not as written: edited).
     unwritable : str
         Why the file took no more results ('' while it takes them): a full disk, a quota;
@@ -94,7 +96,9 @@ class Memo:
         self._fd: int | None = None
         self.path = private_file(path)
         self.results: dict[str, Any] = {}
-        self.n_read = self.n_reused = self.n_written = self.n_damaged = 0
+        self.n_read = self.n_reused = self.n_repeated = self.n_written = self.n_damaged = 0
+        #: the keys read from the file when opened (`n_reused` counts those handed back)
+        self._read_keys: frozenset[str] = frozenset()
         self.unwritable = ""
         self._removed = False
         self._fd = self._held()
@@ -147,6 +151,7 @@ class Memo:
             else:
                 self.n_damaged += 1
         self.n_read = len(self.results)
+        self._read_keys = frozenset(self.results)
         return not text or text.endswith(b"\n")
 
     def add(self, key: str, result: Any) -> None:
@@ -210,7 +215,9 @@ class Memo:
             keys = [job_key(func, j) for j in jobs]
             todo = [i for i, k in enumerate(keys) if k not in self.results]
             reused = len(jobs) - len(todo)
-            self.n_reused += reused
+            from_file = sum(k in self._read_keys for k in keys)
+            self.n_reused += from_file
+            self.n_repeated += reused - from_file
 
             def finished(k, n, i, result):  # as the caller's jobs count: reused ones done
                 self.add(keys[todo[i]], result)

@@ -437,3 +437,23 @@ def test_estimate_cct_whose_cache_fills_runs_its_searches_in_a_temporary_file(
     assert res.exit_code == 0, res.output
     assert "cannot be written (No space left on device): the searches are run again" in (res.stderr)
     assert len(seen) == 2 and "cache" not in str(seen[1])
+
+
+def test_a_job_repeated_within_a_plan_is_not_counted_as_an_interrupted_plan_s(tmp_path):
+    """Round 42: a fresh plan said "1 simulation job(s) taken from the interrupted plan"
+    for a job it had itself run earlier (a repeat within the plan): only jobs read from
+    the file of an earlier plan count as taken from it (`n_reused`), the others are
+    repeats (`n_repeated`)."""
+    path = tmp_path / "m" / "c.jsonl"
+
+    def run_map(func, jobs, done=None):
+        return [func(j) for j in jobs]
+
+    with Memo(path) as memo:
+        mapped = memo.wrap(run_map)
+        mapped(_square, [{"x": 3}])
+        mapped(_square, [{"x": 3}, {"x": 4}])
+        assert (memo.n_read, memo.n_reused, memo.n_repeated) == (0, 0, 1)
+    with Memo(path) as again:  # the same plan run again: the file's jobs are taken from it
+        again.wrap(run_map)(_square, [{"x": 3}, {"x": 4}, {"x": 5}])
+        assert (again.n_read, again.n_reused, again.n_repeated) == (2, 2, 0)
