@@ -901,11 +901,50 @@ def print_placement(case_name, d) -> None:
 def _plan_verdict(d) -> str:
     """The plan's label: VERIFIED, NOT verified, or NOTHING TO PLACE when every
     contingency was set aside as infeasible (a verdict on the contingencies, not a plan
-    verified on them; the plan's message, printed after it, says so)."""
-    aside = d["set_aside"] or d.get("not_simulable")
+    verified on them; the plan's message, printed after it, says so); VERIFIED in the
+    checks' window (e.g. "VERIFIED in the 5-s window") when a check run longer lost
+    synchronism (`stabctl.placement.plan.PlanResult.run_end`)."""
+    aside = d["set_aside"] or d.get("not_simulable") or d.get("n1_insecure")
     if d["verified"] and aside and not d["n_met"]:
         return "NOTHING TO PLACE"
+    run_end = d.get("run_end") or {}
+    if d["verified"] and run_end.get("not_converged"):
+        return f"VERIFIED in the {run_end['window_s']:g}-s window"
     return "VERIFIED" if d["verified"] else "NOT verified"
+
+
+def _run_end_lines(d: dict) -> list:
+    """The plan's lines on its runs' end, one per contingency in question: its CCT
+    without storage (and with the allocation) NOT CONVERGED IN THE RUN'S END, as `cct`
+    says (`run_end_line`), and its check run T_AFTER_FAULT s longer with the allocation
+    (`stabctl.placement.plan._run_end`)."""
+    again = "with `stabctl cct` and a later --tf"
+    window = (d.get("run_end") or {}).get("window_s")
+    out = []
+    for r in d["contingencies"]:
+        for key, what, cct in (
+            ("cct_no_storage_run_end_check", "CCT without storage", r["cct_no_storage_s"]),
+            ("cct_run_end_check", "CCT with the allocation", r["cct_s"]),
+        ):
+            rc = r.get(key)
+            if rc and rc.get("t_separation_s") is not None and cct is not None:
+                out.append(f"  {r['name']}: {what}: {run_end_line(rc, cct, 3, again)}")
+        rc = r.get("run_end_check")
+        if not rc:
+            continue
+        at = f"cleared at its required {r['required_s']:.3f} s with the allocation"
+        if rc["t_separation_s"] is None:
+            out.append(
+                f"  {r['name']}: run's end checked: {at}, the run stays stable to t = "
+                f"{rc['t_end_s']:g} s"
+            )
+        else:
+            out.append(
+                f"  {r['name']}: NOT CONVERGED IN THE RUN'S END: {at}, the run to t = "
+                f"{rc['t_end_s']:g} s loses synchronism at {rc['t_separation_s']:.2f} s "
+                f"(verified in the {window:g}-s window only)"
+            )
+    return out
 
 
 #: how a plan's header names a law other than the paper's (`place --coi`)
@@ -1016,6 +1055,7 @@ def print_plan(case, d) -> None:
         for n, why in (
             (len(d.get("set_aside") or []), "infeasible"),
             (len(d.get("not_simulable") or {}), "not simulable"),
+            (len(d.get("n1_insecure") or {}), "N-1 insecure"),
         )
         if n
     ]
@@ -1036,6 +1076,8 @@ def print_plan(case, d) -> None:
         )
     if d.get("half_step"):
         click.echo(_half_step_line(d["half_step"]))
+    for line in _run_end_lines(d):
+        click.echo(line)
     for r in d["contingencies"]:
         if r.get("critical_group"):
             click.echo(f"  {r['name']}: the law armed on {machine_list(case, r['critical_group'])}")
@@ -1050,6 +1092,8 @@ def print_plan(case, d) -> None:
         click.echo("set aside as " + proof)
     for name, why in (d.get("not_simulable") or {}).items():
         click.echo(f"set aside as not simulable without storage: {name}: {why}")
+    for name, why in (d.get("n1_insecure") or {}).items():
+        click.echo(f"set aside as N-1 insecure: {name}: {why}")
     u = d.get("uniform")
     if u and u.get("pct") is not None:
         click.echo(

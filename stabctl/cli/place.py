@@ -153,8 +153,9 @@ from stabctl.errors import InputError
     help="A contingency that storage at the candidate sites cannot make meet its "
     "requirement (proven by simulation with every site at its bound), or whose "
     "fault cannot be simulated without storage while it is on (in a case with "
-    "converters each is held on for --t-max first, one short run), is listed and "
-    "the others are planned for "
+    "converters each is held on for --t-max first, one short run), or that is N-1 "
+    "insecure (its CCT search without storage: unstable even when cleared at once), is "
+    "listed under its own label and the others are planned for "
     "(default: error, exit 2).",
 )
 @storage_options(with_rating=False, critical=True)
@@ -241,8 +242,16 @@ def place(
       stabctl place miniwecc --faults faults.csv --required-clearing-cycles 5 \\
           --load-levels 0.9,1.0,1.1 --cost-mw 1 --cost-mwh 0.3 --uniform-reference
 
+    \b
+    The run's end: the checks are judged 5 s after the fault start, the CCT search's
+    window. A contingency whose CCT search separated late in it (as `cct` checks) has its
+    check run 5 s longer with the allocation; one that loses synchronism there is named
+    NOT CONVERGED IN THE RUN'S END and the plan is "VERIFIED in the 5-s window" (exit 0:
+    a verdict on the window, said in the text and the JSON's run_end).
+
     Exit status: 0 verified; 1 not verified within --max-rounds/--max-iter; 2 bad input
-    or infeasible (the `error:` line names the contingency and its load level).
+    or infeasible (the `error:` line names the contingency and its load level), or N-1
+    insecure without --set-aside-infeasible.
     """
     from stabctl.io import load_case
     from stabctl.parallel import RunnerOptions, atomic_write, default_workers
@@ -402,7 +411,7 @@ def _kept_plan(memo, run):
         return run()
     keep_until_end(memo.kept, memo.remove, memo.close)
     result = run()
-    if memo.n_reused:
+    if memo.n_reused:  # an earlier plan's jobs only: a repeat within this plan is no news
         click.echo(
             f"{memo.n_reused} simulation job(s) taken from the interrupted plan "
             f"({memo.path}), not run again",

@@ -18,11 +18,13 @@ import numpy as np
 from tqdm import tqdm
 
 from stabctl.dynamics.options import ModelOptions
+from stabctl.errors import InsecureContingency
 from stabctl.placement.evaluation import (
     VerifyOptions,
     check,
     controller_dict,
     devices_of,
+    run_end,
     simulable,
 )
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
@@ -43,7 +45,8 @@ class PlanContext:
     evaluation without storage (`add_base`); energy_rate: usable energy per MW at each site (MWh/MW,
     `stabctl.placement.energy.mwh_per_mw`); drop_infeasible, brackets: as `plan`;
     infeasible, set_aside: what was set aside as infeasible; not_simulable: name -> why
-    of the contingencies set aside as not simulable (`simulable`); place: the
+    of the contingencies set aside as not simulable (`simulable`); n1_insecure: name ->
+    the verdict of those set aside as N-1 insecure (`add_base`); place: the
     `PlaceOptions` of every round's `place` (damping, sparsity, iterations); esd_model:
     the devices' model (`Study.esd_model`); critical_reference: the law armed per
     contingency (`Study.critical_reference`).
@@ -66,6 +69,7 @@ class PlanContext:
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
     not_simulable: dict = field(default_factory=dict)
+    n1_insecure: dict = field(default_factory=dict)
     place: PlaceOptions = PlaceOptions()
     esd_model: str = "ideal"
     critical_reference: bool = False
@@ -79,10 +83,14 @@ class PlanContext:
         the plan stops it rather than mixing two cases)."""
         return cached_simulator(self.case, self.model).case.digest()
 
-    def check(self, contingencies, mw, energy_mj=None, h: float | None = None) -> dict:
+    def check(
+        self, contingencies, mw, energy_mj=None, h: float | None = None, longer: bool = False
+    ) -> dict:
         """`stabctl.placement.evaluation.check` of every contingency at ratings mw (one
         run each, in parallel): name -> check dict.  energy_mj: usable energy per site
-        (MJ) of finite devices; h: another integration step (s) than the plan's."""
+        (MJ) of finite devices; h: another integration step (s) than the plan's; longer:
+        each run again T_AFTER_FAULT s longer instead (`stabctl.placement.evaluation.
+        run_end`: name -> {"t_end_s", "t_separation_s"}, s)."""
         devs = devices_of(self.sites, mw)
         if energy_mj is not None:
             used = [j for j, p in enumerate(mw) if p > 0]
@@ -108,7 +116,8 @@ class PlanContext:
             }
             for c in contingencies
         ]
-        return dict(zip((c.name for c in contingencies), self.run_map(check, jobs)))
+        out = self.run_map(run_end if longer else check, jobs)
+        return dict(zip((c.name for c in contingencies), out))
 
     def simulable(self, contingencies) -> tuple:
         """The contingencies whose fault can be simulated without storage while it is on
@@ -177,7 +186,17 @@ class PlanContext:
         """Add to `base` the evaluations without storage (CCT by bisection, from the
         screening's bracket when known, and its gradient; counted) of the contingencies
         of `cons` it lacks (`stabctl.placement.loop.evaluations` of `study`).
-        brackets: fault name -> [stable, unstable] clearing times (s), or None."""
+        brackets: fault name -> [stable, unstable] clearing times (s), or None.  A
+        contingency N-1 insecure (unstable even when cleared at once: the CCT search's
+        verdict) goes to `n1_insecure` when the plan sets infeasible ones aside (its
+        callers leave it out: `planned`); else it is raised.
+
+        Raises
+        ------
+        InsecureContingency
+            An N-1 insecure contingency, the plan not setting any aside (the first, named,
+            and how to set it aside).
+        """
         todo = [c for c in cons if c.name not in self.base]
         if not todo:
             return
@@ -189,7 +208,26 @@ class PlanContext:
             and c.fault_name in brackets
             and None not in brackets[c.fault_name]
         }
-        self.base.update(evaluations(self.case, todo, None, study, VerifyOptions(brackets=br)))
+        got = evaluations(
+            self.case, todo, None, study, VerifyOptions(brackets=br, insecure_verdict=True)
+        )
+        insecure = {n: e["n1_insecure"] for n, e in got.items() if "n1_insecure" in e}
+        if insecure and not self.drop_infeasible:
+            name, why = next(iter(insecure.items()))
+            raise InsecureContingency(
+                f"contingency {name}: {why} (--set-aside-infeasible, PlanOptions."
+                "drop_infeasible, sets it aside, listed as N-1 insecure, and plans for the "
+                "others)"
+            )
+        for name, why in insecure.items():
+            if name not in self.n1_insecure:
+                self.n1_insecure[name] = why
+                self.say(f"set aside as N-1 insecure: {name}: {why}")
+        self.base.update({n: e for n, e in got.items() if n not in insecure})
+
+    def planned(self, cons) -> tuple:
+        """The contingencies of `cons` not set aside as N-1 insecure (`add_base`)."""
+        return tuple(c for c in cons if c.name not in self.n1_insecure)
 
     def step_s(self) -> float:
         """The integration step of the plan's runs (s)."""

@@ -25,6 +25,7 @@ from stabctl.dynamics.options import ModelOptions
 from stabctl.errors import AboveSearchLimit, InputError, InsecureContingency, SimulationError
 from stabctl.placement.program import CCTCut
 from stabctl.stability.cct import (
+    T_AFTER_FAULT,
     LineFault,
     SearchOptions,
     cached_simulator,
@@ -32,6 +33,7 @@ from stabctl.stability.cct import (
     fault_inputs,
     fault_of_inputs,
     fault_on_failure,
+    run_end_check,
 )
 from stabctl.stability.sime import (
     clearing_energy_rate,
@@ -116,14 +118,19 @@ def evaluate(job: dict) -> dict:
         bisection from 0, an unstable end found stable is pushed up as
         `critical_clearing_time` does); check_s (a required clearing time, s: the run
         cleared there is also simulated, `check`); gradient (False: a CCT only, the
-        gradient zero).
+        gradient zero); insecure_verdict (True: a fault N-1 insecure, unstable even when
+        cleared at once, is returned as a verdict instead of raised).
 
     Returns
     -------
     dict
         {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical", "margin",
-        "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max"} and with check_s the
-        keys of `check`; a CCT above t_max is returned as t_max with a zero gradient.
+        "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max", "run_end_check"
+        (the CCT search's check of its run's end, `CCTResult.to_dict`'s: None, or
+        {"t_end_s", "t_separation_s"} when its unstable end separated late in its run)}
+        and with check_s the keys of `check`; a CCT above t_max is returned as t_max with
+        a zero gradient.  With insecure_verdict, an N-1 insecure fault gives
+        {"n1_insecure" (the verdict's message), "cct_s" 0, "n_simulations"}.
         Runs repeated within one evaluation (the scan's and the bisection's bracket
         ends, the gradient's run beyond the CCT) are simulated once (`_Memo`);
         n_simulations counts the runs simulated.
@@ -131,7 +138,8 @@ def evaluate(job: dict) -> dict:
     Raises
     ------
     InputError
-        Unstable at zero clearing, bad fault.
+        Unstable at zero clearing (`InsecureContingency`, but with insecure_verdict),
+        bad fault.
     SimulationError
         The network fails while the fault is on.
     """
@@ -158,6 +166,10 @@ def evaluate(job: dict) -> dict:
                 stop=job.get("scan_to"),
                 step=job.get("scan_s", SCAN_S),
             )
+    except InsecureContingency as exc:
+        if not job.get("insecure_verdict"):
+            raise
+        return {"n1_insecure": str(exc), "cct_s": 0.0, "n_simulations": sim.n_runs}
     except AboveSearchLimit:
         return {
             "cct_s": t_max,
@@ -168,6 +180,7 @@ def evaluate(job: dict) -> dict:
             "margin": None,
             "dmargin_dtc": None,
             "above_t_max": True,
+            "run_end_check": None,
             "gradient_s_per_mw": [0.0] * len(sites),
             **checked,
         }
@@ -178,6 +191,7 @@ def evaluate(job: dict) -> dict:
             "n_simulations": sim.n_runs,
             "separated": list(res.separated),
             "above_t_max": False,
+            "run_end_check": res.to_dict()["run_end_check"],
             "critical": [],
             "margin": None,
             "dmargin_dtc": None,
@@ -204,6 +218,7 @@ def evaluate(job: dict) -> dict:
         "n_simulations": sim.n_runs,
         "separated": list(res.separated),
         "above_t_max": False,
+        "run_end_check": res.to_dict()["run_end_check"],
         **grad,
         **checked,
     }
@@ -245,6 +260,35 @@ def check(job: dict) -> dict:
     ctrl = _law(job, sim, fault)
     fleet = _fleet(job, ctrl)
     out = _check_run(sim, fault, fleet, float(job["t_clear"]), job["sites"], ctrl)
+    return {**out, "n_simulations": sim.n_runs}
+
+
+def run_end(job: dict) -> dict:
+    """A `check` run again T_AFTER_FAULT s longer (`stabctl.stability.cct.run_end_check`,
+    one run): for a contingency whose CCT search found its unstable end separating late
+    in the window the checks are judged in (a worker job; JSON-able in and out).
+
+    Parameters
+    ----------
+    job : dict
+        As `check`'s (case, fault, devices, sites, controller, t_clear in s after the
+        fault start, conventions, h, load).
+
+    Returns
+    -------
+    dict
+        {"t_end_s" (the longer run's end, s), "t_separation_s" (when it separated, s, or
+        None: stable there), "n_simulations" (1)}.
+
+    Raises
+    ------
+    SimulationError
+        The network fails while the fault is on.
+    """
+    sim = _Memo(job_simulator(job), [site[0] for site in job["sites"]])
+    fault = fault_of_inputs(job["fault"])
+    fleet = _fleet(job, _law(job, sim, fault))
+    out = run_end_check(sim, fault, float(job["t_clear"]), storage=fleet)
     return {**out, "n_simulations": sim.n_runs}
 
 
@@ -624,11 +668,15 @@ def _margin(result, crit, t_clear_abs: float, case):
 
 
 def _run(sim, fault: LineFault, t_clear: float, fleet):
-    """A run to fault + 5 s stopped at separation; after a divergence (voltage collapse
-    or a machine lost) its partial trajectory."""
+    """A run to the fault start + T_AFTER_FAULT (5 s, the CCT search's default window)
+    stopped at separation; after a divergence (voltage collapse or a machine lost) its
+    partial trajectory."""
     try:
         return sim.run(
-            fault.events(t_clear), fault.t_fault + 5.0, storage=fleet, stop_at_separation=True
+            fault.events(t_clear),
+            fault.t_fault + T_AFTER_FAULT,
+            storage=fleet,
+            stop_at_separation=True,
         )
     except SimulationError as exc:
         if exc.result is None or len(exc.result.t) < 3:
@@ -665,6 +713,9 @@ class VerifyOptions:
         Also the run cleared at each target (`check`).
     gradient : bool
         False for CCTs only.
+    insecure_verdict : bool
+        An N-1 insecure contingency (unstable even when cleared at once) returned as a
+        verdict (`evaluate`'s insecure_verdict) instead of raised.
 
     Raises
     ------
@@ -677,6 +728,7 @@ class VerifyOptions:
     brackets: dict | None = None
     check: bool = False
     gradient: bool = True
+    insecure_verdict: bool = False
 
     def __post_init__(self) -> None:
         if self.scan not in ("target", "full", "none"):
@@ -772,6 +824,7 @@ def verify(ev: Evaluator, contingencies, mw, opts: VerifyOptions = VerifyOptions
             "fault": fault_inputs(c.fault),
             "load": c.load,
             "gradient": opts.gradient,
+            **({"insecure_verdict": True} if opts.insecure_verdict else {}),
             **({"check_s": c.target_cct_s} if opts.check else {}),
             "scan_from": min(base[c.name]["cct_s"], c.target_cct_s) if scanning else None,
             "scan_to": c.target_cct_s if scan == "target" else None,

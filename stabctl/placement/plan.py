@@ -20,6 +20,15 @@ not yet checked on every contingency (it set some aside, or found the uniform fl
 allocation is checked then (`_check_last_allocation`).  The energies are then sized
 (`stabctl.placement.energy`) and, when asked, the references computed
 (`stabctl.placement.references`).
+
+The run's end: every check is judged in the CCT search's window (the fault start +
+T_AFTER_FAULT).  A contingency whose CCT search (without storage, or with the
+allocation) found its unstable end separating late in that window
+(`stabctl.stability.cct.CCTResult.run_end_check`) has its check run again T_AFTER_FAULT s
+longer at the end (`_run_end`, one run each); one that loses synchronism there is named
+NOT CONVERGED IN THE RUN'S END (`PlanResult.run_end`): the plan is verified in the
+window only.  A contingency N-1 insecure (unstable even when cleared at once, by its CCT
+search) is set aside as such with `PlanOptions.drop_infeasible`, else raised.
 """
 
 from __future__ import annotations
@@ -68,6 +77,7 @@ from stabctl.placement.references import (
 )
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
 from stabctl.progress import Heartbeat
+from stabctl.stability.cct import T_AFTER_FAULT
 
 logger = logging.getLogger(__name__)
 
@@ -87,7 +97,13 @@ class PlanResult:
     contingencies unstable when cleared at once; infeasible, set_aside: the proofs and
     names of those set aside as infeasible; not_simulable: name -> why of those set aside
     as not simulable without storage (their fault fails while on: `PlanOptions.
-    drop_infeasible`).
+    drop_infeasible`); n1_insecure: name -> the verdict of those set aside as N-1
+    insecure (unstable even when cleared at once, by their CCT search without storage);
+    run_end: {"window_s" (the checks' window after the fault start, s), "checked" (the
+    contingencies whose check was run T_AFTER_FAULT s longer, `_run_end`),
+    "not_converged" (those of them that lose synchronism there: verified in the window
+    only), "cct_no_storage_not_converged" (those whose CCT without storage is NOT
+    CONVERGED IN THE RUN'S END, as `stabctl cct` says)}.
     """
 
     case: str
@@ -107,6 +123,8 @@ class PlanResult:
     infeasible: list = field(default_factory=list)
     set_aside: list = field(default_factory=list)
     not_simulable: dict = field(default_factory=dict)
+    n1_insecure: dict = field(default_factory=dict)
+    run_end: dict = field(default_factory=dict)
     uniform: dict | None = None
     alone: list = field(default_factory=list)
     half_step: dict | None = None
@@ -147,6 +165,8 @@ class PlanResult:
             "infeasible": self.infeasible,
             "set_aside": self.set_aside,
             "not_simulable": self.not_simulable,
+            "n1_insecure": self.n1_insecure,
+            "run_end": self.run_end,
             "contingencies": self.contingencies,
             "rounds": self.rounds,
             "n_simulations": self.n_simulations,
@@ -320,6 +340,9 @@ def plan(
     InfeasibleError
         A contingency misses its requirement even with every site at its bound (named
         with its load level).
+    InsecureContingency
+        A contingency N-1 insecure (its CCT search without storage: unstable even when
+        cleared at once), unless ``options.drop_infeasible`` sets it aside.
     InputError
         No faults, bad settings (`check_damping_model`), a fault unstable already when
         cleared at once, a contingency's target at or above the search limit
@@ -391,6 +414,7 @@ def _planned(case, faults, requirement, o: PlanOptions, study, say, freq_hz, sit
         result.requirement = describe(requirement, o.overrides)
         result.infeasible, result.set_aside = list(pl.infeasible), list(pl.set_aside)
         result.not_simulable = dict(pl.not_simulable)
+        result.n1_insecure = dict(pl.n1_insecure)
         kept = {r["name"] for r in result.contingencies}
         _references(
             pl,
@@ -429,9 +453,8 @@ def _contingencies(
     if requirement.needs_base or any(r.needs_base for r in (overrides or {}).values()):
         pl.say(f"CCT without storage of {counted(len(every), 'contingency', 'contingencies')}")
         pl.add_base(every, pl.brackets, kw)
-    cons = contingencies_of(
-        faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base, pl.not_simulable
-    )
+    aside = {**pl.not_simulable, **pl.n1_insecure}
+    cons = contingencies_of(faults, requirement, freq_hz, pl.tol, levels, overrides, pl.base, aside)
     _check_search_limit(pl, cons, requirement, overrides)
     held = [c.name for c in cons if _held_at_limit(pl, c, overrides, requirement)]
     if held:
@@ -549,6 +572,7 @@ def _not_monotone(pl: PlanContext, cons, failing, checks, study: Study) -> tuple
         "stable at the required time (a stable clearing above a CCT meets no requirement)"
     )
     pl.add_base(stable, pl.brackets, study)
+    cons, stable = pl.planned(cons), list(pl.planned(stable))
     why = {
         c.name: (
             f"not monotone: {c.name}: stable cleared at its required {c.target_cct_s:.3f} s "
@@ -669,21 +693,23 @@ def _generate(
 ) -> PlanResult:
     """The rounds of constraint generation (module docstring), then the energies."""
     st = _Rounds(cons, checks, np.zeros(len(pl.sites)))
+    if failing and not pl.brackets:  # no screening to rank by: simulate every failing one
+        _add_base(pl, st, failing, kw)
+    failing = list(pl.planned(failing))
+    while failing and not st.active:  # the first active set, less any N-1 insecure
+        st.active = _most_binding(failing, pl.brackets, pl.base, n_active)
+        _add_base(pl, st, st.active, kw)
+        failing = list(pl.planned(failing))
     if not failing:
         st.verified = True
         st.message = (
             "every contingency is stable without storage"
-            if cons
-            else f"every contingency set aside as not simulable ({', '.join(pl.not_simulable)})"
-            ": no storage to place"
-            if pl.not_simulable
+            if st.cons
+            else f"every contingency set aside {_aside_words(pl)}: no storage to place"
+            if pl.not_simulable or pl.n1_insecure
             else "no contingency left to plan for: no storage to place"
         )
     else:
-        if not pl.brackets:  # no screening to rank by: simulate every failing one
-            pl.add_base(failing, None, kw)
-        st.active = _most_binding(failing, pl.brackets, pl.base, n_active)
-        pl.add_base(st.active, pl.brackets, kw)
         st.message = f"not verified after {max_rounds} round(s) of constraint generation"
     for rnd in range(1, max_rounds + 1 if failing else 1):
         if _round(pl, st, (rnd, max_rounds), n_active, kw):
@@ -695,6 +721,25 @@ def _generate(
     mwh, energy, ok = size_energy(pl, st.cons, st.mw, st.checks)
     if st.verified and not ok:
         st.verified, st.message = False, st.message + "; the sized energies fail a check run"
+    longer = _run_end(pl, st)
+    lost = sorted(n for n, r in longer.items() if r["t_separation_s"] is not None)
+    run_end = {
+        "window_s": T_AFTER_FAULT,
+        "checked": sorted(longer),
+        "not_converged": lost,
+        "cct_no_storage_not_converged": sorted(
+            c.name for c in st.cons if _not_converged(pl.base.get(c.name))
+        ),
+    }
+    if lost:
+        st.message += (
+            f"; verified in the {T_AFTER_FAULT:g}-s window only: "
+            f"{counted(len(lost), 'contingency', 'contingencies')} NOT "
+            "CONVERGED IN THE RUN'S END ("
+            + ", ".join(lost)
+            + f"): cleared at the required time with this allocation, the run "
+            f"{T_AFTER_FAULT:g} s longer loses synchronism"
+        )
     return PlanResult(
         case=pl.case,
         requirement="",
@@ -704,12 +749,69 @@ def _generate(
         mwh=mwh,
         cost=pl.cost.split(pl.sites, st.mw, mwh),
         verified=st.verified,
-        contingencies=_rows(st.cons, st.checks, st.evs, pl.base),
+        contingencies=_rows(st.cons, st.checks, st.evs, pl.base, longer),
         rounds=st.rounds,
         active=[c.name for c in st.active],
         message=st.message,
         energy=energy,
+        run_end=run_end,
     )
+
+
+def _not_converged(ev: dict | None) -> bool:
+    """Whether an evaluation's CCT search found the run cleared at its CCT losing
+    synchronism when run T_AFTER_FAULT s longer (`CCTResult.run_end_check`)."""
+    rc = (ev or {}).get("run_end_check")
+    return rc is not None and rc.get("t_separation_s") is not None
+
+
+def _run_end(pl: PlanContext, st: _Rounds) -> dict:
+    """The checks whose window the CCT searches put in question, run again T_AFTER_FAULT s
+    longer with the allocation (one run each, `PlanContext.check` with longer): those of
+    the contingencies stable at their required time whose CCT search without storage,
+    or with the allocation, had its unstable end separating late in its run (its
+    ``run_end_check`` not None).  Name -> {"t_end_s", "t_separation_s"} (s; None: stable
+    there)."""
+    flagged = [
+        c
+        for c in st.cons
+        if st.checks.get(c.name, {}).get("stable_at_check")
+        and any(
+            (ev or {}).get("run_end_check") is not None
+            for ev in (pl.base.get(c.name), st.evs.get(c.name))
+        )
+    ]
+    if not flagged:
+        return {}
+    pl.say(
+        f"{counted(len(flagged), 'contingency', 'contingencies')} whose CCT search separated "
+        f"late in its {T_AFTER_FAULT:g}-s window: each check run {T_AFTER_FAULT:g} s longer "
+        "with the allocation (" + ", ".join(c.name for c in flagged) + ")"
+    )
+    out = pl.check(flagged, st.mw, longer=True)
+    return {n: {k: r[k] for k in ("t_end_s", "t_separation_s")} for n, r in out.items()}
+
+
+def _aside_words(pl: PlanContext) -> str:
+    """How a message names what was set aside before the rounds: as not simulable, as
+    N-1 insecure (each with its names)."""
+    words = [
+        f"as {label} ({', '.join(names)})"
+        for label, names in (
+            ("not simulable", pl.not_simulable),
+            ("N-1 insecure", pl.n1_insecure),
+        )
+        if names
+    ]
+    return " and ".join(words)
+
+
+def _add_base(pl: PlanContext, st: _Rounds, cons, kw: Study) -> None:
+    """`PlanContext.add_base` of cons, then those set aside as N-1 insecure left out of
+    the rounds' contingencies and active set."""
+    pl.add_base(cons, pl.brackets, kw)
+    st.cons = pl.planned(st.cons)
+    st.active = list(pl.planned(st.active))
 
 
 def _round(pl: PlanContext, st: _Rounds, of: tuple, n_active: int, kw: Study) -> bool:
@@ -815,8 +917,8 @@ def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
     if not st.cons:
         st.mw, st.verified = np.zeros_like(st.mw), True
         aside = [f"as infeasible ({', '.join(pl.set_aside)})"] if pl.set_aside else []
-        if pl.not_simulable:
-            aside.append(f"as not simulable ({', '.join(pl.not_simulable)})")
+        if pl.not_simulable or pl.n1_insecure:
+            aside.append(_aside_words(pl))
         st.message = (
             f"every contingency set aside {' and '.join(aside)}: no storage to place"
             if aside
@@ -828,7 +930,9 @@ def _recheck(pl: PlanContext, st: _Rounds, rnd: int, n_active: int, kw) -> bool:
         st.verified, st.message = True, f"verified on every contingency after {rnd} round(s)"
         return True
     st.active = _most_binding(fails, pl.brackets, pl.base, n_active)
-    pl.add_base(st.active, pl.brackets, kw)
+    _add_base(pl, st, st.active, kw)
+    if not st.active:  # every one that failed was N-1 insecure, now set aside
+        return _recheck(pl, st, rnd, n_active, kw)
     return False
 
 
@@ -874,8 +978,8 @@ def _add_failing(pl: PlanContext, st: _Rounds, rnd: int, res, kw) -> bool:
             f"{', '.join(c.name for c in fails)}"
         )
         return True
-    pl.add_base(new, pl.brackets, kw)
     st.active = st.active + new
+    _add_base(pl, st, new, kw)
     return False
 
 
@@ -910,12 +1014,16 @@ def _uniform_start(pl: PlanContext, st: _Rounds, rnd: int, kw: Study) -> bool:
     return True
 
 
-def _rows(cons, checks, evs, base) -> list:
+def _rows(cons, checks, evs, base, longer=None) -> list:
     """One row per contingency: name, fault, load, required time, stable at it, CCT
     without storage (and whether it is only known above t_max) and with the allocation
     where simulated, margin (s); from its run at the required time with the allocation,
     the devices' switchings and those chattering, and the machines the law was armed on
-    (``place --coi critical``; None otherwise or without such a run)."""
+    (``place --coi critical``; None otherwise or without such a run); the run's end
+    checks (`CCTResult.run_end_check` of each CCT search, and its check run
+    T_AFTER_FAULT s longer, `_run_end`: longer, name -> {"t_end_s", "t_separation_s"};
+    None: not in question, not run)."""
+    longer = longer or {}
     out = []
     for c in cons:
         cct = evs.get(c.name, {}).get("cct_s")
@@ -937,6 +1045,9 @@ def _rows(cons, checks, evs, base) -> list:
                 "switchings": checks[c.name].get("switchings"),
                 "chattering": checks[c.name].get("chattering"),
                 "critical_group": checks[c.name].get("critical_group"),
+                "cct_no_storage_run_end_check": base.get(c.name, {}).get("run_end_check"),
+                "cct_run_end_check": evs.get(c.name, {}).get("run_end_check"),
+                "run_end_check": longer.get(c.name),
             }
         )
     return out

@@ -738,14 +738,69 @@ def _separated_late(probe: _Probes, k: int) -> bool:
 def _longer_run(probe: _Probes, k: int) -> tuple[float, float | None]:
     """The probe cleared at k run to t_end + T_AFTER_FAULT (counted): (that end, when it
     separated, s, or None: stable)."""
+    return _longer_at(probe, _lattice(k, probe.o.tol))
+
+
+def _longer_at(probe: _Probes, t_clear: float) -> tuple[float, float | None]:
+    """`_longer_run` at a clearing time t_clear (s after the fault start)."""
     longer = probe.t_end + T_AFTER_FAULT
-    res, diverged = probe._whole(_lattice(k, probe.o.tol), probe.h, t_end=longer)
+    res, diverged = probe._whole(t_clear, probe.h, t_end=longer)
     probe.reruns += 1
     probe.n_steps += _steps(res)
     if not diverged and probe._said(res):
         return (longer, None)
     at = getattr(res, "t_separation", None)
     return (longer, float(res.t[-1]) if at is None else float(at))
+
+
+def run_end_check(
+    sim: Runner,
+    fault: LineFault,
+    t_clear: float,
+    search: SearchOptions | None = None,
+    *,
+    h: float | None = None,
+    storage=None,
+) -> dict:
+    """The check `critical_clearing_time` makes of a CCT whose unstable end separated late
+    in its run (`CCTResult.run_end_check`), made of one clearing time: the run cleared at
+    `t_clear` run T_AFTER_FAULT s past the search's run end, stopped at separation, judged
+    by the search's criterion (one run).  For a verdict taken in the search's window (e.g.
+    a placement's check run at a required clearing time) whose CCT search flagged its
+    run's end.
+
+    Parameters
+    ----------
+    sim : Runner
+        The simulator.
+    fault : LineFault
+        The fault.
+    t_clear : float
+        Clearing time, s after the fault start.
+    search : SearchOptions or None, optional
+        The search whose window is extended (its ``t_end``, None: the fault start +
+        T_AFTER_FAULT; its criterion and separation limit); default `SearchOptions()`.
+    h : float or None, optional
+        Integration step, s (default `sim.default_h`).
+    storage : StorageFleet or None, optional
+        Passed to the run.
+
+    Returns
+    -------
+    dict
+        ``t_end_s`` (the longer run's end, s) and ``t_separation_s`` (when it separated,
+        s, or None: stable there), as `CCTResult.to_dict`'s ``run_end_check``.
+
+    Raises
+    ------
+    SimulationError
+        The network fails while the fault is on.
+    """
+    o = SearchOptions() if search is None else search
+    t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
+    h = sim.default_h if h is None else h
+    probe = _Probes(sim, fault, o, h, t_end, storage, ())
+    return dict(zip(("t_end_s", "t_separation_s"), _longer_at(probe, float(t_clear))))
 
 
 def _window_stable(probe: _Probes, k: int) -> bool:

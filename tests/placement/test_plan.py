@@ -812,3 +812,68 @@ def test_a_plan_s_total_is_summed_to_the_watt():
 
     assert sum([44.7, 44.7, 44.7]) != 134.1
     assert total_mw([44.7, 44.7, 44.7]) == 134.1 and total_mw([]) == 0.0
+
+
+def test_a_plan_says_its_runs_end_and_sets_an_n1_insecure_fault_aside(tmp_path):
+    """Round 42: `place` called VERIFIED, in the 5-s window of its checks, a plan whose
+    allocation cleared at the required time loses synchronism run longer, where `cct`
+    says NOT CONVERGED IN THE RUN'S END (Kundur's 1-10: its trip islands G1 and the rest
+    drifts out of step 5-10 s after the fault); and an N-1 insecure fault (2-20) stopped
+    the whole plan, --set-aside-infeasible or not.  Now 1-10's CCT without storage
+    carries `cct`'s own check, its check run 5 s longer with the allocation loses
+    synchronism where an independent simulation does, and the plan is "VERIFIED in the
+    5-s window"; 2-20 is set aside as N-1 insecure (`critical_clearing_time`'s verdict),
+    and without the flag the refusal says how to set it aside."""
+    from stabctl.errors import InsecureContingency
+    from stabctl.stability.cct import SearchOptions, critical_clearing_time
+    from stabctl.storage.control import BangBangCOI
+    from stabctl.storage.devices import StorageDevice, StorageFleet
+
+    csv = tmp_path / "f.csv"
+    csv.write_text("bus,far_bus\n2,20\n1,10\n")
+    args = ["place", "kundur", "--faults", str(csv), "--target-cct-gain", "5", "--t-max", "0.5"]
+    args += ["--workers", "1"]
+    refused = CliRunner().invoke(main, args)
+    assert refused.exit_code == 2 and "N-1 insecure" in refused.output, refused.output
+    assert "--set-aside-infeasible" in refused.output
+    res = CliRunner().invoke(
+        main, [*args, "--set-aside-infeasible", "--out", str(tmp_path / "p.json")]
+    )
+    assert res.exit_code == 0, res.output
+    d = json.loads((tmp_path / "p.json").read_text())
+    case = load_case("kundur")
+    sim = Simulator(case)
+    with pytest.raises(InsecureContingency):
+        critical_clearing_time(sim, LineFault(2, 20, 1.0), SearchOptions(t_max=0.5))
+    assert list(d["n1_insecure"]) == ["2-20"] and "N-1 insecure" in d["n1_insecure"]["2-20"]
+    assert "set aside as N-1 insecure: 2-20: " in res.stdout
+    # the CCT without storage and its run's end, as `cct` gives them
+    ref = json.loads(
+        CliRunner()
+        .invoke(
+            main, ["cct", "kundur", "--fault", "1", "--far-bus", "10", "--t-max", "0.5", "--json"]
+        )
+        .stdout
+    )
+    (row,) = d["contingencies"]
+    assert row["cct_no_storage_s"] == ref["cct_s"]
+    assert row["cct_no_storage_run_end_check"] == ref["run_end_check"]
+    # the check run 5 s longer, against the same run simulated here
+    fault = LineFault(1, 10, 1.0)
+    rows = d["allocation"]
+    fleet = StorageFleet(
+        tuple(StorageDevice(r["bus"], r["machine"], r["mw"]) for r in rows), BangBangCOI()
+    )
+    longer = sim.run(fault.events(row["required_s"]), 11.0, storage=fleet, stop_at_separation=True)
+    assert not longer.stable
+    assert row["run_end_check"]["t_end_s"] == 11.0
+    assert row["run_end_check"]["t_separation_s"] == pytest.approx(longer.t_separation)
+    assert stable_when_cleared(case, fault, row["required_s"], rows) and row["met"]
+    assert d["verified"] and d["run_end"]["not_converged"] == ["1-10"]
+    assert d["run_end"]["window_s"] == 5.0
+    head = res.stdout.splitlines()[0]
+    assert "VERIFIED in the 5-s window" in head and "NOT CONVERGED IN THE RUN'S END (1-10)" in head
+    assert (
+        f"  1-10: NOT CONVERGED IN THE RUN'S END: cleared at its required "
+        f"{row['required_s']:.3f} s with the allocation, the run to t = 11 s loses synchronism"
+    ) in res.stdout
