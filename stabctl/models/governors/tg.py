@@ -14,7 +14,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, lag, leadlag
-from stabctl.models.declaration import DyrModel, states
+from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.governors.table import AT_RATED_SPEED, G
 
 if TYPE_CHECKING:
@@ -22,8 +22,13 @@ if TYPE_CHECKING:
 
 TG = 1
 KINDS = {TG: "PST tg"}
-#: the speed set point w_f (`table.AT_RATED_SPEED`)
-LIMITS = AT_RATED_SPEED
+#: the speed set point w_f (`table.AT_RATED_SPEED`); the transient-gain lead T_3 (which
+#: the table's column bounds for no type) a time constant, >= 0 (round 42: a negative one
+#: ran as given); the turbine's lead T_4 may be negative (a hydro unit's water column)
+LIMITS = (
+    AT_RATED_SPEED,
+    Limits("PSTess tg.m: the transient-gain lead-lag (1 + s T_3)/(1 + s T_c)", nonnegative=("T3",)),
+)
 #: the time constants that must be >= 1e-3 s (declared tg_con fields)
 NEEDS = ("Ts", "Tc", "T5")
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
