@@ -30,7 +30,7 @@ NEEDS: tuple[str, ...] = ()
 #: the lag bypassed; tg_con T4 has no bound of its own, hydro types read it otherwise)
 LIMITS = Limits(
     "PSS/E Model Library IEESGO: the lead-lag (1 + s T2)/(1 + s T3)",
-    nonnegative=("T3", "T4", "T5", "T6"),
+    nonnegative=("T3", "T4"),  # T5, T6: tg_con columns bounded >= 0 for every type
     leads=(("T3", "Ts"),),
 )
 #: the family refuses a start-up order (`initialise`'s order) outside [Tmin, Tmax]:
