@@ -15,6 +15,7 @@ omega, Hz for f0.  M is in pu*s^2/rad.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from numbers import Real
@@ -487,9 +488,10 @@ def simulate(
     stops when the angle passes delta_u (loss of synchronism).
 
     Raises:
-        InputError: t_clear < 0 or t_end <= t_clear.
+        InputError: t_clear < 0, t_end <= t_clear, or either not finite (round 43: NaN
+            or inf gave solve_ivp a span it never ended).
     """
-    if t_clear < 0 or t_end <= t_clear:
+    if not (math.isfinite(t_clear) and math.isfinite(t_end)) or t_clear < 0 or t_end <= t_clear:
         raise InputError(f"need 0 <= t_clear < t_end, got t_clear={t_clear}, t_end={t_end}")
     x0 = [system.delta0, 0.0]
     if t_clear > 0:

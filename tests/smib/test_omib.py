@@ -102,3 +102,16 @@ def test_separatrix_passes_through_the_unstable_equilibrium():
 def test_bad_parameters_are_rejected(kwargs):
     with pytest.raises(InputError):
         OMIB(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "t_clear, t_end", [(float("nan"), 5.0), (0.1, float("nan")), (0.1, float("inf"))]
+)
+def test_a_time_that_is_not_finite_is_refused_not_integrated_for_ever(t_clear, t_end):
+    """Round 43: `simulate(PAPER_OMIB, t_clear=nan)` (or t_end nan or inf) passed the
+    guard (every comparison with NaN is False) and solve_ivp spun on for ever."""
+    from stabctl.errors import InputError
+    from stabctl.smib.omib import PAPER_OMIB, simulate
+
+    with pytest.raises(InputError, match=r"need 0 <= t_clear < t_end"):
+        simulate(PAPER_OMIB, t_clear=t_clear, t_end=t_end)
