@@ -77,7 +77,7 @@ from stabctl.placement.references import (
 )
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
 from stabctl.progress import Heartbeat
-from stabctl.stability.cct import T_AFTER_FAULT
+from stabctl.stability.cct import RUN_END_KEYS, T_AFTER_FAULT
 
 logger = logging.getLogger(__name__)
 
@@ -789,7 +789,7 @@ def _run_end(pl: PlanContext, st: _Rounds) -> dict:
         "with the allocation (" + ", ".join(c.name for c in flagged) + ")"
     )
     out = pl.check(flagged, st.mw, longer=True)
-    return {n: {k: r[k] for k in ("t_end_s", "t_separation_s")} for n, r in out.items()}
+    return {n: {k: r[k] for k in RUN_END_KEYS} for n, r in out.items()}
 
 
 def _aside_words(pl: PlanContext) -> str:

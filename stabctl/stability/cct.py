@@ -413,9 +413,7 @@ class CCTResult:
             "end_t_s": self.end_t_s,
             "stiff_step_s": self.stiff_step_s,
             "run_end_check": (
-                None
-                if self.run_end_check is None
-                else dict(zip(("t_end_s", "t_separation_s"), self.run_end_check))
+                None if self.run_end_check is None else dict(zip(RUN_END_KEYS, self.run_end_check))
             ),
             "storage_acted": self.storage_acted,
             "probes": [[t, ok] for t, ok in self.probes],
@@ -709,6 +707,10 @@ def critical_clearing_time(
     )
 
 
+#: the keys of a run's-end check as a dict (`CCTResult.to_dict`'s ``run_end_check``,
+#: `run_end_check`): the longer run's end and when it separated (None: stable), s
+RUN_END_KEYS = ("t_end_s", "t_separation_s")
+
 #: an unstable end of the bracket that separated later than this share of its run after
 #: its clearing has the stable end run again T_AFTER_FAULT s longer (`_run_end_check`)
 LATE_SEPARATION = 0.8
@@ -800,7 +802,7 @@ def run_end_check(
     t_end = fault.t_fault + T_AFTER_FAULT if o.t_end is None else o.t_end
     h = sim.default_h if h is None else h
     probe = _Probes(sim, fault, o, h, t_end, storage, ())
-    return dict(zip(("t_end_s", "t_separation_s"), _longer_at(probe, float(t_clear))))
+    return dict(zip(RUN_END_KEYS, _longer_at(probe, float(t_clear))))
 
 
 def _window_stable(probe: _Probes, k: int) -> bool:
