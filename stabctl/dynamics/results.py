@@ -570,7 +570,9 @@ class SimulationResult:
 
     def to_npz(self, path: str | os.PathLike) -> Path:
         """Write every array and the verdict to a compressed .npz, atomically (temporary
-        file beside it, then rename); `meta` is not written, `partitions` (if any) as one
+        file beside it, then rename); `meta` is not written except a run monitor's
+        ``early_verdict`` (array ``early_verdict``: a stopped run reads back `STOPPED`,
+        not stable), `partitions` (if any) as one
         array per field (``partition_t_s``, ``partition_island``, ...); ``units`` holds
         each array's unit as "name: unit" strings (`NPZ_UNITS`).
 
@@ -589,6 +591,8 @@ class SimulationResult:
             arrays.pop("converters", None)
         arrays["verdict"] = np.array([self.stable, self.t_separation or np.nan], float)
         arrays["separated"] = np.asarray(self.separated, int)
+        if "early_verdict" in self.meta:  # a run its monitor stopped (files of others as before)
+            arrays["early_verdict"] = np.array(str(self.meta["early_verdict"]))
         if self.partitions:  # files of runs without trips or splits as before
             for name in PARTITION_FIELDS:
                 arrays[f"partition_{name}"] = np.array([getattr(p, name) for p in self.partitions])
@@ -607,7 +611,8 @@ class SimulationResult:
         Returns
         -------
         SimulationResult
-            The arrays and verdict as written; `meta` is empty (it is not stored).
+            The arrays and verdict as written; `meta` holds only a monitor's
+            ``early_verdict`` if written (the rest is not stored).
 
         Raises
         ------
@@ -622,7 +627,8 @@ class SimulationResult:
         d = _npz_arrays(path)
         fixed = {"stable", "t_separation", "meta", "partitions"}  # not arrays of the file
         names = {f.name for f in fields(cls)} - fixed
-        known = names | {"verdict", "units"} | {f"partition_{n}" for n in PARTITION_FIELDS}
+        known = names | {"verdict", "units", "early_verdict"}
+        known |= {f"partition_{n}" for n in PARTITION_FIELDS}
         unknown = sorted(set(d) - known)
         needed = {f.name for f in fields(cls) if _no_default(f)} | {"verdict", "separated"}
         missing = sorted(needed - set(d))
@@ -640,6 +646,8 @@ class SimulationResult:
                 + ")"
             )
         d.pop("units", None)  # (files written before it have none)
+        early = d.pop("early_verdict", None)
+        meta = {} if early is None else {"early_verdict": str(early)}
         stable, tsep = d.pop("verdict")
         sep = [int(i) for i in d.pop("separated")]  # as a run gives them: JSON-able ints
         parts = {name: d.pop(f"partition_{name}", ()) for name in PARTITION_FIELDS}
@@ -653,6 +661,7 @@ class SimulationResult:
             t_separation=None if np.isnan(tsep) else float(tsep),
             separated=sep,
             partitions=partitions,
+            meta=meta,
         )
 
 

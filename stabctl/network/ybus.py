@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from stabctl.case import Case
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, WrongTypeError, is_whole_number
 
 __all__ = [
     "BranchAdmittances",
@@ -69,11 +69,22 @@ class BranchAdmittances:
 def kept_rows(case: Case, drop: Iterable[int] = ()) -> np.ndarray:
     """0-based branch rows left after removing ``drop`` (0-based rows of ``case.branches``).
 
-    Raises :class:`CaseError` if a dropped row does not exist.
+    Raises :class:`CaseError` if a dropped row does not exist (negative included),
+    `stabctl.errors.WrongTypeError` if one is no whole number (1.5, a text, None).
     """
     n = len(case.branches)
-    drop = np.unique(np.asarray(list(drop), dtype=int))
-    bad = drop[(drop < 0) | (drop >= n)]
+    given = list(drop)
+    odd = [d for d in given if not is_whole_number(d)]
+    if odd:  # (a 1.5 was truncated to row 1, a "3" or None a bare numpy error)
+        raise WrongTypeError(
+            f"line: branch rows to remove are 0-based whole-number indices, got {odd[0]!r}"
+        )
+    drop = np.unique(np.asarray(given, dtype=int))
+    if drop.size and drop[0] < 0:  # (-1 was named "row 0")
+        raise CaseError(
+            f"line: cannot remove branch index {drop[0]}: indices are 0-based, 0 to {n - 1}"
+        )
+    bad = drop[drop >= n]
     if bad.size:
         raise CaseError(f"line: cannot remove row {bad[0] + 1}, the case has {n} branches")
     keep = np.ones(n, dtype=bool)

@@ -485,15 +485,20 @@ def modal_analysis(
         inertia = sys.C[sys.output_labels.index("omega_coi"), speed]
         if not np.any(inertia):  # the COI is an infinite bus: no weight on the others
             inertia = np.ones(speed.size)
-    inertia = np.asarray(inertia, float)
+    given = inertia
+    try:
+        inertia = np.asarray(inertia, float)
+    except (TypeError, ValueError):  # (a text gave numpy's bare "could not convert")
+        inertia = np.empty(0)  # no numbers: refused below, naming what was given
     if (
-        inertia.shape != (speed.size,)
+        isinstance(given, str)
+        or inertia.shape != (speed.size,)
         or not np.all(np.isfinite(inertia) & (inertia >= 0))
         or (speed.size > 0 and not inertia.any())
     ):
         raise InputError(
             f"modal_analysis(inertia): {speed.size} finite weights >= 0, not all 0 (H * MVA, "
-            f"one per machine in the order of the speed states) are needed, got {inertia!r}"
+            f"one per machine in the order of the speed states) are needed, got {given!r}"
         )
     lam, right, left = eigen(np.asarray(sys.A))
     P = participation_factors(right, left)

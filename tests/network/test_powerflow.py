@@ -14,7 +14,7 @@ import pytest
 import scipy.sparse as sp
 
 from stabctl.case import PQ, PV
-from stabctl.errors import CaseError, PowerFlowError, UnknownBusError
+from stabctl.errors import CaseError, PowerFlowError, UnknownBusError, WrongTypeError
 from stabctl.io import load_case
 from stabctl.network import ybus as network
 from stabctl.network.powerflow import solve_powerflow
@@ -328,6 +328,12 @@ def test_branch_lookup_errors():
         network.find_branches(case, 5, 3)
     with pytest.raises(CaseError, match="cannot remove row 15"):
         network.build_ybus(case, drop=[14])
+    # round 43: -1 was named "row 0"; 1.5 removed row 1
+    with pytest.raises(CaseError, match=r"cannot remove branch index -1: .* 0 to 13"):
+        solve_powerflow(case, drop=[-1])
+    for odd in (1.5, "3", None, True):
+        with pytest.raises(WrongTypeError, match=r"0-based whole-number indices, got "):
+            network.build_ybus(case, drop=[odd])
     with pytest.raises(CaseError, match="line row 5 is not in service"):
         network.Network.from_case(case, drop=[4]).without([4])
 

@@ -204,12 +204,13 @@ def test_a_discrete_time_model_is_refused(sys_k, ma_k):
 @pytest.mark.filterwarnings("error")
 @pytest.mark.parametrize(
     "inertia",
-    [[0, 0, 0, 0], [1, -1, 1, 1], [np.nan, 1, 1, 1], [1, 1, 1]],
-    ids=["all 0", "negative", "NaN", "too few"],
+    [[0, 0, 0, 0], [1, -1, 1, 1], [np.nan, 1, 1, 1], [1, 1, 1], "abcd", "1234", [1, 1, "x", 1]],
+    ids=["all 0", "negative", "NaN", "too few", "text", "digits", "a text among"],
 )
 def test_bad_inertia_weights_are_refused(sys_k, inertia):
     """All-zero weights divided by zero (numpy's RuntimeWarning, eta NaN, Kundur's
-    inter-area mode relabelled 'local'); they are refused as `coi_speed` refuses them."""
+    inter-area mode relabelled 'local'); they are refused as `coi_speed` refuses them.
+    Round 43: a text gave numpy's bare "could not convert string to float"."""
     with pytest.raises(InputError, match=r"modal_analysis\(inertia\): .* not all 0"):
         modal_analysis(sys_k, inertia=inertia)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from stabctl.dynamics.driver import Simulator
-from stabctl.dynamics.results import LOSS_OF_SYNCHRONISM, STOPPED
+from stabctl.dynamics.results import LOSS_OF_SYNCHRONISM, STOPPED, SimulationResult
 from stabctl.errors import InputError, SimulationError
 from stabctl.io import load_case
 from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
@@ -60,7 +60,7 @@ def mismatches(name: str, every: int = 1):
     return bad, 1 - t_early / t_full
 
 
-def test_monitored_run_is_the_same_trajectory_up_to_its_stop(kundur):
+def test_monitored_run_is_the_same_trajectory_up_to_its_stop(kundur, tmp_path):
     fault = LineFault(3, 101)
     full = kundur.run(fault.events(0.1), 6.0)
     seen = []
@@ -79,6 +79,12 @@ def test_monitored_run_is_the_same_trajectory_up_to_its_stop(kundur):
         fault.events(0.5), 6.0, monitor=lambda r: "stop" if r.t[-1] > 1.5 else None
     )
     assert long_fault.verdict == STOPPED and long_fault.summary()["stable"] is None
+    # round 43: written to .npz and read back it said "stable" (the monitor's word was in
+    # `meta`, which the file did not hold)
+    back = SimulationResult.from_npz(long_fault.to_npz(tmp_path / "stopped.npz"))
+    assert back.verdict == STOPPED and back.meta == {"early_verdict": "stop"}
+    again = SimulationResult.from_npz(full.to_npz(tmp_path / "full.npz"))
+    assert again.verdict == "stable" and again.meta == {}
     assert kundur.run(fault.events(0.5), 6.0).verdict == LOSS_OF_SYNCHRONISM
     for odd in (5, 0, b"stop"):
         with pytest.raises(TypeError, match=r"run\(monitor\): a monitor returns None .* got"):
