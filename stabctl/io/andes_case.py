@@ -645,13 +645,24 @@ _ANDES_JSON = (
 )
 
 
+def _first_text_byte(f) -> bytes:
+    """The first byte of open binary file ``f`` that is not JSON white space (b"" if
+    none), read in 64 KiB blocks."""
+    while block := f.read(1 << 16):
+        text = block.lstrip(b" \t\r\n")
+        if text:
+            return text[:1]
+    return b""
+
+
 def _check_json_layout(path: Path) -> None:
     """InputError for a json file that is not in ANDES's layout (`_ANDES_JSON`), naming
     what it is (a stabctl case, a PSTess matrix file) or the key that breaks the layout:
     ANDES read a stabctl case's ``"version": 1`` as model rows and failed with
     "'int' object is not iterable".  A key given twice is refused (`_json_data`), and a
-    byte-order mark (ANDES's reader fails on it); a file that is not JSON is left to
-    ANDES, whose message names it."""
+    byte-order mark (ANDES's reader fails on it), and a file whose first character
+    cannot start JSON text (NULs, a spreadsheet renamed, ...), before it is read whole;
+    other text that is not JSON is left to ANDES, whose message names it."""
     from stabctl.io.pst import FORMAT
 
     with open(path, "rb") as f:
@@ -661,6 +672,12 @@ def _check_json_layout(path: Path) -> None:
                 "by some Windows editors), which ANDES's json reader cannot read: save it "
                 "as UTF-8 without one"
             )
+        f.seek(0)
+        first = _first_text_byte(f)
+    if not first or first not in b'{["-0123456789tfn':  # (round 42: 200 MB of NULs was
+        # read whole three times, 1 GiB, before ANDES said "Expecting value")
+        said = "nothing but white space" if not first else f"it starts with the byte {first!r}"
+        raise InputError(f"{path.name}: not JSON text ({said}): {_ANDES_JSON}")
     data = _json_data(path)
     if data is None:
         return
@@ -1860,7 +1877,7 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
     regulating a remote bus, with a nominal frequency other than the system's or whose
     BusFreq (row ``bf``) has no washout."""
     regca1 = m.class_name in ("REGCA1", "REGCP1")
-    if not regca1 and m.igreg.v[k] is not None:
+    if not regca1 and _remote(m.igreg.v[k], bus):
         return f"remote bus igreg = {m.igreg.v[k]} (stabctl: the device's own bus)"
     if m.bus.v[k] != bus:
         return f"bus {m.bus.v[k]} differs from its static generator's ({bus})"
@@ -1871,7 +1888,7 @@ def _converter_refusal(ss, m, k, bus, shared: bool, bf: int) -> str:
         if why:
             return f"its angle comes from PLL {m.pll.v[k]}: {why}"
     if regca1:
-        return _electrical_control_refusal(ss, m.idx.v[k])
+        return _electrical_control_refusal(ss, m.idx.v[k], bus)
     if m.fn.v[k] != ss.config.freq:  # fHz = fn f: its trip points, in Hz, read at fn
         return f"fn = {m.fn.v[k]:g} Hz differs from the system frequency {ss.config.freq:g} Hz"
     if ss.BusFreq.fn.v[bf] != ss.config.freq:
@@ -1921,9 +1938,21 @@ _REECA1_NAMES = {"pqflag": "PQFLAG", "tiq": "Tiq"}
 _REECA1_CONFIG = {"Kqs": "kqs", "Kvs": "kvs", "Tpfilt": "tpfilt"}
 
 
-def _electrical_control_refusal(ss, regc) -> str:
+def _remote(busr, bus) -> bool:
+    """Whether a device's regulated bus ``busr`` (None: its own) is another than its own
+    ``bus`` (round 43: a busr naming the device's own bus was refused as remote; ANDES
+    regulates that same bus either way, as PSS/E's IREG of its own bus or 0)."""
+    if busr is None:
+        return False
+    try:
+        return float(busr) != float(bus)
+    except (TypeError, ValueError):  # a text idx
+        return str(busr) != str(bus)
+
+
+def _electrical_control_refusal(ss, regc, bus) -> str:
     """Why renewable generator ``regc``'s electrical control cannot be mapped (empty if
-    it has none or one REECA1 or REECB1 on its own bus)."""
+    it has none or one REECA1 or REECB1 regulating its own ``bus``)."""
     drivers = _electrical_controls(ss, regc)
     if len(drivers) > 1 or any(name not in MAPPED_CONTROLS for name, _ in drivers):
         labels = ", ".join(f"{name} {ss.models[name].idx.v[j]}" for name, j in drivers)
@@ -1935,14 +1964,14 @@ def _electrical_control_refusal(ss, regc) -> str:
         return ""
     name, j = drivers[0]
     ree = ss.models[name]
-    if ree.busr.v[j] is not None:
+    if _remote(ree.busr.v[j], bus):
         return f"its {name} regulates remote bus busr = {ree.busr.v[j]} (stabctl: its own)"
     plants = _plant_controls(ss, ree.idx.v[j])
     if len(plants) > 1:
         return f"its {name} takes references from {len(plants)} REPCA1 (stabctl: one)"
     for p in plants:
         m = ss.REPCA1
-        if m.busr.v[p] is not None:
+        if _remote(m.busr.v[p], bus):
             return f"its REPCA1 {m.idx.v[p]} regulates remote bus busr = {m.busr.v[p]}"
     if name == "REECB1" and _wind_links(ss, ree.idx.v[j]):
         return f"its REECB1 {ree.idx.v[j]} drives a wind turbine (stabctl: a REECA1's only)"

@@ -43,6 +43,7 @@ WTTQA1 ICONs and CONs); ANDES 2.0 ``andes/io/psse-dyr.yaml`` for the same orders
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -266,6 +267,8 @@ def _plant_row(
         _own_bus(rec)
         v["reec"] = _REEC[rec.model]
         _copy(rec, v)
+        if rec.model == "REECA1":
+            _no_curve_noted(rec, v)
     if "REPCA1" in plant:
         rec = plant["REPCA1"]
         if not reec:
@@ -279,6 +282,21 @@ def _plant_row(
             v["pc_Pmax"], v["pc_Pmin"] = v["pc_Pmax"] - p0, v["pc_Pmin"] - p0
     _wind(plant, reec[0] if reec else None, v)
     return [float(v[p.name]) for p in CONVERTER.params]
+
+
+def _no_curve_noted(rec: DyrRecord, v: dict) -> None:
+    """Warn of a REECA1 VDL curve whose points are all 0: read as no curve, the current
+    limited by Imax alone (as a REECD1's table of no points; round 43: every run of it
+    was refused at a current limit 0, without a word at import)."""
+    for volts, amps, curve, limited in (("Vq", "Iq", "VDL1", "Iq"), ("Vp", "Ip", "VDL2", "Ip")):
+        names = [f"{x}{j}" for x in (volts, amps) for j in range(1, 5)]
+        if all(v[n] == 0 for n in names):
+            warnings.warn(
+                f"{rec.label()}: {curve} ({volts}1..{amps}4) all 0: read as no curve, "
+                f"{limited} limited by Imax alone (a table of no points, as REECD1's)",
+                UserWarning,
+                stacklevel=2,
+            )
 
 
 def _dera1_row(rec: DyrRecord, gen: dict, number: int) -> list[float]:

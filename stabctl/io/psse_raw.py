@@ -537,11 +537,13 @@ _MTDC = ("NAME", "NCONV", "NDCBS", "NDCLN", "MDC", "VCONV", "VCMOD", "VCONVN")
 _GNE_FIRST = ("NAME", "MODEL", "NTERM")
 
 
-def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
-    """(SBASE, version, BASFRQ, index of its line) from the case identification record:
-    IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ (the same six fields in v32-v36), after the
-    ``@!`` column-heading lines PSS/E 35 and later write above it.  IC must be 0 (a new
-    case): 1 is a change file, which PSS/E adds to the case in its working memory."""
+def _header(lines: list[str], path: Path) -> tuple[float, int, float, int, list]:
+    """(SBASE, version, BASFRQ, index of its line, the defaults taken) from the case
+    identification record: IC, SBASE, REV, XFRRAT, NXFRAT, BASFRQ (the same six fields in
+    v32-v36), after the ``@!`` column-heading lines PSS/E 35 and later write above it.  IC
+    must be 0 (a new case): 1 is a change file, which PSS/E adds to the case in its
+    working memory.  A blank REV (read as 33) or BASFRQ (60 Hz) is named (RawSource, for
+    ``changed``; round 43: taken without a word)."""
     first = next((i for i, t in enumerate(lines) if not t.lstrip().startswith("@!")), len(lines))
     if len(lines) < first + 3:
         raise CaseError(
@@ -566,7 +568,13 @@ def _header(lines: list[str], path: Path) -> tuple[float, int, float, int]:
         rec.fail(f"RAW version {rev} is not supported (32, 33, 34, 35 or 36)")
     if sbase <= 0 or freq <= 0:
         rec.fail(f"SBASE {rec.written(0, 1)} MVA and BASFRQ {rec.shown(0, 5, freq)} Hz must be > 0")
-    return sbase, rev, freq, first
+    fields = rec.lines[0]
+    defaults = [
+        rec.source(f"case identification: {name} not given: read as {value}")
+        for k, name, value in ((2, "REV", "version 33"), (5, "BASFRQ", "60 Hz (the POM's default)"))
+        if k >= len(fields) or not fields[k].strip()
+    ]
+    return sbase, rev, freq, first, defaults
 
 
 def _record_lines(sec: str, first: list[str], rec_file: str, lineno: int) -> int:
@@ -1362,6 +1370,9 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
         return
     if not _modelled(b, rec, (2, 3, 4), what):
         return
+    for w in sorted(set(range(3)) - set(windings)):  # (round 43: left out without a word)
+        why = "at an isolated bus" if rows[w] is None else f"out of service (STAT {stat})"
+        b.switched_off.append(rec.source(f"{what}: winding {w + 1} (bus {buses[w]}) {why}"))
     in_service = [2 + w for w in windings]
     held = [(row, cod) for row, cod in controls if row in in_service]
     _hold_transformer(b, rec, held, "-".join(map(str, buses)), what)
@@ -1756,8 +1767,9 @@ def read_raw(
         lines = case_text(path, "RAW file").splitlines()
     except OSError as exc:
         raise CaseError(f"cannot read {path}: {exc}") from None
-    base, version, freq, first = _header(lines, path)
+    base, version, freq, first, defaults = _header(lines, path)
     b = _Builder(version, base, loads, net=net)
+    b.changed += defaults
     for rec in _records(lines, path, version, first + 3):
         _dispatch(b, rec)
     return _finish(b, path, lines[first + 1 : first + 3], version, freq)

@@ -19,6 +19,7 @@ from stabctl.dynamics.driver import Simulator
 from stabctl.errors import CaseError, InputError
 from stabctl.io import load_case
 from stabctl.io.andes_case import read_andes_case
+from stabctl.models.converters import CONVERTER
 
 andes = pytest.importorskip("andes")
 pd = pytest.importorskip("pandas")
@@ -122,6 +123,14 @@ def edited(tmp_path, case: str, model: str, **values):
         ),
         (WT3, "REECA1", {"Vp4": 0.7}, "Vp3 = 0.8, Vp4 = 0.7: it must be Vp1 <= Vp2 <= Vp3 <= Vp4"),
         (WT3, "REECA1", {"Ip1": 5.0}, "Ip1 = 5, Ip2 = 4, Ip3 = 8, Ip4 = 10: it must be Ip1 <= "),
+        # round 43: a curve all 0 (ANDES limits the current to 0; the table's route reads
+        # it as no curve, Imax alone): refused, not run otherwise than ANDES
+        (
+            WT3,
+            "REECA1",
+            {f"{x}{j}": 0.0 for x in ("Vq", "Iq") for j in range(1, 5)},
+            "it must be not all 0 (the points of the VDL1 curve: ANDES then limits the current",
+        ),
         # a link to a device the case does not hold (ANDES's own message named neither sheet
         # nor row, at times another model: WTPTA1 for a WTARA1's rego, as 99.0)
         (ESD1, "ESD1", {"bus": 999}, "bus = 999: no ACNode (Bus) of that idx in the case (ANDES"),
@@ -413,3 +422,22 @@ def test_converter_columns_are_named_with_their_buses(tmp_path, monkeypatch):
     for k, b in zip(case.converters.number, case.converters.bus):
         placed.setdefault(int(b), []).append(f"C{int(k)}")
     assert at == {b: ",".join(names) for b, names in placed.items()} and len(placed[4]) == 10
+
+
+def test_a_regulated_bus_naming_the_device_s_own_is_its_own_bus(tmp_path):
+    """Round 43: a REECA1 (REPCA1) whose busr names its REGCA1's own bus (ieee14_wt3: bus
+    8) was refused as regulating a remote bus; ANDES regulates that same bus as with busr
+    empty (PSS/E: IREG of its own bus, as 0).  It reads as the file without busr, column
+    for column; another bus is still refused by name."""
+    plain = read_andes_case(andes.get_case(WT3), on_unsupported="skip").case.converters
+    for model in ("REECA1", "REPCA1"):
+        own = read_andes_case(edited(tmp_path, WT3, model, busr=8), on_unsupported="skip")
+        got = own.case.converters
+        differ = [
+            p.name
+            for p in CONVERTER.params
+            if not np.array_equal(getattr(got, p.name), getattr(plain, p.name))
+        ]
+        assert differ == [], model
+    with pytest.raises(InputError, match=r"REGCA1 1: its REECA1 regulates remote bus busr = 4"):
+        read_andes_case(edited(tmp_path, WT3, "REECA1", busr=4))

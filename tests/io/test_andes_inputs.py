@@ -412,6 +412,12 @@ def test_a_json_file_not_in_andes_s_layout_is_named_for_what_it_is(tmp_path):
     other.write_text("[1, 2]")
     with pytest.raises(InputError, match=r"^other.json: holds a list, not an ANDES case: an ANDES"):
         read_andes_case(other)
+    # round 42 (R01): 200 MB of NULs was read whole three times (1 GiB) before ANDES's
+    # "Expecting value"; a first byte no JSON text starts with is refused before reading on
+    for text, said in ((b"\0" * 4096, r"b'\\x00'"), (b" \n\t", "nothing but white space")):
+        other.write_bytes(text)
+        with pytest.raises(InputError, match=rf"^other.json: not JSON text \(.*{said}"):
+            read_andes_case(other)
 
 
 def test_an_andes_case_without_a_line_is_named_so(tmp_path):

@@ -183,6 +183,42 @@ def test_wind_turbine_records_read_as_andes_reads_its_wind_case(tmp_path):
     assert differ == {}
 
 
+#: a REGCA1 + REECA1 plant on RENA's bus 103 (ANDES's ieee14_wt3 values in the Model
+#: Library's orders; its VDL1 Iq (2, 4, 8, 10) at Vq (0.2, 0.4, 0.8, 1.0)), the CONs from
+#: Vq1 on written by `_reeca1_plant`
+_REECA1_PLANT = (
+    "102 'GENCLS' 1 0.0 0.0 /\n"
+    "103 'REGCA1' 1 1 0.1 999.0 0.8 0.5 1.0 1.2 1.0 0.4 0.0 0.1 0.7 1.0 -1.0 0 /\n"
+    "103 'REECA1' 1 0 0 0 0 0 0 0.8 1.1 0.02 -0.02 0.02 20.0 999.0 -999.0 1.03 0.0 -2.0 "
+    "1.0 0.02 999.0 -999.0 999.0 -999.0 1.0 0.1 1.0 0.1 1.03 0.02 999.0 -999.0 999.0 "
+    "-999.0 10.0 0.02 {vdl} /\n"
+)
+
+
+def _reeca1_plant(tmp_path, vq=(0.2, 0.4, 0.8, 1.0), iq=(2.0, 4.0, 8.0, 10.0)) -> Path:
+    """`_REECA1_PLANT` with VDL1 (vq, iq) and VDL2 0.2 2 0.4 4 0.8 8 1.0 10."""
+    vdl1 = " ".join(f"{v} {i}" for v, i in zip(vq, iq))
+    text = _REECA1_PLANT.format(vdl=vdl1 + " 0.2 2.0 0.4 4.0 0.8 8.0 1.0 10.0")
+    return _dyr(tmp_path, [text])
+
+
+def test_reeca1_vdl_curve_reads_as_psse_takes_it(tmp_path):
+    """Round 43: a VDL1 curve with one falling current switched the whole curve off
+    without a word (ANDES's zVDL1); PSS/E interpolates its currents as given (it applies);
+    voltages that fall are refused naming the record; all points 0 is no curve (Imax
+    alone), named at import (every run was refused at a current limit 0)."""
+    case = load_psse(RAW, _reeca1_plant(tmp_path, iq=(1.0, 0.5, 8.0, 10.0)))
+    sim = Simulator(case)
+    assert sim.model.cp.zVDL1[0] == 1.0 and case.converters.Iq2[0] == 0.5
+    with pytest.raises(CaseError, match=r"plant\.dyr:3 REECA1 .*Vq3 = 0\.3.*Vq1 <= Vq2 <= Vq3"):
+        load_psse(RAW, _reeca1_plant(tmp_path, vq=(0.2, 0.4, 0.3, 1.0)))
+    with pytest.warns(UserWarning, match=r"plant\.dyr:3 REECA1 .*VDL1 .*all 0: read as no curve"):
+        case = load_psse(RAW, _reeca1_plant(tmp_path, vq=(0.0,) * 4, iq=(0.0,) * 4))
+    sim = Simulator(case)
+    assert sim.model.cp.zVDL1[0] == 0.0 and sim.model.cp.zVDL2[0] == 1.0
+    assert sim.run([], 0.5).verdict == "stable"
+
+
 def _rena(tmp_path, **change) -> Path:
     """RENA's DYR with ``change``: model -> {field: value}."""
     recs = read_dyr(DYR)

@@ -457,8 +457,13 @@ def test_three_winding_star_rows_taps_phases_and_status(tmp_path):
         (_Z_PAIRS[1, 2] + _Z_PAIRS[2, 0] - _Z_PAIRS[0, 1]) / 2,
     )
     np.testing.assert_allclose(rows[:, 2] + 1j * rows[:, 3], [z1, z2, z3], rtol=1e-13)
-    rows = read_raw(_three_winding(tmp_path, stat=2, name="s2.raw")).line
-    np.testing.assert_allclose(rows[rows[:, 1] == 6][:, 0], [1, 4])
+    s2 = read_raw(_three_winding(tmp_path, stat=2, name="s2.raw"))
+    np.testing.assert_allclose(s2.line[s2.line[:, 1] == 6][:, 0], [1, 4])
+    # round 43: the winding left out was not named
+    named = [str(s) for s in s2.switched_off if "three-winding" in str(s)]
+    assert named == [
+        "s2.raw:34 three-winding transformer 1-3-4 'T': winding 2 (bus 3) out of service (STAT 2)"
+    ]
     raw = read_raw(_three_winding(tmp_path, stat=0, name="s0.raw"))
     assert 6 not in raw.bus[:, 0] and not np.any(raw.line[:, 1] == 6)
 
@@ -1171,3 +1176,27 @@ def test_raw_records_that_look_wrong_are_kept_and_named(tmp_path):
     said = " ".join(str(w.message) for w in got)
     assert "bus 103: NVHI 0.90000 below NVLO 1.10000 (voltage limits stabctl does not use" in said
     assert "odd.raw:14 branch 101-102 '1': R -1.00000E-2 pu, negative (kept" in said
+
+
+@pytest.mark.parametrize(
+    "header, named",
+    [
+        ("0,   100.00, 33, 0, 1", ["BASFRQ not given: read as 60 Hz (the POM's default)"]),
+        ("0,   100.00, , 0, 1, 50.00", ["REV not given: read as version 33"]),
+        (
+            "0,   100.00",
+            ["REV not given: read as version 33", "BASFRQ not given: read as 60 Hz"],
+        ),
+    ],
+)
+def test_a_header_s_blank_version_or_frequency_is_named(tmp_path, header, named):
+    """Round 43: a case identification without REV (read as version 33) or BASFRQ (60
+    Hz) was read without a word; each default taken is named in ``changed`` (the
+    import's "read ... with a value other than the file's" warning)."""
+    path = _edit(tmp_path, "0,   100.00, 33, 0, 1, 50.00", header)
+    said = [str(c) for c in read_raw(path).changed if "case identification" in str(c)]
+    assert len(said) == len(named)
+    for text, want in zip(said, named):
+        assert text.startswith("edited.raw:1 ") and want in text
+    with pytest.warns(UserWarning, match=r"case identification: (REV|BASFRQ) not given"):
+        load_psse(path)

@@ -425,6 +425,22 @@ def test_reeca1_voltage_dependent_limit_and_q_priority_room_for_ip():
     assert dx[1, 0] == pytest.approx((np.sqrt(5.05**2 - 1.0) - 0.1) / 0.1, rel=1e-13)
 
 
+def test_reeca1_vdl_curve_with_a_falling_current_applies_and_all_zero_is_no_curve():
+    # round 43: one falling current point switched the whole VDL1 off (limit 1e8, Iqinj
+    # 9.6 passed); PSS/E (and GridPACK) interpolate it as given: Iq (1, 0.5, 8, 10) at
+    # (0.2, 0.4, 0.8, 1.0): at 0.3 pu (0.3 - 0.2)(0.5 - 1)/0.2 + 1 = 0.75 pu
+    changes = [(S["Vt_filter"], 0.3)]
+    falling = {"Iq1": 1.0, "Iq2": 0.5}
+    dx, _, _, cp = reeca1(changes, V=0.3, Kqv=20.0, Imax=5.05, Iqrmax=99.0, **falling)
+    assert cp.zVDL1[0] == 1.0
+    assert dx[1, 0] == pytest.approx((0.75 - 0.1) / 0.1, rel=1e-13)
+    # all its points 0: no curve (a REECD1's table of no points): Imax alone, not 1e8
+    zero = {f"{x}{j}": 0.0 for x in ("Vq", "Iq") for j in range(1, 5)}
+    dx, _, _, cp = reeca1(changes, V=0.3, Kqv=20.0, Imax=5.05, Iqrmax=99.0, **zero)
+    assert cp.zVDL1[0] == 0.0 and cp.zVDL2[0] == 1.0
+    assert dx[1, 0] == pytest.approx((5.05 - 0.1) / 0.1, rel=1e-13)
+
+
 def test_reeca1_holds_ipmax_after_the_dip_and_runs_its_timers_down():
     # after the dip (1 pu) with the Thld2 timer running: Ipmax is the held 0.2, not the
     # room; both timers run down at 1/s; without a running timer the held value tracks

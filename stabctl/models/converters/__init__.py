@@ -243,8 +243,9 @@ class ConverterParams(Declared):
     power-factor reference, 0 where P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0|
     (the REGCA1's Ipcmd less the REECA1's, ANDES's two initial commands summed; 0 for a
     REGC_B, whose Ipcmd0 is P0/|V0|: it has no LVG), Imaxr
-    (Imax, 1e8 where <= 0), zVDL1, zVDL2 (1 where the VDL curve's points rise: the curve
-    applies), nVDL1, nVDL2 (a REECD1's: the points its ten-point curves use, 0 none);
+    (Imax, 1e8 where <= 0), zVDL1, zVDL2 (1 where the VDL curve has a point not 0: the
+    curve applies; all 0, no curve: Imax alone), nVDL1, nVDL2 (a REECD1's: the points its
+    ten-point curves use, 0 none);
     REPCA1 (``repc``,
     ANDES repca1.py): the monitored line's end buses (rows bus1_idx, bus2_idx; the
     device's own bus without a line) and their positions pos1, pos2 among the kept buses

@@ -90,10 +90,11 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
     compares, `reecd1.initial_voltage`; |V0| of the others) and the point counts nVDL1,
     nVDL2 of its ten-point curves (`_table_points`)."""
 
-    def rising(a: str, b: str):
-        pts = [vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3)]
-        nxt = [vals[f"{c}{j}"] for c in (a, b) for j in (2, 3, 4)]
-        return np.all(np.array(pts) <= np.array(nxt), axis=0)
+    def curve(a: str, b: str):
+        """1 where the curve has a point not 0 (all 0: no curve, Imax alone; its voltages
+        rise: `stabctl.models.converters.rules`; its currents may fall, as PSS/E's)."""
+        pts = np.array([vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3, 4)])
+        return np.any(pts != 0, axis=0)
 
     # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu);
     # REECB1's -Q0 (reecb1.py 304)
@@ -112,8 +113,8 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
         "tanpf": tanpf,
         "Ipoff": Ipcmd0 - P0 / v0,
         "Imaxr": np.where(vals["Imax"] <= 0, 1e8, vals["Imax"]),
-        "zVDL1": rising("Vq", "Iq").astype(float),
-        "zVDL2": rising("Vp", "Ip").astype(float),
+        "zVDL1": curve("Vq", "Iq").astype(float),
+        "zVDL2": curve("Vp", "Ip").astype(float),
         "nVDL1": np.where(reec == REECD1, _table_points(vals, "Vq", "Iq"), 0.0),
         "nVDL2": np.where(reec == REECD1, _table_points(vals, "Vp", "Ip"), 0.0),
     }
@@ -213,10 +214,10 @@ def _vdl_table(P, k, curve, u):
 @kernel
 def _vdl_limit(P, k, curve, u):
     """REECA1's VDL limit of device k at filtered voltage u: min(VDL(u), Imaxr) (`_vdl`,
-    columns c) if the curve's points rise (flag column z), else 1e8 (ANDES Iqmax1,
-    Ipmax1); curve `_VDL1` or `_VDL2`.  A REECB1 has no curves: Imaxr (ANDES reecb1.py
-    Ipmax, Iqmax).  A REECD1: min(its ten-point curve, Imaxr) (`_vdl_table`; Imaxr
-    without a curve, InterPSS's ``currentLimits``)."""
+    columns c) if it has a curve (flag column z: not all its points 0), else Imaxr (no
+    curve, as a REECD1's table of no points); curve `_VDL1` or `_VDL2`.  A REECB1 has no
+    curves: Imaxr (ANDES reecb1.py Ipmax, Iqmax).  A REECD1: min(its ten-point curve,
+    Imaxr) (`_vdl_table`; Imaxr without a curve, InterPSS's ``currentLimits``)."""
     z, c = curve[0], curve[1]
     if P[k, C.REEC] == REECB1:
         return P[k, C.IMAXR]
@@ -225,7 +226,7 @@ def _vdl_limit(P, k, curve, u):
             return P[k, C.IMAXR]
         return min(_vdl_table(P, k, curve, u), P[k, C.IMAXR])
     if P[k, z] == 0.0:
-        return 1e8
+        return P[k, C.IMAXR]
     return min(_vdl(P, k, c, u), P[k, C.IMAXR])
 
 

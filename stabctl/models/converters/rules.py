@@ -12,12 +12,15 @@ divisions, limit pairs and rest points (docs/ibr.md).
 
 An ANDES file's REECA1 whose voltage-dependent current limit's points fall (Vq1..Vq4,
 Iq1..Iq4 of VDL1; Vp1..Vp4, Ip1..Ip4 of VDL2) is refused: ANDES 2.0 ``reeca1.py`` takes
-that curve out of service without a word (its ``zVDL1``/``zVDL2``); an ibr_con row's such
-curve is out of service as in ANDES (the table's route, PSS/E's REEC_A data included, is
-left as it was).  Judged not impossible, so accepted without a word: WTARA1's aerodynamic
-gain Ka = 0 (ANDES declares it non-negative: the turbine's power then does not depend on
-its pitch, no division); a WTTQA1 speed curve sp1..sp4 that does not rise
-(neither ANDES nor the WECC WTGTRQ_A specification orders it, nothing divides by its
+that curve out of service without a word (its ``zVDL1``/``zVDL2``); so is one whose
+points are all 0 (ANDES limits the current to 0).  An ibr_con row's curve (PSS/E's
+REEC_A data included) applies as PSS/E's REECA1 takes it: its voltages must not fall
+(refused on any route), its currents may (round 43: a falling current point switched
+the whole curve off without a word), and all its points 0 is no curve (Imax alone, as
+a REECD1's table of no points).  Judged not impossible, so accepted without a word:
+WTARA1's aerodynamic gain Ka = 0 (ANDES declares it non-negative: the turbine's power
+then does not depend on its pitch, no division); a WTTQA1 speed curve sp1..sp4 that does
+not rise (neither ANDES nor the WECC WTGTRQ_A specification orders it, nothing divides by its
 steps: only its power points p1..p4 must rise).
 """
 
@@ -203,10 +206,35 @@ _REEC = (
     _around_zero("dPmax", "dPmin", "the P reference"),
 )
 #: an ANDES file's REECA1's voltage-dependent current limits VDL1 (Iq) and VDL2 (Ip): their
-#: voltage and current points do not fall (ANDES 2.0 reeca1.py's ``zVDL1``, ``zVDL2``)
-_REEC_VDL = tuple(
-    _not_falling(tuple(f"{x}{j}" for j in range(1, 5)), f"the {curve} curve")
-    for x, curve in (("Vq", "VDL1"), ("Iq", "VDL1"), ("Vp", "VDL2"), ("Ip", "VDL2"))
+#: voltage and current points do not fall (ANDES 2.0 reeca1.py's ``zVDL1``, ``zVDL2``),
+#: and a curve is not all 0 (ANDES then limits the current to 0: nothing starts; an
+#: ibr_con row's all-0 curve is no curve, PSS/E's table of no points)
+_REEC_VDL = (
+    *(
+        _not_falling(tuple(f"{x}{j}" for j in range(1, 5)), f"the {curve} curve")
+        for x, curve in (("Vq", "VDL1"), ("Iq", "VDL1"), ("Vp", "VDL2"), ("Ip", "VDL2"))
+    ),
+    *(
+        Rule(
+            tuple(f"{x}{j}" for x in (v, i) for j in range(1, 5)),
+            lambda *pts: np.logical_or.reduce([np.asarray(p) != 0 for p in pts]),
+            f"not all 0 (the points of the {curve} curve: ANDES then limits the current "
+            "to 0, so the device cannot start)",
+        )
+        for v, i, curve in (("Vq", "Iq", "VDL1"), ("Vp", "Ip", "VDL2"))
+    ),
+)
+#: an ibr_con row's REECA1 VDL curves (any route: PSS/E's REEC_A data, an ANDES file's):
+#: voltages that do not fall (PSS/E interpolates in voltage; its currents may fall, as
+#: PSS/E's and GridPACK's REECA1 take them)
+_REEC_VDL_VOLTAGES = tuple(
+    Rule(
+        tuple(f"{x}{j}" for j in range(1, 5)),
+        lambda *v: np.logical_and.reduce([a <= b for a, b in zip(v, v[1:])]),
+        f"{' <= '.join(f'{x}{j}' for j in range(1, 5))} (the voltages of the {curve} curve, "
+        "which is linear between them)",
+    )
+    for x, curve in (("Vq", "VDL1"), ("Vp", "VDL2"))
 )
 #: the lags an ANDES file's REECA1 (REECB1) must have, as the ibr_con table's
 #: `stabctl.models.converters.converter_params` does (its Pe filter Tp may be 0: none)
@@ -346,6 +374,7 @@ COMPONENTS: tuple[tuple[str, Callable[[Any], Any], tuple[Rule, ...]], ...] = (
         (name, lambda t, code=code: (t.type == REGCA1) & (t.reec == code), _REEC)
         for name, code in (("REECA1", REECA1), ("REECB1", REECB1), ("REECD1", REECD1))
     ),
+    ("REECA1", lambda t: (t.type == REGCA1) & (t.reec == REECA1), _REEC_VDL_VOLTAGES),
     (
         "REGCA1 battery",
         lambda t: (t.type == REGCA1) & (t.storage == 1) & (t.En > 0),
