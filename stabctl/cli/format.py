@@ -475,7 +475,9 @@ def sweep_line(key, rec) -> str:
         f"{key:<34} {r['cct_s']:7.{n}f} {r['cct_cycles']:8.{c}f} {err:>6} "
         f"{r['n_simulations']:5d} " + ("      -" if wall is None else f"{wall:7.2f}")
     )
-    if (rc := r.get("run_end_check")) and rc.get("t_separation_s") is not None:
+    from stabctl.stability.cct import run_end_lost
+
+    if run_end_lost(rc := r.get("run_end_check")):
         line += f"\n{'':<34} {run_end_line(rc, r['cct_s'], n)}"  # round 41: said by cct only
     if r.get("storage_acted") is False:
         line += f"\n{'':<34} {NO_DEVICE_ACTED}"
@@ -587,6 +589,7 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
     """
     n, c = time_decimals(tol_s), cycle_decimals(tol_s)
     from stabctl.dynamics.results import END_FREQUENCY_HZ, END_VOLTAGE_PU
+    from stabctl.stability.cct import run_end_lost
     from stabctl.stability.screening import ABOVE, INSECURE, VERDICTS
 
     width = max([22, *(len(_fault_label(r)) for r in rows)])
@@ -623,7 +626,7 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
                 f"{where} ends off a normal operating point: {' and '.join(r['end_concerns'])}"
                 f" at t = {r['end_t_s']:g} s"
             )
-        if (rc := r.get("run_end_check")) and rc.get("t_separation_s") is not None:
+        if run_end_lost(rc := r.get("run_end_check")):
             again = "with `stabctl cct` and a later --tf"
             click.echo(f"{where} {run_end_line(rc, r['cct_s'], n, again)}")
     counts = {v: sum(r["verdict"] == v for r in rows) for v in VERDICTS}
@@ -918,6 +921,8 @@ def _run_end_lines(d: dict) -> list:
     without storage (and with the allocation) NOT CONVERGED IN THE RUN'S END, as `cct`
     says (`run_end_line`), and its check run T_AFTER_FAULT s longer with the allocation
     (`stabctl.placement.plan._run_end`)."""
+    from stabctl.stability.cct import run_end_lost
+
     again = "with `stabctl cct` and a later --tf"
     window = (d.get("run_end") or {}).get("window_s")
     out = []
@@ -927,7 +932,7 @@ def _run_end_lines(d: dict) -> list:
             ("cct_run_end_check", "CCT with the allocation", r["cct_s"]),
         ):
             rc = r.get(key)
-            if rc and rc.get("t_separation_s") is not None and cct is not None:
+            if run_end_lost(rc) and cct is not None:
                 out.append(f"  {r['name']}: {what}: {run_end_line(rc, cct, 3, again)}")
         rc = r.get("run_end_check")
         if not rc:

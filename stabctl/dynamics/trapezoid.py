@@ -500,11 +500,12 @@ def run(
         if bad < 0:
             bad = _unhealthy_state(x, nm, _judged_now(partitions, grid.t[k + 1], nm))
             why = symptom(x[bad], bad, nm) if bad >= 0 else ""
-        if why:
+        if why:  # the step named as where the network fails (round 38)
+            smaller = "" if h > 2 * sim.default_h else "; use a smaller step"  # (said)
             msg = (
                 f"case '{sim.case.name}': trapezoidal step ending at t = {grid.t[k + 1]:.4f} s:"
-                f" state {m.state_name(bad)} = {x[bad]:.6g} ({why}); use a smaller step"
-                f" (the run reached {grid.t[k]:.4f} s)"
+                f" state {m.state_name(bad)} = {x[bad]:.6g}: {_at_step(why, h, sim.default_h)}"
+                f"{smaller} (the run reached {grid.t[k]:.4f} s)"
             )
             _fail(sim, grid, rec, k, wall, limit, msg, NumericalInstabilityError, partitions)
     return sim._result(grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions)

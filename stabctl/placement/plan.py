@@ -77,7 +77,7 @@ from stabctl.placement.references import (
 )
 from stabctl.placement.requirements import CostModel, Requirement, contingencies_of, describe
 from stabctl.progress import Heartbeat
-from stabctl.stability.cct import RUN_END_KEYS, T_AFTER_FAULT
+from stabctl.stability.cct import RUN_END_KEYS, T_AFTER_FAULT, run_end_lost
 
 logger = logging.getLogger(__name__)
 
@@ -722,13 +722,15 @@ def _generate(
     if st.verified and not ok:
         st.verified, st.message = False, st.message + "; the sized energies fail a check run"
     longer = _run_end(pl, st)
-    lost = sorted(n for n, r in longer.items() if r["t_separation_s"] is not None)
+    lost = sorted(n for n, r in longer.items() if run_end_lost(r))
     run_end = {
         "window_s": T_AFTER_FAULT,
         "checked": sorted(longer),
         "not_converged": lost,
         "cct_no_storage_not_converged": sorted(
-            c.name for c in st.cons if _not_converged(pl.base.get(c.name))
+            c.name
+            for c in st.cons
+            if run_end_lost((pl.base.get(c.name) or {}).get("run_end_check"))
         ),
     }
     if lost:
@@ -756,13 +758,6 @@ def _generate(
         energy=energy,
         run_end=run_end,
     )
-
-
-def _not_converged(ev: dict | None) -> bool:
-    """Whether an evaluation's CCT search found the run cleared at its CCT losing
-    synchronism when run T_AFTER_FAULT s longer (`CCTResult.run_end_check`)."""
-    rc = (ev or {}).get("run_end_check")
-    return rc is not None and rc.get("t_separation_s") is not None
 
 
 def _run_end(pl: PlanContext, st: _Rounds) -> dict:

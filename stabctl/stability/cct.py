@@ -711,6 +711,23 @@ def critical_clearing_time(
 #: `run_end_check`): the longer run's end and when it separated (None: stable), s
 RUN_END_KEYS = ("t_end_s", "t_separation_s")
 
+
+def run_end_lost(check: dict | None) -> bool:
+    """Whether a run's-end check (a dict of `RUN_END_KEYS`, None: none was run) found the
+    longer run losing synchronism: the CCT is not converged in the run's end.
+
+    Parameters
+    ----------
+    check : dict or None
+        ``run_end_check`` of a CCT result's dict or record, or of a plan's row.
+
+    Returns
+    -------
+    bool
+    """
+    return check is not None and check.get("t_separation_s") is not None
+
+
 #: an unstable end of the bracket that separated later than this share of its run after
 #: its clearing has the stable end run again T_AFTER_FAULT s longer (`_run_end_check`)
 LATE_SEPARATION = 0.8

@@ -797,12 +797,16 @@ def test_a_plan_names_its_armed_groups_and_its_chattering():
         main, [*args, "--target-cct-gain", "30", "--deadband-hz", "0", "--json"]
     )
     rows = {r["name"]: r for r in json.loads(res.stdout)["contingencies"]}
-    assert (rows["3-101"]["switchings"], rows["3-101"]["chattering"]) == (342, 293)
+    # how many of a bang-bang law's switchings chatter without a deadband depends on the
+    # last bits of the arithmetic (342/293 and 350/302 with other numpy, scipy releases):
+    # most of hundreds of them
+    n, chattering = rows["3-101"]["switchings"], rows["3-101"]["chattering"]
+    assert n > 200 and 0.7 < chattering / n < 0.95, (n, chattering)
     assert rows["3-101"]["critical_group"] is None
     text = CliRunner().invoke(main, [*args, "--target-cct-gain", "30", "--deadband-hz", "0"])
     assert (
-        "  3-101: at its required time, 342 switchings; 293 of the switchings chattering "
-        "(within 20 ms of the device's previous one)" in text.output
+        f"  3-101: at its required time, {n} switchings; {chattering} of the switchings "
+        "chattering (within 20 ms of the device's previous one)" in text.output
     )
 
 
