@@ -394,7 +394,13 @@ def print_cct(case, rating, d) -> None:
         click.echo(critical_group_line(case, d["critical_group"], n))
     for line in islanding_lines(case, d.get("islanded", []), timed=False):
         click.echo(f"the contingency's trip: {line}")
-    if d["separated_machines"]:
+    if failure := d.get("unstable_end_failure"):  # before any machine separated
+        click.echo(f"cleared at {d['t_unstable_s']:.{n}f} s the run fails: {failure}")
+        if d["separated_machines"]:
+            click.echo(
+                f"machine(s) leading its swing: {machine_list(case, d['separated_machines'])}"
+            )
+    elif d["separated_machines"]:
         click.echo(
             f"machine(s) {machine_list(case, d['separated_machines'])} lose "
             f"synchronism when cleared at {d['t_unstable_s']:.{n}f} s"

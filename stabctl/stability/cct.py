@@ -299,11 +299,13 @@ class CCTResult:
     search_bracket: the (stable, unstable) interval the bisection started from, after the
     bound checks and expansion.  probes: every (clearing time s, stable) simulated, in
     order.  separated: machines that lose synchronism when cleared at t_unstable (empty if
-    the criterion failed without separation).  islanded: the islanding of the first probe
-    that islands (`stabctl.dynamics.driver.islanding_log`: buses cut from every machine,
-    their load shed, or an island with machines apart from the main grid, those machines
-    lost and the CCT that of the rest; empty: none).  step_s: integration step h; wall_time_s:
-    the whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
+    the criterion failed without separation; where that run failed first,
+    ``unstable_end_failure`` says how, and these are the machines leading its swing).
+    islanded: the islanding of the first probe that islands
+    (`stabctl.dynamics.driver.islanding_log`: buses cut from every machine, their load
+    shed, or an island with machines apart from the main grid, those machines lost and
+    the CCT that of the rest; empty: none).  step_s: integration step h; wall_time_s: the
+    whole search.  cct_half_step_s: the CCT at h/2 (module docstring; None when the
     check was not asked for), half_step_probes: its runs; conventions: the model's.
     n_simulations: every run of the search (probes and half_step_probes; a provisional
     probe continued to t_end counts once, a run started again because its provisional one
@@ -326,6 +328,9 @@ class CCTResult:
     probes: tuple[tuple[float, bool], ...] = field(repr=False)
     separated: tuple[int, ...] = ()
     islanded: tuple = ()
+    #: what ended the run cleared at t_unstable when it failed (the network's voltage
+    #: collapse, a diverging state) before any machine separated; None: it separated
+    unstable_end_failure: str | None = None
     cct_half_step_s: float | None = None
     half_step_probes: tuple[tuple[float, bool], ...] = field(default=(), repr=False)
     conventions: str = "ieee"
@@ -375,8 +380,9 @@ class CCTResult:
 
     @property
     def cct_cycles(self) -> float:
-        """CCT in cycles of the case frequency."""
-        return self.t_stable * self.freq_hz
+        """CCT in cycles of the case frequency (to 1e-9 cycle: 0.515 s at 60 Hz gave
+        30.900000000000002)."""
+        return round(self.t_stable * self.freq_hz, 9)
 
     @property
     def bracket(self) -> tuple[float, float]:
@@ -394,7 +400,7 @@ class CCTResult:
             "conventions": self.conventions,
             "t_stable_s": self.t_stable,
             "t_unstable_s": self.t_unstable,
-            "t_unstable_cycles": self.t_unstable * self.freq_hz,
+            "t_unstable_cycles": round(self.t_unstable * self.freq_hz, 9),
             "search_bracket_s": list(self.search_bracket),
             "tol_s": self.tol_s,
             "t_max_s": self.t_max_s,
@@ -408,6 +414,7 @@ class CCTResult:
             "wall_time_s": self.wall_time_s,
             "criterion": self.criterion,
             "separated_machines": list(self.separated),
+            "unstable_end_failure": self.unstable_end_failure,
             "islanded": list(self.islanded),
             "end_concerns": list(self.end_concerns),
             "end_t_s": self.end_t_s,
@@ -689,6 +696,7 @@ def critical_clearing_time(
         criterion=getattr(probe.crit, "__name__", repr(probe.crit)),
         probes=tuple(probe.probes[h]),
         separated=probe.separated.get(k_hi, ()),
+        unstable_end_failure=probe.failed_at.get(k_hi),
         islanded=tuple(probe.islanded),
         stiff_step_s=probe.stiff_step,
         end_t_s=probe.ends.get(k_lo, (None, ()))[0],
@@ -950,6 +958,8 @@ class _Probes:
         self.separated: dict = {}
         #: the time each unstable probe at the step separated, s (`_run_end_check`)
         self.separated_at: dict[int, float] = {}
+        #: unstable probes whose run failed before any machine separated: what ended it
+        self.failed_at: dict[int, str] = {}
         self.margins: dict = {}
         self.swings: dict = {}
         self.early_stops: list = []
@@ -1124,6 +1134,8 @@ class _Probes:
             self.separated[k] = tuple(int(m) for m in (res.separated or critical_machines(res)))
             if getattr(res, "t_separation", None) is not None:
                 self.separated_at[k] = float(res.t_separation)
+            elif diverged:  # (round 44: said to "lose synchronism")
+                self.failed_at[k] = res.meta.get("diverged", "the run failed")
         if o.method == "sime" and not ok and not dead:
             t_cl = self.fault.t_fault + t_clear
             self.margins[k] = probe_margin(
@@ -1677,6 +1689,7 @@ def _outcome(fault: LineFault, t_clear: float, call) -> tuple[SimulationResult, 
         t = getattr(res, "t", None)
         cleared = t is not None and len(t) > 0 and t[-1] >= fault.t_fault + t_clear
         if res is not None and (not res.stable or cleared):
+            res.meta["diverged"] = str(exc)  # what ended it (`CCTResult.unstable_end_failure`)
             return res, True
         raise SimulationError(
             f"{fault.describe()}, cleared after {t_clear:g} s: {exc}", result=exc.result

@@ -389,6 +389,40 @@ def test_trip_bands_out_of_order_are_refused(tmp_path):
         _sim(tmp_path, (1, 0, 0, 1, 1, 0), vl0=0.5)
 
 
+@pytest.mark.parametrize(
+    ("flags", "cons", "said"),
+    [
+        (
+            (1, 0, 0, 1, 0, 0),
+            {"Iqh1": -1.0, "Iql1": 1.0},
+            r"Iqh1 = -1(\.0)?, Iql1 = 1(\.0)?: .*Iqh1 >= ",
+        ),
+        (
+            (1, 1, 0, 1, 0, 0),
+            {"dPmax": -0.5, "dPmin": 0.5},
+            r"dPmax = -0\.5, dPmin = 0\.5: .*<= 0 <=",
+        ),
+        (
+            (1, 1, 0, 1, 0, 0),
+            {"femax": -99.0, "femin": 99.0},
+            r"femax = -99(\.0)?, femin = 99(\.0)?: .*femax >= ",
+        ),
+        (
+            (1, 1, 0, 1, 0, 0),
+            {"Pmax": 0.0, "Pmin": 1.1},
+            r"Pmax = 0(\.0)?, Pmin = 1\.1: .*Pmax >= ",
+        ),
+    ],
+)
+def test_limit_pairs_out_of_order_are_refused_at_import(tmp_path, flags, cons, said):
+    """Round 44: Iqh1 below Iql1 imported and ran (exit 0, another Q at the fault); with
+    FreqFlag 1 dPmax < 0 < dPmin, femax < femin and Pmax < Pmin imported and only the
+    first run refused them, without naming the field.  Each is refused at import naming
+    the record and its fields, as REECA1's and REPCA1's pairs are."""
+    with pytest.raises(CaseError, match=r"dera1\.dyr:\d+ DERA1 \(bus 102, id 1\): " + said):
+        load_psse(RAW, _dyr(tmp_path, flags, **cons))
+
+
 def test_freqflag1_line_trip_settles_where_freqflag0_does(tmp_path):
     """PSS/E's ThreeBus event (line 101-102 tripped, here at 1 s, 6 s at 5 ms) with
     FreqFlag, VtripFlag and FtripFlag 1: the infinite bus brings the frequency back to 1,

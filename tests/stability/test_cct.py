@@ -624,3 +624,19 @@ def test_a_cct_with_storage_none_of_whose_devices_switched_says_it_is_the_one_wi
     )
     assert sweep.exit_code == 0, sweep.output
     assert sweep.stdout.count("this CCT is the one without storage") == 1  # esd-5's line
+
+
+def test_an_unstable_end_that_fails_before_any_separation_is_named_so():
+    """Round 44: Kundur's 3-101 fault with 13-120 also opened (which islands area 2's G3
+    and G4) has its unstable end at 0.376 s, where the network has no solution at the
+    clearing (a voltage collapse, as `simulate` says) before any machine separates; `cct`
+    said G1 "lose(s) synchronism".  Its result, JSON and text now name the failure, and
+    the machine leading the swing as such; an end that separates keeps its words."""
+    args = ["cct", "kundur", "--fault", "3", "--far-bus", "101", "--trip", "13", "120"]
+    d = json.loads(CliRunner().invoke(main, [*args, "--json"]).stdout)
+    assert d["t_unstable_s"] == 0.376 and "voltage collapse" in d["unstable_end_failure"]
+    text = CliRunner().invoke(main, args).output
+    assert "cleared at 0.376 s the run fails: case 'kundur': the network/load" in text
+    assert "machine(s) leading its swing: G1 (bus 1)" in text and "lose synchronism" not in text
+    plain = json.loads(CliRunner().invoke(main, [*args[:6], "--json"]).stdout)
+    assert plain["unstable_end_failure"] is None and plain["separated_machines"]

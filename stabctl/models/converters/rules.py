@@ -36,6 +36,7 @@ import numpy as np
 
 from stabctl.models.blocks import LBND
 from stabctl.models.converters.table import (
+    DERA1,
     ESD1,
     PVD1,
     REECA1,
@@ -334,6 +335,20 @@ _ESD = (
     ),
 )
 
+#: a PSS/E DERA1's limit pairs (its Iqinj's [Iql1, Iqh1]; with FreqFlag 1 the frequency
+#: error's [femin, femax], the power PI's and Pord's [Pmin, Pmax], Pord's rate limits
+#: around 0): the ibr_con table's ``da_`` columns (round 44: Iqh1 < Iql1 ran with exit 0
+#: and another Q; the others were refused by `simulate` only, without the field)
+_DERA_IQ = (_ordered("Iqh1", "Iql1", "Iqinj").prefixed("da_"),)
+_DERA_FREQ = tuple(
+    r.prefixed("da_")
+    for r in (
+        _ordered("femax", "femin", "the frequency error"),
+        _ordered("Pmax", "Pmin", "the power order"),
+        _around_zero("dPmax", "dPmin", "the power order"),
+    )
+)
+
 #: physically impossible converter and battery data, refused whichever route the data
 #: come by: an ANDES case file's rows as written (`stabctl.io.andes_case`, before ANDES
 #: fills its defaults) and the ibr_con table of any case (`stabctl.case.ConverterTable`,
@@ -375,6 +390,8 @@ COMPONENTS: tuple[tuple[str, Callable[[Any], Any], tuple[Rule, ...]], ...] = (
         for name, code in (("REECA1", REECA1), ("REECB1", REECB1), ("REECD1", REECD1))
     ),
     ("REECA1", lambda t: (t.type == REGCA1) & (t.reec == REECA1), _REEC_VDL_VOLTAGES),
+    ("DERA1", lambda t: t.type == DERA1, _DERA_IQ),
+    ("DERA1", lambda t: (t.type == DERA1) & (t.da_FreqFlag == 1), _DERA_FREQ),
     (
         "REGCA1 battery",
         lambda t: (t.type == REGCA1) & (t.storage == 1) & (t.En > 0),
