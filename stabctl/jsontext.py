@@ -21,14 +21,19 @@ from typing import Any
 
 from stabctl.errors import InputError
 
-__all__ = ["MAX_INPUT_BYTES", "input_file", "parse_json"]
+__all__ = ["MAX_INPUT_BYTES", "MAX_JSON_BYTES", "input_file", "parse_json"]
 
 #: largest input file read, bytes (the largest case shipped, ACTIVSg2000's RAW, is 0.7 MB)
 MAX_INPUT_BYTES = 256 * 2**20
+#: largest file of JSON text read whole into Python objects (a case file, a records file,
+#: an ANDES json case), bytes: its objects take 6-8 times its bytes (round 44: a 250 MiB
+#: case file peaked at 1.4 GiB, a 223 MiB records file at 1.8 GiB); ACTIVSg2000's case
+#: file is about 5 MB, its N-1 screening's records about 15 MB
+MAX_JSON_BYTES = 64 * 2**20
 
 
-def input_file(path: str | os.PathLike, what: str) -> Path:
-    """``path`` after checking that it is a regular file of at most MAX_INPUT_BYTES
+def input_file(path: str | os.PathLike, what: str, limit: int = MAX_INPUT_BYTES) -> Path:
+    """``path`` after checking that it is a regular file of at most ``limit`` bytes
     (links followed).
 
     Parameters
@@ -37,6 +42,9 @@ def input_file(path: str | os.PathLike, what: str) -> Path:
         The file.
     what : str
         What it is, for messages (``"fault list"``).
+    limit : int, optional
+        Its largest size, bytes: MAX_INPUT_BYTES (default), MAX_JSON_BYTES for JSON text
+        read whole.
 
     Returns
     -------
@@ -60,10 +68,11 @@ def input_file(path: str | os.PathLike, what: str) -> Path:
         raise InputError(
             f"{what} {path}: not a regular file (a device, a pipe or a directory); give a file"
         )
-    if st.st_size > MAX_INPUT_BYTES:
+    if st.st_size > limit:
+        kind = "an input file" if limit == MAX_INPUT_BYTES else "a file of JSON text read whole"
         raise InputError(
             f"{what} {path}: {st.st_size / 2**20:.0f} MiB, above the "
-            f"{MAX_INPUT_BYTES / 2**20:.0f} MiB an input file may have"
+            f"{limit / 2**20:.0f} MiB {kind} may have"
         )
     return path
 

@@ -86,7 +86,7 @@ from stabctl.errors import (
     require_flag,
     speaking,
 )
-from stabctl.jsontext import input_file, parse_json
+from stabctl.jsontext import MAX_JSON_BYTES, input_file, parse_json
 from stabctl.locking import beside, exclusive, is_held, temp_dir, temp_file
 from stabctl.progress import bar as progress_bar
 
@@ -259,9 +259,9 @@ def _record_lines(
     and `why` says why, when the line is not a whole sweep record (`_record`; `check` the
     schema of the records' kind, see `Job`).  Raises InputError, before a byte is read,
     for a file that is not a regular one of at most
-    `stabctl.jsontext.MAX_INPUT_BYTES` (as every input file), and at a longer line or a
+    `stabctl.jsontext.MAX_JSON_BYTES` (JSON text read whole), and at a longer line or a
     line giving a key twice."""
-    input_file(path, "records file")
+    input_file(path, "records file", MAX_JSON_BYTES)
     with path.open(encoding="utf-8-sig", errors="replace") as f:
         for n, line in enumerate(iter(lambda: f.readline(MAX_RECORD_LINE + 1), ""), start=1):
             if len(line) > MAX_RECORD_LINE:
@@ -392,7 +392,7 @@ def read_records(
     ------
     InputError
         A file that is not a regular one or is larger than
-        `stabctl.jsontext.MAX_INPUT_BYTES`, a line longer than MAX_RECORD_LINE, a line
+        `stabctl.jsontext.MAX_JSON_BYTES`, a line longer than MAX_RECORD_LINE, a line
         giving a key twice, a job recorded twice other than after a failure (a file
         edited by hand: which result holds?), or with `whole` a line that is not a sweep
         record (its number named, and why).
@@ -402,6 +402,7 @@ def read_records(
         return {}
     records: dict[str, dict] = {}
     first: dict[str, int] = {}
+    ignored = 0
     for n, _, rec, why in _record_lines(path, check):
         if rec is None and whole is not None:
             raise InputError(
@@ -409,7 +410,9 @@ def read_records(
                 "must be whole; repair or remove the line, or rerun the screening"
             )
         if rec is None:
-            warnings.warn(f"{path} line {n}: not a sweep record ({why}), ignored", stacklevel=2)
+            ignored += 1
+            if ignored <= LINES_NAMED:  # (round 44: one warning a line, 9 million of them)
+                warnings.warn(f"{path} line {n}: not a sweep record ({why}), ignored", stacklevel=2)
             continue
         key = rec["key"]
         if key in records and records[key]["status"] != "failed":  # a retry follows a failure
@@ -419,7 +422,19 @@ def read_records(
             )
         records[key] = rec
         first.setdefault(key, n)
+    if ignored > LINES_NAMED:
+        warnings.warn(
+            f"{path}: {ignored - LINES_NAMED} more line(s) not sweep records, ignored",
+            stacklevel=2,
+        )
     return records
+
+
+#: the lines not sweep records that a warning names one by one (the rest are counted)
+LINES_NAMED = 20
+#: a file whose first this many non-blank lines hold no sweep record is refused there
+#: (`set_aside_damaged`), not read to its end
+LINES_WITHOUT_RECORD = 1000
 
 
 def set_aside_damaged(
@@ -446,6 +461,11 @@ def set_aside_damaged(
         (good if rec is not None else bad).append((n, line if line.endswith("\n") else line + "\n"))
         if rec is None:
             whys.setdefault(why, []).append(n)
+        if not good and len(bad) == LINES_WITHOUT_RECORD:  # (round 44: 9 million read first)
+            raise InputError(
+                f"{path}: none of its first {LINES_WITHOUT_RECORD} lines is a sweep record: "
+                f"not the records of an earlier run (left as it is); {remedy}"
+            )
     if not bad:
         return []
     if not good and len(bad) > 1:
@@ -459,15 +479,22 @@ def set_aside_damaged(
     atomic_write(path, lambda f: f.writelines(line for _, line in good))
     numbers = [n for n, _ in bad]
     reasons = "; ".join(
-        why if len(whys) == 1 else f"line(s) {', '.join(map(str, ns))}: {why}"
+        why if len(whys) == 1 else f"line(s) {_numbers_named(ns)}: {why}"
         for why, ns in whys.items()
     )
     warnings.warn(
-        f"{path}: line(s) {', '.join(map(str, numbers))} not a whole sweep record "
+        f"{path}: line(s) {_numbers_named(numbers)} not a whole sweep record "
         f"({reasons}): moved to {aside}; their jobs run again",
         stacklevel=2,
     )
     return numbers
+
+
+def _numbers_named(numbers: list[int]) -> str:
+    """Line numbers for a message: the first LINES_NAMED, the rest counted."""
+    shown = ", ".join(map(str, numbers[:LINES_NAMED]))
+    more = len(numbers) - LINES_NAMED
+    return shown + (f" and {more} more" if more > 0 else "")
 
 
 def atomic_write(

@@ -1915,21 +1915,45 @@ def test_sweep_cct_reruns_a_record_of_impossible_fields_instead_of_showing_it(tm
 def test_a_records_file_above_the_input_cap_is_refused_before_it_is_read(tmp_path):
     """A sweep's own --out, 280 MB of blank lines, was read for 112 s without a word (only
     its lines were bounded) before the sweep appended to it; it is refused at once by the
-    cap of every input file, naming it, and left as it is."""
-    from stabctl.jsontext import MAX_INPUT_BYTES
+    cap of JSON text read whole, naming it, and left as it is (round 44: a 223 MiB file of
+    records under the 256 MiB cap of every input peaked at 1.8 GiB)."""
+    from stabctl.jsontext import MAX_JSON_BYTES
 
     out = tmp_path / "big.jsonl"
     with out.open("wb") as f:
-        f.truncate(MAX_INPUT_BYTES + 2**20)  # sparse: no disk used
+        f.truncate(MAX_JSON_BYTES + 2**20)  # sparse: no disk used
+    said = r"big\.jsonl: 65 MiB, above the 64 MiB a file of JSON text read whole may have"
     t0 = time.perf_counter()
     for read in (set_aside_damaged, read_records):
-        with pytest.raises(InputError, match=r"big\.jsonl: 257 MiB, above the 256 MiB"):
+        with pytest.raises(InputError, match=said):
             read(out)
-    with pytest.raises(InputError, match=r"big\.jsonl: 257 MiB, above the 256 MiB"):
+    with pytest.raises(InputError, match=said):
         run_sweep(jobs_of(square, 1), out, workers=1, progress=False)
     assert time.perf_counter() - t0 < 5
-    assert out.stat().st_size == MAX_INPUT_BYTES + 2**20
+    assert out.stat().st_size == MAX_JSON_BYTES + 2**20
     assert not (tmp_path / "big.jsonl.damaged").exists()
+
+
+def test_lines_that_are_not_records_are_named_up_to_a_bound(tmp_path, recwarn):
+    """Round 44: 9 million lines that are not records each gave their own warning (1.9
+    GiB, 195 s) before "none of its lines is a sweep record": `read_records` names the
+    first LINES_NAMED and counts the rest, `set_aside_damaged` refuses a file whose first
+    LINES_WITHOUT_RECORD lines hold no record there, without reading on."""
+    from stabctl.parallel import LINES_NAMED, LINES_WITHOUT_RECORD
+
+    out = tmp_path / "m.jsonl"
+    out.write_text("".join(f'{{"key": "k{i}", "a": 1}}\n' for i in range(LINES_WITHOUT_RECORD + 5)))
+    assert read_records(out) == {}
+    said = [str(w.message) for w in recwarn]
+    assert len(said) == LINES_NAMED + 1
+    assert said[0].startswith(f"{out} line 1: not a sweep record (")
+    more = LINES_WITHOUT_RECORD + 5 - LINES_NAMED
+    assert said[-1] == f"{out}: {more} more line(s) not sweep records, ignored"
+    with pytest.raises(
+        InputError, match=rf"none of its first {LINES_WITHOUT_RECORD} lines is a sweep"
+    ):
+        set_aside_damaged(out)
+    assert out.stat().st_size > 0 and not (tmp_path / "m.jsonl.damaged").exists()
 
 
 def test_failures_recorded_before_and_not_rerun_are_counted_and_told(tmp_path):

@@ -664,7 +664,9 @@ def _check_json_layout(path: Path) -> None:
     cannot start JSON text (NULs, a spreadsheet renamed, ...), before it is read whole;
     other text that is not JSON is left to ANDES, whose message names it."""
     from stabctl.io.pst import FORMAT
+    from stabctl.jsontext import MAX_JSON_BYTES, input_file
 
+    input_file(path, "case file", MAX_JSON_BYTES)  # read whole below (and by ANDES)
     with open(path, "rb") as f:
         if f.read(3) == b"\xef\xbb\xbf":
             raise InputError(

@@ -37,6 +37,7 @@ from stabctl.case.events import check_case_events
 from stabctl.case.system import tables_named
 from stabctl.errors import CaseError
 from stabctl.io.inputs import input_file, parse_json, plain_float
+from stabctl.jsontext import MAX_JSON_BYTES
 
 __all__ = [
     "FORMAT",
@@ -295,7 +296,7 @@ _IMPORTERS = {
 
 
 def _load_json(path: Path):
-    path = input_file(path, "case file")
+    path = input_file(path, "case file", MAX_JSON_BYTES)
     try:
         # a byte-order mark (Windows editors write one) read as the start of UTF-8 text
         return parse_json(path.read_text(encoding="utf-8-sig"), str(path), CaseError)

@@ -1107,6 +1107,20 @@ def test_an_input_file_above_the_size_cap_is_refused_before_it_is_read(tmp_path)
         assert_error(run(*args), what, "257 MiB, above the 256 MiB an input file may have")
 
 
+def test_a_case_file_of_json_text_above_its_cap_is_refused_before_it_is_read(tmp_path):
+    """Round 44: a 250 MiB case file (under the 256 MiB cap of every input) was parsed
+    whole, 1.4 GiB, before its unknown key was refused; JSON text read whole is capped at
+    `stabctl.jsontext.MAX_JSON_BYTES` (a stabctl case and an ANDES json alike)."""
+    from stabctl.jsontext import MAX_JSON_BYTES
+
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate(MAX_JSON_BYTES + 2**20)
+    said = "65 MiB, above the 64 MiB a file of JSON text read whole may have"
+    assert_error(run("simulate", big), "case file", said)
+    assert_error(run("import-andes", big, "-o", tmp_path / "o.json"), "case file", said)
+
+
 def test_a_case_file_that_is_not_utf8_is_refused_by_name(tmp_path):
     """A .json case with bytes that are not UTF-8 stopped `simulate` with a
     UnicodeDecodeError traceback (exit 1); it is one error line naming the file and the
