@@ -1733,7 +1733,8 @@ def _local(jobs: list, workers: int | None, pool=None) -> Generator[dict, None, 
                 restarts,
                 len(left),
                 len(jobs),
-                f"run again, the {len(running)} then running each alone first",
+                "run again"
+                + (f", the {len(running)} then running each alone first" if running else ""),
                 f" (not run: {', '.join(keys[:3])}{more}); the finished records are kept, "
                 "and the same command runs the rest",
             )
