@@ -396,10 +396,8 @@ def print_cct(case, rating, d) -> None:
         click.echo(f"the contingency's trip: {line}")
     if failure := d.get("unstable_end_failure"):  # before any machine separated
         click.echo(f"cleared at {d['t_unstable_s']:.{n}f} s the run fails: {failure}")
-        if d["separated_machines"]:
-            click.echo(
-                f"machine(s) leading its swing: {machine_list(case, d['separated_machines'])}"
-            )
+        if d.get("leading_machines"):
+            click.echo(f"machine(s) leading its swing: {machine_list(case, d['leading_machines'])}")
     elif d["separated_machines"]:
         click.echo(
             f"machine(s) {machine_list(case, d['separated_machines'])} lose "
@@ -612,10 +610,10 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
         if r["status"] == "ok":
             err = r["numerical_error_s"]
             err = "-" if err is None else f"{1000 * err:.{max(n - 3, 0)}f}"
-            click.echo(
-                f"{where} {r['cct_s']:7.{n}f} {r['cct_cycles']:7.{c}f} {err:>6}  "
-                + (machine_list(case, r["separated"]) or "-")
-            )
+            said = machine_list(case, r["separated"]) or "-"
+            if r.get("unstable_end_failure"):  # none separated: the run above it failed
+                said = "no separation: the run at its unstable end fails (cct names how)"
+            click.echo(f"{where} {r['cct_s']:7.{n}f} {r['cct_cycles']:7.{c}f} {err:>6}  {said}")
         elif r["verdict"] == ABOVE:
             above = f">{r['t_max_s']:.{n}f}"
             click.echo(f"{where} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there")

@@ -413,8 +413,11 @@ class CCTResult:
             "search": self.method,
             "wall_time_s": self.wall_time_s,
             "criterion": self.criterion,
-            "separated_machines": list(self.separated),
+            # a run that failed before any machine separated: none separated, the
+            # machines leading its swing apart (round 44)
+            "separated_machines": [] if self.unstable_end_failure else list(self.separated),
             "unstable_end_failure": self.unstable_end_failure,
+            "leading_machines": list(self.separated) if self.unstable_end_failure else [],
             "islanded": list(self.islanded),
             "end_concerns": list(self.end_concerns),
             "end_t_s": self.end_t_s,

@@ -359,6 +359,9 @@ def screen(
                 cct_cycles=r["cct_cycles"],
                 numerical_error_s=r.get("numerical_error_s"),
                 separated=r["separated_machines"],
+                # its unstable end failed before any machine separated (None: it did not;
+                # records from before round 44 have none)
+                unstable_end_failure=r.get("unstable_end_failure"),
                 n_simulations=r["n_simulations"],
                 # the search's step cut for short subtransient time constants, and its
                 # run's end checked (round 41: `cct` said them, `screen` did not)

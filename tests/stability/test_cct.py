@@ -635,8 +635,10 @@ def test_an_unstable_end_that_fails_before_any_separation_is_named_so():
     args = ["cct", "kundur", "--fault", "3", "--far-bus", "101", "--trip", "13", "120"]
     d = json.loads(CliRunner().invoke(main, [*args, "--json"]).stdout)
     assert d["t_unstable_s"] == 0.376 and "voltage collapse" in d["unstable_end_failure"]
+    assert d["separated_machines"] == [] and d["leading_machines"] == [1]
     text = CliRunner().invoke(main, args).output
     assert "cleared at 0.376 s the run fails: case 'kundur': the network/load" in text
     assert "machine(s) leading its swing: G1 (bus 1)" in text and "lose synchronism" not in text
     plain = json.loads(CliRunner().invoke(main, [*args[:6], "--json"]).stdout)
     assert plain["unstable_end_failure"] is None and plain["separated_machines"]
+    assert plain["leading_machines"] == []
