@@ -465,11 +465,7 @@ def sweep_line(key, rec) -> str:
         if verdict(rec) == ABOVE:
             return f"{key:<34} above the search limit t_max = {rec['inputs']['t_max']:g} s (robust)"
         if verdict(rec) == INSECURE:
-            insecure = "N-1 insecure: unstable even when cleared at once"
-            said = rec.get("reason", "")
-            if "; yet stable when cleared at" in said:  # not monotone (`cct`'s window)
-                insecure += "; " + said.split("; ", 1)[1].split(":", 1)[0]
-            return f"{key:<34} {0.0:7.3f} {0.0:8.2f}  {insecure}"
+            return f"{key:<34} {0.0:7.3f} {0.0:8.2f}  {insecure_said(rec.get('reason', ''))}"
         return f"{key:<34} failed: {rec['error']}"
     r, wall = rec["result"], rec.get("wall_time_s")  # none in a reproducible copy
     n, c = time_decimals(r.get("tol_s")), cycle_decimals(r.get("tol_s"))
@@ -485,7 +481,29 @@ def sweep_line(key, rec) -> str:
         line += f"\n{'':<34} {run_end_line(rc, r['cct_s'], n)}"  # round 41: said by cct only
     if r.get("storage_acted") is False:
         line += f"\n{'':<34} {NO_DEVICE_ACTED}"
+    if r.get("end_concerns") and r.get("end_t_s") is not None:  # (round 45: cct's, screen's)
+        line += f"\n{'':<34} note: cleared at the CCT, {end_note(r['end_t_s'], r['end_concerns'])}"
     return line
+
+
+def insecure_said(reason: str) -> str:
+    """An N-1 insecure row's words, with the caveat of its record's ``reason`` where the
+    verdict is not monotone in the clearing time (stable at some later clearing in
+    `cct`'s window).
+
+    Parameters
+    ----------
+    reason : str
+        The record's reason ("" if none).
+
+    Returns
+    -------
+    str
+    """
+    insecure = "N-1 insecure: unstable even when cleared at once"
+    if "; yet stable when cleared at" in reason:
+        insecure += "; " + reason.split("; ", 1)[1].split(":", 1)[0]
+    return insecure
 
 
 def print_sweep(rep, n_jobs: int, case=None) -> None:
@@ -516,8 +534,8 @@ def print_sweep(rep, n_jobs: int, case=None) -> None:
 
     verdicts = [verdict(r) for r in rep.records.values()]
     islands = (
-        f"; {n_load} islanding load buses (their load shed), {n_machines} islanding machines "
-        "(lost; the verdicts judge the rest)"
+        f"; {n_load} job(s) islanding load buses (their load shed), {n_machines} job(s) "
+        "islanding machines (lost; the verdicts judge the rest)"
         if n_load or n_machines
         else ""
     )
@@ -618,10 +636,8 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
             above = f">{r['t_max_s']:.{n}f}"
             click.echo(f"{where} {above:>7} {'-':>7} {'-':>6}  robust: stable when cleared there")
         elif r["verdict"] == INSECURE:
-            click.echo(
-                f"{where} {0.0:7.{n}f} {0.0:7.{c}f} {'-':>6}  N-1 insecure: unstable even "
-                "when cleared at once"
-            )
+            said = insecure_said(r.get("reason", ""))  # (round 45: its caveat left out)
+            click.echo(f"{where} {0.0:7.{n}f} {0.0:7.{c}f} {'-':>6}  {said}")
         else:
             said = f"{r['error'][:70]}" + (" (recorded before)" if r.get("failed_before") else "")
             click.echo(f"{where} {'-':>7} {'-':>7} {'-':>6}  {said}")
@@ -992,7 +1008,9 @@ def critical_group_line(case, group: dict, decimals: int = 3) -> str:
     ----------
     case : stabctl.case.Case
     group : dict
-        ``machines``, ``cct_without_storage_s``.
+        ``machines``, ``cct_without_storage_s``, ``separated`` (False: the run at the
+        search's unstable end failed before any machine separated, the machines leading
+        its swing taken; absent in JSON from before round 44: True).
     decimals : int, optional
         Decimals of the CCT in s.
 
@@ -1000,9 +1018,15 @@ def critical_group_line(case, group: dict, decimals: int = 3) -> str:
     -------
     str
     """
+    how = (
+        "separate without storage"
+        if group.get("separated", True)
+        else "lead the swing without storage, where the run fails before any machine "
+        "separates (no separation to take the group from)"
+    )
     return (
         f"storage on the critical group's COI: machines {machine_list(case, group['machines'])} "
-        f"separate without storage (CCT {group['cct_without_storage_s']:.{decimals}f} s); their "
+        f"{how} (CCT {group['cct_without_storage_s']:.{decimals}f} s); their "
         "devices brake them against the other machines' COI, the other devices drive theirs "
         "after them"
     )

@@ -215,6 +215,8 @@ def cct(
                 "machines": list(base.separated),
                 "buses": machine_buses(case, base.separated),
                 "cct_without_storage_s": base.cct_s,
+                # False: none separated, the run failing first (round 45: said to separate)
+                "separated": base.unstable_end_failure is None,
             }
         }
     )

@@ -646,6 +646,7 @@ class SimulationResult:
                 + ")"
             )
         d.pop("units", None)  # (files written before it have none)
+        _check_contents(d, path)
         early = d.pop("early_verdict", None)
         meta = {} if early is None else {"early_verdict": str(early)}
         stable, tsep = d.pop("verdict")
@@ -673,6 +674,55 @@ MAX_NPZ_BYTES = 4 << 30
 #: beyond BOMB_BYTES, is refused (deflate packs at most about 1000:1, a run's floats far
 #: less): a 2 MB file of 2 GiB of zeros
 BOMB_RATIO, BOMB_BYTES = 500, 256 << 20
+
+
+#: the arrays of a result file with a row a time and a column a machine, bus, storage
+#: device or converter (`_check_contents`): name -> the array numbering the columns
+_PER_TIME = {
+    **{n: "machines" for n in ("speed", "angle", "pelect", "pmech", "efd", "qelect")},
+    "vmag": "buses",
+    "vang": "buses",
+    "pesd": "devices",
+    "ibr_p": "converters",
+    "ibr_q": "converters",
+}
+
+
+def _check_contents(d: dict, path) -> None:
+    """InputError naming the file and the array for contents `SimulationResult.to_npz`
+    does not write (round 44: a damaged verdict or time axis raised numpy's errors, and
+    arrays of the wrong width, a verdict of NaN or a time axis backwards were read as a
+    run and its verdict): the verdict (stable 0 or 1, the separation time NaN or >= 0),
+    a finite non-decreasing time axis, integer numbering arrays, and each per-time array
+    of one row a time and one column a machine (bus, device, converter)."""
+
+    def bad(name: str, why: str):
+        raise InputError(
+            f"{path}: array {name!r} {why}: not a result written by SimulationResult.to_npz"
+        )
+
+    v = d["verdict"]
+    if v.shape != (2,) or v.dtype.kind != "f":
+        bad("verdict", f"has shape {v.shape} and dtype {v.dtype} (two floats expected)")
+    if v[0] not in (0.0, 1.0) or not (np.isnan(v[1]) or (np.isfinite(v[1]) and v[1] >= 0)):
+        bad("verdict", f"holds {v.tolist()} (stable 0 or 1, then a separation time or NaN)")
+    t = d["t"]
+    if t.ndim != 1 or t.dtype.kind != "f" or not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
+        bad("t", "is not a time axis (finite times, not decreasing)")
+    for name in ("machines", "buses", "devices", "converters", "island", "separated"):
+        if name in d and (d[name].ndim != 1 or d[name].dtype.kind not in "iu"):
+            bad(name, f"has shape {d[name].shape} and dtype {d[name].dtype} (integers)")
+    if "inertia" in d and d["inertia"].shape != d["machines"].shape:
+        bad("inertia", f"has shape {d['inertia'].shape}, not one weight a machine")
+    for name, columns in _PER_TIME.items():
+        if name not in d:
+            continue
+        width = d[columns].size if columns in d else 0
+        widths = (width, 0) if name in ("vmag", "vang") else (width,)  # voltages=False: 0
+        a = d[name]
+        if a.ndim != 2 or a.shape[0] != t.size or a.shape[1] not in widths:
+            shape = f"({t.size}, {width})"
+            bad(name, f"has shape {a.shape}, not {shape}: a row a time, a column of {columns}")
 
 
 def _no_default(f) -> bool:

@@ -58,7 +58,14 @@ from stabctl.dynamics.model import (
     kernel_network,
     kernel_outputs,
 )
-from stabctl.errors import InputError, SimulationError, bus_numbers, require_flag
+from stabctl.errors import (
+    InputError,
+    SimulationError,
+    WrongTypeError,
+    bus_numbers,
+    is_number,
+    require_flag,
+)
 from stabctl.models import converters as conv
 from stabctl.models import exciters as exc
 from stabctl.models import governors as gov
@@ -191,7 +198,7 @@ def linearise(
     UnknownBusError
         An ESD bus not in the case.
     InputError
-        `rel_step` not in (0, 0.1); unknown conventions or limits.
+        `rel_step` not in [MIN_REL_STEP, 0.1); unknown conventions or limits.
     SimulationError
         The network did not solve at a perturbed point, a perturbation crossed a limiter
         not active at the operating point (the linearisation would be meaningless), or
@@ -432,10 +439,22 @@ def compare_pulse(
     }
 
 
+#: the smallest relative step of the central differences: below it a difference of two
+#: evaluations is round-off (double precision's 1e-16 over a step of 1e-9 leaves about 7
+#: digits; round 44: 1e-16 divided by zero inside the kernel, 1e-12 blamed a limiter)
+MIN_REL_STEP = 1e-9
+
+
 def _check_difference_settings(rel_step: float, limits: str) -> None:
-    """InputError for a rel_step outside (0, 0.1) or an unknown limits rule."""
-    if not 0 < rel_step < 0.1:
-        raise InputError(f"rel_step must be in (0, 0.1), got {rel_step}")
+    """InputError for a rel_step outside [MIN_REL_STEP, 0.1) (WrongTypeError: not a
+    number) or an unknown limits rule."""
+    if not is_number(rel_step):
+        raise WrongTypeError(f"rel_step must be a number, got {rel_step!r}")
+    if not MIN_REL_STEP <= rel_step < 0.1:
+        raise InputError(
+            f"rel_step must be in [{MIN_REL_STEP:g}, 0.1), got {rel_step} (below {MIN_REL_STEP:g} "
+            "the central differences are round-off)"
+        )
     if limits not in LIMIT_RULES:
         raise InputError(f"limits must be one of {sorted(LIMIT_RULES)}, got {limits!r}")
 

@@ -15,7 +15,7 @@ import pytest
 
 from stabctl.case import PssTable
 from stabctl.dynamics.driver import Simulator
-from stabctl.errors import InputError, SimulationError, UnknownBusError
+from stabctl.errors import InputError, SimulationError, UnknownBusError, WrongTypeError
 from stabctl.io import load_case
 from stabctl.smallsignal.linearise import (
     STATE,
@@ -167,6 +167,15 @@ def test_bad_input(kundur):
         linearise(kundur, extra_buses=[999])
     with pytest.raises(InputError, match="rel_step"):
         linearise(kundur, rel_step=0.5)
+    # round 44: 1e-16 divided by zero inside the kernel (a numba traceback), 1e-12 blamed
+    # a limiter that is not there, a text gave a bare TypeError
+    for tiny in (1e-16, 1e-300, 1e-12):
+        with pytest.raises(
+            InputError, match=r"rel_step must be in \[1e-09, 0.1\), got .* round-off"
+        ):
+            linearise(kundur, rel_step=tiny)
+    with pytest.raises(WrongTypeError, match="rel_step must be a number, got '1e-4'"):
+        linearise(kundur, rel_step="1e-4")
     with pytest.raises(InputError, match="not kept"):
         linearise_model(kundur.model, [3])
     sys = linearise(kundur, esd_buses=[3], extra_buses=[13, 3])

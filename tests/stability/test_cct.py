@@ -538,7 +538,8 @@ def test_the_texts_name_their_settings_and_a_sweep_names_its_islands(tmp_path, m
         "N-1 insecure: unstable even when cleared at once; yet stable when cleared at 0.017, "
         "0.033, 0.05 s"
     ) in sweep.stdout
-    assert "; 1 islanding load buses (their load shed), 1 islanding machines" in lines[-1]
+    said = "; 1 job(s) islanding load buses (their load shed), 1 job(s) islanding machines"
+    assert said in lines[-1]  # (round 45: jobs counted, said as machines)
     screen = CliRunner().invoke(main, ["screen", "kundur", "--buses", "3", "--t-max", "0.5"])
     assert screen.stdout.splitlines()[0] == lines[0], screen.output
 
@@ -642,3 +643,9 @@ def test_an_unstable_end_that_fails_before_any_separation_is_named_so():
     plain = json.loads(CliRunner().invoke(main, [*args[:6], "--json"]).stdout)
     assert plain["unstable_end_failure"] is None and plain["separated_machines"]
     assert plain["leading_machines"] == []
+    # round 45: `--coi critical` said G1 "separate(s) without storage" and armed on it
+    armed = [*args, "--esd-pct", "5", "--coi", "critical"]
+    group = json.loads(CliRunner().invoke(main, [*armed, "--json"]).stdout)["critical_group"]
+    assert group["machines"] == [1] and group["separated"] is False
+    text = CliRunner().invoke(main, armed).output
+    assert "machines G1 (bus 1) lead the swing without storage, where the run fails" in text
