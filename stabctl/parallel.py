@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import errno
 import fcntl
 import inspect
 import io
@@ -557,6 +558,8 @@ def atomic_write(
                 with open(path, mode, **_utf8(mode)) as f:
                     write(f)
             return given
+        if path.is_dir():  # (round 45: "Is a directory: 'd' -> None", from the rename)
+            raise IsADirectoryError(errno.EISDIR, "a directory, not a file to write", str(given))
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, held = temp_file(path.parent, beside(path.name, "."), path.suffix)
         tmp = held.path

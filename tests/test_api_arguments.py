@@ -153,6 +153,31 @@ def test_a_result_file_with_other_arrays_a_pickle_or_a_bomb_is_refused_by_name(t
 
 
 @pytest.mark.parametrize(
+    "change, said",
+    [
+        (lambda z: z.update(verdict=np.array([1.0])), r"'verdict' has shape \(1,\)"),
+        (lambda z: z.update(t=np.array("abc")), r"'t' is not a time axis"),
+        (lambda z: z.update(speed=z["speed"][:, :3]), r"'speed' has shape \(\d+, 3\), not"),
+        (lambda z: z.update(verdict=np.array([np.nan, np.nan])), r"'verdict' holds \[nan, nan\]"),
+        (lambda z: z.update(t=z["t"][::-1].copy()), r"'t' is not a time axis"),
+    ],
+    ids=["verdict short", "t a text", "a machine short", "verdict NaN", "t backwards"],
+)
+def test_a_result_file_whose_arrays_are_damaged_is_refused_by_name(kundur, tmp_path, change, said):
+    """Round 45: `from_npz` checked the arrays' names, not their contents: a short verdict
+    or a text time axis raised numpy's errors from deep inside, a machine's column cut
+    away, a NaN verdict or a time axis backwards were read as a run and its verdict."""
+    from stabctl.dynamics.results import SimulationResult
+
+    res = stabctl.Simulator(kundur).run([], t_end=0.2)
+    z = dict(np.load(res.to_npz(tmp_path / "ok.npz")))
+    change(z)
+    np.savez(tmp_path / "bad.npz", **z)
+    with pytest.raises(InputError, match=r"bad.npz: array " + said):
+        SimulationResult.from_npz(tmp_path / "bad.npz")
+
+
+@pytest.mark.parametrize(
     "call, said",
     [
         # a text is true to Python: "no" turned the Q limits and the stop on
@@ -674,3 +699,36 @@ def test_api_findings_of_round_36_are_refused_by_name(tmp_path):
     assert r.machine(2) == 1
     assert r.speed_at(0.5) == pytest.approx(r.speed_at(np.array([0.5]))[0])
     assert r.speed_at(0.5).shape == (4,)
+
+
+def test_writing_a_result_over_a_directory_names_it(kundur, tmp_path):
+    """Round 45: `to_npz` / `to_csv` of a directory's path ended in "Is a directory: 'd'
+    -> None" (the temporary file's rename); the directory is named before anything is
+    written, and left as it is."""
+    res = stabctl.Simulator(kundur).run([], t_end=0.1)
+    (tmp_path / "d").mkdir()
+    for write in (res.to_npz, res.to_csv):
+        with pytest.raises(IsADirectoryError, match=r"a directory, not a file to write: '.*d'$"):
+            write(tmp_path / "d")
+    assert list((tmp_path / "d").iterdir()) == [] and list(tmp_path.iterdir()) == [tmp_path / "d"]
+
+
+def test_wrong_arguments_raise_stabctl_s_own_errors(kundur):
+    """Round 45: these gave Python's TypeError or ValueError with stabctl's words, so an
+    `except StabctlError` (the CLI's) missed them; each is a WrongTypeError or InputError
+    (still a TypeError or ValueError as Python has them), a Fraction a number to OMIB."""
+    from fractions import Fraction
+
+    from stabctl.dynamics.coi import coi_speed
+    from stabctl.errors import StabctlError, WrongTypeError
+
+    sim = stabctl.Simulator(kundur)
+    with pytest.raises(WrongTypeError, match=r"run\(storage\): a StorageFleet is needed"):
+        sim.run([], t_end=0.5, storage="x")
+    with pytest.raises(WrongTypeError, match=r"run\(events\): each event is"):
+        sim.run(np.ones((2, 2)), t_end=0.5)
+    with pytest.raises(WrongTypeError, match="OMIB: not a number: H = '5'"):
+        stabctl.OMIB("5", 0.8, 2.0, 0.5, 1.5)
+    with pytest.raises(StabctlError, match=r"coi_speed: inertia of shape \(\)"):
+        coi_speed(np.ones((3, 2)), "5")
+    assert stabctl.OMIB(Fraction(1, 3), 0.2, 2.0, 0.5, 1.5).H == Fraction(1, 3)

@@ -475,6 +475,9 @@ class PlainFloat(_Plain, click.types.FloatParamType):
         out = super().convert(value, param, ctx) + 0.0
         if isinstance(value, str) and underflows(value, out):
             self.fail(f"{value}: {UNDERFLOW}", param, ctx)
+        if isinstance(value, str) and math.isinf(out) and "inf" not in value.lower():
+            shown = value if len(value) <= 24 else f"{value[:20]}... ({len(value)} characters)"
+            self.fail(f"{shown}: beyond the largest number a float holds", param, ctx)
         return out
 
 
@@ -1385,9 +1388,11 @@ def far_end(spec: str, option: str) -> tuple[int, int]:
     InputError
         Not integers, or K < 1.
     """
-    head, _, ckt = spec.partition(":")
+    head, sep, ckt = spec.partition(":")
     try:
         if not plain_number(spec):
+            raise ValueError(spec)
+        if sep and not ckt:  # "101:" (round 45: read as circuit 1)
             raise ValueError(spec)
         to, k = int(head), int(ckt) if ckt else 1
     except ValueError:

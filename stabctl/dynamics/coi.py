@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from stabctl.errors import WrongTypeError
+from stabctl.errors import InputError, WrongTypeError
 from stabctl.storage.control import coi_value, island_coi
 
 __all__ = [
@@ -154,7 +154,7 @@ def coi_speed(speed: np.ndarray, inertia: np.ndarray) -> np.ndarray:
 
     Raises
     ------
-    ValueError
+    InputError
         `inertia` not one finite weight >= 0 per machine of `speed`'s last axis, or all 0
         (a zero total divided by zero; a negative weight gave a speed outside the
         machines').
@@ -168,12 +168,12 @@ def coi_speed(speed: np.ndarray, inertia: np.ndarray) -> np.ndarray:
             f"coi_speed: speed and inertia must be arrays of numbers ({exc})"
         ) from None
     if inertia.ndim != 1 or speed.shape[-1:] != inertia.shape:
-        raise ValueError(
+        raise InputError(
             f"coi_speed: inertia of shape {inertia.shape} for speeds of shape {speed.shape}: "
             "one weight per machine (the speeds' last axis) is needed"
         )
     if not (np.all(np.isfinite(inertia) & (inertia >= 0)) and inertia.sum() > 0):
-        raise ValueError(
+        raise InputError(
             f"coi_speed: the inertia weights must be finite, >= 0 and not all 0, got {inertia}"
         )
     return coi_angle(speed, inertia)

@@ -674,7 +674,7 @@ class Simulator:
         rating, energy and initial charge of each device, the battery fields; the
         MODELS_KEPT most recently used kept)."""
         if storage is not None and not isinstance(storage, st.StorageFleet):
-            raise TypeError(
+            raise WrongTypeError(
                 "run(storage): a StorageFleet is needed (stabctl.uniform_fleet(case, 5)), got "
                 f"{type(storage).__name__}"
             )

@@ -37,7 +37,7 @@ from stabctl.case.events import (
 )
 from stabctl.case.events import as_record as as_record
 from stabctl.dynamics.model import StageConfig
-from stabctl.errors import CaseError, InputError, advice, require_number
+from stabctl.errors import CaseError, InputError, WrongTypeError, advice, require_number
 
 #: the classes an event of a run may be (a case's own records' and a playback source)
 EVENT_TYPES = (*EVENT_KINDS.values(), Playback)
@@ -57,7 +57,7 @@ def validate(case: Case, events, t_end: float) -> None:
     switchings: dict = {}
     for ev in events:
         if not isinstance(ev, EVENT_TYPES):  # a str, None: failed on .times()
-            raise TypeError(
+            raise WrongTypeError(
                 f"run(events): each event is a Fault, LineTrip, ... (stabctl.case.events), "
                 f"got {type(ev).__name__} {ev!r}"
             )

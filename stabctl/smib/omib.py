@@ -23,7 +23,7 @@ from numbers import Real
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from stabctl.errors import InputError
+from stabctl.errors import InputError, WrongTypeError
 
 CYCLE_S_60HZ = 1.0 / 60.0
 
@@ -73,8 +73,8 @@ class OMIB:
         given.update(f0=self.f0, D=self.D, k_C=self.k_C)
         text = [f"{k} = {v!r}" for k, v in given.items() if not isinstance(v, Real)]
         if text:
-            raise TypeError(f"OMIB: not a number: {', '.join(text)}")
-        odd = [f"{k} = {v}" for k, v in given.items() if not np.isfinite(v)]
+            raise WrongTypeError(f"OMIB: not a number: {', '.join(text)}")
+        odd = [f"{k} = {v}" for k, v in given.items() if not np.isfinite(float(v))]
         if odd:  # NaN compares false with every bound below
             raise InputError(f"OMIB: not a finite number: {', '.join(odd)}")
         if not self.H > 0:

@@ -82,6 +82,9 @@ FAULT = ("simulate", "kundur", "--fault", 3, "--far-bus", 101)
         (FAULT + ("--deadband-hz", "inf"), "--deadband-hz inf"),
         # a number below the smallest float is named as given, not as the 0 it parses to
         (FAULT + ("--tf", "1e-400"), "'--tf': 1e-400: too small for a float"),
+        # round 45: 5000 nines (or 1e999) were named "--tf inf", a value nobody typed
+        (FAULT + ("--tf", "9" * 5000), "'--tf': 99999999999999999999... (5000 characters): beyond"),
+        (FAULT + ("--tf", "1e999"), "'--tf': 1e999: beyond the largest number a float holds"),
         (FAULT + ("--clear-cycles", "3E-999"), "'--clear-cycles': 3E-999: too small for a float"),
         (("omib", "--H", "-1.5e-400"), "'--H': -1.5e-400: too small for a float"),
         (
@@ -1552,6 +1555,8 @@ def test_a_clearing_after_the_end_of_the_run_is_refused(no_simulation, args, nee
         (("simulate", "kundur", "--fault", "\uff13", "--far-bus", 101), "write numbers"),
         (("omib", "--pmax", "1_2"), "'1_2': write numbers"),
         (KUNDUR_SIM + ("--trip", 3, "1_01"), "--trip ... 1_01: give the far bus"),
+        # round 45: a colon without its circuit was read as circuit 1
+        (KUNDUR_SIM + ("--trip", 3, "101:"), "--trip ... 101:: give the far bus"),
         (KUNDUR_SIM + ("--bus-fault", "1_01", 1, 1.1), "--bus-fault 1_01 1 1.1: BUS is"),
     ],
 )
