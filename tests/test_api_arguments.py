@@ -732,3 +732,13 @@ def test_wrong_arguments_raise_stabctl_s_own_errors(kundur):
     with pytest.raises(StabctlError, match=r"coi_speed: inertia of shape \(\)"):
         coi_speed(np.ones((3, 2)), "5")
     assert stabctl.OMIB(Fraction(1, 3), 0.2, 2.0, 0.5, 1.5).H == Fraction(1, 3)
+
+
+def test_a_case_name_too_long_for_a_file_is_an_unknown_case():
+    """Round 45: `load_case('x' * 5000)` raised OSError "File name too long" naming the
+    package's data folder (the CLI printed a 5069-character line); it is an unknown case,
+    its name shortened."""
+    from stabctl.errors import CaseError
+
+    with pytest.raises(CaseError, match=r"^unknown case 'x{40}\.\.\. \(5000 characters\)': built"):
+        stabctl.load_case("x" * 5000)

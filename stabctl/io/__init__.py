@@ -83,16 +83,26 @@ def load_case(name_or_path: str | Path) -> Case:
     return case
 
 
+def _is_file(path: Path) -> bool:
+    """Whether `path` is a file; False where it cannot be one (round 45: a name of 5000
+    characters raised "File name too long" from the built-in cases' folder)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
+
+
 def _read_case(name_or_path: str | Path) -> Case:
     """`load_case`'s case, read."""
     text = str(name_or_path)
     builtin = CASE_DIR / f"{text}.json"
     if "/" not in text and "\\" not in text and not text.endswith((".json", ".m")):
-        if builtin.is_file():
+        if _is_file(builtin):
             return pstio.read_case_json(builtin)
-        if not Path(text).is_file():  # a file of another kind is named as such (read_any)
+        if not _is_file(Path(text)):  # a file of another kind is named as such (read_any)
+            shown = text if len(text) <= 60 else f"{text[:40]}... ({len(text)} characters)"
             raise CaseError(
-                f"unknown case '{text}': built-ins are {', '.join(list_cases()) or 'none'}"
+                f"unknown case '{shown}': built-ins are {', '.join(list_cases()) or 'none'}"
             )
     path = Path(name_or_path)
     if not path.exists():

@@ -120,13 +120,21 @@ class ModalAnalysis:
     kind: np.ndarray
     eta: np.ndarray
 
+    def _mode(self, i) -> int:
+        """Mode index i checked: a whole number within the modes (round 45: 999 gave
+        numpy's IndexError, -1 the last mode without a word, '1' an IndexError)."""
+        n = self.speed_shape.shape[1]
+        if not is_whole_number(i) or not 0 <= i < n:
+            raise InputError(f"mode index {i!r}: a whole number from 0 to {n - 1} is needed")
+        return int(i)
+
     def groups(self, i: int) -> tuple[list[int], list[int]]:
         """Coherent groups of mode i: machine numbers swinging with the largest speed
         component and those swinging against it (components >= SIGNIFICANT of the largest;
         with it = within QUADRATURE_DEG degrees of it, against it = within QUADRATURE_DEG
         of its opposite), each sorted by decreasing amplitude; the others are in
         quadrature (`quadrature`), on neither side."""
-        s = self.speed_shape[:, i]
+        s = self.speed_shape[:, self._mode(i)]
         big = np.abs(s) >= SIGNIFICANT
         order = np.argsort(-np.abs(s))
         sel = lambda m: [int(self.machines[k]) for k in order if big[k] and m[k]]  # noqa: E731
@@ -139,7 +147,7 @@ class ModalAnalysis:
         in neither coherent group (round 41: Kundur's 1.157 Hz local mode without PSS read
         "G2 G3 vs G1 G4", G3 at 85 degrees and G4 at -96 sorted by the sign of a cosine,
         where the participation says G2 against G1), by decreasing amplitude."""
-        s = self.speed_shape[:, i]
+        s = self.speed_shape[:, self._mode(i)]
         angle = np.degrees(np.abs(np.angle(s)))
         off = (np.abs(s) >= SIGNIFICANT) & (angle > QUADRATURE_DEG) & (angle < 180 - QUADRATURE_DEG)
         return [int(self.machines[k]) for k in np.argsort(-np.abs(s)) if off[k]]
@@ -151,7 +159,7 @@ class ModalAnalysis:
         and those against it, each sorted by decreasing momentum.  An inter-area mode
         moves the areas' centres of inertia, so a side may hold an area of many machines
         each too small to count in `groups`."""
-        m = self.inertia * self.speed_shape[:, i]  # shape: largest component 1 + 0j
+        m = self.inertia * self.speed_shape[:, self._mode(i)]  # largest component 1 + 0j
         p = np.bincount(self.areas, m.real) + 1j * np.bincount(self.areas, m.imag)
         big = np.abs(p) >= SIGNIFICANT * np.abs(p).max()
         order = np.argsort(-np.abs(p))
@@ -161,7 +169,7 @@ class ModalAnalysis:
     def area_sides(self, i: int) -> str:
         """The areas inter-area mode i swings against each other: '1, 3 vs 2' (1-based
         area labels, `area_groups`); '-' for any other mode."""
-        if self.kind[i] != "inter-area":
+        if self.kind[self._mode(i)] != "inter-area":
             return "-"
         a1, a2 = (", ".join(str(a) for a in sorted(side)) for side in self.area_groups(i))
         return f"{a1} vs {a2 or '-'}"

@@ -531,3 +531,15 @@ def test_a_machine_in_quadrature_is_on_neither_side_of_a_mode():
         assert angle <= 60 or angle >= 120
     text = CliRunner().invoke(main, ["eig", "kundur", "--no-pss"]).stdout
     assert "G2 (bus 2) vs G1 (bus 1) (in quadrature: G4 (bus 12) G3 (bus 11))" in text
+
+
+def test_a_mode_index_outside_the_modes_is_refused(sys_k):
+    """Round 45: `groups(999)`, `area_sides(999)` gave numpy's IndexError, `groups('1')`
+    and `groups(1.5)` an IndexError, `groups(-1)` the last mode without a word."""
+    ma = modal_analysis(sys_k)
+    n = ma.speed_shape.shape[1]
+    for call in (ma.groups, ma.quadrature, ma.area_groups, ma.area_sides):
+        for i in (999, -1, "1", 1.5, n):
+            with pytest.raises(InputError, match=rf"mode index {i!r}: a whole number from 0 to"):
+                call(i)
+    assert ma.groups(ma.electromechanical[0]) == ma.groups(int(ma.electromechanical[0]))
