@@ -1107,6 +1107,21 @@ def print_plan(case, d) -> None:
             f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
             f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}"
         )
+    aside = {
+        *(d.get("set_aside") or []),
+        *(d.get("not_simulable") or {}),
+        *(d.get("n1_insecure") or {}),
+    }
+    met_before = [
+        r["name"]
+        for r in d["contingencies"]
+        if r["cct_s"] is None and r["met"] and r["name"] not in aside
+    ]
+    if met_before:  # (round 45: left out of the table without a word)
+        click.echo(
+            "met without storage (their CCT without storage at or above the required "
+            f"time, nothing to solve for): {', '.join(met_before)}"
+        )
     if d.get("half_step"):
         click.echo(_half_step_line(d["half_step"]))
     for line in _run_end_lines(d):

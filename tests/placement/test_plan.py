@@ -881,3 +881,17 @@ def test_a_plan_says_its_runs_end_and_sets_an_n1_insecure_fault_aside(tmp_path):
         f"  1-10: NOT CONVERGED IN THE RUN'S END: cleared at its required "
         f"{row['required_s']:.3f} s with the allocation, the run to t = 11 s loses synchronism"
     ) in res.stdout
+
+
+def test_a_contingency_met_without_storage_is_named_not_left_out():
+    """Round 45: with 12 cycles required, Kundur's 13-101 (CCT 0.408 s without storage)
+    needs nothing; the plan said "2 of 2 contingencies stable" and its table showed 3-101
+    alone.  The text names it as met without storage; the JSON row holds both CCTs."""
+    args = ["place", "kundur", "--faults", "DEFAULT", "--required-clearing-cycles", "12"]
+    text = CliRunner().invoke(main, [*args, "--workers", "1"]).output
+    assert "2 of 2 contingencies stable at their required clearing time" in text
+    assert "met without storage (their CCT without storage at or above the required " in text
+    assert text.split("met without storage", 1)[1].split("\n", 1)[0].endswith(": 13-101")
+    d = json.loads(CliRunner().invoke(main, [*args, "--workers", "1", "--json"]).stdout)
+    row = {r["name"]: r for r in d["contingencies"]}["13-101"]
+    assert row["met"] and row["cct_s"] is None and row["cct_no_storage_s"] >= row["required_s"]
