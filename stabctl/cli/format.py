@@ -1107,7 +1107,7 @@ def print_plan(case, d) -> None:
             f"{r['name']:<18} {r['required_s']:10.3f} {f(r['cct_no_storage_s']):>9} "
             f"{f(r['cct_s']):>8}  {'yes' if r['met'] else 'NO'}"
         )
-    aside = {
+    left = {
         *(d.get("set_aside") or []),
         *(d.get("not_simulable") or {}),
         *(d.get("n1_insecure") or {}),
@@ -1115,7 +1115,7 @@ def print_plan(case, d) -> None:
     met_before = [
         r["name"]
         for r in d["contingencies"]
-        if r["cct_s"] is None and r["met"] and r["name"] not in aside
+        if r["cct_s"] is None and r["met"] and r["name"] not in left
     ]
     if met_before:  # (round 45: left out of the table without a word)
         click.echo(
