@@ -742,3 +742,17 @@ def test_a_case_name_too_long_for_a_file_is_an_unknown_case():
 
     with pytest.raises(CaseError, match=r"^unknown case 'x{40}\.\.\. \(5000 characters\)': built"):
         stabctl.load_case("x" * 5000)
+
+
+def test_a_result_s_speeds_and_end_take_numbers_only(kundur):
+    """Round 45: `speed_at('1')` and `speed_at(None)` gave numpy's casting errors and
+    `speed_at(nan)` NaN speeds; `end_state` took a frequency of NaN, 0 or -60 Hz and
+    returned it times the speed (and '60' failed with "can't multiply sequence")."""
+    res = stabctl.Simulator(kundur).run([], t_end=0.2)
+    for t in ("1", None, float("nan"), np.ones((2, 2))):
+        with pytest.raises(InputError, match=r"speed_at\(t\): finite times in s"):
+            res.speed_at(t)
+    for f in (float("nan"), 0, -60, "60"):
+        with pytest.raises(InputError, match=r"end_state\(freq_hz\): a frequency in \[1, 1000\]"):
+            res.end_state(f)
+    assert res.speed_at(0.1).shape == (4,) and res.end_state(60.0)["frequency_hz"] > 59

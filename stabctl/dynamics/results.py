@@ -24,7 +24,7 @@ from stabctl.dynamics.partition import (
     relative_to_islands,
     stage_at,
 )
-from stabctl.errors import InputError, WrongTypeError, is_whole_number
+from stabctl.errors import InputError, WrongTypeError, is_number, is_whole_number
 from stabctl.parallel import atomic_write
 
 #: the `Partition` fields written to a .npz (`SimulationResult.to_npz`), in its order
@@ -317,7 +317,14 @@ class SimulationResult:
         dict
             ``t_s``, ``lowest_voltage_pu``, ``lowest_voltage_bus`` (None without an
             energised bus), ``frequency_hz`` (None without a judged machine).
+
+        Raises
+        ------
+        InputError
+            `freq_hz` not a number in [1, 1000] Hz (a case's range).
         """
+        if not (is_number(freq_hz) and 1 <= freq_hz <= 1000):  # (round 45: nan, 0, -60 ran)
+            raise InputError(f"end_state(freq_hz): a frequency in [1, 1000] Hz, got {freq_hz!r}")
         v, buses = self.vmag[-1] if self.vmag.size else np.zeros(0), self.buses
         if not v.size and self.meta.get("end_vmag") is not None:  # a run recording none
             v, buses = self.meta["end_vmag"], self.meta["end_buses"]
@@ -388,9 +395,21 @@ class SimulationResult:
         ndarray, shape (n, n_mac), or (n_mac,) for one time given as a number
             Speeds, pu; at a time recorded twice (a zero-length interval) the value
             after it.
+
+        Raises
+        ------
+        InputError
+            `t` not finite numbers (a text, None, NaN, an array of two or more axes).
         """
-        if np.ndim(t) == 0:
-            return self.speed_at(np.atleast_1d(t))[0]
+        try:
+            times = np.asarray(t, float)
+        except (TypeError, ValueError):  # (round 45: numpy's casting errors)
+            times = np.full(1, np.nan)
+        if isinstance(t, str) or t is None or times.ndim > 1 or not np.all(np.isfinite(times)):
+            raise InputError(f"speed_at(t): finite times in s (a number or a 1-D array), got {t!r}")
+        if times.ndim == 0:
+            return self.speed_at(np.atleast_1d(times))[0]
+        t = times
         keep = np.r_[np.diff(self.t) > 0, True]
         return np.stack(
             [np.interp(t, self.t[keep], self.speed[keep, k]) for k in range(self.speed.shape[1])],
