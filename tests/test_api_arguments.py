@@ -756,3 +756,14 @@ def test_a_result_s_speeds_and_end_take_numbers_only(kundur):
         with pytest.raises(InputError, match=r"end_state\(freq_hz\): a frequency in \[1, 1000\]"):
             res.end_state(f)
     assert res.speed_at(0.1).shape == (4,) and res.end_state(60.0)["frequency_hz"] > 59
+
+
+def test_a_case_s_replace_and_circuit_row_read_their_arguments_as_the_case_does(kundur):
+    """Round 45: `Case.replace(foo=1)` gave dataclasses' "unexpected keyword argument";
+    `circuit_row('3', 101)` said "no branch between bus 3 and bus 101" where two circuits
+    are, though `bus_index('3')` reads the text bus."""
+    from stabctl.errors import WrongTypeError
+
+    with pytest.raises(WrongTypeError, match=r"Case.replace: foo not a field of a Case"):
+        kundur.replace(foo=1)
+    assert kundur.circuit_row("3", 101, 2) == kundur.circuit_row(3, 101, 2)

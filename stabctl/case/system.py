@@ -1850,8 +1850,8 @@ class Case:
         UnknownBusError
             A bus not in the case.
         """
-        self.bus_index(bus_a)
-        self.bus_index(bus_b)
+        # as bus_index reads them (round 45: circuit_row('3', 101) found no branch)
+        bus_a, bus_b = (int(self.buses.number[self.bus_index(b)]) for b in (bus_a, bus_b))
         br = self.branches
         hit = ((br.from_bus == bus_a) & (br.to_bus == bus_b)) | (
             (br.from_bus == bus_b) & (br.to_bus == bus_a)
@@ -1924,9 +1924,15 @@ class Case:
         ------
         CaseError
             The new data fail the checks of construction (see :class:`Case`).
-        TypeError
-            A name is not a field of :class:`Case`.
+        WrongTypeError
+            A name is not a field of :class:`Case` (a TypeError as Python has it).
         """
+        unknown = sorted(set(changes) - {f.name for f in dataclasses.fields(self)})
+        if unknown:  # (round 45: dataclasses' "unexpected keyword argument")
+            raise WrongTypeError(
+                f"Case.replace: {', '.join(unknown)} not a field of a Case (fields: "
+                f"{', '.join(f.name for f in dataclasses.fields(self))})"
+            )
         return dataclasses.replace(self, **changes)
 
     def digest(self) -> str:
