@@ -85,6 +85,7 @@ def test_cct_cli_finds_the_group_and_other_commands_refuse_it(kundur):
         "machines": [1, 2],
         "buses": [1, 2],
         "cct_without_storage_s": 0.154,
+        "separated": True,  # (False: the run failed before any machine separated)
     }
     assert out["cct_s"] > 0.154
     text = CliRunner().invoke(main, [*args, "--coi", "critical"])
