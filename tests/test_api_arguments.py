@@ -767,3 +767,15 @@ def test_a_case_s_replace_and_circuit_row_read_their_arguments_as_the_case_does(
     with pytest.raises(WrongTypeError, match=r"Case.replace: foo not a field of a Case"):
         kundur.replace(foo=1)
     assert kundur.circuit_row("3", 101, 2) == kundur.circuit_row(3, 101, 2)
+
+
+def test_a_storage_device_beyond_any_plant_is_refused():
+    """Round 45: a StorageDevice of 1e308 MW ran 'stable', moving 0 MJ (its bus below the
+    low-voltage switch); a rating above MAX_DEVICE_MW (100 GW) is refused by name."""
+    from stabctl.storage.devices import MAX_DEVICE_MW
+
+    with pytest.raises(
+        InputError, match=r"storage at bus 10: rating 1e\+308 MW is above 100000 MW"
+    ):
+        stabctl.StorageDevice(10, 1, 1e308)
+    assert stabctl.StorageDevice(10, 1, MAX_DEVICE_MW).pmax_mw == MAX_DEVICE_MW

@@ -97,6 +97,10 @@ WECC_BATTERY: dict[str, float] = {
 }
 
 
+#: the largest storage rating a device may have, MW (100 GW)
+MAX_DEVICE_MW = 1e5
+
+
 @dataclass(frozen=True)
 class StorageDevice:
     """One energy-storage device (paper Section 5): a real-power sink/source at a bus,
@@ -126,8 +130,8 @@ class StorageDevice:
     Raises
     ------
     InputError
-        A rating that is not > 0, a negative lag, a ramp limit or energy that is not > 0,
-        or soc0 outside [0, 1].
+        A rating that is not > 0 or is above MAX_DEVICE_MW, a negative lag, a ramp limit or
+        energy that is not > 0, or soc0 outside [0, 1].
     WrongTypeError
         A field of another type (a bus given as text, a rating as a bool).
     """
@@ -146,6 +150,12 @@ class StorageDevice:
             raise InputError(
                 f"storage at bus {self.bus}: rating must be a finite number > 0 MW, got "
                 f"{self.pmax_mw}"
+            )
+        if self.pmax_mw > MAX_DEVICE_MW:  # (round 45: 1e308 MW ran "stable", moving 0 MJ)
+            raise InputError(
+                f"storage at bus {self.bus}: rating {self.pmax_mw:g} MW is above "
+                f"{MAX_DEVICE_MW:g} MW, more than any plant of a planning case (the largest "
+                "power station is about 22 GW): no device is that large"
             )
         if not (
             self.lag_s >= 0 and self.ramp_mw_s > 0 and self.energy_mj > 0 and 0 <= self.soc0 <= 1
