@@ -481,6 +481,8 @@ def sweep_line(key, rec) -> str:
         line += f"\n{'':<34} {run_end_line(rc, r['cct_s'], n)}"  # round 41: said by cct only
     if r.get("storage_acted") is False:
         line += f"\n{'':<34} {NO_DEVICE_ACTED}"
+    if failure := r.get("unstable_end_failure"):  # none separated there (round 45)
+        line += f"\n{'':<34} cleared at {r['t_unstable_s']:.{n}f} s the run fails: {failure}"
     if r.get("end_concerns") and r.get("end_t_s") is not None:  # (round 45: cct's, screen's)
         line += f"\n{'':<34} note: cleared at the CCT, {end_note(r['end_t_s'], r['end_concerns'])}"
     return line
@@ -530,9 +532,13 @@ def print_sweep(rep, n_jobs: int, case=None) -> None:
         for line in islanding_lines(case, islanded, timed=False) if case is not None else ():
             click.echo(f"{key:<34} the contingency's trip: {line}")
         click.echo(sweep_line(key, rec))
+    from stabctl.stability.cct import run_end_lost
     from stabctl.stability.screening import ABOVE, INSECURE, verdict
 
     verdicts = [verdict(r) for r in rep.records.values()]
+    lost = sum(
+        run_end_lost((r.get("result") or {}).get("run_end_check")) for r in rep.records.values()
+    )
     islands = (
         f"; {n_load} job(s) islanding load buses (their load shed), {n_machines} job(s) "
         "islanding machines (lost; the verdicts judge the rest)"
@@ -541,7 +547,8 @@ def print_sweep(rep, n_jobs: int, case=None) -> None:
     )
     click.echo(
         f"{n_jobs} job(s): {run_counts(rep.ran, rep.skipped, rep.out)}; "
-        f"{verdicts.count('cct')} CCT(s) found, {verdicts.count(ABOVE)} above the search "
+        f"{verdicts.count('cct')} CCT(s) found{_not_converged(lost)}, "
+        f"{verdicts.count(ABOVE)} above the search "
         f"limit (robust), {verdicts.count(INSECURE)} N-1 insecure (CCT 0), "
         f"{verdicts.count('failed')} failed{islands}; wall {rep.wall_time_s:.1f} s"
     )
@@ -550,6 +557,12 @@ def print_sweep(rep, n_jobs: int, case=None) -> None:
             f"{rep.failed_before} job(s) recorded as failed before were not run again; "
             "--retry-failed reruns them"
         )
+
+
+def _not_converged(n: int) -> str:
+    """The summaries' words for the CCTs NOT CONVERGED IN THE RUN'S END among those found
+    (round 45: counted without a word)."""
+    return f" ({n} of them not converged in the run's end, said above)" if n else ""
 
 
 def run_counts(ran: int, reused: int, out) -> str:
@@ -653,8 +666,10 @@ def print_screening(case, rows, tol_s: float | None = None, out=None) -> None:
     n_off = sum(bool(r.get("end_concerns")) for r in rows)
     ran = sum(bool(r.get("run_now")) for r in rows)
     reused = "" if out is None else f"{run_counts(ran, len(rows) - ran, out)}; "
+    lost = sum(run_end_lost(r.get("run_end_check")) for r in rows)
     click.echo(
-        f"{len(rows)} fault(s): {reused}{counts['cct']} CCT(s) found, {counts[ABOVE]} above the "
+        f"{len(rows)} fault(s): {reused}{counts['cct']} CCT(s) found{_not_converged(lost)}, "
+        f"{counts[ABOVE]} above the "
         f"search limit (robust), {counts[INSECURE]} N-1 insecure (CCT 0), "
         f"{counts['failed']} failed; "
         + _islanding_counts(

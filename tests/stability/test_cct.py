@@ -649,3 +649,17 @@ def test_an_unstable_end_that_fails_before_any_separation_is_named_so():
     assert group["machines"] == [1] and group["separated"] is False
     text = CliRunner().invoke(main, armed).output
     assert "machines G1 (bus 1) lead the swing without storage, where the run fails" in text
+
+
+def test_a_sweep_says_what_cct_says_of_a_cct_s_ends(tmp_path):
+    """Round 45: `sweep-cct` left out `cct`'s note of a CCT ending off a normal operating
+    point and its summary counted a CCT NOT CONVERGED IN THE RUN'S END among those found
+    without a word.  Kundur's 10-20 searched to 0.5 s: CCT 0.328 s, its run 5 s longer
+    separates, and its stable end leaves bus 101 at 0.564 pu."""
+    faults = tmp_path / "f.csv"
+    faults.write_text("bus,far_bus\n10,20\n")
+    args = ["sweep-cct", "kundur", "--faults", str(faults), "--workers", "1", "--t-max", "0.5"]
+    res = CliRunner().invoke(main, [*args, "--out", str(tmp_path / "s.jsonl")])
+    assert res.exit_code == 0, res.output
+    assert "note: cleared at the CCT, at the end (t = 6 s) bus 101 at 0.564 pu" in res.output
+    assert "1 CCT(s) found (1 of them not converged in the run's end, said above)" in res.output
