@@ -335,7 +335,7 @@ def sweep_text_json_records():
         if "N-1 insecure" in ln and re.match(r"kundur/", ln):
             nins += 1
     sm = re.search(
-        r"(\d+) CCT\(s\) found, (\d+) above the search limit \(robust\), (\d+) N-1 insecure \(CCT 0\), (\d+) failed",
+        r"(\d+) CCT\(s\) found(?: \([^)]*\))?, (\d+) above the search limit \(robust\), (\d+) N-1 insecure \(CCT 0\), (\d+) failed",
         out,
     )
     if not sm:
@@ -466,7 +466,7 @@ def screen_text_json_records():
                 f"{key}: JSON '{r['reason'][r['reason'].find('yet') :]}' but the text row says only '{ln.split('  ')[-1].strip()}'"
             )
     sm = re.search(
-        r"(\d+) CCT\(s\) found, (\d+) above the search limit \(robust\), (\d+) N-1 insecure \(CCT 0\), (\d+) failed",
+        r"(\d+) CCT\(s\) found(?: \([^)]*\))?, (\d+) above the search limit \(robust\), (\d+) N-1 insecure \(CCT 0\), (\d+) failed",
         out,
     )
     counts = {"cct": 0, "above t_max": 0, "N-1 insecure": 0}
