@@ -757,7 +757,7 @@ def test_a_trapezoid_step_whose_network_fails_names_the_step_and_its_check_no_tr
     res = run(*args, "--method", "trapezoid", "--step", "0.5")
     assert res.exit_code == 2
     # where the network (or Newton's iteration) fails at so coarse a step depends on the
-    # last bits of the libraries' arithmetic (2.08 s, or 5.02 s with numpy 2.4): either
+    # last bits of the libraries' arithmetic (2.08 s, or 5.02 s on another install): either
     # failure names the step
     said = "did not converge (a step of 0.49 s, 98 times the case's default: a smaller --step "
     assert said + "may converge)" in res.stderr, res.stderr
