@@ -402,10 +402,10 @@ class SimulationResult:
             `t` not finite numbers (a text, None, NaN, an array of two or more axes).
         """
         try:
-            times = np.asarray(t, float)
+            times = None if isinstance(t, str) else np.asarray(t, float)
         except (TypeError, ValueError):  # (round 45: numpy's casting errors)
-            times = np.full(1, np.nan)
-        if isinstance(t, str) or t is None or times.ndim > 1 or not np.all(np.isfinite(times)):
+            times = None
+        if times is None or times.ndim > 1 or not np.all(np.isfinite(times)):
             raise InputError(f"speed_at(t): finite times in s (a number or a 1-D array), got {t!r}")
         if times.ndim == 0:
             return self.speed_at(np.atleast_1d(times))[0]

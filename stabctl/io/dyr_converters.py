@@ -63,6 +63,7 @@ from stabctl.models.converters import (
     REPCA1,
     WTDTA1,
 )
+from stabctl.models.converters.reeca1 import has_curve
 
 __all__ = ["ConverterRows", "converter_rows", "shares", "CONVERTER_RECORDS"]
 
@@ -288,12 +289,11 @@ def _no_curve_noted(rec: DyrRecord, v: dict) -> None:
     """Warn of a REECA1 VDL curve whose points are all 0: read as no curve, the current
     limited by Imax alone (as a REECD1's table of no points; round 43: every run of it
     was refused at a current limit 0, without a word at import)."""
-    for volts, amps, curve, limited in (("Vq", "Iq", "VDL1", "Iq"), ("Vp", "Ip", "VDL2", "Ip")):
-        names = [f"{x}{j}" for x in (volts, amps) for j in range(1, 5)]
-        if all(v[n] == 0 for n in names):
+    for volts, amps, curve in (("Vq", "Iq", "VDL1"), ("Vp", "Ip", "VDL2")):
+        if not has_curve(v, volts, amps):
             warnings.warn(
                 f"{rec.label()}: {curve} ({volts}1..{amps}4) all 0: read as no curve, "
-                f"{limited} limited by Imax alone (a table of no points, as REECD1's)",
+                f"{amps} limited by Imax alone (a table of no points, as REECD1's)",
                 UserWarning,
                 stacklevel=2,
             )

@@ -90,12 +90,6 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
     compares, `reecd1.initial_voltage`; |V0| of the others) and the point counts nVDL1,
     nVDL2 of its ten-point curves (`_table_points`)."""
 
-    def curve(a: str, b: str):
-        """1 where the curve has a point not 0 (all 0: no curve, Imax alone; its voltages
-        rise: `stabctl.models.converters.rules`; its currents may fall, as PSS/E's)."""
-        pts = np.array([vals[f"{c}{j}"] for c in (a, b) for j in (1, 2, 3, 4)])
-        return np.any(pts != 0, axis=0)
-
     # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu);
     # REECB1's -Q0 (reecb1.py 304)
     vp0 = np.where(v0 <= 0.01, 0.01, v0)
@@ -113,12 +107,34 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
         "tanpf": tanpf,
         "Ipoff": Ipcmd0 - P0 / v0,
         "Imaxr": np.where(vals["Imax"] <= 0, 1e8, vals["Imax"]),
-        "zVDL1": curve("Vq", "Iq").astype(float),
-        "zVDL2": curve("Vp", "Ip").astype(float),
+        "zVDL1": has_curve(vals, "Vq", "Iq").astype(float),
+        "zVDL2": has_curve(vals, "Vp", "Ip").astype(float),
         "nVDL1": np.where(reec == REECD1, _table_points(vals, "Vq", "Iq"), 0.0),
         "nVDL2": np.where(reec == REECD1, _table_points(vals, "Vp", "Ip"), 0.0),
     }
     return {name: np.where(reec != NO_REEC, value, 0.0) for name, value in on.items()}
+
+
+def has_curve(vals: dict, v_name: str, i_name: str) -> np.ndarray:
+    """Where a REECA1's four-point VDL curve (voltages ``v_name``1..4, currents
+    ``i_name``1..4 of ``vals``, scalars or per-device arrays) has a point not 0: all 0 is
+    no curve, Imax alone (as a REECD1's table of no points); its voltages rise
+    (`stabctl.models.converters.rules`), its currents may fall, as PSS/E's.
+
+    Parameters
+    ----------
+    vals : dict
+        Field name -> value or array of values.
+    v_name, i_name : str
+        The curve's voltage and current field stems ("Vq", "Iq" of VDL1).
+
+    Returns
+    -------
+    numpy.ndarray
+        bool, one per device (0-d for scalars).
+    """
+    pts = np.array([vals[f"{c}{j}"] for c in (v_name, i_name) for j in (1, 2, 3, 4)])
+    return np.any(pts != 0, axis=0)
 
 
 def _table_points(vals: dict, v_name: str, i_name: str) -> np.ndarray:
