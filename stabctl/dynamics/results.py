@@ -49,6 +49,7 @@ NPZ_UNITS = {
     "ibr_q": "pu on the system base",
     "verdict": "[stable (1/0), t_separation s or NaN]",
     "partition_t_s": "s",
+    "end_vmag": "pu (every bus's at the run's end, a run recording no voltages)",
 }
 
 SERIES = ("speed", "angle", "pelect", "pmech", "efd", "qelect")
@@ -591,7 +592,8 @@ class SimulationResult:
         """Write every array and the verdict to a compressed .npz, atomically (temporary
         file beside it, then rename); `meta` is not written except a run monitor's
         ``early_verdict`` (array ``early_verdict``: a stopped run reads back `STOPPED`,
-        not stable), `partitions` (if any) as one
+        not stable) and a run's end voltages where it recorded none (``end_vmag``,
+        ``end_buses``: `end_state` reads them back), `partitions` (if any) as one
         array per field (``partition_t_s``, ``partition_island``, ...); ``units`` holds
         each array's unit as "name: unit" strings (`NPZ_UNITS`).
 
@@ -612,6 +614,9 @@ class SimulationResult:
         arrays["separated"] = np.asarray(self.separated, int)
         if "early_verdict" in self.meta:  # a run its monitor stopped (files of others as before)
             arrays["early_verdict"] = np.array(str(self.meta["early_verdict"]))
+        if not self.vmag.size and self.meta.get("end_vmag") is not None:  # voltages=False
+            arrays["end_vmag"] = np.asarray(self.meta["end_vmag"], float)
+            arrays["end_buses"] = np.asarray(self.meta["end_buses"], int)
         if self.partitions:  # files of runs without trips or splits as before
             for name in PARTITION_FIELDS:
                 arrays[f"partition_{name}"] = np.array([getattr(p, name) for p in self.partitions])
@@ -631,7 +636,8 @@ class SimulationResult:
         -------
         SimulationResult
             The arrays and verdict as written; `meta` holds only a monitor's
-            ``early_verdict`` if written (the rest is not stored).
+            ``early_verdict`` and the end voltages of a run recording none
+            (``end_vmag``, ``end_buses``) if written (the rest is not stored).
 
         Raises
         ------
@@ -646,7 +652,7 @@ class SimulationResult:
         d = _npz_arrays(path)
         fixed = {"stable", "t_separation", "meta", "partitions"}  # not arrays of the file
         names = {f.name for f in fields(cls)} - fixed
-        known = names | {"verdict", "units", "early_verdict"}
+        known = names | {"verdict", "units", "early_verdict", "end_vmag", "end_buses"}
         known |= {f"partition_{n}" for n in PARTITION_FIELDS}
         unknown = sorted(set(d) - known)
         needed = {f.name for f in fields(cls) if _no_default(f)} | {"verdict", "separated"}
@@ -668,6 +674,8 @@ class SimulationResult:
         _check_contents(d, path)
         early = d.pop("early_verdict", None)
         meta = {} if early is None else {"early_verdict": str(early)}
+        if "end_vmag" in d:  # a run recording no voltages: its end's (end_state)
+            meta["end_vmag"], meta["end_buses"] = d.pop("end_vmag"), d.pop("end_buses")
         stable, tsep = d.pop("verdict")
         sep = [int(i) for i in d.pop("separated")]  # as a run gives them: JSON-able ints
         parts = {name: d.pop(f"partition_{name}", ()) for name in PARTITION_FIELDS}
@@ -728,9 +736,14 @@ def _check_contents(d: dict, path) -> None:
     t = d["t"]
     if t.ndim != 1 or t.dtype.kind != "f" or not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0):
         bad("t", "is not a time axis (finite times, not decreasing)")
-    for name in ("machines", "buses", "devices", "converters", "island", "separated"):
+    for name in ("machines", "buses", "devices", "converters", "island", "separated", "end_buses"):
         if name in d and (d[name].ndim != 1 or d[name].dtype.kind not in "iu"):
             bad(name, f"has shape {d[name].shape} and dtype {d[name].dtype} (integers)")
+    if ("end_vmag" in d) != ("end_buses" in d) or (
+        "end_vmag" in d
+        and (d["end_vmag"].dtype.kind != "f" or d["end_vmag"].shape != d["end_buses"].shape)
+    ):
+        bad("end_vmag", "is not one float a bus of end_buses")
     if "inertia" in d and d["inertia"].shape != d["machines"].shape:
         bad("inertia", f"has shape {d['inertia'].shape}, not one weight a machine")
     for name, columns in _PER_TIME.items():

@@ -490,6 +490,21 @@ def test_a_run_without_bus_voltages_has_the_same_trajectories(
     assert lean.stable == full.stable
 
 
+def test_a_run_without_bus_voltages_keeps_its_end_state_through_a_result_file(kundur, tmp_path):
+    """A run recording no bus voltage gives the lowest voltage at its end all the same,
+    the full run's (to the step's solution), and keeps it through `to_npz`/`from_npz` (round 45: the file lost it,
+    so the read-back `end_state` had no lowest voltage)."""
+    events = LineFault(3, 101).events(0.1)
+    full = kundur.run(events, 2.0).end_state(60.0)
+    lean = kundur.run(events, 2.0, voltages=False)
+    back = SimulationResult.from_npz(lean.to_npz(tmp_path / "lean.npz"))
+    end = lean.end_state(60.0)
+    assert back.end_state(60.0) == end
+    # one evaluation of the model at the last point; the full run's the step's solution
+    assert end["lowest_voltage_bus"] == full["lowest_voltage_bus"]
+    assert end["lowest_voltage_pu"] == pytest.approx(full["lowest_voltage_pu"], abs=1e-4)
+
+
 def _same_machines(a, b, same_bits: bool) -> None:
     """Every machine trajectory of run a equals run b's: bit for bit, or within round-off
     (1e-10 of the largest value)."""
