@@ -174,6 +174,14 @@ def print_storage(esd: dict, result) -> None:
             f"{d['pmax_mw']:7.1f} {d['switchings']:10d} {d['energy_absorbed_mj']:11.1f} "
             f"{d['energy_delivered_mj']:12.1f} {d['peak_power_mw']:8.1f}"
         )
+    for d in info:
+        if d.get("commanded_idle_s", 0.0) > 0:
+            click.echo(
+                f"  device {d['device']} (bus {d['bus']}): the network took none of its power "
+                f"for {d['commanded_idle_s']:.3g} s of the {d['commanded_s']:.3g} s it was "
+                "commanded (its bus below the 0.5 pu low-voltage switch, or its energy at "
+                "a limit)"
+            )
 
 
 def _chattering(info: list) -> str:

@@ -445,8 +445,10 @@ def simulate(
     one's bus, and its ID in a PSS/E case: "G2 (bus 102, id '1')"), vmag_pu.B<n>,
     vang_rad.B<n> per bus n, and with
     --esd-pct pesd_pu.D<d> per device (+ absorbs); --json then also gives the storage
-    settings (`esd`), per device switchings, energy absorbed and delivered (MJ) and peak
-    power used (MW) (`storage`), and every switching as {t_s, device, bus, machine, mode
+    settings (`esd`), per device switchings, energy absorbed and delivered (MJ), peak
+    power used (MW), seconds commanded and of those with no power taken (its bus below
+    the 0.5 pu low-voltage switch, or its energy at a limit: commanded_s,
+    commanded_idle_s) (`storage`), and every switching as {t_s, device, bus, machine, mode
     (absorb, idle, inject), mode_code (+1, 0, -1), rel_speed_hz (machine minus COI speed
     seen by the controller)} (`switchings`).  A case with converters (ANDES PVD1, ESD1;
     docs/ibr.md) adds pibr_pu.C<c> and qibr_pu.C<c>, the P and Q each injects (system

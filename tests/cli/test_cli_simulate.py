@@ -976,3 +976,24 @@ def test_a_line_fault_s_steps_are_its_intervals():
     res = CliRunner().invoke(main, ["simulate", "kundur", "--fault", "3", "--far-bus", "101"])
     assert res.exit_code == 0, res.output
     assert "0-6 s, 1200 steps (h = 5 ms" in res.stdout, res.stdout
+
+
+def test_the_storage_summary_says_when_the_network_took_no_power():
+    """A device commanded while its bus is below PST's 0.5 pu low-voltage switch moves
+    nothing (the network drops it); round 45: a device far beyond its bus switched and
+    moved nothing without a word.  Kundur, fault at device 1's bus 10 for 30 cycles,
+    ungated devices: the summary names the seconds of its command that took no power."""
+    args = ("simulate", "kundur", "--fault", "10", "--clear-cycles", "30", "--v-gate", "0")
+    res = CliRunner().invoke(main, [*args, "--esd-pct", "50"])
+    assert res.exit_code == 0, res.output
+    said = re.search(
+        r"device 1 \(bus 10\): the network took none of its power for ([\d.]+) s of the "
+        r"([\d.]+) s it was commanded \(its bus below the 0.5 pu low-voltage switch",
+        res.stdout,
+    )
+    assert said, res.stdout
+    idle, commanded = map(float, said.groups())
+    assert 0.5 <= idle < commanded  # the fault holds bus 10 down 0.5 s; then it recovers
+    data = json.loads(CliRunner().invoke(main, [*args, "--esd-pct", "50", "--json"]).stdout)
+    dev = data["storage"][0]
+    assert dev["commanded_idle_s"] == pytest.approx(idle, rel=2e-3)

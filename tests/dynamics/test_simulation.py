@@ -492,8 +492,8 @@ def test_a_run_without_bus_voltages_has_the_same_trajectories(
 
 def test_a_run_without_bus_voltages_keeps_its_end_state_through_a_result_file(kundur, tmp_path):
     """A run recording no bus voltage gives the lowest voltage at its end all the same,
-    the full run's (to the step's solution), and keeps it through `to_npz`/`from_npz` (round 45: the file lost it,
-    so the read-back `end_state` had no lowest voltage)."""
+    the full run's (to the step's solution), and keeps it through `to_npz`/`from_npz`
+    (round 45: the file lost it, so the read-back `end_state` had no lowest voltage)."""
     events = LineFault(3, 101).events(0.1)
     full = kundur.run(events, 2.0).end_state(60.0)
     lean = kundur.run(events, 2.0, voltages=False)

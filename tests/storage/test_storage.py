@@ -195,6 +195,10 @@ def test_dropped_device_keeps_its_state_of_charge(kundur):
     dev = r.meta["storage"][0]
     assert [m for _, _, m, _ in r.meta["switchings"]] == [1]
     assert np.all(r.pesd == 0.0) and dev["peak_power_mw"] == 0.0
+    # and the summary says so: commanded from its switching to the end, all of it idle
+    t_on = r.meta["switchings"][0][0]
+    assert dev["commanded_s"] == pytest.approx(1.4 - t_on, abs=2 * np.diff(r.t).max())
+    assert dev["commanded_idle_s"] == dev["commanded_s"] > 0
     for key in ("energy_absorbed_mj", "energy_delivered_mj", "soc_high_mj", "soc_low_mj"):
         assert dev[key] == 0.0
 
