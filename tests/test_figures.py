@@ -114,6 +114,30 @@ def test_a_screening_map_draws_the_branch_faults_and_their_verdicts(kept):
     assert {c.norm.vmin for c in coloured} == {0.154 * 60}
 
 
+def test_a_screening_map_rings_unconverged_ccts_and_keeps_its_legend_off_the_markers(kept):
+    """Round 45: a CCT not converged in the run's end (cleared at it, a longer run loses
+    synchronism) was drawn as any CCT, and the legend, inside the axes at their lower
+    right, could cover a marker.  Such a row now has a magenta ring, named in the legend,
+    and the legend sits below the axes, clear of every marker."""
+    case = stabctl.load_case("kundur")
+    late = {"t_end_s": 11.0, "t_separation_s": 6.07}
+    rows = [
+        {"bus": 3, "far_bus": None, "verdict": "cct", "cct_s": 0.238},
+        {"bus": 101, "far_bus": None, "verdict": "cct", "cct_s": 0.2, "run_end_check": late},
+        {"bus": 13, "far_bus": 120, "verdict": "above t_max", "t_max_s": 0.5},
+        {"bus": 2, "far_bus": 20, "verdict": "N-1 insecure"},
+    ]
+    figures.screening_map(case, rows, "unused.png")
+    fig = kept[-1]
+    ax = fig.axes[0]
+    ring = next(c for c in ax.collections if c.get_label().startswith("CCT not converged"))
+    xy = stabctl.plotting.layout.spectral_layout(case)
+    np.testing.assert_allclose(ring.get_offsets(), xy[case.bus_indices([101])])
+    fig.canvas.draw()
+    box = ax.get_legend().get_window_extent()
+    assert box.y1 <= ax.get_window_extent().y0  # below the axes: over no marker
+
+
 @pytest.mark.parametrize("suffix", ["png", "pdf", "svg"])
 def test_a_figure_written_twice_is_the_same_bytes(suffix, tmp_path, monkeypatch):
     """`simulate --plot r.pdf` (or .svg, and `screen --plot s.svg`) differed from run to

@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from stabctl.smallsignal.modal import SIGNIFICANT
+from stabctl.stability.cct import run_end_lost
 
 #: the savefig metadata of each format that would otherwise stamp the time of writing
 #: (the PDF's /CreationDate, the SVG's <dc:date>, PostScript's %%CreationDate): left out,
@@ -596,7 +597,9 @@ def screening_map(case, rows, path: Path) -> None:
     (squares; round 42: branch faults were left off the map, their N-1 insecure verdicts
     and islanding trips shown nowhere), on one colour scale; open markers: CCT above the
     search limit (robust); red crosses: N-1 insecure (CCT 0); grey crosses: failed search;
-    a legend; bus numbers on the most critical buses.  A screening of some buses only
+    a magenta ring: a CCT not converged in the run's end (`stabctl.stability.cct.
+    run_end_lost`); a legend below the map (inside, it could cover a marker); bus numbers
+    on the most critical buses.  A screening of some buses only
     (``stabctl screen --buses``) shows the others as small grey points, labels every
     screened bus when they are at most LABEL_ALL, zooms to the screened faults when they
     are under SUBSET_ZOOM of the buses, and says "k of n buses" in its title.
@@ -633,8 +636,12 @@ def screening_map(case, rows, path: Path) -> None:
     norm = Normalize(min(ccts) * case.freq_hz, max(ccts) * case.freq_hz)
     sc = _verdict_markers(ax, case, xy[idx], bus_rows, norm, "o", 40, "")
     _verdict_markers(ax, case, mid, branch_rows, norm, "s", 22, " (branch fault)")
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="lower right", fontsize=8)
+    _not_converged_rings(ax, np.vstack([xy[idx], mid]), bus_rows + branch_rows)
+    handles = ax.get_legend_handles_labels()[0]
+    if handles:  # below the axes: inside, it could cover a marker (round 45)
+        ax.legend(
+            loc="upper center", bbox_to_anchor=(0.5, -0.02), fontsize=8, ncol=1 + (len(handles) > 3)
+        )
     cct = np.array([r["cct_s"] if r.get("verdict") == "cct" else np.inf for r in bus_rows])
     labelled = len(idx) if len(idx) <= LABEL_ALL else 10
     screened = np.vstack([xy[idx], mid])
@@ -654,6 +661,19 @@ def screening_map(case, rows, path: Path) -> None:
         pad = 0.15 * np.maximum(hi - lo, 0.05 * np.ptp(xy, axis=0))
         ax.set(xlim=(lo[0] - pad[0], hi[0] + pad[0]), ylim=(lo[1] - pad[1], hi[1] + pad[1]))
     save_figure(fig, path)
+
+
+def _not_converged_rings(ax, at, rows) -> None:
+    """A magenta ring around each marker of `rows` (positions `at`, (n, 2)) whose CCT is
+    not converged in the run's end: cleared at it, a longer run loses synchronism (round
+    45: such rows were drawn as any CCT)."""
+    lost = np.array([run_end_lost(r.get("run_end_check")) for r in rows], bool)
+    if lost.any():
+        ax.scatter(
+            at[lost, 0], at[lost, 1], s=160, facecolors="none", edgecolors="magenta",
+            linewidths=1.2, zorder=4,
+            label="CCT not converged in the run's end (a longer run loses synchronism)",
+        )  # fmt: skip
 
 
 def _verdict_markers(ax, case, at, rows, norm, marker, size, what):
