@@ -12,6 +12,7 @@ from pathlib import Path
 
 import click
 
+from stabctl.cli.format import undecoded
 from stabctl.errors import InputError
 from stabctl.locking import temp_file
 from stabctl.parallel import stream_fd
@@ -26,7 +27,7 @@ def _check_name(text: str, option: str) -> None:
         text.encode("utf-8")
     except UnicodeEncodeError:
         raise InputError(
-            f"{option} {os.fsencode(text)!r}: a name that is not UTF-8: the JSON outputs "
+            f"{option} {undecoded(text)}: a name that is not UTF-8: the JSON outputs "
             "and records naming the file could not; give another name"
         ) from None
 

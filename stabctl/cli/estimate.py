@@ -725,8 +725,10 @@ def track(
     """The speeds of CASE's machines estimated from PMU frames that come from outside (a
     field recording, a PDC over TCP) with no simulation: per frame, each machine's speed
     and the COI speed (Hz) and the relative speeds f_i - f_COI (mHz), forecast over
-    --latency-ms as the ESD controllers use them, and with --esd-pct the modes Table 3
-    would command.  The PMUs' station names must be CASE's generator PMUs
+    --latency-ms as the ESD controllers use them, with --esd-pct the modes Table 3
+    would command, and each machine's age (age_<PMU>_s: seconds since its last usable
+    PMU value, 0 when measured in the frame; above 0 its speed is held (raw) or
+    predicted (kf, ekf) across a gap).  The PMUs' station names must be CASE's generator PMUs
     (docs/estimation.md 6.1); the noise options state the PMUs' accuracy the filters are
     tuned to.  Over TCP the commands address stream --idcode, and every frame is checked
     (CRC; each data frame's IDCODE, type, size and FRACSEC count against its CFG-2, and
@@ -828,14 +830,15 @@ def track(
     write_kept(at, lambda to: _write_track(to, ctrl, d, esd_pct is not None), short, kept)
     rel = np.where(d.formed[:, None], np.abs(d.rel), -1.0)
     worst = np.unravel_index(np.argmax(rel), rel.shape) if d.formed.any() else None
-    unformed = d.unformed([p.label for p in ctrl.pmus])
+    named = [_measured(case, p) for p in ctrl.pmus]  # as every other output names them
+    unformed = d.unformed(named)
     click.echo(
         f"tracked {_instants(got)} from {src} with {estimator}"
         + (
             ""
             if worst is None
             else f": largest |f_i - f_COI| {1e3 * abs(d.rel[worst]):.1f} mHz "
-            f"({ctrl.pmus[worst[1]].label} at {d.t[worst[0]]:.3f} s)"
+            f"({named[worst[1]]} at {d.t[worst[0]]:.3f} s)"
         )
         + (f"; {unformed}" if unformed else "")
         + (f"; {counted(d.starts, 'ESD start')}" if esd_pct is not None else "")
@@ -846,6 +849,16 @@ def track(
     )
     if got.short:
         fail_short(out_path, at, why, kept)
+
+
+def _measured(case, pmu) -> str:
+    """What a PMU's frequency is named by in `estimate track`'s text: its machine as every
+    output names machines, with the PMU's station name, ``"G2 (bus 2; PMU B2:G2)"``
+    (round 45: the station name alone, ``B2:G2``, where others say ``G2 (bus 2)``); a
+    PMU of no machine by its station name."""
+    if pmu.machine is None:
+        return f"PMU {pmu.label}"
+    return f"{case.machine_name(pmu.machine)[:-1]}; PMU {pmu.label})"
 
 
 def _keep_received(out_path, recordings: list, case_name: str) -> str:
@@ -904,7 +917,10 @@ def _write_track(out_path, ctrl, d, with_modes: bool) -> None:
 
 def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:
     """`estimate track`'s CSV header and rows: t, each machine's speed (Hz), the COI speed
-    (Hz), each relative speed (mHz), with_modes: each ESD's mode."""
+    (Hz), each relative speed (mHz), with_modes: each ESD's mode; then each machine's
+    age (s since its last usable PMU value, `Diagnostics.age`: 0 measured in the frame,
+    above 0 held (raw) or predicted (kf, ekf) across a gap; round 44: a held value was
+    written as a measured one)."""
     labels = [p.label for p in ctrl.pmus]
     head = ["t_s", *(f"f_{x}_hz" for x in labels), "f_coi_hz"]
     head += [f"rel_{x}_mhz" for x in labels]
@@ -913,4 +929,6 @@ def _track_columns(ctrl, d, with_modes: bool) -> tuple[str, np.ndarray]:
         buses = ctrl.case.buses.number[ctrl.sa.bus]
         head += [f"mode_esd{k + 1}_bus{int(b)}" for k, b in enumerate(buses)]
         cols.append(d.modes)
+    head += [f"age_{x}_s" for x in labels]
+    cols.append(d.age)
     return ",".join(head), np.hstack(cols) if d.t.size else np.zeros((0, len(head)))

@@ -23,11 +23,28 @@ def one_line(exc) -> str:
     -------
     str
     """
-    msg = " ".join(str(exc).split())
+    msg = " ".join(undecoded(str(exc)).split())
     res = getattr(exc, "result", None)
     if isinstance(exc, SimulationError) and res is not None and len(res.t) and "t = " not in msg:
         msg += f" (run stopped; last computed point t = {float(res.t[-1]):.4f} s)"
     return msg
+
+
+def undecoded(text: str) -> str:
+    """`text` with the bytes of a name that is not UTF-8 (which Python holds as lone
+    surrogates, ``'x\\udcff.raw'``) shown as escapes of those bytes, ``x\\xff.raw``:
+    every message names such a file one way (round 44: ``x\\udcff.raw`` in one,
+    ``b'z\\xff.csv'`` in another).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    str
+    """
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
 
 
 def shown(path) -> str:
@@ -44,6 +61,9 @@ def shown(path) -> str:
     str
     """
     text = str(path)
+    if text.isprintable():
+        return text
+    text = undecoded(text)
     return text if text.isprintable() else repr(text)
 
 
@@ -798,7 +818,8 @@ def print_estimate(d) -> None:
         f"PMUs at the {p['at']} buses: {p['rate']:g} frames/s, TVE {100 * p['tve']:g} %, "
         f"FE {p['fe_hz']:g} Hz, RFE {p['rfe_hz_s']:g} Hz/s ({p['k_sigma']:g} sigma), "
         f"frequency window {p['window_cycles']:g} cycles, latency {1000 * p['latency_s']:g} ms, "
-        f"lost {p['drop_prob']:g}; "
+        f"frames lost with probability {p['drop_prob']:g}"  # (round 44: "lost 0", "8 missing")
+        + ("; " if d.get("source") is None else " in the in-process comparison; ")
         + (
             f"{counted(d['runs'], 'run')}, seeds {d['seed']}..{d['seed'] + d['runs'] - 1}"
             if d.get("source") is None

@@ -77,13 +77,16 @@ class Diagnostics:
     relative speeds f_i - f_COI it acted on (Hz, the estimator's forecast to t + latency;
     nan in a frame where they could not be formed, `formed`); modes
     (n_f, n_dev) the commanded modes; freq (n_f, n_mac) the machine speeds those came from
-    (Hz); mac: each device's machine index; latency (s), f0 (Hz), coi ("system" or "rest")
-    of the loop."""
+    (Hz); age (n_f, n_mac) the seconds since each machine's last usable PMU value (0:
+    measured in the frame; above 0 its speed held (raw) or predicted (kf, ekf) across a
+    gap; nan: none yet, or the true speeds of the ideal estimator: 0); mac: each device's
+    machine index; latency (s), f0 (Hz), coi ("system" or "rest") of the loop."""
 
     t: np.ndarray
     rel: np.ndarray
     modes: np.ndarray
     freq: np.ndarray
+    age: np.ndarray
     mac: np.ndarray
     latency: float
     f0: float
@@ -182,9 +185,9 @@ class LoopController:
         """Modes (n_dev,) to take effect at t_f + latency."""
         self.island = island_at(partial, t_f)
         if self.estimator == "ideal":
-            return self._command(t_f, partial.speed_at(np.array([t_f]))[0])
+            return self._command(t_f, partial.speed_at(np.array([t_f]))[0], 0.0)
         if partial.t.size < 2:  # the run start is not recorded yet: no frame
-            return self._command(t_f, np.ones(self.models.n))
+            return self._command(t_f, np.ones(self.models.n), np.nan)
         frame = self.measure(t_f, partial)
         return self.act(frame if self.wire is None else self.wire(frame))
 
@@ -215,15 +218,17 @@ class LoopController:
         else:
             self.filter.step(frame)
             speed = self.filter.forecast(self.settings.latency_s)[0]
-        stale = frame.t - self.seen > FILL_S + 1e-9
-        return self._command(frame.t, np.where(stale, np.nan, speed))
+        age = frame.t - self.seen
+        return self._command(frame.t, np.where(age > FILL_S + 1e-9, np.nan, speed), age)
 
-    def _command(self, t_f: float, speed: np.ndarray) -> np.ndarray:
-        """Table 3 modes on the relative speeds of `speed` (n_mac,) pu, recorded."""
+    def _command(self, t_f: float, speed: np.ndarray, age) -> np.ndarray:
+        """Table 3 modes on the relative speeds of `speed` (n_mac,) pu, recorded with the
+        age of each machine's value (s, a scalar or (n_mac,): `Diagnostics.age`)."""
         rel = np.nan_to_num(island_relative(speed, self.models.inertia, self.island, self.coi))
         self.mode = law.desired_modes(self.sa, self.mode, rel)
         f0 = self.case.freq_hz
-        self.rows.append(self.row(t_f, rel * f0, self.mode, np.asarray(speed) * f0))
+        age = np.broadcast_to(np.asarray(age, float), speed.shape)
+        self.rows.append(self.row(t_f, rel * f0, self.mode, np.asarray(speed) * f0, age))
         self._loose += 1
         if self._loose == ROW_BLOCK:  # a block of rows in one array (`row`)
             self.rows[-ROW_BLOCK:] = [np.vstack(self.rows[-ROW_BLOCK:])]
@@ -231,11 +236,11 @@ class LoopController:
         return self.mode
 
     @staticmethod
-    def row(t_f: float, rel_hz, modes, freq_hz) -> np.ndarray:
+    def row(t_f: float, rel_hz, modes, freq_hz, age_s) -> np.ndarray:
         """A row of `diagnostics` packed in one array (t, rel (n_mac,), modes (n_dev,),
-        freq (n_mac,)); `rows` holds such rows, every `ROW_BLOCK` of them stacked in
-        one array (a track of millions of frames keeps about 8 bytes a value)."""
-        return np.concatenate(([t_f], rel_hz, modes, freq_hz))
+        freq (n_mac,), age (n_mac,)); `rows` holds such rows, every `ROW_BLOCK` of them
+        stacked in one array (a track of millions of frames keeps about 8 bytes a value)."""
+        return np.concatenate(([t_f], rel_hz, modes, freq_hz, age_s))
 
     def measure(self, t_f: float, partial: SimulationResult) -> Frame:
         """The PMUs' half: the measured frame at t_f, true values from the trajectory's
@@ -264,8 +269,9 @@ class LoopController:
 
     def diagnostics(self) -> Diagnostics:
         n, m = self.models.n, self.mode.size
-        a = np.vstack(self.rows) if self.rows else np.zeros((0, 1 + 2 * n + m))
-        t, rel, freq = a[:, 0], a[:, 1 : 1 + n], a[:, 1 + n + m :]
+        a = np.vstack(self.rows) if self.rows else np.zeros((0, 1 + 3 * n + m))
+        t, rel = a[:, 0], a[:, 1 : 1 + n]
+        freq, age = a[:, 1 + n + m : 1 + 2 * n + m], a[:, 1 + 2 * n + m :]
         rel = np.where(np.isfinite(freq).all(axis=1, keepdims=True), rel, np.nan)
         modes = a[:, 1 + n : 1 + n + m].astype(np.int64)
         return Diagnostics(
@@ -273,6 +279,7 @@ class LoopController:
             rel=rel,
             modes=modes,
             freq=freq,
+            age=age,
             mac=np.asarray(self.sa.mac),
             latency=self.settings.latency_s,
             f0=self.case.freq_hz,
@@ -611,7 +618,7 @@ def _over_tcp(run, plant: LoopController, remote_of, serve) -> ClosedLoopRun:
         remote.rows[:0] = plant.rows  # the instants before a frame could be made
         return ClosedLoopRun(res, remote.diagnostics(), link.stats().summary())
     nan = np.full(plant.models.n, np.nan)
-    plant.rows += [plant.row(t, nan, modes, nan) for t, modes in link.answers]
+    plant.rows += [plant.row(t, nan, modes, nan, nan) for t, modes in link.answers]
     summary = {**link.stats().summary(), "dropped_peers": list(link.refused)}
     return ClosedLoopRun(res, plant.diagnostics(), summary)
 

@@ -2727,8 +2727,12 @@ def test_an_output_name_that_is_not_utf_8_is_refused(tmp_path):
     written."""
     name = os.fsdecode(b"\xffo.csv")
     res = run("simulate", "kundur", "--tf", 0.5, "--out", str(tmp_path / name), "--json")
-    assert_error(res, "--out ", "\\xffo.csv': a name that is not UTF-8")
+    assert_error(res, f"--out {tmp_path}/\\xffo.csv: a name that is not UTF-8")
     assert list(tmp_path.iterdir()) == []
+    # an input of that name is named the same way (round 44: "b'...\\xffo.csv'" in one
+    # message, "\\udcffo.csv" in the other)
+    res = run("simulate", str(tmp_path / name), "--tf", 0.5)
+    assert_error(res, f"case file not found: {tmp_path}/\\xffo.csv")
 
 
 def test_an_output_name_with_a_newline_is_written_and_shown_on_one_line(tmp_path):

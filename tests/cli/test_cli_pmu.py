@@ -77,7 +77,7 @@ def test_served_stream_is_the_in_process_stream_and_replays_byte_for_byte(tmp_pa
     assert (tmp_path / "b.c37").read_bytes() == (tmp_path / "a.c37").read_bytes()
 
 
-def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
+def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path, capsys):
     """`estimate rmse --source tcp://...` on `pmu serve`'s stream of the same fault and
     seed: every estimator's figures equal those of the same seed's frames through the
     frame codec in process; the text report prints the three side by side."""
@@ -101,6 +101,14 @@ def test_estimate_rmse_from_a_served_stream_equals_in_process(tmp_path):
         - src["in_process"]["raw"]["speed_rmse_mhz"]
     )
     assert gap <= 1 / np.sqrt(12)  # FREQ in whole mHz: at most its rounding RMS
+    # the text: the loss probability is the in-process comparison's, the stream's own
+    # losses its missing instants (round 44: "lost 0" beside "8 missing")
+    from stabctl.cli.format import print_estimate
+
+    print_estimate(d)
+    text = capsys.readouterr().out
+    assert "frames lost with probability 0.05 in the in-process comparison; frames from" in text
+    assert "0 missing (labelled seed 2)" in text
 
 
 @pytest.mark.heavy

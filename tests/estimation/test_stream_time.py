@@ -5,6 +5,7 @@ are counted and said, a short gap filled with missing values and a long one rest
 the estimator, never predicted across."""
 
 import binascii
+import re
 import struct
 
 import numpy as np
@@ -158,6 +159,15 @@ def test_a_short_gap_is_filled_and_said(wire, tmp_path):
     )
     rows = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
     assert rows.shape[0] == 121 and np.allclose(np.diff(rows[:, 0]), 1 / 60)
+    # the filled rows say how old each machine's value is (round 44: `--estimator raw`
+    # held values through the gap and wrote them as measured): k/60 s at the k-th filled
+    # instant, 0 where measured
+    ages = np.genfromtxt(tmp_path / "t.csv", delimiter=",", names=True)
+    age = np.column_stack([ages[n] for n in ages.dtype.names if n.startswith("age_")])
+    assert age.shape == (121, 4)
+    want = np.zeros(121)
+    want[40:70] = np.arange(1, 31) / 60
+    np.testing.assert_allclose(age, np.repeat(want[:, None], 4, axis=1), atol=1e-9)
 
 
 @pytest.mark.parametrize("seconds", [10, 3600])
@@ -503,13 +513,15 @@ def test_a_machine_never_measured_leaves_no_relative_speed_not_zero(wire, tmp_pa
     assert "largest" not in res.stdout
     assert (
         f"no relative speed in {len(body)} of {len(body)} frames (a COI needs an estimate "
-        "of every machine; no estimate ever of B1:G1): the devices idle there" in res.stdout
+        "of every machine; no estimate ever of G1 (bus 1; PMU B1:G1)): the devices idle "
+        "there" in res.stdout  # machines named as every output names them (round 45)
     )
     rows = np.genfromtxt(tmp_path / "t.csv", delimiter=",", names=True)
     assert np.isnan(rows["f_B1G1_hz"]).all() and np.isfinite(rows["f_B2G2_hz"]).all()
     assert np.isnan(rows["f_coi_hz"]).all() and np.isnan(rows["rel_B2G2_mhz"]).all()
     whole = _track(tmp_path, head, body)
     assert "no relative speed" not in whole.stdout and _largest_mhz(whole) > 100
+    assert re.search(r" mHz \(G(\d) \(bus \1; PMU B\1:G\1\) at \d+\.\d{3} s\)", whole.stdout)
 
 
 def _first_pmu_field(cfg2, frame: bytes, field: str, raw: bytes) -> bytes:
