@@ -216,13 +216,15 @@ def test_estimate_track_writes_a_row_per_recorded_frame(tmp_path, monkeypatch):
     assert "tracked 121 frames from k.c37 with ekf" in res.stdout
     head, *rows = (tmp_path / "t.csv").read_text().splitlines()
     names = head.split(",")
-    assert len(rows) == 121 and len(names) == 1 + 4 + 1 + 4 + 4
+    assert len(rows) == 121 and len(names) == 1 + 4 + 1 + 4 + 4 + 4
     data = np.array([[float(v) for v in r.split(",")] for r in rows])
     coi = data[:, names.index("f_coi_hz")]
     for k in range(1, 5):
         rel = data[:, 5 + k] / 1e3
         np.testing.assert_allclose(data[:, k] - rel, coi, atol=1e-6)
-    assert set(np.unique(data[:, -4:])) <= {-1.0, 0.0, 1.0}
+    assert set(np.unique(data[:, -8:-4])) <= {-1.0, 0.0, 1.0}  # the modes
+    assert names[-4:] == ["age_B1:G1_s", "age_B2:G2_s", "age_B11:G3_s", "age_B12:G4_s"]
+    assert not data[:, -4:].any()  # every frame measured every machine
 
 
 def test_estimate_source_refuses_monte_carlo_options(tmp_path):
