@@ -144,7 +144,8 @@ def _allowed(host: str, allow: str | None) -> tuple:
     peer); InputError for an empty or blank value (it names no peer: it must not mean
     any), an item that is not an address, an empty item or a repeat (`comma_list`), or an
     unspecified address (0.0.0.0, ::: no peer's); warns when listening beyond loopback
-    to any peer, and for each address no peer of `host` can have (`_unreachable`)."""
+    to any peer, for each address no peer of `host` can have (`_unreachable`), and for
+    each IPv6 zone left out (`plain_ip`)."""
     from stabctl.estimation.c37_tcp import plain_ip
 
     if not host.strip():
@@ -158,6 +159,13 @@ def _allowed(host: str, allow: str | None) -> tuple:
             "let any peer connect"
         )
     peers = tuple(() if allow is None else comma_list(allow, "--allow", plain_ip, "an IP address"))
+    for item in (allow or "").split(","):
+        if "%" in item:  # an IPv6 zone: not compared (`plain_ip`)
+            click.echo(
+                f"warning: --allow {item.strip()}: read as {plain_ip(item.strip())} (a peer is "
+                "matched by its address, not by the zone after %)",
+                err=True,
+            )
     for peer in peers:  # said now, before the server waits for peers
         if ipaddress.ip_address(peer).is_unspecified:
             raise InputError(

@@ -91,7 +91,8 @@ class Guard:
 def plain_ip(address: str) -> str:
     """An IP address as `Guard.allow` holds it: an IPv4-mapped IPv6 address (a dual-stack
     socket's IPv4 peer, ``::ffff:10.0.0.5``) as its IPv4 address, any other in its
-    compressed form.
+    compressed form, without an IPv6 zone (``fe80::1%eth0`` as ``fe80::1``: a peer is
+    matched by its address; round 46: ``--allow ::1%lo`` admitted no one).
 
     Parameters
     ----------
@@ -109,6 +110,8 @@ def plain_ip(address: str) -> str:
         Not an IP address.
     """
     ip = ipaddress.ip_address(address)
+    if getattr(ip, "scope_id", None):
+        ip = ipaddress.ip_address(address.split("%", 1)[0])
     return str(getattr(ip, "ipv4_mapped", None) or ip)
 
 
@@ -1207,9 +1210,18 @@ def _data_frames(
                 cut = "reset the connection"
             except CutFrame:
                 cut = "closed the connection in the middle of a frame"
-            except InputError as exc:  # bytes that start no frame
-                off = f" (or data frame {len(data)}'s FRAMESIZE is off)" if data else ""
-                raise InputError(f"after {len(data)} data frames: {exc}{off}") from None
+            except NoFrameStart as exc:
+                if not data:  # the peer speaks another protocol
+                    raise InputError(f"after 0 data frames: {exc}") from None
+                damaged = (
+                    f"after data frame {len(data)}: {exc.head!r}, no frame start (SYNC 0xAA, "
+                    f"FRAMESIZE of at least 16), or data frame {len(data)}'s FRAMESIZE is off"
+                )
+                return (  # a frame refused (round 46: the frames before it were lost)
+                    f"the server sent bytes that start no frame ({damaged}); the stream is cut "
+                    f"there: {len(data)} data frames before them{last}, before {end}",
+                    damaged,
+                )
             else:
                 if frame is not None:
                     kind = c37.frame_kind(frame)
@@ -1257,6 +1269,15 @@ class CutFrame(InputError):
     """The peer closed the connection in the middle of a frame."""
 
 
+class NoFrameStart(InputError):
+    """Bytes `head` (4) where a frame starts that start none (SYNC 0xAA, FRAMESIZE of at
+    least 16): the peer speaks another protocol, or, after frames, one is damaged."""
+
+    def __init__(self, head: bytes):
+        super().__init__(f"the peer does not speak C37.118.2: it sent {head!r} for a frame start")
+        self.head = head
+
+
 def _read_frame(conn: socket.socket, first_byte: float | None = None):
     """One whole frame from conn, SYNC and FRAMESIZE first (None if the peer closed
     between frames), within the connection's time-out (``conn.gettimeout()``) for the
@@ -1274,9 +1295,9 @@ def _read_frame(conn: socket.socket, first_byte: float | None = None):
 
     Raises
     ------
-    InputError
+    NoFrameStart
         Bytes that do not start a C37.118.2 frame (SYNC 0xAA, FRAMESIZE of at least 16):
-        the peer speaks another protocol.
+        the peer speaks another protocol (or, after frames, one is damaged).
     CutFrame
         The peer closed in the middle of a frame.
     TimeoutError
@@ -1297,9 +1318,7 @@ def _read_frame(conn: socket.socket, first_byte: float | None = None):
             return None
         head = first + rest
         if head[0] != 0xAA or int.from_bytes(head[2:4], "big") < 16:
-            raise InputError(
-                f"the peer does not speak C37.118.2: it sent {head!r} for a frame start"
-            )
+            raise NoFrameStart(head)
         body = _recv_exactly(conn, int.from_bytes(head[2:4], "big") - 4, deadline, True)
         return head + body
     finally:

@@ -427,6 +427,16 @@ def test_an_allow_list_no_peer_can_match_is_named(capsys):
     for unspecified in ("0.0.0.0", "::"):
         with pytest.raises(InputError, match=f"--allow {unspecified}: the unspecified address"):
             _allowed("127.0.0.1", unspecified)
+    # round 46: `--allow ::1%lo` (an IPv6 zone) was taken as it was, which no peer's
+    # address equals: a peer is matched by its address, the zone left out and said
+    assert _allowed("::1", "::1%lo") == ("::1",)
+    assert capsys.readouterr().err.splitlines() == [
+        "warning: --allow ::1%lo: read as ::1 (a peer is matched by its address, not by the "
+        "zone after %)"
+    ]
+    from stabctl.estimation.c37_tcp import Guard
+
+    assert Guard(allow=("fe80::1",)).admits(("fe80::1%eth0", 4712, 0, 2))
 
 
 def test_a_peer_that_resets_the_controller_is_named_by_its_address():

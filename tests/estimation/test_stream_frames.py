@@ -146,6 +146,45 @@ def test_record_keeps_the_good_frames_before_a_refused_one(wire, tmp_path, bad, 
     assert not (tmp_path / "n.c37").exists()
 
 
+@pytest.mark.parametrize(
+    "at, value, said",
+    [
+        (2, b"\x00\x00", "\\xaa\\x01\\x00\\x00"),
+        (2, b"\x00\x0f", "\\x00\\x0f"),
+        (0, b"\xab", "\\xab"),
+    ],
+)
+def test_record_keeps_the_good_frames_before_bytes_that_start_no_frame(
+    wire, tmp_path, at, value, said
+):
+    """Round 46: data frame 6's header damaged so that it starts no frame (FRAMESIZE 0 or
+    15, below a frame's 16 bytes; SYNC 0xAB) stopped `pmu record` with nothing written,
+    the 5 good frames before it lost.  Such bytes after a data frame are now a frame
+    refused: the good frames are kept, exit 2 naming them; before any data frame they
+    still say the peer does not speak C37.118.2."""
+    _, _, head, body = wire
+    damaged = bytearray(body[5])
+    damaged[at : at + len(value)] = value
+    out = tmp_path / "r.c37"
+    srv, port = _server(head, b"".join([*body[:5], bytes(damaged), *body[6:20]]))
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 15, "-o", out)
+    one_error(
+        res,
+        f"127.0.0.1:{port}: the server sent bytes that start no frame (after data frame 5: b'",
+        said,
+        "', no frame start (SYNC 0xAA, FRAMESIZE of at least 16), or data frame 5's FRAMESIZE "
+        "is off); the stream is cut there: 5 data frames before them, the last stamped "
+        f"0.0667 s, before 15 frames; the 5 received are in {out}",
+    )
+    assert out.read_bytes() == head + b"".join(body[:5])
+    srv, port = _server(head, b"".join([bytes(damaged), *body[6:20]]))
+    with srv:
+        res = run("pmu", "record", f"127.0.0.1:{port}", "--frames", 15, "-o", tmp_path / "n.c37")
+    one_error(res, "after 0 data frames: the peer does not speak C37.118.2")
+    assert not (tmp_path / "n.c37").exists()
+
+
 def test_receive_keeps_the_frames_before_one_refused(wire):
     """The library's receiver: the stream cut at the refused frame, `refused` says why."""
     _, _, head, body = wire
