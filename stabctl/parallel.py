@@ -260,9 +260,16 @@ def _record_lines(
     and `why` says why, when the line is not a whole sweep record (`_record`; `check` the
     schema of the records' kind, see `Job`).  Raises InputError, before a byte is read,
     for a file that is not a regular one of at most
-    `stabctl.jsontext.MAX_JSON_BYTES` (JSON text read whole), and at a longer line or a
-    line giving a key twice."""
+    `stabctl.jsontext.MAX_JSON_BYTES` (JSON text read whole) or one in UTF-16 or UTF-32,
+    and at a longer line or a line giving a key twice."""
     input_file(path, "records file", MAX_JSON_BYTES)
+    with path.open("rb") as raw:  # (round 46: each line "cut by a kill?")
+        start = raw.read(4)
+    if start[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in start:
+        raise InputError(
+            f"{path}: not UTF-8 text (UTF-16 or UTF-32: a byte-order mark or NUL bytes at its "
+            "start), not a file of sweep records; save it as UTF-8"
+        )
     with path.open(encoding="utf-8-sig", errors="replace") as f:
         for n, line in enumerate(iter(lambda: f.readline(MAX_RECORD_LINE + 1), ""), start=1):
             if len(line) > MAX_RECORD_LINE:

@@ -655,6 +655,24 @@ def test_a_records_file_starting_with_a_byte_order_mark_is_read_whole(tmp_path, 
     assert not [w for w in recwarn if "d.jsonl" in str(w.message)]
 
 
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-32"])
+def test_a_records_file_in_utf_16_or_32_is_named_so(tmp_path, encoding):
+    """Round 46: a records file saved in UTF-16 (`place --screening`) was refused as "line
+    1: not a whole sweep record (cut by a kill?)"; a resumed sweep would have set every
+    line aside.  It is refused naming its encoding and what to do, the file untouched."""
+    out = tmp_path / "d.jsonl"
+    run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False)
+    saved = out.read_text().encode(encoding)
+    out.write_bytes(saved)
+    for call in (
+        lambda: read_records(out, whole="--screening"),
+        lambda: run_sweep(jobs_of(square, 1, 2), out, workers=1, progress=False),
+    ):
+        with pytest.raises(InputError, match=r"d.jsonl: not UTF-8 text \(UTF-16 or UTF-32"):
+            call()
+    assert out.read_bytes() == saved and not (tmp_path / "d.jsonl.damaged").exists()
+
+
 _NOT_DASK = "what answers there closed the connection or does not speak Dask's protocol"
 
 

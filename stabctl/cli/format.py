@@ -372,15 +372,17 @@ def print_cct(case, rating, d) -> None:
     """
     f = d["fault"]
     circ = f" (circuit {f['circuit']})" if f["circuit"] != 1 else ""
-    where = (
-        f"fault at bus {f['bus']} at {f['t_fault_s']:g} s, cleared without loss of a line"
+    trips = ", ".join(f"{a}-{b}" for a, b in f["trips"])
+    where = (  # (round 46: "cleared without loss of a line, 3-101 also opened")
+        f"fault at bus {f['bus']} at {f['t_fault_s']:g} s, cleared "
+        + (f"by opening {trips}" if trips else "without loss of a line")
         if f["far_bus"] is None
         else f"fault at bus {f['bus']} on line {f['bus']}-{f['far_bus']}{circ} at "
         f"{f['t_fault_s']:g} s, cleared at both ends, line tripped"
+        + (f", {trips} also opened" if trips else "")
     )
     click.echo(
         f"case {case.name}: {where}"
-        + "".join(f", {a}-{b} also opened" for a, b in f["trips"])
         + (
             "; no storage"
             if rating is None

@@ -399,12 +399,15 @@ def maps_machine(rec: DyrRecord) -> bool:
 SOURCE_UNSUPPORTED = "generator model not supported by stabctl (yet)"
 
 
+#: an integer field as PSS/E reads one: digits with an optional sign ("103.0" and "1.03E2"
+#: are errors to it, as the RAW reader's `stabctl.io.psse_raw` refuses them; round 46: a
+#: DYR's were read as bus 103)
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
 def _integer(tok: str) -> int | None:
-    try:
-        v = plain_float(tok.strip("'"))
-    except ValueError:
-        return None
-    return int(v) if math.isfinite(v) and v.is_integer() else None
+    text = tok.strip("'").strip()
+    return int(text) if _INTEGER.fullmatch(text) else None
 
 
 # -- mapping ------------------------------------------------------------------------------------

@@ -63,17 +63,25 @@ def case_text(path, what: str) -> str:
     Raises
     ------
     CaseError
-        A file in UTF-16 or UTF-32 (its byte-order mark, or NUL bytes among its first
-        bytes: an editor's "Unicode" save, read as "SBASE = ' ': not a number"), naming
-        the file and what to do.
+        A file in UTF-16 or UTF-32 (its byte-order mark, or NUL bytes as a quarter or more
+        of its first 4096 bytes: an editor's "Unicode" save, read as "SBASE = ' ': not a
+        number"), naming the file and what to do; a NUL byte elsewhere (a damaged file),
+        naming the file and its line.
     OSError
         The file cannot be read.
     """
     data = path.read_bytes()
-    if data[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in data[:4096]:
+    head = data[:4096]
+    if data[:2] in (b"\xff\xfe", b"\xfe\xff") or head.count(0) * 4 >= max(len(head), 1):
         raise CaseError(
             f"{path}: the {what} is in UTF-16 or UTF-32 (a byte-order mark or NUL bytes at its "
             "start), not text PSS/E reads: save it as ASCII or UTF-8"
+        )
+    if (at := data.find(0)) >= 0:  # (round 46: one NUL was read as UTF-16, no line named)
+        line = data.count(b"\n", 0, at) + 1
+        raise CaseError(
+            f"{path}:{line}: the {what} holds a NUL byte (byte {at}): a damaged file, not "
+            "text PSS/E reads"
         )
     return data.decode("utf-8-sig", errors="replace")
 

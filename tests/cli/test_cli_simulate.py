@@ -641,6 +641,13 @@ def test_cct_of_a_bus_fault_is_labelled_as_one():
     head = res.stdout.splitlines()[0]
     assert head == "case kundur: fault at bus 3 at 1 s, cleared without loss of a line; no storage"
     assert "CCT 0.238 s" in res.stdout and "None" not in res.stdout
+    # round 46: with --trip, "cleared without loss of a line, 3-101 also opened"; the CCT
+    # is the line fault's, and the head says the clearing opens the line
+    res = run("cct", "kundur", "--fault", 3, "--trip", 3, 101)
+    assert res.exit_code == 0, res.output
+    head = res.stdout.splitlines()[0]
+    assert head == "case kundur: fault at bus 3 at 1 s, cleared by opening 3-101; no storage"
+    assert "CCT 0.154 s" in res.stdout
 
 
 def test_a_closed_pipe_ends_a_command_quietly():

@@ -77,6 +77,7 @@ def edited(tmp_path, case: str, model: str, **values):
             {"Iqrmax": -999.0},
             "Iqrmax = -999, Iqrmin = -999: it must be Iqrmin <= 0 <= Iqrmax",
         ),
+        ("kundur/kundur_reg.xlsx", "REGCA1", {"Iolim": 1.3}, "Iolim = 1.3: it must be Iolim <= 0"),
         # limit pairs out of order, rates excluding the rest rate 0, a lag of 0, a negative
         # droop, no shaft, an efficiency above 1, a flag or frequency out of its range:
         # each imported and ran without a word

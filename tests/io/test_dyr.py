@@ -481,6 +481,10 @@ def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
             "\uff12 'GENCLS' 1 3.0 0.0 /\n",
             r"t.dyr:1 GENCLS \(bus \uff12, id 1\): IBUS = '\uff12': not an",
         ),
+        # round 46: read as bus 2, where the RAW reader (and PSS/E) refuse a real number in
+        # an integer field
+        ("2.0 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1 GENCLS \(bus 2.0, id 1\): IBUS = '2.0': not an"),
+        ("2E0 'GENCLS' 1 3.0 0.0 /\n", r"t.dyr:1 GENCLS \(bus 2E0, id 1\): IBUS = '2E0': not an"),
     ],
 )
 def test_malformed_records_name_file_and_line(tmp_path, text, message):

@@ -1092,6 +1092,14 @@ def test_a_raw_or_dyr_saved_as_utf_16_is_named_so(tmp_path):
         (raw if kind == "RAW" else dyr_file).write_bytes(source.read_text().encode("utf-16"))
         with pytest.raises(CaseError, match=rf"the {kind} file is in UTF-16 or UTF-32 .* save it"):
             load_psse(raw, dyr_file)
+    # round 46: one NUL byte in an ASCII file (inside a number, near its start) was called
+    # UTF-16, no line named; it is a damaged file, named with its line
+    text = dyr.read_bytes()
+    at = text.index(b"\n") + 9  # in line 2's H
+    damaged = tmp_path / "nul.dyr"
+    damaged.write_bytes(text[:at] + b"\x00" + text[at:])
+    with pytest.raises(CaseError, match=rf"nul.dyr:2: the DYR file holds a NUL byte \(byte {at}\)"):
+        load_psse(RAW, damaged)
 
 
 def test_advice_is_in_the_callers_words():

@@ -195,10 +195,10 @@ def test_regca1_low_voltage_gain_and_high_voltage_reactive_management():
     assert S.real == 0.0
     _, S, _, _ = regca1(V=1.3)
     assert S.imag == pytest.approx((0.1 - 0.7 * 0.1) * 1.3, rel=1e-12)
-    # Iolim: the output Iq held at its lower limit (-1.5 pu default; here 0.05, above
-    # Iq - HVG = 0.03)
-    _, S, _, _ = regca1(V=1.3, Iolim=0.05)
-    assert S.imag == pytest.approx(0.05 * 1.3, rel=1e-14)
+    # Iolim: the output Iq held at its lower limit (-1.5 pu default; here -0.05, above
+    # Iq - HVG = 0.1 - 2 (1.3 - 1.2) = -0.1)
+    _, S, _, _ = regca1(V=1.3, Iolim=-0.05, Khv=2.0)
+    assert S.imag == pytest.approx(-0.05 * 1.3, rel=1e-14)
 
 
 def test_regca1_lvpl_limit_resets_the_active_current_state():
@@ -247,6 +247,9 @@ def test_regca1_start_with_a_limit_active_is_refused():
         # for good (0.324 against 0.350 pu), a negative LVPL limit ran
         ("Rrpwr", 0.0, r"field 'Rrpwr': REGCA1: Rrpwr = 0: it must be Rrpwr > 0"),
         ("Lvpl1", -1.0, r"field 'Lvpl1': REGCA1: Lvpl1 = -1: it must be Lvpl1 >= 0"),
+        # round 46: +1.3 imported without a word, and the run then refused to start naming
+        # six causes, not this one
+        ("Iolim", 1.3, r"field 'Iolim': REGCA1: Iolim = 1.3: it must be Iolim <= 0 \(the lower"),
         # a negative lag was told "must be >= 0", and 0 then "must be >= 0.001 s"
         ("Tg", -0.02, r"field 'Tg': must be >= 0.001 s \(a lag of the converter\)"),
     ],

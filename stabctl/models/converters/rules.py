@@ -320,6 +320,14 @@ _REGC = (
         lambda hi, lo: (lo <= 0) & (hi >= 0),
         "Iqrmin <= 0 <= Iqrmax (the rate limits of Iq; at rest its rate is 0)",
     ),
+    # round 46: +1.3 imported without a word, then the run refused to start, naming six
+    # causes but not this one; PSS/E's REGC_A states Iolim < 0 (ANDES's default -1.5)
+    Rule(
+        ("Iolim",),
+        lambda v: v <= 0,
+        "Iolim <= 0 (the lower limit of the reactive current out, the high-voltage "
+        "management's clamp: above 0 the converter could absorb no reactive current)",
+    ),
 )
 
 #: ESD1's energy, efficiencies (at most 1: ANDES 2.0 esd1.py declares (0, 1), its state of
