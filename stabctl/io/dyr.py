@@ -615,11 +615,57 @@ def _map_records(records, generators, conventions):
                 f"{rec.label()}: second {kind} model for this generator (first at "
                 f"{rows[kind][number][0].where()})"
             )
+        _saturation_noted(rec, conventions)
         rows[kind][number] = (rec, row)
+    for number in [k for k in rows["exciter"] if _classical(rows["machine"].get(k))]:
+        skipped.append((rows["exciter"].pop(number)[0], _NO_FIELD_WINDING))
     for number in [k for k in rows["pss"] if k not in rows["exciter"]]:
         skipped.append((rows["pss"].pop(number)[0], "its machine has no (supported) exciter"))
     skipped += _compensate(compensators, gens, rows["exciter"], andes)
     return rows, sorted(skipped, key=lambda item: (item[0].file, item[0].line))
+
+
+#: why an exciter of a GENCLS is left out (round 47: imported, its field voltage moved
+#: while every trajectory was the run's without it)
+_NO_FIELD_WINDING = (
+    "its machine is a GENCLS: a classical machine (constant E' behind X'd) has no field "
+    "winding for an exciter to drive"
+)
+
+
+def _classical(machine: tuple | None) -> bool:
+    """Whether a machine's (record, row) of `_map_records` is a GENCLS."""
+    return machine is not None and machine[0].model == "GENCLS"
+
+
+#: the saturation points of a DC or AC exciter's record (PSS/E Model Library)
+_EXCITER_POINTS = ("E1", "SE(E1)", "E2", "SE(E2)")
+
+
+def _saturation_noted(rec: DyrRecord, conventions: str) -> None:
+    """Warn of a saturation value the model ignores (round 47: without a word): a
+    GENROU's or GENSAL's S(1.2) > 0 with S(1.0) = 0 (PSS/E's quadratic through both
+    points is off, the machine unsaturated; PST's curve through (0.8, 0.8) still fits
+    one, `conventions` "pst"), an exciter's SE(E1) or SE(E2) with a point 0 (no curve)."""
+    v = DYR_MODELS[rec.model].values(rec.params)
+    quadratic = rec.model in ("GENROU", "GENSAL") and conventions != "pst"
+    if quadratic and v["S(1.0)"] == 0 and v["S(1.2)"] != 0:
+        warnings.warn(
+            f"{rec.label()}: S(1.2) = {v['S(1.2)']:g} has no effect: with S(1.0) = 0 there is "
+            "no saturation (PSS/E's curve goes through both points): the machine runs "
+            "unsaturated",
+            UserWarning,
+            stacklevel=3,
+        )
+    points = [v.get(name) for name in _EXCITER_POINTS]
+    if None not in points and 0 in points and (points[1] or points[3]):
+        warnings.warn(
+            f"{rec.label()}: saturation points (E1, SE(E1)) = ({points[0]:g}, {points[1]:g}) "
+            f"and (E2, SE(E2)) = ({points[2]:g}, {points[3]:g}) have a 0: no saturation (a "
+            "curve needs both points, as PSS/E): the exciter runs unsaturated",
+            UserWarning,
+            stacklevel=3,
+        )
 
 
 def _compensate(records, gens, exciters, andes) -> list:
@@ -842,6 +888,20 @@ def _leakage_noted(rec, v) -> None:
         )
 
 
+def _zsorce_noted(rec, gen, xdpp: float) -> None:
+    """Warn of a subtransient machine whose RAW ZSORCE X differs from its X''d: PSS/E's
+    Model Library wants ZSORCE = R_a + j X''d for GENROU and GENSAL; the model's X''d is
+    used (round 47: the RAW's value was left unused without a word)."""
+    xs = float(gen.get("xsource", xdpp))
+    if abs(xs - xdpp) > 1e-6 * max(1.0, abs(xdpp)):
+        warnings.warn(
+            f"{rec.label()}: the RAW's ZSORCE X {xs:g} differs from X''d {xdpp:g} (PSS/E's "
+            "Model Library wants ZSORCE = R_a + j X''d): the model runs with X''d",
+            UserWarning,
+            stacklevel=3,
+        )
+
+
 def _positive_h(rec, H) -> None:
     if H <= 0:
         raise CaseError(
@@ -856,6 +916,7 @@ def _genrou(rec, gen):
     v = DYR_MODELS[rec.model].values(rec.params)
     _positive_h(rec, v["H"])
     _leakage_noted(rec, v)
+    _zsorce_noted(rec, gen, v["X''d"])
     return _mac_row(rec, gen, xqpp=v["X''d"])
 
 
@@ -865,6 +926,7 @@ def _gensal(rec, gen):
     v = DYR_MODELS[rec.model].values(rec.params)
     _positive_h(rec, v["H"])
     _leakage_noted(rec, v)
+    _zsorce_noted(rec, gen, v["X''d"])
     return _mac_row(rec, gen, xqp=v["Xq"], xqpp=v["X''d"], Tqop=0.0)
 
 
@@ -1458,6 +1520,7 @@ def _gensal_andes(rec, gen):
     v = DYR_MODELS["GENSAL"].values(rec.params)
     _positive_h(rec, v["H"])
     _leakage_noted(rec, v)
+    _zsorce_noted(rec, gen, v["X''d"])
     return _mac_row(rec, gen, xqp=v["X'd"], Tqop=v["T'do"], xqpp=v["X''d"])
 
 

@@ -718,26 +718,54 @@ def _from_flat_start(case: Case, settings: tuple, failed: PowerFlowError) -> tup
     magnitude limits then clip for good), with a warning that says so; failing again,
     the first failure with that said and the hint of `_without_limits_hint`."""
     b = case.buses
-    flat = (
-        np.where(b.kind == PQ, 1.0, b.vmag),
-        np.full(case.n_bus, np.deg2rad(b.vang_deg[b.kind == SWING][:1].sum())),
-    )
+    _, _, q_limits, _, drop = settings
+    flat = (np.where(b.kind == PQ, 1.0, b.vmag), _flat_angles(case, drop))
     try:
         sol = _solve(case, settings, flat)
     except PowerFlowError:
-        _, _, q_limits, _, drop = settings
         raise PowerFlowError(
             f"{failed} (from the case's own voltages; from a flat start, 1 pu at the "
-            f"swing bus's angle, it did not converge either)"
+            f"swing bus's angle and the phase shifts, it did not converge either)"
             f"{_without_limits_hint(case, q_limits, drop)}"
         ) from None
     warnings.warn(
         f"{failed} from the case's own voltages; solved from a flat start instead (1 pu "
-        "at the swing bus's angle, PV buses at their set points)",
+        "at the swing bus's angle and the phase shifts, PV buses at their set points)",
         RuntimeWarning,
         stacklevel=3,
     )
     return sol
+
+
+def _flat_angles(case: Case, drop) -> np.ndarray:
+    """A flat start's bus angles (n_bus,) rad: the first swing bus's, plus the phase
+    shifts of the transformers on the way to each bus (a tree of the branches not in
+    `drop`, breadth first from the swing buses; PSS/E's flat start "with phase shift
+    angles").  Round 47: a radial 30-degree phase shifter's bus started 30 degrees off
+    its solution, where Newton went to a spurious low-voltage one: refused as not
+    converging, a case PSS/E solves."""
+    from scipy.sparse.csgraph import breadth_first_order
+
+    b, br = case.buses, case.branches
+    swing = np.flatnonzero(b.kind == SWING)
+    angles = np.full(case.n_bus, np.deg2rad(b.vang_deg[swing[:1]].sum()))
+    shift = np.deg2rad(br.phase_deg)  # unloaded, V_to leads V_from by it (`build_ybus`)
+    keep = np.ones(len(br), bool)
+    keep[list(drop or ())] = False
+    if not shift[keep].any():
+        return angles
+    f, t = case.bus_indices(br.from_bus)[keep], case.bus_indices(br.to_bus)[keep]
+    step = {**dict(zip(zip(t, f), -shift[keep])), **dict(zip(zip(f, t), shift[keep]))}
+    graph = sp.coo_matrix((np.ones(f.size), (f, t)), shape=(case.n_bus,) * 2).tocsr()
+    seen = np.zeros(case.n_bus, bool)
+    for root in swing:
+        if seen[root]:
+            continue
+        order, pred = breadth_first_order(graph, root, directed=False)
+        seen[order] = True
+        for n in order[1:]:
+            angles[n] = angles[pred[n]] + step[(pred[n], n)]
+    return angles
 
 
 def _without_limits_hint(case: Case, q_limits: bool, drop) -> str:

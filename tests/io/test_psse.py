@@ -1157,6 +1157,123 @@ def test_a_machine_whose_leakage_lies_above_its_subtransient_reactance_is_named(
         )
 
 
+def test_a_saturation_value_the_model_ignores_is_named(tmp_path):
+    """Round 47: a GENROU with S(1.0) = 0, S(1.2) = 0.5 and an IEEET1 with SE(E1) = 0,
+    SE(E2) = 0.5 imported without a word, and ran bit for bit as with S(1.2) = 0 and
+    SE(E2) = 0: PSS/E's saturation curve goes through both points, so a point 0 means
+    none (OpenIPSL's SE()).  Kept as PSS/E reads it, and named; PST's machine curve,
+    through (0.8, 0.8) too, still fits one (conventions "pst": no word of the machine)."""
+    import warnings
+
+    from stabctl.io.psse import import_psse
+
+    raw = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU" / "ThreeBusMulti.raw"
+    dyr = tmp_path / "s.dyr"
+    dyr.write_text(
+        "    101 'GENCLS' 1 0.0 0.0 /\n"
+        "    102 'GENROU' 1 8.0 0.03 0.4 0.05 6.175 0.05 1.8 1.7 0.3 0.55 0.25 0.2 0.0 0.5 /\n"
+        "    102 'IEEET1' 1 0.0 400.0 0.04 7.3 -7.3 1.0 0.8 0.03 1.0 0.0 2.3 0.0 3.1 0.5 /\n"
+    )
+    machine = (
+        "s.dyr:2 GENROU (bus 102, id 1): S(1.2) = 0.5 has no effect: with S(1.0) = 0 there "
+        "is no saturation (PSS/E's curve goes through both points): the machine runs "
+        "unsaturated"
+    )
+    exciter = (
+        "s.dyr:3 IEEET1 (bus 102, id 1): saturation points (E1, SE(E1)) = (2.3, 0) and (E2, "
+        "SE(E2)) = (3.1, 0.5) have a 0: no saturation (a curve needs both points, as "
+        "PSS/E): the exciter runs unsaturated"
+    )
+    for conventions, said in (("psse", [machine, exciter]), ("pst", [exciter])):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            import_psse(raw, dyr, conventions=conventions)
+        assert [str(w.message) for w in got if "saturation" in str(w.message)] == said
+
+
+def test_a_source_reactance_other_than_the_subtransient_one_is_named(tmp_path):
+    """Round 47: generator 102's ZSORCE X 0.1 beside its GENROU's X''d 0.25 was left
+    unused without a word (PSS/E's Model Library wants ZSORCE = R_a + j X''d); the model
+    runs with X''d, and the import says so.  The file's own 0.25 says nothing."""
+    from stabctl.io.psse import import_psse
+
+    runs = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU"
+    raw = tmp_path / "z.raw"
+    raw.write_text((runs / "ThreeBusMulti.raw").read_text().replace("2.500E-1", "1.000E-1"))
+    for path, said in ((raw, True), (runs / "ThreeBusMulti.raw", False)):
+        with warnings.catch_warnings(record=True) as got:
+            warnings.simplefilter("always")
+            import_psse(path, runs / "ThreeBus_GENROU.dyr")
+        named = [str(w.message) for w in got if "ZSORCE" in str(w.message)]
+        assert named == (
+            [
+                "ThreeBus_GENROU.dyr:2 GENROU (bus 102, id 1): the RAW's ZSORCE X 0.1 differs "
+                "from X''d 0.25 (PSS/E's Model Library wants ZSORCE = R_a + j X''d): the model "
+                "runs with X''d"
+            ]
+            if said
+            else []
+        )
+
+
+def test_an_exciter_of_a_classical_machine_is_left_out_by_name(tmp_path):
+    """Round 47: a SEXS on a GENCLS imported as "1 exciter", and its field voltage rose
+    from 1.04 to 1.37 pu in a run whose every other trajectory was the run's without it
+    (a classical machine has no field winding).  It is an unsupported record: refused,
+    or left out with --skip-unsupported, saying why."""
+    from stabctl.io.psse import import_psse
+
+    raw = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU" / "ThreeBusMulti.raw"
+    dyr = tmp_path / "c.dyr"
+    dyr.write_text(
+        "    101 'GENCLS' 1 0.0 0.0 /\n    102 'GENCLS' 1 6.0 0.0 /\n"
+        "    102 'SEXS' 1 0.4 5.0 20.0 1.0 -50.0 50.0 /\n"
+    )
+    why = "its machine is a GENCLS: a classical machine (constant E' behind X'd) has no field"
+    with pytest.raises(CaseError, match=r"c.dyr:3 SEXS at bus 102 '1': " + re.escape(why)):
+        import_psse(raw, dyr)
+    got = import_psse(raw, dyr, on_unsupported="skip")
+    assert len(got.left_out) == 1 and got.left_out[0].startswith("c.dyr:3 SEXS")
+    assert why in got.left_out[0] and len(got.case.exciters) == 0
+
+
+def test_a_radial_phase_shifter_solves_from_a_flat_start_with_its_shift(tmp_path):
+    """Round 47: a 30-degree phase shifter 103-104 feeding a 10 MW load at bus 104, whose
+    RAW angle is 103's (not yet solved), was refused as not converging: Newton from the
+    RAW's angles, then from a flat start at the swing bus's angle (30 degrees off, both),
+    went to a spurious low-voltage solution.  PSS/E's flat start sets each angle to the
+    phase shifts on its way from the swing bus; so does stabctl's, and the case solves,
+    bus 104 about 30 degrees below bus 103, as from a RAW holding the solved angle."""
+    from stabctl.io.psse import import_psse
+
+    runs = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU"
+    text = (runs / "ThreeBusMulti.raw").read_text()
+    bus = "   104,'BUS 4', 13.8,1, 1, 1, 1,1.00000, {angle},1.1,0.9,1.1,0.9\n"
+    load = "   104,'1 ',1, 1, 1, 10.000, 2.000, 0.000, 0.000, 0.000, 0.000, 1,1,0\n"
+    xf = (
+        "   103,   104,     0,'1 ',1,1,1, 0.0, 0.0,2,'            ',1,   1,1.0000\n"
+        " 0.0, 0.08, 100.0\n"
+        "1.0, 0.0,   30.000,   100.00,   100.00,   100.00, 0,      0, 1.10000, 0.90000, 1.10000, "
+        "0.90000,  33, 0, 0.00000, 0.00000,  0.000\n"
+        "1.0,   0.000\n"
+    )
+    solved = {}
+    for angle in ("-8.7697", "-39.0000"):
+        raw = tmp_path / f"ps{angle}.raw"
+        raw.write_text(
+            text.replace(" 0 /End of Bus data", bus.format(angle=angle) + " 0 /End of Bus data")
+            .replace(" 0 /End of Load data", load + " 0 /End of Load data")
+            .replace(" 0 /End of Transformer data", xf + " 0 /End of Transformer data")
+        )
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always")
+            case = import_psse(raw, runs / "ThreeBus_GENROU.dyr").case
+        pf = solve_powerflow(case)
+        solved[angle] = np.rad2deg(pf.vang[case.bus_indices([103, 104])])
+    np.testing.assert_allclose(solved["-8.7697"], solved["-39.0000"], atol=1e-6)
+    assert solved["-8.7697"][1] - solved["-8.7697"][0] == pytest.approx(-30, abs=1.0)
+
+
 def test_raw_records_that_look_wrong_are_kept_and_named(tmp_path):
     """Round 41: a bus whose NVHI 0.9 is below its NVLO 1.1 and a branch of R = -0.01 pu
     were read without a word.  PSS/E reads both (the limits stabctl does not use; a
