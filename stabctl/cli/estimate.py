@@ -302,6 +302,7 @@ def rmse(
         model=model_settings(conventions, step, q_limits),
         esd_model=esd_model,
         source=src,
+        progress=src is None,
     )
     out = {
         **_what_ran(case, (fault, far_bus, t_fault, clear_cycles), esd_pct, settings, seed),

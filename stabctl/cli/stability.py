@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, replace
+from pathlib import Path
 
 import click
 
@@ -591,10 +592,11 @@ def screen(
         retry_failed=retry_failed,
     )
     rows.sort(key=lambda r: r.get("cct_s", float("inf")))
-    if plot_p is not None:
+    if plot_p is not None:  # written atomically (round 47: in place, a reader saw it empty)
+        from stabctl.parallel import atomic_write
         from stabctl.plotting import figures as plotting
 
-        plotting.screening_map(case, rows, plot_p)
+        atomic_write(plot_p, lambda tmp: plotting.screening_map(case, rows, Path(tmp)), mode=None)
     rows = [_with_buses(case, r) for r in rows]
     if as_json:
         print_json([{**row, "settings": settings["json"]} for row in rows])

@@ -23,6 +23,7 @@ each estimate of the relative speed on runs without fault (with ambient load flu
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -186,8 +187,10 @@ def monte_carlo(
     window: tuple[float, float],
     at: str = "terminal",
     coi: str = "system",
+    done: Callable[[], object] | None = None,
 ) -> dict:
-    """Errors of every estimator over `runs` PMU streams (seeds seed .. seed + runs - 1).
+    """Errors of every estimator over `runs` PMU streams (seeds seed .. seed + runs - 1);
+    ``done()`` is called after each run's (a progress bar's ``update``), if given.
 
     Returns {estimator: {metric: {"mean", "std", "min", "max", "runs": [...]}}} ("std"
     None from fewer than two runs: no spread).  Raises InputError for runs < 1.
@@ -197,7 +200,7 @@ def monte_carlo(
     pmus = machine_pmus(case, at)
     truth = phasor_truth(case, result, pmus, settings.window_cycles)
     streams = (measure(truth, settings, seed + r) for r in range(runs))
-    return _stream_figures(case, result, pmus, streams, window, coi)
+    return _stream_figures(case, result, pmus, streams, window, coi, done)
 
 
 def received_errors(
@@ -246,13 +249,16 @@ def received_errors(
     return _stream_figures(case, result, pmus, [stream], window, coi)
 
 
-def _stream_figures(case, result, pmus, streams, window, coi) -> dict:
-    """Every estimator's errors on each stream, summarised over the streams."""
+def _stream_figures(case, result, pmus, streams, window, coi, done=None) -> dict:
+    """Every estimator's errors on each stream, summarised over the streams; ``done()``
+    after each stream's, if given."""
     models = machine_models(case, pmus)
     per_run: dict[str, list] = {name: [] for name in ESTIMATORS}
     for stream in streams:
         for name, track in run_estimators(stream, models).items():
             per_run[name].append(errors(track, result, stream, window, coi))
+        if done is not None:
+            done()
     return {
         name: {m: _summary([e[m] for e in rows]) for m in METRICS} for name, rows in per_run.items()
     }

@@ -389,6 +389,19 @@ def test_estimate_rmse_with_nearly_every_frame_lost_says_why_a_figure_is_missing
     assert "warning" not in res.stderr, res.stderr
 
 
+def test_estimate_rmse_shows_the_fraction_of_its_runs_done():
+    """Round 47: `estimate rmse --runs 30` ran minutes with nothing on stderr.  A bar of
+    its noise and ambient runs (fraction done, time left) goes to stderr; the --json
+    stdout stays the JSON alone."""
+    args = ["estimate", "rmse", "kundur", "--fault", "3", "--far-bus", "101", "--runs", "3"]
+    args += ["--ambient-s", "2", "--ambient-runs", "2", "--tf", "2", "--json"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    json.loads(res.stdout)
+    last = res.stderr.replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("estimate: noise and ambient runs: 100%") and " 5/5 [" in last
+
+
 def test_estimate_rmse_of_one_run_has_no_spread_and_its_columns_stay_apart():
     """One run has no spread: its standard deviations are null in the JSON (not 0) and
     "+-n/a" in the text, said under the table.  With --k-sigma 0.001 the noise is a

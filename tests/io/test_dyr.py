@@ -33,6 +33,11 @@ KUNDUR_DYR = CASES / "kundur" / "kundur_full.dyr"
 WECC_DYR = CASES / "wecc" / "wecc_full.dyr"
 
 
+#: a GENROU record's data for the tests whose machine has an exciter (an exciter of a GENCLS
+#: is left out, round 47)
+ROUND = "'GENROU' 1 8.0 0.03 0.4 0.05 6.175 0 1.8 1.7 0.3 0.55 0.25 0.2 0 0 /\n"
+
+
 def kundur_generators(mbase=900.0):
     """The four Kundur generators as the RAW reader gives them (ANDES buses 1-4, id 1)."""
     return [dict(number=k, bus=k, id="1", mbase=mbase, ra=0.0, xsource=0.25) for k in range(1, 5)]
@@ -429,7 +434,7 @@ def test_wecc_exst1_mapping():
 
 def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
     text = (
-        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+        f"1 {ROUND}1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
         "1 'IEEEST' 1 1 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
     )
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
@@ -438,7 +443,7 @@ def test_ieeest_maps_to_pst_pss_when_equivalent(tmp_path):
         t.pss_con[0], [1, 1, 30, 10, 0.2, 0.02, 0, 0.5, 0.1, -0.1] + [0] * (len(PSS.names) - 10)
     )
     np.testing.assert_array_equal(t.exc_con[0][:9], [0, 1, 0, 100, 0.05, 10, 1.0, 5, -5])
-    assert t.mac_con[0][6] == 0.25 and t.mac_con[0][5] == 0  # classical: x'd = ZSORCE X
+    assert t.mac_con[0][6] == 0.3 and t.mac_con[0][5] == 1.8  # the GENROU's x'd, x_d
 
 
 def test_gensal_has_no_q_axis_transient_circuit(tmp_path):
@@ -1051,9 +1056,9 @@ def test_flat_run_and_linearisation_with_psse_stabilisers(dyr_kundur):
 
 def test_ieeest_with_filter_maps_to_psse_type_and_other_inputs_are_unsupported(tmp_path):
     text = (
-        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+        f"1 {ROUND}1 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
         "1 'IEEEST' 1 3 0 0.1 0.01 0 0 0.05 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
-        "2 'GENCLS' 1 3.0 0.0 /\n2 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
+        f"2 {ROUND}2 'SEXS' 1 0.1 10 100 0.05 -5 5 /\n"
         "2 'IEEEST' 1 2 0 0 0 0 0 0 0 0.2 0.02 0 0.5 1.5 10 20 0.1 -0.1 0 0 /\n"
     )
     t = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:2], on_unsupported="skip")
@@ -1257,7 +1262,7 @@ def test_esac1a_record_lands_in_its_columns(tmp_path):
     value in its declared column (stabctl.models.exciters.EXCITER)."""
     values = [0.02, 0.5, 0.8, 400, 0.02, 14.5, -14.5, 0.8, 0.03, 1.0, 0.2, 0.38, 1.0]
     values += [4.18, 0.1, 3.14, 0.03, 6.03, -5.43]
-    text = "1 'GENCLS' 1 3.0 0.0 /\n1 'ESAC1A' 1 " + " ".join(map(str, values)) + " /\n"
+    text = f"1 {ROUND}1 'ESAC1A' 1 " + " ".join(map(str, values)) + " /\n"
     tab = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:1])
     e = ExciterTable.from_matrix(tab.exc_con)
     got = [e.TR, e.TB, e.TC, e.KA, e.TA, e.VAmax, e.VAmin, e.VImin, e.KF, e.TF, e.KC, e.KD]
@@ -1274,7 +1279,7 @@ def test_ieeet3_and_esst4b_records_land_in_their_columns(tmp_path):
     t3 = [0.02, 5.0, 0.04, 0.0, -7.3, 1.0, 0.1, 1.0, 4.0, 0.1, 18.0, 1.0]
     st4b = [0.01, 1.0, 0.5, 8.0, -1.0, 0.1, 1.5, 0.2, 8.0, -2.0, 1.0, 4.0, 0.1, 18.0, 0.1]
     st4b += [0.01, 5.0]
-    text = "1 'GENCLS' 1 3.0 0.0 /\n2 'GENCLS' 1 3.0 0.0 /\n"
+    text = f"1 {ROUND}2 {ROUND}"
     text += "1 'IEEET3' 1 " + " ".join(map(str, t3)) + " /\n"
     text += "2 'ESST4B' 1 " + " ".join(map(str, st4b)) + " /\n"
     tab = dyr_tables(read_dyr(write(tmp_path, text)), kundur_generators()[:2])
@@ -1294,8 +1299,8 @@ def test_ieeevc_load_compensator_completes_its_exciter_row(tmp_path):
     the records; one on a machine without exciter is refused with that reason."""
     text = (
         "1 'IEEEVC' 1 0.02 0.08 /\n"
-        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -3 3 /\n"
-        "2 'GENCLS' 1 3.0 0.0 /\n2 'IEEEVC' 1 0.0 0.1 /\n"
+        f"1 {ROUND}1 'SEXS' 1 0.1 10 100 0.05 -3 3 /\n"
+        f"2 {ROUND}2 'IEEEVC' 1 0.0 0.1 /\n"
     )
     recs = read_dyr(write(tmp_path, text))
     t = dyr_tables(recs, kundur_generators()[:2], on_unsupported="skip")
@@ -1310,7 +1315,7 @@ def test_a_second_ieeevc_for_one_machine_is_refused_as_a_second_model(tmp_path):
     Xcomp without a word; it is refused as a second exciter or machine model is, naming
     both records."""
     text = (
-        "1 'GENCLS' 1 3.0 0.0 /\n1 'SEXS' 1 0.1 10 100 0.05 -3 3 /\n"
+        f"1 {ROUND}1 'SEXS' 1 0.1 10 100 0.05 -3 3 /\n"
         "1 'IEEEVC' 1 0.0 0.05 /\n1 'IEEEVC' 1 0.0 0.10 /\n"
     )
     recs = read_dyr(write(tmp_path, text))

@@ -91,6 +91,31 @@ def test_cli_screen_writes_map_and_reports_failures(tmp_path):
     assert [r["run_now"] for r in rows] == [False, False]
 
 
+def test_a_screening_map_is_written_whole_or_not_at_all(tmp_path, monkeypatch):
+    """Round 47: `screen --plot` wrote its figure in place: a reader saw the old map
+    truncated to 0 bytes while it was drawn, an interrupt left a fragment, and a write
+    cut by the file size limit left a truncated PNG with "error: File too large".  The
+    map is written as every output is (`stabctl.parallel.atomic_write`): a write that
+    fails leaves the old map as it was and names it."""
+    from stabctl.plotting import figures
+
+    args = ["screen", "kundur", "--buses", "3", "--t-max", "0.4", "--workers", "1"]
+    args += ["--out", str(tmp_path / "s.jsonl"), "--plot", str(tmp_path / "m.png")]
+    old = b"an old map"
+    (tmp_path / "m.png").write_bytes(old)
+
+    def cut(fig, path):  # a part written, then the file size limit (`ulimit -f`)
+        with open(path, "wb") as f:
+            f.write(b"\x89PNG part")
+        raise OSError(27, "File too large")
+
+    monkeypatch.setattr(figures, "save_figure", cut)
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and f"{tmp_path / 'm.png'}" in res.stderr, res.output
+    assert (tmp_path / "m.png").read_bytes() == old
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.png", "s.jsonl"]
+
+
 def test_a_screening_with_a_failed_search_exits_1_after_its_results(tmp_path):
     """Every search of a screening failed (Kundur at --step 0.0185 s: its exciters swing at
     the step's period, a numerical instability) and it exited 0, which a script checking
