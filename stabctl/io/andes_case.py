@@ -898,7 +898,8 @@ def _file_inputs(path: Path, ss) -> _Given:
             for c in dict.fromkeys(c for row in rows for c in row)
             if c not in m.params and c not in _ROW_COLUMNS
         )
-        dynamic = m.group in _DYNAMIC_GROUPS
+        # a Fault's rf, xf too (round 48: ieee14_fault's, left empty, ran at ANDES's unsaid)
+        dynamic = m.group in _DYNAMIC_GROUPS or model == "Fault"
         lines = sheet_rows.get(sheet, [])
         _check_unique_idx(path.name, sheet, rows, lines)
         for k, row in enumerate(rows, start=1):
@@ -1516,6 +1517,11 @@ def _network(ss, file: str) -> tuple[dict, dict]:
         for k in _in_service(m):
             for col, name in cols:
                 bus[row[m.bus.v[k]], col] += getattr(m, name).v[k]
+    if ss.Slack.n and not _in_service(ss.Slack):  # (round 48: "no row with field 'kind' = 1")
+        why = "; ".join(
+            f"Slack {ss.Slack.idx.v[k]} {_off_why(ss.Slack, k)}" for k in range(ss.Slack.n)
+        )
+        raise CaseError(f"{file}: no Slack in service, so no swing bus: {why}")
     for m, kind in ((ss.PV, PV), (ss.Slack, SWING)):
         for k in _in_service(m):
             r = row[m.bus.v[k]]
@@ -2572,6 +2578,11 @@ def _disturbances(ss, file: str, numbers: dict, gens: list, mats: dict, motor_nu
                         f"{file}: {name} {m.idx.v[k]}: {what} = {when:g} s: an event time "
                         "must be finite and >= 0"
                     )
+            if (tc := _clearing(m, k)) is not None and tc < t:  # (round 48: run refused it)
+                raise CaseError(
+                    f"{file}: Fault {m.idx.v[k]}: tc = {tc:g} s before tf = {t:g} s: a fault "
+                    "is cleared after it starts"
+                )
             timed.append((t, name, k))
     state: dict = {}
     for t, name, k in sorted(timed, key=lambda e: e[0]):
@@ -2645,6 +2656,8 @@ def _alter(ss, m, k, t: float, state: dict, machine_of: dict, have: dict):
     what = f"{model} {dev} {src}"
     if target is None or kind is None:
         return {}, f"alters {what}, which stabctl does not map (mapped: exciter vref0, TGOV1 paux0)"
+    if dev not in target.idx.v:  # (round 48: a traceback, "'NOPE_9' is not in list")
+        return {}, f"alters {what}: the case has no {model} {dev} (Alter field dev)"
     j = list(target.idx.v).index(dev)
     number = machine_of.get(str(target.syn.v[j]))
     table = "exc_con" if kind == "VrefStep" else "tg_con"

@@ -891,9 +891,10 @@ def _leakage_noted(rec, v) -> None:
 def _zsorce_noted(rec, gen, xdpp: float) -> None:
     """Warn of a subtransient machine whose RAW ZSORCE X differs from its X''d: PSS/E's
     Model Library wants ZSORCE = R_a + j X''d for GENROU and GENSAL; the model's X''d is
-    used (round 47: the RAW's value was left unused without a word)."""
+    used (round 47: the RAW's value was left unused without a word).  Only a RAW's
+    generator (``zsorce`` in its dict): an ANDES case's source reactance is its x'd."""
     xs = float(gen.get("xsource", xdpp))
-    if abs(xs - xdpp) > 1e-6 * max(1.0, abs(xdpp)):
+    if gen.get("zsorce") and abs(xs - xdpp) > 1e-6 * max(1.0, abs(xdpp)):
         warnings.warn(
             f"{rec.label()}: the RAW's ZSORCE X {xs:g} differs from X''d {xdpp:g} (PSS/E's "
             "Model Library wants ZSORCE = R_a + j X''d): the model runs with X''d",

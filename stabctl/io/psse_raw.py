@@ -266,7 +266,8 @@ class Generator:
 
     def as_dyr(self) -> dict:
         """The dict ``stabctl.io.dyr.dyr_tables`` takes for this generator (pg and qg split
-        a bus's generation among its machines)."""
+        a bus's generation among its machines; ``zsorce``: its xsource is a RAW's ZSORCE,
+        which a subtransient machine's X''d should equal)."""
         return {
             "number": self.number,
             "bus": self.bus,
@@ -274,6 +275,7 @@ class Generator:
             "mbase": self.mbase,
             "ra": self.ra,
             "xsource": self.xsource,
+            "zsorce": True,
             "pg": self.pg,
             "qg": self.qg,
         }

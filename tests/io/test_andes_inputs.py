@@ -89,6 +89,13 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             ": r = x = 0 between buses 5 and 6: a zero impedance",
         ),
         ([("Toggler", 2, "t", -1)], "Toggle 1: t = -1 s: an event time must be finite and >= 0"),
+        # round 48: the Slack's bus out of service gave "bus: no swing bus (no row with
+        # field 'kind' = 1)", naming neither the Slack nor its bus
+        (
+            [("Bus", 2, "u", 0)],
+            "no Slack in service, so no swing bus: Slack 1 out of service with the device it "
+            "serves or its bus",
+        ),
         # a link to a device the case does not hold, any model (ANDES's message named
         # neither sheet nor row); a machine's share of its static generator out of [0, 1]
         (
@@ -116,6 +123,22 @@ def test_values_andes_would_change_or_cannot_run_are_refused(tmp_path, edits, ne
     with pytest.raises(CaseError) as err:
         read_andes_case(path, on_unsupported="skip")
     assert str(err.value).startswith(f"{path.name}: ") and needle in str(err.value)
+
+
+def test_own_events_of_unknown_devices_or_cleared_before_they_start_are_refused(tmp_path):
+    """Round 48: an Alter of a device the case does not hold ended in a traceback
+    ("'NOPE_9' is not in list"); a Fault with tc 0.9 s before its tf 1 s was imported and
+    refused only by the run; a Fault's rf and xf left empty ran at ANDES's defaults
+    without being listed among them."""
+    path = cells_edited(tmp_path, [("Alter", 2, "dev", "NOPE_9")], "ieee14/ieee14_alter.xlsx")
+    with pytest.raises(InputError, match=r"Alter 1: alters \w+ NOPE_9 \w+: the case has no"):
+        read_andes_case(path)
+    path = cells_edited(tmp_path, [("Fault", 2, "tc", 0.9)], "ieee14/ieee14_fault.xlsx")
+    with pytest.raises(CaseError, match=r"Fault 1: tc = 0.9 s before tf = 1 s: a fault is"):
+        read_andes_case(path)
+    got = read_andes_case(andes.get_case("ieee14/ieee14_fault.xlsx"))
+    assert "Fault xf = 0.0001 (row 1: empty in the file)" in got.defaulted
+    assert "Fault rf = 0 (row 1: empty in the file)" in got.defaulted
 
 
 @pytest.mark.parametrize(
