@@ -68,8 +68,7 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)
-    _check_before_end([("--fault-cycles", c) for c in fault_cycles], f0)
-    _check_before_end([("MORE_CYCLES", c) for c in more_cycles], f0)
+    _check_before_end([("--fault-cycles", c) for c in (*fault_cycles, *more_cycles)], f0)
     twice = [c for k, c in enumerate(cycles) if c in cycles[:k]]
     if twice:
         raise InputError(f"--fault-cycles: {twice[0]:g} given twice (each duration once)")

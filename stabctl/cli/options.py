@@ -398,7 +398,6 @@ _INF = float("inf")
 #: runs stay short (H = 0.001 s, f0 = 1000 Hz ran for many minutes).
 _RANGES = {
     "--fault-cycles": (0, 600, True, True, "cycles"),
-    "MORE_CYCLES": (0, 600, True, True, "cycles"),
     "--H": (0.5, 50, True, True, "s"),
     "--pm": (0, 10, False, True, "pu"),
     "--delta0": (0, 1.5707963267948966, False, False, "rad"),
@@ -562,10 +561,18 @@ def _check_numbers(kwargs) -> None:
                 check_number(label, value)
 
 
+#: arguments that carry an option's further values, named as that option (`omib
+#: --fault-cycles 6 12 15`: 12 and 15 are the argument MORE_CYCLES; round 48: "MORE_CYCLES
+#: 0" named what the user never typed)
+_VALUES_OF = {"MORE_CYCLES": "--fault-cycles"}
+
+
 def _option_name(param: click.Parameter) -> str:
     """How messages name a parameter: its first long option name (``--dyr-conventions``,
-    not its hidden alias or its Python name), or an argument's name."""
-    return next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
+    not its hidden alias or its Python name), or an argument's name (that of the option
+    whose further values it carries, `_VALUES_OF`)."""
+    name = next((o for o in param.opts if o.startswith("--")), None) or param.human_readable_name
+    return _VALUES_OF.get(name, name)
 
 
 #: largest magnitude of a number whose option has no range of its own (a time, a bus

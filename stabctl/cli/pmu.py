@@ -485,7 +485,7 @@ def record(address, out, frames, idcode):
 
     \b
     Example:
-      stabctl pmu record 127.0.0.1:4712 --frames 3600 -o wecc.c37
+      stabctl pmu record 127.0.0.1:4712 --frames 3601 -o wecc.c37
     """
     from stabctl.estimation import c37
     from stabctl.estimation.c37_tcp import End, receive

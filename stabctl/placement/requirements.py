@@ -341,7 +341,8 @@ def screening_brackets(path, case: str, digest: str, settings: dict | None = Non
                 _whole(f["bus"]),
                 None if f["far_bus"] is None else _whole(f["far_bus"]),
                 _seconds(f["t_fault_s"] if "t_fault_s" in f else f["t_fault"]),  # older records
-                _whole(f["circuit"]),
+                # a bus fault's circuit is null (round 48: every `screen` file refused)
+                1 if f["far_bus"] is None and f["circuit"] is None else _whole(f["circuit"]),
                 tuple((_whole(a), _whole(b)) for a, b in f["trips"]),
             )
             out[Contingency(fault, 1.0).fault_name] = (

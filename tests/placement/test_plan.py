@@ -350,6 +350,27 @@ def test_cli_place_with_a_clearing_time_requirement_and_bad_input(tmp_path):
         assert not out.exists()
 
 
+def test_the_records_screen_writes_are_screening_records_to_place(tmp_path):
+    """Round 48: since a bus fault's circuit is null in the records (2026-11-30), `place
+    --screening` refused every file `stabctl screen` writes ("None is not a number >=
+    1"), docs/placement.md's IEEE 39 example included.  A real screening's records,
+    a bus fault's and a line fault's, give their brackets."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+    from stabctl.placement.requirements import screening_brackets
+
+    out = tmp_path / "s.jsonl"
+    args = ["screen", "kundur", "--buses", "3", "--lines", "--t-max", "0.3", "--workers", "1"]
+    res = CliRunner().invoke(main, [*args, "--out", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    rows = json.loads(res.stdout)
+    brackets = screening_brackets(out, "kundur", load_case("kundur").digest())
+    assert brackets["3"] == pytest.approx((0.238, 0.239))  # the bus fault's CCT cell
+    lines = [r for r in rows if r["far_bus"] is not None and r["verdict"] == "cct"]
+    assert lines and all(f"{r['bus']}-{r['far_bus']}" in brackets for r in lines)
+
+
 def test_screening_brackets_and_requirement_overrides_are_read_from_their_files(tmp_path):
     from stabctl.placement.requirements import read_requirements, screening_brackets
 
