@@ -79,7 +79,8 @@ class Diagnostics:
     (n_f, n_dev) the commanded modes; freq (n_f, n_mac) the machine speeds those came from
     (Hz); age (n_f, n_mac) the seconds since each machine's last usable PMU value (0:
     measured in the frame; above 0 its speed held (raw) or predicted (kf, ekf) across a
-    gap; nan: none yet, or the true speeds of the ideal estimator: 0); mac: each device's
+    gap; nan: no usable value yet; 0 for the ideal estimator, which reads the true
+    speeds); mac: each device's
     machine index; latency (s), f0 (Hz), coi ("system" or "rest") of the loop."""
 
     t: np.ndarray
