@@ -29,7 +29,8 @@ no out-of-service bus; ANDES's converges), a Fault with tc < tf imported (simula
 it later), Fault xf/rf empty run at ANDES's defaults not listed among them, an idx given
 twice across PV and Slack named only through its consequence.  Fixed: the Alter refused by
 name, the Slack named with its bus, tc < tf refused at import, a Fault's rf/xf defaults
-listed; still short: AE07k and AE13 (both SMALLER, their refusals name the consequence).
+listed, then AE07k (the refusal says ANDES's flow converges and what was left out) and
+AE13 (an idx two StaticGen sheets give refused by name).
 """
 
 # ruff: noqa: E501, BLE001, SIM115, UP031, RUF059 - a tester's script, kept as written

@@ -17,7 +17,7 @@ from stabctl.cli.options import (
     refuse_given,
     reports_errors,
 )
-from stabctl.errors import InputError, StabctlError, counted
+from stabctl.errors import InputError, PowerFlowError, StabctlError, counted
 
 #: the tables a case may hold beside its machines and controls, as summaries count them
 #: (only where the case has any): key, noun, plural
@@ -794,7 +794,6 @@ def _solved(case, q_limits: bool, against: str, unsolved: str | None):
     --keep-unsolved."""
     import warnings
 
-    from stabctl.errors import PowerFlowError
     from stabctl.network.powerflow import solve_powerflow
 
     try:
@@ -868,7 +867,16 @@ def _powerflow_gap(imported, case, unsolved: str | None) -> tuple[float | None, 
         _solved(case, False, "ANDES's", unsolved)
         return None, None
     andes = np.column_stack([imported.pf_bus, imported.pf_vmag, np.rad2deg(imported.pf_vang)])
-    gap = _solution_gap(case, andes, False, "ANDES's", unsolved=unsolved)
+    try:
+        gap = _solution_gap(case, andes, False, "ANDES's", unsolved=unsolved)
+    except PowerFlowError as exc:  # ANDES's converged (round 48: not said, nor what was out)
+        off = imported.out_of_service
+        said = f"; {len(off)} device(s) out of service left out, as ANDES leaves them: " + (
+            "; ".join(off[:3]) + ("; ..." if len(off) > 3 else "")
+        )
+        raise PowerFlowError(
+            f"{exc} (ANDES's own power flow of the file converges{said if off else ''})"
+        ) from None
     if gap is None:
         return None, None
     dv, da = gap["vmag_diff_pu"], gap["angle_diff_rad"]

@@ -967,6 +967,7 @@ def _file_inputs(path: Path, ss) -> _Given:
         f"{model} {name} = {default} (row{'s' * (len(rows) > 1)} {_row_list(rows)}: {how})"
         for (model, name, default, how), rows in missing.items()
     )
+    _check_group_idx(path.name, all_rows, sheet_rows, ("PV", "Slack"), "StaticGen")
     _check_one_per_machine(path.name, all_rows, sheet_rows, ss)
     return given
 
@@ -1129,6 +1130,30 @@ def _check_unique_idx(file: str, sheet: str, rows: list, lines: list) -> None:
                 "rename the second, and a device linked to that idx reach the first"
             )
         seen[key] = k
+
+
+def _check_group_idx(file: str, all_rows: dict, sheet_rows: dict, sheets, group: str) -> None:
+    """CaseError for an idx that rows of two sheets of one ANDES group give (a PV's and a
+    Slack's, both StaticGen): a device linked to it by the group (a machine's ``gen``)
+    reaches either (round 48: refused only through its consequence, two machines taking
+    one static generator's power twice)."""
+    seen: dict = {}
+    for sheet in sheets:
+        lines = sheet_rows.get(sheet, [])
+        for k, row in enumerate(all_rows.get(sheet, ()), start=1):
+            idx = row.get("idx")
+            if idx is None or (isinstance(idx, float) and idx != idx):
+                continue
+            key = int(idx) if isinstance(idx, float) and idx.is_integer() else idx
+            at = f"{sheet} row {k}" + (
+                f" (spreadsheet row {lines[k - 1]})" if k <= len(lines) else ""
+            )
+            if key in seen and not seen[key].startswith(f"{sheet} "):
+                raise CaseError(
+                    f"{file}: {seen[key]} and {at} both give idx {key!r}: ANDES's {group} "
+                    "group holds both, and a device linked to that idx reaches either"
+                )
+            seen.setdefault(key, at)
 
 
 def _check_row(where: str, model: str, row: dict) -> None:

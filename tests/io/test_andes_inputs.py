@@ -89,6 +89,13 @@ def cells_edited(tmp_path, edits, case=KUNDUR):
             ": r = x = 0 between buses 5 and 6: a zero impedance",
         ),
         ([("Toggler", 2, "t", -1)], "Toggle 1: t = -1 s: an event time must be finite and >= 0"),
+        # round 48: a PV's idx equal to the Slack's was refused only through its
+        # consequence (two machines taking one static generator's power twice)
+        (
+            [("PV", 2, "idx", 1), ("GENROU", 3, "gen", 1)],
+            "PV row 1 (spreadsheet row 2) and Slack row 1 (spreadsheet row 2) both give idx "
+            "1: ANDES's StaticGen group holds both",
+        ),
         # round 48: the Slack's bus out of service gave "bus: no swing bus (no row with
         # field 'kind' = 1)", naming neither the Slack nor its bus
         (
@@ -352,6 +359,19 @@ def test_an_unsolved_power_flow_is_refused_unless_kept(tmp_path):
     assert res.returncode == 0 and (tmp_path / "heavy.json").exists(), res.stderr
     assert "warning: stabctl's power flow of the case did not converge" in res.stderr
     assert "--keep-unsolved" in run_cli("import-andes", "--help", cwd=tmp_path).stdout
+
+
+def test_an_unsolved_power_flow_says_when_andes_s_converges_and_what_was_out(tmp_path):
+    """Round 48: Kundur with bus 2 out of service (its machine and lines taken out with
+    it): ANDES's power flow converges, stabctl's does not, and the refusal named only the
+    mismatch.  It now says that ANDES's converges and which devices were left out."""
+    off = cells_edited(tmp_path, [("Bus", 3, "u", 0)])
+    res = run_cli("import-andes", off, "-o", "off.json", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    last = res.stderr.splitlines()[-1]
+    assert "does not converge" in last and "(ANDES's own power flow of the file converges; " in last
+    assert "device(s) out of service left out, as ANDES leaves them: " in last
+    assert not (tmp_path / "off.json").exists()
 
 
 def test_a_zero_impedance_branch_of_a_raw_file_is_refused_by_both_importers(tmp_path):
