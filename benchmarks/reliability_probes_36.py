@@ -509,13 +509,13 @@ def _():
 def _():
     """--help examples of pmu serve and pmu record, as they read together (docs/estimation.md 6.1
     pairs them too): `pmu serve miniwecc --fault 83 --far-bus 33 --tf 60 --port 4712` and `pmu
-    record 127.0.0.1:4712 --frames 3600 -o wecc.c37`: wecc.c37 written, both exit 0 (serve's
+    record 127.0.0.1:4712 --frames 3601 -o wecc.c37`: wecc.c37 written, both exit 0 (serve's
     help: "exit status 0 once the PDC has been sent every frame")."""
     srv = bg("pmu serve miniwecc --fault 83 --far-bus 33 --tf 60 --port 4712".split())
     if not wait_port(4712, 300):
         srv.kill()
         return False, f"serve never listened: {finish(srv, 10)[2][-200:]}"
-    rc, o, e = cli("pmu record 127.0.0.1:4712 --frames 3600 -o wecc.c37".split(), 300)
+    rc, o, e = cli("pmu record 127.0.0.1:4712 --frames 3601 -o wecc.c37".split(), 300)
     src, so, se = finish(srv, 120)
     shutil.copy(Path(WD, "wecc.c37"), Path(WD, "wecc_keep.c37")) if Path(
         WD, "wecc.c37"
