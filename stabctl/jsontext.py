@@ -21,7 +21,7 @@ from typing import Any
 
 from stabctl.errors import InputError
 
-__all__ = ["MAX_INPUT_BYTES", "MAX_JSON_BYTES", "input_file", "parse_json"]
+__all__ = ["MAX_INPUT_BYTES", "MAX_JSON_BYTES", "input_file", "parse_json", "wide_unicode"]
 
 #: largest input file read, bytes (the largest case shipped, ACTIVSg2000's RAW, is 0.7 MB)
 MAX_INPUT_BYTES = 256 * 2**20
@@ -92,6 +92,25 @@ class _LongInt(ValueError):
     def __init__(self, digits: str):
         super().__init__(digits)
         self.digits = digits
+
+
+def wide_unicode(head: bytes) -> bool:
+    """Whether a text file's first bytes are UTF-16 or UTF-32 (an editor's "Unicode"
+    save): a byte-order mark, or NUL bytes as a quarter or more of them (ASCII text in
+    UTF-16 is half NULs, in UTF-32 three quarters).  The one test of the readers that
+    take text only as ASCII or UTF-8 (`stabctl.io.inputs.case_text`, the records files
+    of `stabctl.parallel`).
+
+    Parameters
+    ----------
+    head : bytes
+        The file's first bytes (its first 4096, or fewer).
+
+    Returns
+    -------
+    bool
+    """
+    return head[:2] in (b"\xff\xfe", b"\xfe\xff") or head.count(0) * 4 >= max(len(head), 1)
 
 
 def _integer(digits: str) -> int:

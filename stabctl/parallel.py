@@ -87,7 +87,7 @@ from stabctl.errors import (
     require_flag,
     speaking,
 )
-from stabctl.jsontext import MAX_JSON_BYTES, input_file, parse_json
+from stabctl.jsontext import MAX_JSON_BYTES, input_file, parse_json, wide_unicode
 from stabctl.locking import beside, exclusive, is_held, temp_dir, temp_file
 from stabctl.progress import bar as progress_bar
 
@@ -265,7 +265,7 @@ def _record_lines(
     input_file(path, "records file", MAX_JSON_BYTES)
     with path.open("rb") as raw:  # (round 46: each line "cut by a kill?")
         start = raw.read(4)
-    if start[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in start:
+    if wide_unicode(start):
         raise InputError(
             f"{path}: not UTF-8 text (UTF-16 or UTF-32: a byte-order mark or NUL bytes at its "
             "start), not a file of sweep records; save it as UTF-8"

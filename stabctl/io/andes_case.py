@@ -1116,20 +1116,29 @@ def _check_unique_idx(file: str, sheet: str, rows: list, lines: list) -> None:
     reaches the first, whichever the file meant."""
     seen: dict = {}
     for k, row in enumerate(rows, start=1):
-        idx = row.get("idx")
-        if idx is None or (isinstance(idx, float) and idx != idx):
+        key = _idx_key(row.get("idx"))
+        if key is None:
             continue
-        key = int(idx) if isinstance(idx, float) and idx.is_integer() else idx
         if key in seen:
-            at = [
-                f"row {j}" + (f" (spreadsheet row {lines[j - 1]})" if j <= len(lines) else "")
-                for j in (seen[key], k)
-            ]
+            at = [_row_at(j, lines) for j in (seen[key], k)]
             raise CaseError(
                 f"{file}: {sheet} {at[0]} and {at[1]} both give idx {key!r}: ANDES would "
                 "rename the second, and a device linked to that idx reach the first"
             )
         seen[key] = k
+
+
+def _idx_key(idx):
+    """A row's idx as its devices are told apart (a whole float as the integer it is), or
+    None for none (absent, empty: NaN)."""
+    if idx is None or (isinstance(idx, float) and idx != idx):
+        return None
+    return int(idx) if isinstance(idx, float) and idx.is_integer() else idx
+
+
+def _row_at(k: int, lines: list) -> str:
+    """``"row K (spreadsheet row N)"``, row K of a sheet whose rows lie on `lines`."""
+    return f"row {k}" + (f" (spreadsheet row {lines[k - 1]})" if k <= len(lines) else "")
 
 
 def _check_group_idx(file: str, all_rows: dict, sheet_rows: dict, sheets, group: str) -> None:
@@ -1141,13 +1150,10 @@ def _check_group_idx(file: str, all_rows: dict, sheet_rows: dict, sheets, group:
     for sheet in sheets:
         lines = sheet_rows.get(sheet, [])
         for k, row in enumerate(all_rows.get(sheet, ()), start=1):
-            idx = row.get("idx")
-            if idx is None or (isinstance(idx, float) and idx != idx):
+            key = _idx_key(row.get("idx"))
+            if key is None:
                 continue
-            key = int(idx) if isinstance(idx, float) and idx.is_integer() else idx
-            at = f"{sheet} row {k}" + (
-                f" (spreadsheet row {lines[k - 1]})" if k <= len(lines) else ""
-            )
+            at = f"{sheet} {_row_at(k, lines)}"
             if key in seen and not seen[key].startswith(f"{sheet} "):
                 raise CaseError(
                     f"{file}: {seen[key]} and {at} both give idx {key!r}: ANDES's {group} "

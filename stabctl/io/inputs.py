@@ -29,7 +29,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from stabctl.errors import CaseError, InputError
-from stabctl.jsontext import MAX_INPUT_BYTES, input_file, parse_json
+from stabctl.jsontext import MAX_INPUT_BYTES, input_file, parse_json, wide_unicode
 
 __all__ = [
     "MAX_INPUT_BYTES",
@@ -71,8 +71,7 @@ def case_text(path, what: str) -> str:
         The file cannot be read.
     """
     data = path.read_bytes()
-    head = data[:4096]
-    if data[:2] in (b"\xff\xfe", b"\xfe\xff") or head.count(0) * 4 >= max(len(head), 1):
+    if wide_unicode(data[:4096]):
         raise CaseError(
             f"{path}: the {what} is in UTF-16 or UTF-32 (a byte-order mark or NUL bytes at its "
             "start), not text PSS/E reads: save it as ASCII or UTF-8"
