@@ -68,10 +68,12 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   t2 = 1); the phase is PST's, the opposite sign of ANG1 (:mod:`stabctl.network.ybus`). Taps
   stay at WINDV (automatic adjustment COD is not modelled, as ANDES; a winding with COD
   > 0, which PSS/E would adjust, is named in :attr:`RawData.held`); the magnetizing
-  admittance MAG1 + jMAG2 (CM 1: pu on SBASE) is a shunt at the winding-1 bus, switched
-  with the transformer (``line`` columns 11-12; MATPOWER's ``psse_convert_xfmr`` puts it
-  at that bus too); CM 2 (no-load loss and current) and impedance correction tables
-  (TAB1) are unsupported;
+  admittance is a shunt at the winding-1 bus, switched with the transformer (``line``
+  columns 11-12; MATPOWER's ``psse_convert_xfmr`` puts it at that bus too): CM 1, MAG1 +
+  jMAG2 in pu on SBASE; CM 2, the no-load loss MAG1 (W) and exciting current MAG2 (pu on
+  SBASE1-2 at NOMV1), G = MAG1/(1e6 SBASE) and B = -sqrt(|Y|^2 - G^2) with |Y| = MAG2
+  SBASE1-2/SBASE, both times (BASKV1/NOMV1)^2 (POM Transformer Data); impedance correction
+  tables (TAB1) are unsupported;
 * three-winding transformers (STAT 1 all windings in service; 2, 3, 4 winding 2, 3, 1
   out; 0 all out): PSS/E's star equivalent (POM "Three-Winding Transformer Data"; MATPOWER's
   ``psse_convert_xfmr``, powsybl's PSS/E converter): a star-point bus numbered above every
@@ -81,7 +83,7 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   pair impedances (each on its SBASE and winding base by CZ, as above):
   ``Z1 = (Z12 + Z31 - Z23)/2``, ``Z2 = (Z12 + Z23 - Z31)/2``, ``Z3 = (Z23 + Z31 - Z12)/2``,
   so that the impedance measured between two windings' buses with the third open is the
-  RAW's. The magnetizing admittance (CM 1) is at the winding-1 bus, as for two windings;
+  RAW's. The magnetizing admittance (CM 1 or 2) is at the winding-1 bus, as for two windings;
 * switched shunts (in service): fixed at BINIT (Mvar at 1 pu) into the bus shunt; one
   with MODSW other than 0, which PSS/E would switch, is named in :attr:`RawData.held`.
 
@@ -1321,7 +1323,7 @@ def _transformer(b: _Builder, rec: _Rec):
     if not _modelled(b, rec, (2,), what):
         return
     _hold_transformer(b, rec, controls, f"{i}-{j}", what)
-    g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
+    g_mag, b_mag = _magnetizing(b, rec, ends[0][12], i, what)
     t1, t2 = (_ratio(rec, row, e[12], e[0], what) for row, e in ((2, ends[0]), (3, ends[1])))
     z = _impedance(b, rec, (0, 2), ends[0][12], ends[0][0], what)
     r2, x2 = z.real * t2**2, z.imag * t2**2
@@ -1335,15 +1337,38 @@ def _transformer(b: _Builder, rec: _Rec):
 
 def _modelled(b: _Builder, rec: _Rec, rows: tuple, what: str) -> bool:
     """False (the record reported unsupported) for an impedance correction table (TAB) on
-    a winding line of ``rows`` or a magnetizing admittance given as losses (CM 2)."""
+    a winding line of ``rows``."""
     tab = {32: 13, 33: 13, 34: 22}.get(b.version, 23)
     if any(rec.int(row, tab, 0) != 0 for row in rows):
         b.skip(rec, f"{what}: impedance correction table (TAB)")
         return False
-    if (rec.num(0, 7, 0.0) or rec.num(0, 8, 0.0)) and rec.int(0, 6, 1) != 1:
-        b.skip(rec, f"{what}: magnetizing admittance as no-load loss and current (CM 2)")
-        return False
     return True
+
+
+def _magnetizing(b: _Builder, rec: _Rec, kv: float, bus: int, what: str) -> tuple:
+    """The magnetizing admittance (G, B) in pu on the system base and the base voltage
+    ``kv`` of winding-1 bus ``bus``, from MAG1, MAG2 by CM (POM Transformer Data): CM 1,
+    (MAG1, MAG2) as given; CM 2, the no-load loss MAG1 (W) and the exciting current MAG2
+    (pu on SBASE1-2 and NOMV1, >= 0): G = MAG1/(1e6 SBASE), |Y| = MAG2 SBASE1-2/SBASE,
+    B = -sqrt(|Y|^2 - G^2), both scaled by (kv/NOMV1)^2.  A CM 2 current below its loss
+    (|Y| < G) or a negative MAG1 or MAG2 is refused naming the fields."""
+    g, bm = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
+    if rec.int(0, 6, 1) == 1 or (g == 0 and bm == 0):  # CM 1 or 2 (_check_transformer)
+        return g, bm
+    if g < 0 or bm < 0:
+        rec.fail(f"{what}: {rec.given(0, 7, 8)}: CM 2 gives a loss (W) and a current (pu), >= 0")
+    sbase = rec.num(1, 2, b.base)
+    if sbase <= 0:
+        rec.fail(f"{what}: SBASE1-2 {rec.written(1, 2)} MVA must be > 0", 1)
+    nomv = _nominal(rec, 2, kv, bus, 1, what)
+    scale = (kv / nomv if nomv != kv else 1.0) ** 2 / b.base
+    g, y = g / 1e6 * scale, bm * sbase * scale
+    if y < g:
+        rec.fail(
+            f"{what}: {rec.given(0, 7, 8)}: exciting current {y:g} pu below the no-load loss "
+            f"{g:g} pu (CM 2; pu on the system base)"
+        )
+    return g, -math.sqrt(y * y - g * g)
 
 
 #: STAT of a three-winding transformer -> its windings in service (POM)
@@ -1389,7 +1414,7 @@ def _three_winding(b: _Builder, rec: _Rec, buses: tuple, what: str):
     if vm <= 0:
         rec.fail(f"{what}: VMSTAR {rec.written(1, 9)} must be > 0", 1)
     b.buses[star] = [star, vm, rec.num(1, 10, 0.0), *[0] * 6, PQ, 0, 0, 0.0, 0, 0]
-    g_mag, b_mag = rec.num(0, 7, 0.0), rec.num(0, 8, 0.0)
+    g_mag, b_mag = _magnetizing(b, rec, kvs[0], buses[0], what)
     for w in windings:
         z, ang = star_z[w], _angle(rec, 2 + w, what)
         row = [buses[w], star, z.real, z.imag, 0, _ratio(rec, 2 + w, kvs[w], buses[w], what)]

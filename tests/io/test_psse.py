@@ -370,14 +370,45 @@ def test_records_out_of_the_network_are_named(tmp_path):
 
 def test_magnetizing_admittance_is_a_shunt_at_the_winding_1_bus(tmp_path):
     """MAG1 + jMAG2 (CM 1, pu on SBASE) of transformer 2-3: the branch's from-end shunt
-    (line columns 11-12), switched with it; CM 2 stays unsupported."""
+    (line columns 11-12), switched with it."""
     old = "    2,     3,     0,'1 ',2,2,1, 0.00000E+0, 0.00000E+0,"
     path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,1, 0.002, -0.01,")
     line = read_raw(path).line
     row = line[(line[:, 0] == 2) & (line[:, 1] == 3)][0]
     np.testing.assert_array_equal(row[10:14], [0.002, -0.01, 0.0, 0.0])
-    path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,2, 0.002, -0.01,")
-    assert "CM 2" in str(read_raw(path).unsupported[0])
+
+
+def test_magnetizing_admittance_given_as_loss_and_current(tmp_path):
+    """CM 2 (refused as unsupported until round 49): MAG1 the no-load loss in W, MAG2 the
+    exciting current in pu on SBASE1-2 (500 MVA) at NOMV1 (240 kV, bus 2's base 230 kV):
+    G = MAG1/(1e6 SBASE) (230/240)^2, |Y| = MAG2 SBASE1-2/SBASE (230/240)^2 and
+    B = -sqrt(|Y|^2 - G^2) (POM Transformer Data; OpenPA's XfrMagYcm2 alike).  A current
+    below its loss, or a negative field, is refused naming the fields.  A three-winding
+    transformer's is at its winding-1 bus."""
+    old = "    2,     3,     0,'1 ',2,2,1, 0.00000E+0, 0.00000E+0,"
+    path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,2, 2.0E5, 0.004,")
+    text = path.read_text().replace("240.00,   0.000,   0.000,", "240.00,   240.0,   0.000,", 1)
+    path.write_text(text)  # NOMV1 240 kV
+    raw = read_raw(path)
+    assert raw.unsupported == ()
+    row = raw.line[(raw.line[:, 0] == 2) & (raw.line[:, 1] == 3)][0]
+    scale = (230 / 240) ** 2
+    g, y = 0.2 / 100 * scale, 0.004 * 500 / 100 * scale
+    np.testing.assert_allclose(row[10:14], [g, -np.sqrt(y * y - g * g), 0, 0], rtol=1e-12)
+    t3 = _three_winding(tmp_path)  # bus 1's 230 kV, NOMV1 0 (bus base), SBASE1-2 200 MVA
+    t3.write_text(t3.read_text().replace("'T ',1,2,1, 0.0, 0.0,", "'T ',1,2,2, 1.0E5, 0.01,"))
+    rows = read_raw(t3).line
+    g, y = 0.1 / 100, 0.01 * 200 / 100
+    np.testing.assert_allclose(rows[rows[:, 1] == 6][0, 10:12], [g, -np.sqrt(y * y - g * g)])
+    path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,2, 2.0E5, 0.0001,")
+    with pytest.raises(
+        CaseError,
+        match=r"MAG2 = 0.0001: exciting current 0.0005 pu below the no-load loss 0.002 pu",
+    ):
+        read_raw(path)
+    path = _edit(tmp_path, old, "    2,     3,     0,'1 ',2,2,2, 2.0E5, -0.004,")
+    with pytest.raises(CaseError, match=r"MAG1 = 2.0E5, MAG2 = -0.004: CM 2 gives a loss"):
+        read_raw(path)
 
 
 def test_a_zero_q_limit_stays_a_limit(tmp_path):
