@@ -754,13 +754,11 @@ def print_modes(st, no_pss: bool) -> None:
         f"states; linearised in {st.t_linearise:.2f} s (the model's set-up and its kernels' "
         f"loading included), analysed in {st.t_analyse:.2f} s"
     )
-    if ma.reference_mode is None:
+    ref = ma.reference_values()
+    if not ref:
         click.echo("no angle-reference mode: an infinite bus (H = 0) holds the angles")
     else:
-        click.echo(
-            f"angle-reference mode {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s "
-            "(excluded from damping statistics)"
-        )
+        click.echo(f"angle-reference mode {ref} (excluded from damping statistics)")
     click.echo(ma.table(st.case.machine_name))
 
 

@@ -18,9 +18,11 @@ Conventions (docs/modal.md):
   (Hz), damping ratio -Re lambda / |lambda|;
 - the angle-reference mode (the common rotation of all rotor angles, A e = 0 analytically
   since no machine is taken as reference) is the mode whose right eigenvector is closest
-  in direction to e; it is excluded from damping statistics.  A model with an infinite
-  bus (a machine of H = 0, whose angle and speed are not states, so the model has fewer
-  speed states than omega_G outputs) has none: the infinite bus is the reference.
+  in direction to e; it is excluded from damping statistics.  An islanded network has one
+  per island (the rotation e_I of island I's angles alone; the modes whose right
+  eigenvectors lie nearest the span of the e_I).  A model with an infinite bus (a machine
+  of H = 0, whose angle and speed are not states, so the model has fewer speed states
+  than omega_G outputs) has none: the infinite bus is the reference.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as la
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
 from stabctl.errors import InputError, WrongTypeError, advice, counted, is_whole_number
 
@@ -94,9 +98,11 @@ class ModalAnalysis:
         freq_hz, damping (m,); right (n, m) phi_i, left (m, n) psi_i (psi_i phi_i = 1);
         participation (n, m) real, columns sum to 1; states (n,) names; machines (g,)
         numbers; inertia (g,) H*MVA weights; speed_shape (g, m) complex omega components of
-        phi_i scaled so the largest is 1 + 0j; reference_mode: index of the angle-reference
-        mode (None where an infinite bus holds the angles); electromechanical: indices of
-        the electromechanical modes; areas (g,) area label (0..r-1) of each machine; kind
+        phi_i scaled so the largest is 1 + 0j; reference_modes: indices of the
+        angle-reference modes, one per island of machines (none where an infinite bus
+        holds the angles; `reference_mode` the first or None); island (g,) island label
+        (0..) of each machine; electromechanical: indices of the electromechanical modes;
+        areas (g,) area label (0..r-1) of each machine, an area within one island; kind
         (m,) 'angle reference', 'common' (every machine in phase, the centre of inertia
         swinging: its share of the mode's kinetic energy above COMMON_SHARE,
         `coi_energy_share`, without an infinite bus), 'inter-area' (area momentum
@@ -114,11 +120,27 @@ class ModalAnalysis:
     machines: np.ndarray
     inertia: np.ndarray
     speed_shape: np.ndarray
-    reference_mode: int | None
+    reference_modes: tuple[int, ...]
+    island: np.ndarray
     electromechanical: np.ndarray
     areas: np.ndarray
     kind: np.ndarray
     eta: np.ndarray
+
+    @property
+    def reference_mode(self) -> int | None:
+        """The angle-reference mode of a connected network (the first of
+        `reference_modes`, one per island), None where an infinite bus holds the angles."""
+        return self.reference_modes[0] if self.reference_modes else None
+
+    def reference_values(self) -> str:
+        """The angle-reference modes' eigenvalues as text ('-2.50e-07 1/s'; an islanded
+        network's one per island, '3.2e-08 and 7.8e-08 1/s, one per island of machines'),
+        '' where an infinite bus holds the angles."""
+        values = [f"{self.eigenvalues[i].real:.2e}" for i in self.reference_modes]
+        if len(values) < 2:
+            return f"{values[0]} 1/s" if values else ""
+        return f"{', '.join(values[:-1])} and {values[-1]} 1/s, one per island of machines"
 
     def _mode(self, i) -> int:
         """Mode index i checked: a whole number within the modes (round 45: 999 gave
@@ -229,8 +251,7 @@ class ModalAnalysis:
         band (an exciter's 3.7 Hz modes at +5.2 1/s were in no table, round 41)."""
         lam = self.eigenvalues
         bad = (lam.real > UNSTABLE_REAL_PER_S) & (lam.imag >= 0)
-        if self.reference_mode is not None:
-            bad[self.reference_mode] = False
+        bad[list(self.reference_modes)] = False
         return np.nonzero(bad)[0]
 
     def _unstable_lines(self, shown: np.ndarray, named) -> list[str]:
@@ -326,8 +347,7 @@ class ModalAnalysis:
         the electromechanical modes and over the rotor modes above their band
         (`rotor_modes_above_band`; keys ``all``, ``electromechanical``,
         ``rotor_above_band``, each only when it has a mode)."""
-        ref = [] if self.reference_mode is None else [self.reference_mode]
-        rest = np.setdiff1d(np.arange(self.eigenvalues.size), ref)
+        rest = np.setdiff1d(np.arange(self.eigenvalues.size), self.reference_modes)
         out = {}
         for key, idx in (
             ("all", rest),
@@ -352,7 +372,7 @@ class ModalAnalysis:
             "imag_rad_per_s": float(lam.imag),
             "freq_hz": float(self.freq_hz[i]),
             "damping_ratio": float(self.damping[i]),
-            "stable": bool(lam.real <= UNSTABLE_REAL_PER_S or i == self.reference_mode),
+            "stable": bool(lam.real <= UNSTABLE_REAL_PER_S or i in self.reference_modes),
             "kind": str(self.kind[i]),
             "dominant_states": [
                 {"state": s, "participation": p} for s, p in self.dominant_states(i)
@@ -476,8 +496,9 @@ def modal_analysis(
             "the model linearise returned (indexing it, sys[...], renames its states x[i])"
         )
     speed = np.array([i for i, n in enumerate(states) if n.startswith("mac_omega_G")], int)
-    angle = np.array([i for i, n in enumerate(states) if n.startswith("mac_delta_G")], int)
     machines = np.array([int(states[i].rsplit("_G", 1)[1]) for i in speed])
+    where = {str(n): i for i, n in enumerate(states)}
+    angle = np.array([where.get(f"mac_delta_G{k}", -1) for k in machines], int)
     if inertia is not None and speed.size == 0 and np.size(inertia):
         raise InputError(
             f"modal_analysis(sys): no machine speed state (mac_omega_G<n>, as "
@@ -511,17 +532,17 @@ def modal_analysis(
     lam, right, left = eigen(np.asarray(sys.A))
     P = participation_factors(right, left)
     shape = _normalised(right[speed])
-    e = np.zeros(states.size)  # the common rotation of the rotor angles
-    e[angle] = 1.0
     n_mac = sum(1 for n in sys.output_labels if n.startswith("omega_G"))
-    ref = None if n_mac > speed.size else int(np.argmax(np.abs(e @ right)))
+    infinite_bus = n_mac > speed.size
+    island = np.zeros(speed.size, int) if infinite_bus else _islands(sys, states, speed)
+    ref = () if infinite_bus else _reference_modes(right, angle, island)
     f, mag = np.abs(lam.imag) / (2 * np.pi), np.abs(lam)
     zeta = np.divide(-lam.real, mag, out=np.ones_like(mag), where=mag > 0)  # lambda = 0: 1
     em = electromechanical_modes(f, P, states)
     if speed.size == 0:  # converters against infinite buses: no rotor, no area
         area_of = _no_machines(n_areas, areas)
     elif areas is None:
-        area_of = coherent_areas(shape, f, em, n_areas)
+        area_of = coherent_areas(shape, f, em, n_areas, island)
     else:
         area_of = _given_areas(areas, machines)
     eta = np.full(lam.size, np.nan)
@@ -529,10 +550,9 @@ def modal_analysis(
     kind = np.full(lam.size, "other", dtype=object)
     inter = (eta[em] > INTER_AREA_ETA) & (f[em] <= INTER_AREA_MAX_HZ)
     kind[em] = np.where(inter, "inter-area", "local")
-    if ref is not None and speed.size > 1:  # no infinite bus: the COI can swing
+    if ref and speed.size > 1:  # no infinite bus: the COI can swing
         kind[em[coi_energy_share(shape[:, em], inertia) > COMMON_SHARE]] = "common"
-    if ref is not None:
-        kind[ref] = "angle reference"
+    kind[list(ref)] = "angle reference"
     return ModalAnalysis(
         eigenvalues=lam,
         freq_hz=f,
@@ -544,12 +564,42 @@ def modal_analysis(
         machines=machines,
         inertia=np.asarray(inertia, float),
         speed_shape=shape,
-        reference_mode=ref,
+        reference_modes=ref,
+        island=island,
         electromechanical=em,
         areas=area_of,
         kind=kind.astype(str),
         eta=eta,
     )
+
+
+def _islands(sys, states: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    """Island label (0.., in machine order) of each machine with a speed state, read from
+    the model's omega_rel_G<k> outputs (omega_k minus the COI speed of its island,
+    `stabctl.smallsignal.linearise`: nonzero on the speeds of its island's machines; a
+    machine alone in its island has a zero row).  One island where those outputs are
+    missing (a model rebuilt from bare matrices)."""
+    outputs = list(sys.output_labels)
+    names = ["omega_rel_" + states[i].removeprefix("mac_omega_") for i in speed]
+    if not speed.size or any(n not in outputs for n in names):
+        return np.zeros(speed.size, int)
+    C = np.asarray(sys.C)[[outputs.index(n) for n in names]][:, speed]
+    linked = (C != 0) | (C.T != 0) | np.eye(speed.size, dtype=bool)
+    return connected_components(csr_matrix(linked), directed=False)[1]
+
+
+def _reference_modes(right: np.ndarray, angle: np.ndarray, island: np.ndarray) -> tuple:
+    """The angle-reference modes, one per island: the modes whose right eigenvectors
+    (unit 2-norm) lie nearest the span of the islands' common angle rotations e_I (ones on
+    island I's rotor angles; ``angle`` the state index of each machine's, -1 none), ordered
+    by mode index."""
+    labels = np.unique(island)
+    E = np.zeros((right.shape[0], labels.size))
+    for j, label in enumerate(labels):
+        on = angle[(island == label) & (angle >= 0)]
+        E[on, j] = 1.0 / np.sqrt(max(on.size, 1))
+    near = np.linalg.norm(E.T @ right, axis=0)
+    return tuple(sorted(int(i) for i in np.argsort(-near)[: labels.size]))
 
 
 def electromechanical_modes(freq_hz: np.ndarray, P: np.ndarray, states) -> np.ndarray:
@@ -629,37 +679,46 @@ def _no_machines(n_areas: int | None, areas: dict | None) -> np.ndarray:
 
 
 def coherent_areas(
-    shape: np.ndarray, freq_hz: np.ndarray, em: np.ndarray, n_areas: int | None = None
+    shape: np.ndarray,
+    freq_hz: np.ndarray,
+    em: np.ndarray,
+    n_areas: int | None = None,
+    island: np.ndarray | None = None,
 ) -> np.ndarray:
     """Coherent areas of the machines by slow coherency (Chow et al., grouping by
-    pivoting): the rigid-body direction and the speed shapes of the r - 1 slowest
-    electromechanical modes span V (g, r); the r machines chosen by QR with column pivoting
-    of V^T are the area references; machine k joins the area j maximising
-    (V V_ref^-1)_kj (invariant to the basis of the span).
+    pivoting): the rigid-body directions (one per island: ones on its machines; ``island``
+    (g,) labels, default one island) and the speed shapes of the r - s slowest
+    electromechanical modes (s islands) span V (g, r); the r machines chosen by QR with
+    column pivoting of V^T are the area references; machine k joins the area j maximising
+    (V V_ref^-1)_kj (invariant to the basis of the span), so no area spans two islands.
 
-    r (n_areas) defaults to 1 + the number of slow modes: the electromechanical modes below
+    r (n_areas) defaults to s + the number of slow modes: the electromechanical modes below
     a time-scale gap, taken as the highest ratio of at least GAP_RATIO between consecutive
     sorted frequencies in their lower half (else the largest ratio there).  This is a
     heuristic (Kundur: r = 2, miniWECC: r = 3, docs/modal.md); planners who know their
     areas pass n_areas or `modal_analysis(areas=...)`.  Returns labels (g,), 0 for a
     single area, numbered in the order of each area's first machine (machine order of the
     data: Kundur's area 1 = G1, G2 as in his book).
-    Raises AreaCountError (an InputError) for n_areas outside [1, number of EM modes + 1]
+    Raises AreaCountError (an InputError) for n_areas outside [s, number of EM modes + s]
     or above g.
     """
     g = shape.shape[0]
+    island = np.zeros(g, int) if island is None else np.asarray(island)
+    rigid = [(island == label).astype(float) for label in np.unique(island)]
+    s = len(rigid)
     em = em[np.argsort(freq_hz[em])]
     if n_areas is None:
-        n_areas = min(1 + _slow_mode_count(freq_hz[em]), g)  # one machine: one area
-    if not 1 <= n_areas <= min(em.size + 1, g):
+        n_areas = min(s + _slow_mode_count(freq_hz[em]), g)  # one machine: one area
+    if not s <= n_areas <= min(em.size + s, g):
+        islands = f" (the machines are in {s} islands)" if s > 1 else ""
         raise AreaCountError(
-            f"the number of areas ({advice('n_areas', '--areas')}) must be between 1 and "
-            f"{min(em.size + 1, g)} "
-            f"(electromechanical modes + 1, at most the machines), got {n_areas}"
+            f"the number of areas ({advice('n_areas', '--areas')}) must be between {s} and "
+            f"{min(em.size + s, g)} (electromechanical modes + {s}, at most the "
+            f"machines){islands}, got {n_areas}"
         )
     if n_areas == 1:
         return np.zeros(g, int)
-    V = np.column_stack([np.ones(g), *(shape[:, i].real for i in em[: n_areas - 1])])
+    V = np.column_stack([*rigid, *(shape[:, i].real for i in em[: n_areas - s])])
     _, _, piv = la.qr(V.T, pivoting=True)
     L = V @ np.linalg.inv(V[piv[:n_areas]])
     return _by_first_machine(np.argmax(L, axis=1))

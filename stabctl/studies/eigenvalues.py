@@ -91,6 +91,8 @@ def study_json(st: EigStudy) -> dict:
         "n_states": st.sys.nstates,
         "inputs": list(st.sys.input_labels),
         "reference_mode": ma.reference_mode,
+        # one per island of machines (round 49: an islanded case's second was "other")
+        "reference_modes": list(ma.reference_modes),
         # the machine numbers the modes' machine lists hold, named with their buses
         "machine_names": {str(int(k)): st.case.machine_name(int(k)) for k in ma.machines},
         "areas": _areas(ma),
@@ -189,11 +191,8 @@ def report_markdown(
     `command` as `write_report`'s."""
     ma, sys = st.ma, st.sys
     named = st.case.machine_name
-    ref = (
-        "none: an infinite bus (H = 0) holds the angles"
-        if ma.reference_mode is None
-        else f"lambda = {ma.eigenvalues[ma.reference_mode].real:.2e} 1/s"
-    )
+    ref = ma.reference_values()
+    ref = f"lambda = {ref}" if ref else "none: an infinite bus (H = 0) holds the angles"
     stats = ma.damping_statistics()
     em = ma.electromechanical
     n_inter = int(np.sum(ma.kind[em] == "inter-area"))

@@ -3,6 +3,7 @@ angle-reference mode, Kundur's local and inter-area modes, residues against the 
 function, areas, reports and bad input."""
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +74,54 @@ def test_angle_reference_mode_identified_and_excluded(sys_k, ma_k):
     stats = ma_k.damping_statistics()
     assert stats["all"]["mode"] != i
     assert stats["electromechanical"]["freq_hz"] == pytest.approx(0.612, abs=1e-3)
+
+
+def _kundur_split():
+    """Kundur with both 13-101 tie circuits open, bus 11 a second swing bus, G2 at 2.5 pu
+    and bus 14's load at 14 pu: two islands {G1, G2}, {G3, G4}, each balanced."""
+    c = load_case("kundur")
+    br, b = c.branches, c.buses
+    ends = np.column_stack([br.from_bus, br.to_bus]).astype(int)
+    keep = [i for i, e in enumerate(ends) if not {13, 101} <= set(e.tolist())]
+    kind, pgen, pload = (np.array(x, float) for x in (b.kind, b.pgen, b.pload))
+    kind[c.bus_index(11)], pgen[c.bus_index(2)], pload[c.bus_index(14)] = 1, 2.5, 14.0
+    buses = b.replace(kind=kind, pgen=pgen, pload=pload)
+    return c.replace(name="kundur_split", branches=br.select(keep), buses=buses)
+
+
+def test_an_islanded_case_has_an_angle_reference_mode_per_island(tmp_path):
+    """Round 49 (AH13): two islands have two free rotations e_I (A e_I = 0), and so two
+    near-zero eigenvalues; only one was marked, the other ("other", damping ratio -1) was
+    the JSON's least-damped mode, and a coherent area joined G1 with the other island's
+    G3, G4.  Each island's rotation now lies in the span of the reference modes, both
+    are left out of the statistics, and no area spans two islands."""
+    from stabctl.io.pst import write_case_json
+
+    sys = linearise(_kundur_split(), q_limits=False)
+    ma = modal_analysis(sys)
+    assert len(ma.reference_modes) == 2 and ma.island.tolist() == [0, 0, 1, 1]
+    ref = list(ma.reference_modes)
+    assert np.abs(ma.eigenvalues[ref]).max() < 1e-5
+    assert set(ma.kind[ref]) == {"angle reference"}
+    basis, _ = np.linalg.qr(ma.right[:, ref])
+    names = list(sys.state_labels)
+    for island in ((1, 2), (3, 4)):
+        e = np.zeros(len(names))
+        e[[names.index(f"mac_delta_G{k}") for k in island]] = 1.0
+        assert np.linalg.norm(np.asarray(sys.A) @ e) < 1e-5
+        e /= np.linalg.norm(e)
+        assert np.linalg.norm(e - basis @ (basis.conj().T @ e)) < 1e-6
+    stats = ma.damping_statistics()
+    assert stats["all"]["mode"] not in ref and stats["all"]["damping_ratio"] > 0
+    assert all(len(set(ma.island[ma.areas == a])) == 1 for a in np.unique(ma.areas))
+    write_case_json(_kundur_split(), tmp_path / "split.json")
+    res = run("eig", tmp_path / "split.json", "--no-q-limits", "--json")
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["reference_modes"] == ref and out["damping_statistics"]["all"]["mode"] not in ref
+    res = run("eig", tmp_path / "split.json", "--no-q-limits")
+    said = r"angle-reference mode \S+ and \S+ 1/s, one per island of machines \(excluded"
+    assert re.search(said, res.stdout), res.stdout
 
 
 @pytest.mark.parametrize(
