@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from dataclasses import dataclass
 
 import click
@@ -51,6 +52,7 @@ from stabctl.cli.options import (
     tf_option,
     warnings_so_far,
 )
+from stabctl.dynamics.results import FLAT_DRIFT_PU
 from stabctl.errors import InputError, counted
 from stabctl.io.inputs import plain_number
 
@@ -561,6 +563,8 @@ def simulate(
     with runs_shown():  # a run longer than a few seconds shows a bar of simulated time
         result = run(h=h)
         halved = _step_check(run(h=h / 2), h / 2) if check_step else None
+    if not events:
+        _say_drift(result, case)
     esd = (
         None
         if esd_pct is None
@@ -669,6 +673,25 @@ def simulate(
         click.echo(_step_check_line(result, halved, method))
     for w in written:
         click.echo(f"wrote {shown(w)}")
+
+
+def _say_drift(result, case) -> None:
+    """Warn of a flat run (no disturbance) that moved more than FLAT_DRIFT_PU from its
+    start (round 49: Nordic 44 with its IEEET2 misread drifted 1.06 pu of Efd in 10 s,
+    said "stable" and nothing else)."""
+    d = result.drift()
+    if d["pu"] <= FLAT_DRIFT_PU:
+        return
+    what = {"speed": "the speed of", "efd": "the field voltage of", "vmag": "the voltage of"}
+    where = f"bus {d['where']}" if d["quantity"] == "vmag" else case.machine_name(d["where"])
+    warnings.warn(
+        f"the flat run (no disturbance) did not stay at rest: {what[d['quantity']]} "
+        f"{where} moved {d['pu']:.2e} pu by t = {d['t_s']:g} s (more than {FLAT_DRIFT_PU:g} "
+        "pu): the starting point is no stable equilibrium of the models as read "
+        "(`stabctl eig` names any unstable mode), or the data hold an error",
+        UserWarning,
+        stacklevel=2,
+    )
 
 
 def _in_time_order(events) -> list:

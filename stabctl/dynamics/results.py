@@ -102,6 +102,10 @@ END_VOLTAGE_PU = 0.8
 #: and a frequency further than this from nominal (Hz; NERC PRC-024's band of
 #: continuous operation, 59.4-60.6 Hz at 60 Hz)
 END_FREQUENCY_HZ = 0.6
+#: `SimulationResult.drift`: a run without disturbance whose machine speed, field voltage
+#: or bus voltage moves further than this from its start (pu) is not at rest (PSS/E
+#: practice: a no-disturbance run stays flat well within 1e-4 pu)
+FLAT_DRIFT_PU = 1e-4
 
 
 def _whole(number, what: str) -> None:
@@ -297,6 +301,38 @@ class SimulationResult:
         machine without `partitions`."""
         last = self.last_partition()
         return np.ones(self.machines.size, bool) if last is None else last.judged.copy()
+
+    def drift(self) -> dict:
+        """The largest move from the run's start of a machine speed, field voltage or bus
+        voltage magnitude: what a run without disturbance (a flat run) must keep within
+        `FLAT_DRIFT_PU` (an equilibrium that is not stable drifts away from round-off on,
+        though every derivative is 0 at the start).
+
+        Returns
+        -------
+        dict
+            ``pu`` (the move, pu), ``quantity`` ('speed', 'efd' or 'vmag'), ``where``
+            (machine or bus number), ``t_s`` (when, s); ``pu`` 0 and ``where`` None for
+            a run that moved nothing.
+        """
+        best: dict = {"pu": 0.0, "quantity": "speed", "where": None, "t_s": 0.0}
+        for quantity, values, numbers in (
+            ("speed", self.speed, self.machines),
+            ("efd", self.efd, self.machines),
+            ("vmag", self.vmag, self.buses),
+        ):
+            if values is None or values.size == 0:
+                continue
+            moves = np.abs(values - values[0])
+            k, j = np.unravel_index(int(np.nanargmax(moves)), moves.shape)
+            if moves[k, j] > best["pu"]:
+                best = {
+                    "pu": float(moves[k, j]),
+                    "quantity": quantity,
+                    "where": int(numbers[j]),
+                    "t_s": float(self.t[k]),
+                }
+        return best
 
     def end_state(self, freq_hz: float) -> dict:
         """Where the run ends: its time, the lowest bus voltage among the energised buses

@@ -1004,3 +1004,34 @@ def test_the_storage_summary_says_when_the_network_took_no_power():
     data = json.loads(CliRunner().invoke(main, [*args, "--esd-pct", "50", "--json"]).stdout)
     dev = data["storage"][0]
     assert dev["commanded_idle_s"] == pytest.approx(idle, rel=2e-3)
+
+
+def test_a_flat_run_that_does_not_stay_at_rest_is_said(monkeypatch):
+    """Round 49 (AG12): Nordic 44 with its IEEET2 misread (the rate feedback of Efd, not
+    of V_R) started at rest, drifted from round-off on (Efd 1.06 pu in 10 s) and was said
+    "stable", exit 0, no warning.  `SimulationResult.drift` finds the largest move of a
+    speed, field voltage or bus voltage from the start; a run without disturbance that
+    moves more than FLAT_DRIFT_PU (1e-4 pu) is warned of, naming what moved, where and
+    when; Kundur's flat run (at rest to 1e-12) is not."""
+    from stabctl.dynamics.results import FLAT_DRIFT_PU
+    from stabctl import Simulator
+
+    case = load_case("kundur")
+    res = Simulator(case).run([], 1.0)
+    assert res.drift()["pu"] < 1e-10
+    res.efd[50, 2] += 2e-4  # G3's field voltage away from its start at step 50
+    assert res.drift() == pytest.approx(
+        {"pu": 2e-4, "quantity": "efd", "where": 3, "t_s": float(res.t[50])}
+    )
+    out = run("simulate", "kundur", "--tf", "1", "--json")
+    assert out.exit_code == 0 and json.loads(out.stdout)["warnings"] == []
+    moved = {"pu": 1.06, "quantity": "efd", "where": 3, "t_s": 10.0}
+    monkeypatch.setattr(SimulationResult, "drift", lambda self: moved)
+    out = run("simulate", "kundur", "--tf", "1")
+    said = (
+        "warning: the flat run (no disturbance) did not stay at rest: the field voltage of "
+        f"G3 (bus 11) moved 1.06e+00 pu by t = 10 s (more than {FLAT_DRIFT_PU:g} pu)"
+    )
+    assert said in " ".join(out.stderr.split()), out.stderr
+    out = run("simulate", "kundur", "--tf", "1", "--trip-gen", "4", "0.5")
+    assert "did not stay at rest" not in out.stderr  # a disturbance: moves are its answer

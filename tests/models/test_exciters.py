@@ -7,6 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from stabctl.case import ExciterTable
+from stabctl.errors import CaseError
 from stabctl.io import load_case
 from stabctl.models import exciters as exc
 from stabctl.models.declaration import check_packed, layout
@@ -247,19 +248,31 @@ def test_dc1_without_ta_has_an_algebraic_regulator():
     assert x[2, 0] == P[0, exc.E.VRMAX] and dx[2, 0] == 0.0
 
 
-def test_ieeet2_rate_feedback_has_its_second_lag():
-    """IEEET2: the rate feedback s K_F/((1 + s T_F1)(1 + s T_F2)): its state V_F lags
-    K_F/T_F1 (Efd - R_f) by T_F2 (exc_con column 18, the layout's TF2; 0 for the other
-    types), and with T_F2 below 1e-3 s it is DC1's feedback."""
+def test_ieeet2_rate_feedback_is_of_v_r_through_its_second_lag():
+    """IEEET2 (IEEE Committee Report 1968, Type 2; OpenIPSL's PSS/E-verified IEEET2): the
+    rate feedback s K_F/((1 + s T_F1)(1 + s T_F2)) of the regulator output V_R, not of Efd
+    (round 49: fed Efd, like DC1, Nordic 44's twelve IEEET2 (K_A 729) gave twelve unstable
+    2.5 Hz exciter modes and a flat run that drifted).  V_F lags K_F/T_F1 (V_R - R_f) by
+    T_F2 (exc_con column 18, the layout's TF2; 0 for the other types); R_f follows V_R and
+    an Efd step moves neither; with T_F2 below 1e-3 s, K_F/T_F1 (V_R - R_f) is subtracted
+    from the error itself; T_A and T_F2 both below 1e-3 s (an algebraic loop) are refused."""
     P, x = started(IEEET2)
     assert P[0, exc.E.TF2] == 0.5 and started(DC1)[0][0, exc.E.TF2] == 0.0
-    x[3, 0] += 0.1  # Efd above R_f by 0.1
+    assert x[4, 0] == x[2, 0] and x[5, 0] == 0.0  # R_f at V_R0, V_F at rest
+    x[2, 0] += 0.1  # V_R above R_f by 0.1
     dx = derivatives(P, x)
-    assert dx[5, 0] == pytest.approx((0.0754 / 1.246 * 0.1 - x[5, 0]) / 0.5, rel=1e-14)
-    P[0, exc.E.TF2] = 0.0
+    assert dx[5, 0] == pytest.approx(0.0754 / 1.246 * 0.1 / 0.5, rel=1e-14)
+    assert dx[4, 0] == pytest.approx(0.1 / 1.246, rel=1e-14)
+    x = started(IEEET2)[1]
+    x[3, 0] += 0.1  # Efd: no feedback of it
+    dx = derivatives(P, x)
+    assert dx[4, 0] == 0.0 and dx[5, 0] == 0.0
     P1, x1 = started(IEEET2[:17] + [0.0] + IEEET2[18:])
-    x1[3, 0] += 0.1
-    np.testing.assert_array_equal(derivatives(P, x)[:5], derivatives(P1, x1)[:5])
+    x1[2, 0] += 0.1
+    vf = 0.0754 / 1.246 * 0.1
+    assert derivatives(P1, x1)[2, 0] == pytest.approx((-20 * vf - 0.1) / 0.02, rel=1e-12)
+    with pytest.raises(CaseError, match=r"TA and TF2 both below 0.001 s: IEEET2's rate"):
+        started(IEEET2[:4] + [0.0] + IEEET2[5:17] + [0.0] + IEEET2[18:])
 
 
 @pytest.mark.parametrize("name, slot", [("DC1", 2), ("ST3", 2), ("smpexc", 2)])

@@ -1,8 +1,10 @@
 """The DC commutator exciters: PST's exc_dc12 (exc_con types 1 DC1 and 2 DC2) and PSS/E's
-IEEET2 (type 5: DC1 whose rate feedback has a second lag, s K_F/((1 + s T_F1)(1 + s
-T_F2)).  One file for the three: their equations are one family (rate feedback, lead-lag,
-non-windup K_A/(1 + s T_A) -> V_R, the exciter field T_E dEfd/dt = V_R - V_FE(Efd)); DC2
-only scales the V_R limits by the terminal voltage, IEEET2 only adds the feedback's lag.
+IEEET2 (type 5: the rate feedback s K_F/((1 + s T_F1)(1 + s T_F2)) of the regulator
+output V_R, where DC1 feeds back Efd).  One file for the three: their equations are one
+family (rate feedback, lead-lag, non-windup K_A/(1 + s T_A) -> V_R, the exciter field
+T_E dEfd/dt = V_R - V_FE(Efd)); DC2 only scales the V_R limits by the terminal voltage,
+IEEET2 feeds back V_R through a second lag (IEEE Committee Report 1968, Type 2: the
+rotating rectifier's Efd is not measured; OpenIPSL's PSS/E-verified IEEET2 alike).
 
 Source: PSTess 1.1 `exc_dc12.m` (PST manual 3.11 Table 2); PSS/E Model Library IEEET1,
 IEEET2 (IEEE Committee Report 1968), IEEEX1, ESDC1A, ESDC2A, EXDC2; docs/pst_models.md
@@ -18,7 +20,14 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import refuse_initial
-from stabctl.models.blocks import GAIN_OVER_T, lag, leadlag_input_state, nonwindup_lag, washout
+from stabctl.models.blocks import (
+    GAIN_OVER_T,
+    LBND,
+    lag,
+    leadlag_input_state,
+    nonwindup_lag,
+    washout,
+)
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E
 
@@ -26,7 +35,7 @@ if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
 
 DC1, DC2, T2 = 1, 2, 5
-KINDS = {DC1: "DC1", DC2: "DC2 (exc_dc12)", T2: "IEEET2 (DC1 with a two-lag rate feedback)"}
+KINDS = {DC1: "DC1", DC2: "DC2 (exc_dc12)", T2: "IEEET2 (DC1 with a two-lag V_R feedback)"}
 #: the DC exciters' saturation point E2, T_E and (IEEET2) T_F2 >= 0 (IEEE Std 421.5-2016
 #: DC1A, DC2A; PSS/E Model Library IEEET2); K_E may be negative (self-excited)
 LIMITS = {
@@ -126,7 +135,7 @@ DYR = (
         kind=DC1,
         andes=("IEEET1",),
     ),
-    # IEEET2 -> DC1 (type 5) with the rate feedback s KF/((1 + s TF1)(1 + s TF2))
+    # IEEET2 -> DC1 (type 5) with the rate feedback s KF/((1 + s TF1)(1 + s TF2)) of V_R
     DyrModel(
         "IEEET2",
         (
@@ -151,7 +160,7 @@ DYR = (
 )
 
 #: the states: transducer, lead-lag, regulator V_R, the exciter's Efd, the rate feedback's
-#: washout R_f and IEEET2's second feedback lag V_F
+#: washout R_f (of Efd; IEEET2's of V_R) and IEEET2's second feedback lag V_F
 S = states("DCStates", ("VTR", "VAs", "VR", "Efd", "Rf", "VF"))
 STATE_NAMES = {DC1: S._fields[: S.VF], DC2: S._fields[: S.VF], T2: S._fields}
 
@@ -178,9 +187,15 @@ def time_constants(p: ExciterParams):
 
 def check(e, r: int) -> str | None:
     """Why exc_con row r (0-based) of a DC exciter is not modelled, or None: Vrmax = 0,
-    PST's 'compute it from E2'."""
+    PST's 'compute it from E2'; an IEEET2 with T_A and T_F2 both below 1e-3 s (its rate
+    feedback of V_R would be an algebraic loop)."""
     if e.Vrmax[r] == 0:
         return "field 'Vrmax': 0 (PST computes it from E2) is not supported; give the limit"
+    if int(e.type[r]) == T2 and max(e.TA[r], e.Efdmax[r]) < LBND:
+        return (
+            f"TA and TF2 both below {LBND} s: IEEET2's rate feedback of V_R would be an "
+            "algebraic loop; give TA or TF2 >= 1e-3 s"
+        )
     return None
 
 
@@ -196,14 +211,15 @@ def dc_feedback(KE, Asat, Bsat, quadratic, Efd):
 
 def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     """The DC exciters at rest on rows r (`initial_regulator`): V_R0 the exciter's feedback
-    at Efd0, the lead-lag V_R0/K_A, the rate feedback's washout Efd0; writes x, returns
-    (V_ref - V_TR, p with K_E resolved)."""
+    at Efd0, the lead-lag V_R0/K_A, the rate feedback's washout at its input (Efd0; IEEET2
+    V_R0), IEEET2's second lag 0; writes x, returns (V_ref - V_TR, p with K_E resolved)."""
     p, VR = initial_regulator(p, r, vex, eterm)
     VA = VR / p.KA[r]
     x[S.VAs, r] = VA
     x[S.VR, r] = VR
     x[S.Efd, r] = vex[r]
-    x[S.Rf, r] = vex[r]
+    x[S.Rf, r] = np.where(p.kind[r] == T2, VR, vex[r])
+    x[S.VF, r] = 0.0
     return VA, p
 
 
@@ -244,14 +260,17 @@ def recorded_efd(P, x, i, efd_alg):
 
 @kernel(inline="always")
 def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
-    """exc_dc12 flag 2 and IEEET2: the rate feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s
-    T_F) Efd (IEEET2: then the lag 1/(1 + s T_F2), state V_F), subtracted from the error;
-    V_R non-windup (DC2: limits times eterm, held within `reach`);
-    T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`)."""
+    """exc_dc12 flag 2: the rate feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s T_F) Efd,
+    subtracted from the error; IEEET2: s K_F/(1 + s T_F1) of V_R, then the lag 1/(1 + s
+    T_F2) (state V_F; without it V_R is a state, `check`); V_R non-windup (DC2: limits
+    times eterm, held within `reach`); T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`)."""
     kind = P[i, E.KIND]
-    VF, dx[S.Rf, i] = washout(x[S.Efd, i], x[S.Rf, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
-    if kind == T2:
-        VF, dx[S.VF, i] = lag(VF, x[S.VF, i], P[i, E.TF2])
+    if kind == T2:  # the fed-back V_R: V_F's state, or V_R's state through the washout
+        VF = x[S.VF, i]
+        if P[i, E.TF2] < LBND:
+            VF = P[i, E.KF] / P[i, E.TF] * (x[S.VR, i] - x[S.Rf, i])
+    else:
+        VF, dx[S.Rf, i] = washout(x[S.Efd, i], x[S.Rf, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
     VA, dx[S.VAs, i] = leadlag_input_state(err - VF, x[S.VAs, i], P[i, E.TCTB], P[i, E.TB])
     mult = eterm if kind == DC2 else 1.0
     x[S.VR, i], dx[S.VR, i] = nonwindup_lag(
@@ -263,6 +282,9 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
         ieee,
         reach if kind == DC2 else 0.0,
     )
+    if kind == T2:
+        W, dx[S.Rf, i] = washout(x[S.VR, i], x[S.Rf, i], P[i, E.TF], P[i, E.KF], GAIN_OVER_T)
+        _, dx[S.VF, i] = lag(W, x[S.VF, i], P[i, E.TF2])
     dx[S.Efd, i] = (
         x[S.VR, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[S.Efd, i])
     ) / P[i, E.TE]
