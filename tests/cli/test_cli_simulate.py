@@ -1013,8 +1013,8 @@ def test_a_flat_run_that_does_not_stay_at_rest_is_said(monkeypatch):
     speed, field voltage or bus voltage from the start; a run without disturbance that
     moves more than FLAT_DRIFT_PU (1e-4 pu) is warned of, naming what moved, where and
     when; Kundur's flat run (at rest to 1e-12) is not."""
-    from stabctl.dynamics.results import FLAT_DRIFT_PU
     from stabctl import Simulator
+    from stabctl.dynamics.results import FLAT_DRIFT_PU
 
     case = load_case("kundur")
     res = Simulator(case).run([], 1.0)
