@@ -7,7 +7,7 @@ its map written; `place` on islanding faults, two load levels, faults whose CCT 
 in the run's end and an N-1 insecure fault, its VERIFIED plans run again to 11 s with
 their allocation; the islanding line of a negative load (WECC-179's bus 72).
 
-    python benchmarks/reliability_probes_25.py [--quick]
+    python benchmarks/reliability_probes_25.py [--quick] [ID_PREFIX ...]
 
 The package under test is this repository's (CLONE to test another checkout);
 NUMBA_CACHE_DIR is the caller's; XDG_CACHE_HOME a temporary directory.  Prints per probe:
@@ -22,63 +22,32 @@ from an interrupted one, a negative load's island said "load shed -1525.0 MW"; a
 (the probes below expect the fixed wording where it differs from the tester's).
 """
 
-# ruff: noqa: E501, BLE001, RUF015, RUF059 - a tester's script, kept as written
+# ruff: noqa: E501, RUF015, RUF059 - a tester's script, kept as written
 
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 import andes  # for the case files only
+from _probe_kit import INHERIT, Kit
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-ENV = dict(os.environ, PYTHONPATH=CLONE)  # XDG_CACHE_HOME: main's temporary directory
+KIT = Kit(
+    "probes_t.",
+    only=[a for a in sys.argv[1:] if not a.startswith("--")],
+    line="{pid:<8} {state:<5} {why}",
+)
+CLONE, ENV, RESULTS = KIT.clone, KIT.env, KIT.results  # XDG_CACHE_HOME: in KIT.wd
 ACASES = Path(andes.__file__).parent / "cases"
-RESULTS = []
-T0 = time.time()
+rec, probe = KIT.rec, KIT.probe
 
 
 def run(args, timeout=300, cwd=None):
-    t = time.time()
-    try:
-        p = subprocess.run(
-            ["stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=cwd,
-            env=ENV,
-        )
-        return p.returncode, p.stdout, p.stderr, time.time() - t
-    except subprocess.TimeoutExpired as e:
-        return "timeout", e.stdout or "", e.stderr or "", time.time() - t
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<8} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g(*a, **k):
-            try:
-                ok, why = f(*a, **k)
-            except Exception as e:  # a probe's own crash is reported, not fatal
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        return g
-
-    return deco
+    """(rc, stdout, stderr, seconds) of `stabctl args` (the one on PATH) in cwd (default:
+    the caller's), the caller's stdin."""
+    return KIT.run_argv(["stabctl", *map(str, args)], timeout, cwd or os.getcwd(), stdin=INHERIT)
 
 
 def last_json(out):
@@ -489,8 +458,7 @@ def negative_load_probe(case):
 
 def main():
     quick = "--quick" in sys.argv
-    wd = Path(tempfile.mkdtemp(prefix="probes_t."))
-    ENV["XDG_CACHE_HOME"] = str(wd / "xdg")  # place's kept jobs
+    wd = KIT.wd  # XDG_CACHE_HOME in it: place's kept jobs
     try:
         cases = setup(wd)
         for n in ("ieee14", "ieee39", "npcc", "wecc", "psse14"):
@@ -521,15 +489,8 @@ def main():
             place_probe(pid, cases[case], csv, opts, wd, longer)
         negative_load_probe(cases["wecc"])
     finally:
-        if os.environ.get("KEEP"):
-            print("kept", wd)
-        else:
-            shutil.rmtree(wd, ignore_errors=True)
-    n_short = sum(not ok for _, ok, _ in RESULTS)
-    print(
-        f"\n{len(RESULTS)} probes, {len(RESULTS) - n_short} ok, {n_short} SHORT; {time.time() - T0:.0f} s"
-    )
-    sys.exit(1 if n_short else 0)
+        KIT.cleanup(keep_any=True)
+    KIT.report("\n{n} probes, {ok} ok, {short} SHORT; {secs:.0f} s")
 
 
 PLACES = [

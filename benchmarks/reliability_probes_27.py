@@ -2,7 +2,7 @@
 """Twenty-seventh reliability round (round 44, part X): variants of issue 54's items 6-9,
 its crashes and frictions.
 
-    python benchmarks/reliability_probes_27.py
+    python benchmarks/reliability_probes_27.py [ID_PREFIX ...]
 
 Runs `python -m stabctl` from this repository (CLONE to test another checkout);
 NUMBA_CACHE_DIR is the caller's.  Prints per probe `id ok|SHORT reason`; exits 1 if any is
@@ -13,47 +13,20 @@ and `cct` naming G1 as losing synchronism at an unstable end where the run fails
 voltage collapse before any machine separates (X03); all fixed.
 """
 
-# ruff: noqa: E501, BLE001, E401, I001, SIM115, RUF059, RUF021 - a tester's script, kept as written
-import json, os, shutil, signal, struct, subprocess, sys, tempfile, time
-from pathlib import Path
+# ruff: noqa: E501, E401, I001, SIM115, RUF059, RUF021 - a tester's script, kept as written
+import json, os, shutil, signal, struct, subprocess, sys, time
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-ENV = dict(os.environ, PYTHONPATH=CLONE)
+from _probe_kit import INHERIT, Kit
+
+KIT = Kit("px44_", xdg=False)
+CLONE, ENV, WD, RESULTS = KIT.clone, KIT.env, KIT.wd, KIT.results
 RS = CLONE + "/tests/data/psse_runs/"
-RESULTS = []
-WD = Path(tempfile.mkdtemp(prefix="px44_"))
+probe = KIT.probe
 
 
 def run(args, timeout=200, cwd=WD):
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=cwd,
-            env=ENV,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired as e:
-        return "timeout", str(e.stdout or ""), str(e.stderr or "")
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            RESULTS.append((pid, ok))
-            print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-        return g
-
-    return deco
+    """(rc, stdout, stderr); the caller's stdin."""
+    return KIT.cli(args, timeout, cwd=cwd, stdin=INHERIT)
 
 
 DERA = open(RS + "DERA_FREQFLAG0/ThreeBus_DERA1.dyr").read()
@@ -435,16 +408,13 @@ def x09():
 
 
 def main():
-    try:
-        for f in (x01, x02, x03, x04, x05, x06, x07, x08, x09):
-            f()
-    finally:
-        if not os.environ.get("KEEP"):
-            shutil.rmtree(WD, ignore_errors=True)
-    short = sum(not ok for _, ok in RESULTS)
-    print(f"{len(RESULTS) - short} ok, {short} SHORT")
-    return 1 if short else 0
+    KIT.main(
+        (x01, x02, x03, x04, x05, x06, x07, x08, x09),
+        summary="{ok} ok, {short} SHORT",
+        keep_any=True,
+        kept=None,
+    )
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

@@ -20,204 +20,32 @@ import shutil
 import signal
 import socket
 import struct
-import subprocess
-import sys
-import tempfile
-import threading
 import time
 from pathlib import Path
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-ENV = dict(os.environ, PYTHONPATH=CLONE)
-RESULTS = []
-T0 = time.time()
-ONLY = sys.argv[1:]
-WD = Path(tempfile.mkdtemp(prefix="probes_w44."))
-ENV["XDG_CACHE_HOME"] = str(WD / "xdg")
+from _probe_kit import (
+    FakeServer,
+    Kit,
+    crc_ccitt,
+    free_port,
+    group_alive,
+    lines_of,
+    read_frame,
+    records,
+    split_frames,
+    stamp_of,
+    tail,
+    tb,
+    wait_listen,
+    with_stamp,
+)
+
+KIT = Kit("probes_w44.", line="{pid:<8} {state:<5} {why}", show_tb=True)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+run, run_rss, start, finish = KIT.run, KIT.run_rss, KIT.start, KIT.finish
+rec, probe = KIT.rec, KIT.probe
+recording, track_tcp = KIT.recording, KIT.track_tcp
 KUNDUR = Path(CLONE) / "stabctl/case/data/kundur.json"
-
-
-def cmd(args):
-    return [sys.executable, "-m", "stabctl", *map(str, args)]
-
-
-def run(args, timeout=300, cwd=None, env=None, stdin=None):
-    t = time.time()
-    try:
-        p = subprocess.run(
-            cmd(args),
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=cwd or WD,
-            env=env or ENV,
-            stdin=stdin or subprocess.DEVNULL,
-        )
-        return p.returncode, p.stdout, p.stderr, time.time() - t
-    except subprocess.TimeoutExpired as e:
-        return (
-            "timeout",
-            (e.stdout or b"").decode(errors="replace")
-            if isinstance(e.stdout, bytes)
-            else (e.stdout or ""),
-            (e.stderr or b"").decode(errors="replace")
-            if isinstance(e.stderr, bytes)
-            else (e.stderr or ""),
-            time.time() - t,
-        )
-
-
-def run_rss(args, timeout=300, env=None):
-    """run under /usr/bin/time: (rc, out, err, dt, peak RSS MiB)."""
-    t = time.time()
-    full = ["/usr/bin/time", "-f", "MAXRSS=%M", *cmd(args)]
-    try:
-        p = subprocess.run(
-            full,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=env or ENV,
-            stdin=subprocess.DEVNULL,
-        )
-    except subprocess.TimeoutExpired:
-        return "timeout", "", "", time.time() - t, -1
-    err = p.stderr
-    rss = -1
-    for line in err.splitlines()[::-1]:
-        if line.startswith("MAXRSS="):
-            rss = int(line[7:]) / 1024
-            break
-    err = "\n".join(
-        x
-        for x in err.splitlines()
-        if not x.startswith("MAXRSS=") and "Command exited with non-zero" not in x
-    )
-    rc = p.returncode
-    return rc, p.stdout, err, time.time() - t, rss
-
-
-def start(args, env=None, **kw):
-    return subprocess.Popen(
-        cmd(args),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=WD,
-        env=env or ENV,
-        start_new_session=True,
-        stdin=subprocess.DEVNULL,
-        **kw,
-    )
-
-
-def finish(p, timeout=60):
-    try:
-        out, err = p.communicate(timeout=timeout)
-        return p.returncode, out, err
-    except subprocess.TimeoutExpired:
-        os.killpg(p.pid, signal.SIGKILL)
-        out, err = p.communicate()
-        return "timeout", out, err
-
-
-def group_alive(pgid):
-    """pids still in process group pgid."""
-    r = subprocess.run(["ps", "-eo", "pid,pgid,stat,args"], capture_output=True, text=True)
-    return [
-        ln
-        for ln in r.stdout.splitlines()[1:]
-        if ln.split()[1] == str(pgid) and "Z" not in ln.split()[2]
-    ]
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<8} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g(*a, **k):
-            if ONLY and not any(pid.startswith(o) for o in ONLY):
-                return
-            try:
-                ok, why = f(*a, **k)
-            except Exception as e:
-                import traceback
-
-                traceback.print_exc()
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
-
-
-PROBES = []
-
-
-def tb(text):
-    return "Traceback (most recent call last)" in text
-
-
-def tail(s, n=300):
-    s = (s or "").strip()
-    return s[-n:].replace("\n", " | ")
-
-
-def lines_of(path):
-    return [ln for ln in Path(path).read_text().splitlines() if ln.strip()]
-
-
-def records(path):
-    out = []
-    for ln in lines_of(path):
-        try:
-            out.append(json.loads(ln))
-        except ValueError:
-            out.append(None)
-    return out
-
-
-def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    p = s.getsockname()[1]
-    s.close()
-    return p
-
-
-def wait_port(port, timeout=120, proc=None):
-    t = time.time()
-    while time.time() - t < timeout:
-        if proc is not None and proc.poll() is not None:
-            return False
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=1).close()
-            return True
-        except OSError:
-            time.sleep(0.3)
-    return False
-
-
-def wait_listen(port, timeout=120, proc=None):
-    """wait until port is listening without connecting (ss)."""
-    t = time.time()
-    while time.time() - t < timeout:
-        if proc is not None and proc.poll() is not None:
-            return False
-        r = subprocess.run(["ss", "-ltn"], capture_output=True, text=True)
-        if f":{port} " in r.stdout:
-            return True
-        time.sleep(0.3)
-    return False
 
 
 # ---------------------------------------------------------------- 1. interrupted long work
@@ -590,178 +418,6 @@ def screen_sigint_resume():
 
 
 # ---------------------------------------------------------------- 2. PMU streams
-def crc_ccitt(data: bytes) -> int:
-    crc = 0xFFFF
-    for b in data:
-        crc ^= b << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else (crc << 1)
-            crc &= 0xFFFF
-    return crc
-
-
-def split_frames(blob: bytes):
-    out, i = [], 0
-    while i + 4 <= len(blob):
-        n = struct.unpack(">H", blob[i + 2 : i + 4])[0]
-        out.append(blob[i : i + n])
-        i += n
-    return out
-
-
-def fix_crc(fr: bytes) -> bytes:
-    body = fr[:-2]
-    return body + struct.pack(">H", crc_ccitt(body))
-
-
-def with_stamp(fr: bytes, soc: int, counts: int) -> bytes:
-    b = bytearray(fr)
-    b[6:10] = struct.pack(">I", soc)
-    b[11:14] = counts.to_bytes(3, "big")
-    return fix_crc(bytes(b))
-
-
-def stamp_of(fr):
-    return struct.unpack(">I", fr[6:10])[0], int.from_bytes(fr[11:14], "big")
-
-
-def read_frame(conn):
-    head = b""
-    while len(head) < 4:
-        c = conn.recv(4 - len(head))
-        if not c:
-            return None
-        head += c
-    n = struct.unpack(">H", head[2:4])[0]
-    body = head
-    while len(body) < n:
-        c = conn.recv(n - len(body))
-        if not c:
-            return None
-        body += c
-    return body
-
-
-class FakeServer:
-    """One-shot C37.118.2 server on 127.0.0.1: answers 'cfg2' with cfg, and after 'start'
-    sends `data` (an iterable of bytes objects), then does `end` ('close', 'silent',
-    'half')."""
-
-    def __init__(self, cfg, data, end="close", gap=0.0):
-        self.cfg, self.data, self.end, self.gap = cfg, data, end, gap
-        self.sock = socket.socket()
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(4)
-        self.port = self.sock.getsockname()[1]
-        self.sent = 0
-        self.stop = threading.Event()
-        self.th = threading.Thread(target=self._run, daemon=True)
-        self.th.start()
-
-    def _run(self):
-        try:
-            self.sock.settimeout(120)
-            conn, _ = self.sock.accept()
-            conn.settimeout(120)
-            started = False
-            while not started:
-                fr = read_frame(conn)
-                if fr is None:
-                    return
-                cmdw = struct.unpack(">H", fr[14:16])[0]
-                if cmdw == 5:  # send CFG-2
-                    conn.sendall(self.cfg)
-                elif cmdw == 2:  # start
-                    started = True
-            for fr in self.data:
-                if self.stop.is_set():
-                    break
-                conn.sendall(fr)
-                self.sent += 1
-                if self.gap:
-                    time.sleep(self.gap)
-            if self.end == "half":
-                conn.sendall(
-                    self.data_last[: len(self.data_last) // 2]
-                    if hasattr(self, "data_last")
-                    else b"\xaa\x01\x00\x40\x00\x01"
-                )
-                time.sleep(0.5)
-            elif self.end == "silent":
-                self.stop.wait(300)
-            conn.close()
-        except OSError:
-            pass
-        finally:
-            self.sock.close()
-
-    def close(self):
-        self.stop.set()
-
-
-RECORDING = {}
-
-
-def recording():
-    """(cfg2, [data frames]) of kundur 3-101, 3 s, 60 fps, from `pmu serve` + `pmu record`."""
-    if RECORDING:
-        return RECORDING["cfg"], RECORDING["data"]
-    port = free_port()
-    srv = start(
-        [
-            "pmu",
-            "serve",
-            "kundur",
-            "--fault",
-            3,
-            "--far-bus",
-            101,
-            "--tf",
-            3,
-            "--speed",
-            0,
-            "--port",
-            port,
-            "--wait",
-            5,
-            "--timeout",
-            20,
-        ]
-    )
-    if not wait_listen(port, 300, srv):
-        finish(srv, 5)
-        raise RuntimeError("pmu serve did not listen")
-    rc, o, e, dt = run(
-        ["pmu", "record", f"127.0.0.1:{port}", "--frames", 180, "-o", WD / "k.c37"], timeout=120
-    )
-    finish(srv, 30)
-    if rc != 0:
-        raise RuntimeError(f"pmu record exit {rc}: {tail(e)}")
-    frames = split_frames((WD / "k.c37").read_bytes())
-    RECORDING["cfg"], RECORDING["data"] = frames[0], frames[1:]
-    return frames[0], frames[1:]
-
-
-def track_tcp(server, extra, timeout=120, out="t.csv"):
-    o = WD / out
-    if o.exists():
-        o.unlink()
-    r = run(
-        [
-            "estimate",
-            "track",
-            "kundur",
-            "--source",
-            f"tcp://127.0.0.1:{server.port}",
-            "--out",
-            o,
-            *extra,
-        ],
-        timeout=timeout,
-    )
-    server.close()
-    return (*r, o)
 
 
 def track_refused(pid, data, why_words, extra=("--frames", 180)):
@@ -1681,20 +1337,9 @@ def screening_many_small():
 
 
 def main():
-    try:
-        for f in PROBES:
-            f()
-    finally:
-        if os.environ.get("KEEP"):
-            print("kept", WD)
-        else:
-            subprocess.run(["chown", "-R", "root:root", str(WD)], capture_output=True)
-            shutil.rmtree(WD, ignore_errors=True)
-    n_short = sum(not ok for _, ok, _ in RESULTS)
-    print(
-        f"\n{len(RESULTS)} probes, {len(RESULTS) - n_short} ok, {n_short} SHORT; {time.time() - T0:.0f} s"
+    KIT.main(
+        summary="\n{n} probes, {ok} ok, {short} SHORT; {secs:.0f} s", keep_any=True, chown=True
     )
-    sys.exit(1 if n_short else 0)
 
 
 if __name__ == "__main__":

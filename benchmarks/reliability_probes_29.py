@@ -16,66 +16,36 @@ unless KEEP=1).
 The round found short: `cct --coi critical` saying its group separates where the run fails first (CCT-5), `separated_machines` naming a machine that did not separate (CCT-2), `screen` without the failing end and the not-monotone caveat (SCREEN-3, SCREEN-1), `sweep-cct` without the end-of-run note and counting jobs as machines (SWEEP-2, SWEEP-1); all fixed (the probes' expectations may predate the fixed wording).
 """
 
-# ruff: noqa: E501, BLE001, RUF007, RUF021, RUF059, SIM115 - a tester's script, kept as written
+# ruff: noqa: E501, RUF007, RUF021, RUF059, SIM115 - a tester's script, kept as written
 
 import csv
 import json
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-ENV = dict(os.environ, PYTHONPATH=CLONE)
-ENV.setdefault("NUMBA_CACHE_DIR", "/tmp/s45p/Y/nc")
-RESULTS = []
-T0 = time.time()
+from _probe_kit import INHERIT, Kit, stabctl
+
 QUICK = "--quick" in sys.argv
-WD = Path(tempfile.mkdtemp(prefix="probes_y45_"))
-ENV["XDG_CACHE_HOME"] = str(WD / "xdg")
+KIT = Kit(
+    "probes_y45_",
+    only=[a for a in sys.argv[1:] if not a.startswith("--")],
+    line="{pid:<10} {state:<5} {why}",
+)
+CLONE, ENV, WD, RESULTS = KIT.clone, KIT.env, KIT.wd, KIT.results
+ENV.setdefault("NUMBA_CACHE_DIR", "/tmp/s45p/Y/nc")
+rec, probe = KIT.rec, KIT.probe
 
 
 def run(args, timeout=300, cwd=None, py=False):
-    t = time.time()
-    cmd = (
-        [sys.executable, *map(str, args)]
-        if py
-        else [sys.executable, "-m", "stabctl", *map(str, args)]
-    )
-    try:
-        p = subprocess.run(
-            cmd, capture_output=True, text=True, timeout=timeout, cwd=cwd or WD, env=ENV
-        )
-        return p.returncode, p.stdout, p.stderr, time.time() - t
-    except subprocess.TimeoutExpired as e:
-        return "timeout", e.stdout or "", e.stderr or "", time.time() - t
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<10} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g(*a, **k):
-            try:
-                ok, why = f(*a, **k)
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        return g
-
-    return deco
+    """(rc, stdout, stderr, seconds) of `python -m stabctl args` (py: `python args`); the
+    caller's stdin."""
+    full = [sys.executable, *map(str, args)] if py else stabctl(args)
+    return KIT.run_argv(full, timeout, cwd, stdin=INHERIT)
 
 
 def fnum(pattern, text, group=1):
@@ -965,7 +935,6 @@ def doc_cli():
 
 
 def main():
-    print(f"work dir {WD}", flush=True)
     probes = [
         cct_text_json_sim,
         cct_unstable_end_failure,
@@ -988,17 +957,13 @@ def main():
     if not QUICK:
         probes.append(place_text_json_out)
         probes += [example_probe(p) for p in sorted(Path(CLONE, "examples").glob("*.py"))]
-    only = [a for a in sys.argv[1:] if not a.startswith("--")]
-    for p in probes:
-        if not only or any(p.pid.startswith(o) for o in only):
-            p()
-    short = [r for r in RESULTS if not r[1]]
-    print(
-        f"{len(RESULTS) - len(short)} ok, {len(short)} SHORT, {time.time() - T0:.0f} s", flush=True
+    KIT.main(
+        probes,
+        banner="work dir {wd}",
+        summary="{ok} ok, {short} SHORT, {secs:.0f} s",
+        keep_any=True,
+        kept=None,
     )
-    if not os.environ.get("KEEP"):
-        shutil.rmtree(WD, ignore_errors=True)
-    sys.exit(1 if short else 0)
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ options given hostile or unusual values: wrong types, numpy scalars, NaN/inf/hug
 numbers, damaged result files, round trips of SimulationResult / CCTResult, repeated and
 conflicting options, odd spellings of numbers, environment variables.
 
-    python benchmarks/reliability_probes_30.py
+    python benchmarks/reliability_probes_30.py [ID_PREFIX ...]
 
 CLONE (default: this repository) is the package under test; NUMBA_CACHE_DIR the caller's
 (warm it first with `python -m stabctl compile`).  Prints per probe: id, ok/SHORT, reason;
@@ -20,22 +20,19 @@ that is right; never a foreign exception from deep inside, a hang or a wrong res
 The round found 24 of 31 short, most of them messages of Python's or numpy's words or classes; fixed: linearise's rel_step below 1e-9, from_npz's damaged arrays, the stabctl error classes of run(storage), run(events), OMIB, coi_speed, a mode index, a long case name, a result written over a directory, `--tf` beyond a float, `--trip TO:`; still short: speed_at/end_state arguments, storage ratings far beyond the grid, Case.replace of an unknown field, circuit_row of a text bus.
 """
 
-# ruff: noqa: E501, BLE001, RUF001, RUF059 - a tester's script, kept as written
+# ruff: noqa: E501, RUF001, RUF059 - a tester's script, kept as written
 
 import json
 import os
-import shutil
 import subprocess
 import sys
-import tempfile
 import textwrap
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-WD = tempfile.mkdtemp(prefix="probes_z45_")
-ENV = dict(os.environ, PYTHONPATH=CLONE, XDG_CACHE_HOME=os.path.join(WD, "xdg"))
-RESULTS = []
+from _probe_kit import INHERIT, Kit
+
+KIT = Kit("probes_z45_", path=False)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 
 PRELUDE = textwrap.dedent(
     """
@@ -80,42 +77,8 @@ def py(code, timeout=240):
 
 
 def cli(args, timeout=120, env=None):
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=env or ENV,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired:
-        return "timeout", "", ""
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
-
-
-PROBES = []
+    """(rc, stdout, stderr); the caller's stdin, nothing kept of a run out of time."""
+    return KIT.cli(args, timeout, env=env, stdin=INHERIT, partial=False)
 
 
 def refused(o, types=None):
@@ -617,15 +580,7 @@ def _():
 
 
 def main():
-    try:
-        for p in PROBES:
-            p()
-    finally:
-        if os.environ.get("KEEP") != "1":
-            shutil.rmtree(WD, ignore_errors=True)
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS) - len(short)} ok, {len(short)} SHORT")
-    sys.exit(1 if short else 0)
+    KIT.main(kept=None)
 
 
 if __name__ == "__main__":

@@ -33,39 +33,23 @@ step warned or refused; a clear error (exit 2, one line, no traceback, nothing w
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-WD = tempfile.mkdtemp(prefix="probes_ab46_")
-ENV = dict(os.environ, PYTHONPATH=CLONE, XDG_CACHE_HOME=os.path.join(WD, "xdg"))
-RESULTS = []
-PROBES = []
+from _probe_kit import Kit
+
+KIT = Kit("probes_ab46_", path=False, prefixes=False)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 REN = Path(CLONE, "tests/data/psse_runs/RENA_DEFAULT")
 REN_RAW = str(REN / "ThreeBusRenewable.raw")
 REN_DYR = (REN / "ThreeBus_REN_A_DEFAULT_FLAG.dyr").read_text()
 
 
 def cli(args, timeout=240, env=None, shell_tail=None):
-    """(rc, stdout, stderr) of `python -m stabctl args` in WD."""
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=env or ENV,
-            stdin=subprocess.DEVNULL,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired:
-        return "timeout", "", ""
+    """(rc, stdout, stderr) of `python -m stabctl args` in WD; nothing kept of a run out of time."""
+    return KIT.cli(args, timeout, env=env, partial=False)
 
 
 def sh(cmd, timeout=240):
@@ -83,27 +67,6 @@ def sh(cmd, timeout=240):
         return p.returncode, p.stdout, p.stderr
     except subprocess.TimeoutExpired:
         return "timeout", "", ""
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
 
 
 def last(s, n=220):
@@ -1040,19 +1003,7 @@ def _():
 
 
 def main():
-    try:
-        only = sys.argv[1:]
-        for p in PROBES:
-            if not only or p.pid in only:
-                p()
-    finally:
-        if os.environ.get("KEEP") != "1":
-            shutil.rmtree(WD, ignore_errors=True)
-        else:
-            print("kept", WD)
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS) - len(short)} ok, {len(short)} SHORT")
-    sys.exit(1 if short else 0)
+    KIT.main()
 
 
 if __name__ == "__main__":

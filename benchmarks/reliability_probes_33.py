@@ -42,20 +42,18 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 
-CLONE = os.environ.get("CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-WD = tempfile.mkdtemp(prefix="probes_ac47_")
+from _probe_kit import Kit
+
+KIT = Kit("probes_ac47_", path=False, env={"COLUMNS": "120"})
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 TMP = os.path.join(WD, "tmpdir")
 os.makedirs(TMP)
-ENV = dict(
-    os.environ, PYTHONPATH=CLONE, XDG_CACHE_HOME=os.path.join(WD, "xdg"), TMPDIR=TMP, COLUMNS="120"
-)
+ENV["TMPDIR"] = TMP
 ENV.pop("TQDM_DISABLE", None)
-RESULTS = []
-PROBES = []
 EXPECT = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
 K_BUSES = "1,2,3,4,10,11,12,13"  # Kundur bus faults: a few seconds each
 
@@ -156,27 +154,6 @@ def keys(path):
             if ln.strip():
                 ks.append(json.loads(ln).get("key"))
     return ks
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
 
 
 def no_traceback(r):
@@ -1284,19 +1261,8 @@ def _():
 
 
 def main():
-    want = sys.argv[1:]
-    for g in PROBES:
-        if want and not any(g.pid.startswith(w) for w in want):
-            continue
-        g()
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS) - len(short)} ok, {len(short)} SHORT of {len(RESULTS)}", flush=True)
-    if not os.environ.get("KEEP"):
-        shutil.rmtree(WD, ignore_errors=True)
-    else:
-        print(f"work dir kept: {WD}")
-    return 1 if short else 0
+    KIT.main(summary="\n{ok} ok, {short} SHORT of {n}", keep_any=True, kept="work dir kept: {wd}")
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    main()

@@ -39,22 +39,18 @@ a word, the probe runs the case and checks the value changes the run as PSS/E's 
 say (or that it has no effect where PSS/E gives it none).
 """
 
-# ruff: noqa: E501, BLE001, RUF059, SIM115, RUF021 - a tester's script, kept as written
+# ruff: noqa: E501, RUF059, SIM115, RUF021 - a tester's script, kept as written
 
 import csv
 import json
 import os
 import re
-import shutil
-import subprocess
-import sys
-import tempfile
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-WD = tempfile.mkdtemp(prefix="probes_ad47_")
-ENV = dict(os.environ, PYTHONPATH=CLONE, XDG_CACHE_HOME=os.path.join(WD, "xdg"))
+from _probe_kit import INHERIT, Kit
+
+KIT = Kit("probes_ad47_", path=False, prefixes=False)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 RUNS = os.path.join(CLONE, "tests", "data", "psse_runs")
 RAW = open(os.path.join(RUNS, "GENROU", "ThreeBusMulti.raw")).read()
 GR = "8.0 0.03 0.4 0.05 6.175 0.05 1.8 1.7 0.3 0.55 0.25 0.2"  # GENROU up to Xl
@@ -68,8 +64,6 @@ IEEET1 = (
 )
 TGOV1 = "    102 'TGOV1' 1 0.05 0.2 {vmax} {vmin} 0.3 0.8 0 /\n"
 HYGOV = "    102 'HYGOV' 1 0.05 0.075 12.0 0.5 20.5 0.1 {gmax} {gmin} 15.0 1.5 0.0 0.08 /\n"
-RESULTS = []
-PROBES = []
 
 
 def w(name, text):
@@ -80,18 +74,8 @@ def w(name, text):
 
 
 def run(args, timeout=300):
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=ENV,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired:
-        return "timeout", "", ""
+    """(rc, stdout, stderr); the caller's stdin, nothing kept of a run out of time."""
+    return KIT.cli(args, timeout, stdin=INHERIT, partial=False)
 
 
 def imp(name, dyr, raw=RAW, extra=()):
@@ -131,27 +115,6 @@ def named(text, *pats):
 def last(text):
     t = [ln for ln in text.strip().splitlines() if ln.strip()]
     return t[-1][:260] if t else "(nothing)"
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
 
 
 def refused_or_named(pid, dyr, pats, raw=RAW, effect=None):
@@ -899,19 +862,7 @@ def zsorce_not_xdpp():
 
 
 def main():
-    only = set(sys.argv[1:])
-    try:
-        for p in PROBES:
-            if not only or p.pid in only:
-                p()
-    finally:
-        if os.environ.get("KEEP") != "1":
-            shutil.rmtree(WD, ignore_errors=True)
-        else:
-            print("work dir kept:", WD)
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS)} probes, {len(short)} short")
-    sys.exit(1 if short else 0)
+    KIT.main(summary="\n{n} probes, {short} short", kept="work dir kept: {wd}")
 
 
 if __name__ == "__main__":

@@ -33,25 +33,23 @@ listed, then AE07k (the refusal says ANDES's flow converges and what was left ou
 AE13 (an idx two StaticGen sheets give refused by name).
 """
 
-# ruff: noqa: E501, BLE001, SIM115, UP031, RUF059 - a tester's script, kept as written
+# ruff: noqa: E501, SIM115, UP031, RUF059 - a tester's script, kept as written
 
 import json
 import os
 import shutil
 import subprocess
 import sys
-import tempfile
 
 import andes
 import numpy as np
 import pandas as pd
+from _probe_kit import INHERIT, Kit
 
-CLONE = os.environ.get("CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-WD = tempfile.mkdtemp(prefix="probes_ae48_")
-ENV = dict(os.environ, PYTHONPATH=CLONE, XDG_CACHE_HOME=os.path.join(WD, "xdg"))
+KIT = Kit("probes_ae48_", path=False, prefixes=False)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 CASES = os.path.join(os.path.dirname(andes.__file__), "cases")
-RESULTS = []
-PROBES = []
 
 
 def case(rel):
@@ -59,39 +57,8 @@ def case(rel):
 
 
 def cli(args, timeout=300):
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=ENV,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired:
-        return "timeout", "", ""
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
+    """(rc, stdout, stderr); the caller's stdin, nothing kept of a run out of time."""
+    return KIT.cli(args, timeout, stdin=INHERIT, partial=False)
 
 
 def sheets(rel):
@@ -703,17 +670,7 @@ def _():
 
 
 def main():
-    only = set(sys.argv[1:])
-    try:
-        for p in PROBES:
-            if not only or p.pid in only:
-                p()
-    finally:
-        if os.environ.get("KEEP") != "1":
-            shutil.rmtree(WD, ignore_errors=True)
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS) - len(short)} ok, {len(short)} SHORT")
-    sys.exit(1 if short else 0)
+    KIT.main(kept=None)
 
 
 if __name__ == "__main__":

@@ -39,17 +39,24 @@ import shutil
 import socket
 import subprocess
 import sys
-import tempfile
 import textwrap
 import time
 from pathlib import Path
 
-CLONE = os.environ.get("CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-WD = tempfile.mkdtemp(prefix="probes_af48_")
-ENV = dict(os.environ, PYTHONPATH=CLONE, COLUMNS="200")
-RESULTS = []
-PROBES = []
-ONLY = set(filter(None, os.environ.get("ONLY", "").split(",")))
+from _probe_kit import Kit
+
+KIT = Kit(
+    "probes_af48_",
+    path=False,
+    xdg=False,
+    env={"COLUMNS": "200"},
+    only=filter(None, os.environ.get("ONLY", "").split(",")),
+    prefixes=False,
+    line="{pid}  {state}  {why}",
+    timed=True,
+)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 try:
     import andes  # noqa: F401
 
@@ -59,24 +66,10 @@ except Exception:
 
 
 def cli(args, timeout=300, cwd=None):
-    """(rc, stdout, stderr) of `python -m stabctl args` in WD."""
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=cwd or WD,
-            env=ENV,
-            stdin=subprocess.DEVNULL,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired as e:
-        return (
-            "timeout",
-            (e.stdout or b"").decode() if isinstance(e.stdout, bytes) else (e.stdout or ""),
-            "",
-        )
+    """(rc, stdout, stderr) of `python -m stabctl args` in WD; of a run out of time, what
+    it wrote on stdout."""
+    rc, o, e = KIT.cli(args, timeout, cwd=cwd)
+    return rc, o, "" if rc == "timeout" else e
 
 
 def bg(args):
@@ -128,30 +121,6 @@ def py(code, timeout=300):
         return p.returncode, p.stdout, p.stderr
     except subprocess.TimeoutExpired:
         return "timeout", "", ""
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid}  {'ok' if ok else 'SHORT'}  {why}", flush=True)
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            if ONLY and pid not in ONLY:
-                return
-            t0 = time.time()
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, f"{why} [{time.time() - t0:.0f} s]")
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
 
 
 def doc_block(path, after, lang="python"):
@@ -905,16 +874,7 @@ def _():
 
 
 def main():
-    print(f"work dir {WD}; clone {CLONE}", flush=True)
-    try:
-        for p in PROBES:
-            p()
-    finally:
-        if os.environ.get("KEEP") != "1":
-            shutil.rmtree(WD, ignore_errors=True)
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS) - len(short)} ok, {len(short)} SHORT")
-    sys.exit(1 if short else 0)
+    KIT.main(banner="work dir {wd}; clone {clone}", kept=None)
 
 
 if __name__ == "__main__":
