@@ -494,6 +494,8 @@ def import_psse(
         changed=list(imported.changed),
         held=list(imported.held),
         unused=list(imported.unused),
+        # (a case without machines has no dynamic run to change its loads for)
+        load_model=imported.load_model if len(case.machines) else "",
         infeasible=list(infeasible),
         islands=list(islands),
         powerflow_against_raw=against_raw,
@@ -501,7 +503,7 @@ def import_psse(
     if as_json:
         print_json(summary)
         return
-    _echo_psse_import(text, imported, infeasible, islands)
+    _echo_psse_import(text, imported, infeasible, islands, summary["load_model"])
     _echo_raw_gap(against_raw, "Q limits on, as simulate solves it")
 
 
@@ -531,10 +533,11 @@ def _leave_out_infeasible(case, asked: bool, q_limits: bool = True) -> tuple:
     return case, ()
 
 
-def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
+def _echo_psse_import(text: str, imported, infeasible, islands, load_model: str) -> None:
     """import-psse's summary lines: the counts, then each record left out, out of the
     network, netted or changed, and the controls held at their RAW setting (each, or one
-    line per kind when many: `stabctl.io.psse.held_lines`)."""
+    line per kind when many: `stabctl.io.psse.held_lines`), and the loads' model where
+    the dynamic run changes it (``load_model``, '' none)."""
     click.echo(
         f"{text}; {len(imported.left_out)} record(s) left out, "
         f"{len(imported.out_of_service)} out of the network (as PSS/E), "
@@ -557,6 +560,7 @@ def _echo_psse_import(text: str, imported, infeasible, islands) -> None:
         ("changed", imported.changed_summary),
         ("held", imported.held_summary),
         ("read, of no use to a run (names, schedules, ratings)", imported.unused),
+        ("load model", [load_model] if load_model else []),
     ):
         for item in items:
             click.echo(f"  {what}: {item}")

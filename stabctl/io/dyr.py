@@ -888,13 +888,20 @@ def _leakage_noted(rec, v) -> None:
         )
 
 
+#: relative difference of the RAW's ZSORCE X from the DYR's X''d taken as the files'
+#: rounding (the DYR's four decimals against the RAW's five: 0.1937 and 0.19375, 2.6e-4)
+ZSORCE_ROUNDING = 1e-3
+
+
 def _zsorce_noted(rec, gen, xdpp: float) -> None:
     """Warn of a subtransient machine whose RAW ZSORCE X differs from its X''d: PSS/E's
     Model Library wants ZSORCE = R_a + j X''d for GENROU and GENSAL; the model's X''d is
     used (round 47: the RAW's value was left unused without a word).  Only a RAW's
-    generator (``zsorce`` in its dict): an ANDES case's source reactance is its x'd."""
+    generator (``zsorce`` in its dict): an ANDES case's source reactance is its x'd.  A
+    difference within ZSORCE_ROUNDING of X''d is the two files' rounding (Nordic 44: RAW
+    0.19375, DYR 0.1937), not said (round 49)."""
     xs = float(gen.get("xsource", xdpp))
-    if gen.get("zsorce") and abs(xs - xdpp) > 1e-6 * max(1.0, abs(xdpp)):
+    if gen.get("zsorce") and abs(xs - xdpp) > ZSORCE_ROUNDING * max(abs(xdpp), 1e-3):
         warnings.warn(
             f"{rec.label()}: the RAW's ZSORCE X {xs:g} differs from X''d {xdpp:g} (PSS/E's "
             "Model Library wants ZSORCE = R_a + j X''d): the model runs with X''d",

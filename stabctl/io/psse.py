@@ -77,6 +77,9 @@ class PsseImport(NamedTuple):
     #: the RAW's records of no use to a run, one text a section
     #: (:attr:`stabctl.io.psse_raw.RawData.unused`)
     unused: tuple[str, ...] = ()
+    #: how the loads run in the dynamic run where not as the RAW composes them
+    #: (:attr:`stabctl.io.psse_raw.RawData.load_model`; "" none)
+    load_model: str = ""
 
 
 def load_psse(
@@ -246,6 +249,7 @@ def import_psse(
             *changed[len(raw.changed) + len(raw.load_buses) :],
         ),
         raw.unused,
+        raw.load_model,
     )
 
 

@@ -88,7 +88,8 @@ Read (everything in per unit on the system base ``SBASE`` after conversion):
   with MODSW other than 0, which PSS/E would switch, is named in :attr:`RawData.held`.
 
 Read without use, counted by section in :attr:`RawData.unused` (the import's summary
-names them): area, zone, owner and inter-area transfer data, substations without
+names them): area, zone, owner and inter-area transfer data, multi-section line
+groupings (their sections are branch records, read as such), substations without
 node-breaker data (a name and a place), v36 switching device rating sets, load types,
 interfaces and interface elements (names, ratings and monitoring definitions).  Skipped
 without a word: the system-wide data
@@ -96,10 +97,11 @@ without a word: the system-wide data
 rating-set names RATING, SWDRATNAM, which do not change the case; each record must start
 with its keyword, so a file without the ``0 /`` record that ends them is refused rather
 than read with its buses taken for settings). Unsupported, reported as
-``file:line record``: dc lines, FACTS, GNE devices (POM v33 "GNE Device Data": one record of
-'NAME', 'MODEL', NTERM, BUS1 to BUSNTERM, NREAL, NINTG, NCHAR, then STATUS, OWNER, NMETR,
-then the NREAL REAL, NINTG INTG and NCHAR CHAR values, each kind on lines of up to ten;
-named with their model and buses), induction machines, multi-section lines, system
+``file:line record: what it is: what a run lacks`` (a dc line with its name, buses and
+setting, a FACTS device with its buses): dc lines, FACTS, GNE devices (POM v33 "GNE Device
+Data": one record of 'NAME', 'MODEL', NTERM, BUS1 to BUSNTERM, NREAL, NINTG, NCHAR, then
+STATUS, OWNER, NMETR, then the NREAL REAL, NINTG INTG and NCHAR CHAR values, each kind on
+lines of up to ten; named with their model and buses), induction machines, system
 switching devices and substations with node-breaker data (nodes, switching devices,
 terminals; v34 and later), v36 voltage droop controls, loads with distributed generation
 in service (v34 and later: DGENM 1 with DGENP or DGENQ not 0), generators with a step-up
@@ -138,7 +140,7 @@ from typing import NamedTuple, NoReturn, cast
 import numpy as np
 
 from stabctl.case import PQ, PV, SWING
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, advice
 from stabctl.io.inputs import case_text, input_file, plain_float
 
 __all__ = ["RawSource", "Held", "Generator", "RawData", "read_raw", "split_fields"]
@@ -199,6 +201,7 @@ _SECTIONS[36] = (
 )
 
 _SKIPPED = {
+    "multi-section line",  # its sections are branch records, read as such
     "area",
     "zone",
     "inter-area transfer",
@@ -208,6 +211,11 @@ _SKIPPED = {
     "load type",
     "interface",
     "interface element",
+}
+#: what the summary adds to a count of records read without use
+_UNUSED_NOTE = {
+    "multi-section line": ": groupings of branch records, whose sections are read as the "
+    "branches they are (a trip names one section, not the grouping's '&' id)",
 }
 #: first words of the system-wide data records (v34: GENERAL to RATING; v36 adds SWDRATNAM)
 _SYSTEM_WIDE = ("GENERAL", "GAUSS", "NEWTON", "ADJUST", "TYSL", "SOLVER", "RATING", "SWDRATNAM")
@@ -353,6 +361,10 @@ class RawData:
     held: tuple[Held, ...] = ()
     load_buses: tuple[Held, ...] = ()
     circuit_order: tuple[str, ...] = ()
+    #: how the loads are read for the dynamic run, where it is not the RAW's composition
+    #: ("" where nothing changes): the loads with constant-power or constant-current
+    #: parts made constant impedance (``loads="impedance"``)
+    load_model: str = ""
 
     def matrices(self) -> dict:
         """PST matrices by name (``bus``, ``line``, ``load_con``, ``basmva``, ``sys_freq``,
@@ -917,6 +929,7 @@ class _Builder:
     loads: str
     buses: dict = field(default_factory=dict)  # number -> bus row (list of 15)
     load_src: dict = field(default_factory=dict)  # bus -> its first load record
+    load_model: str = ""  # the loads' change of model for the dynamic run (`_load_con`)
     isolated: set = field(default_factory=set)
     load_parts: dict = field(default_factory=dict)  # bus -> [Pp, Qp, Pi, Qi]
     branches: list = field(default_factory=list)
@@ -1657,10 +1670,12 @@ _HANDLERS = {
 def _load_con(b: _Builder) -> np.ndarray:
     """Bus loads into the bus rows and the PST ``load_con`` fractions (see module doc)."""
     rows = []
+    converted = []
     for num, (pp, qp, pi, qi) in b.load_parts.items():
         bus = b.buses[num]
         bus[5], bus[6] = pp + pi, qp + qi
         if b.loads != "raw":
+            converted += [num] if pp or qp or pi or qi else []
             continue
         fp, fq = _fraction(pp, pi), _fraction(qp, qi)
         if fp is None or fq is None:
@@ -1671,6 +1686,18 @@ def _load_con(b: _Builder) -> np.ndarray:
             )
         else:
             rows.append([num, fp, fq, 1.0 - fp, 1.0 - fq])
+    if converted:  # (round 49: the change of model was said in the docs alone)
+        first = b.load_src[converted[0]]
+        default, raw = (
+            advice("loads='impedance'", "--loads impedance"),
+            advice("loads='raw'", "--loads raw"),
+        )
+        b.load_model = (
+            f"the loads at {len(converted)} bus(es) (from {first.file}:{first.line} on): "
+            "their constant-power (PL, QL) and constant-current (IP, IQ) parts run as "
+            f"constant impedance at the power-flow voltage ({default}, the default; {raw} "
+            "keeps the RAW's composition)"
+        )
     return np.array(rows, dtype=float).reshape(-1, 5)
 
 
@@ -1813,7 +1840,63 @@ def _dispatch(b: _Builder, rec: _Rec):
     elif rec.section in _SKIPPED:
         b.unused.setdefault(rec.section, []).append(rec.line)
     else:
-        b.skip(rec, f"{rec.section} record")
+        b.skip(rec, _unmodelled(rec))
+
+
+def _dc_line(rec: _Rec) -> str:
+    """A two-terminal dc line as its record says: name, rectifier and inverter buses
+    (first fields of lines 2 and 3), control mode MDC and setting SETVL."""
+    mdc, setvl = rec.int(0, 1, 0), rec.num(0, 3, 0.0)
+    mode = {0: "blocked (MDC 0)", 1: f"SETVL {setvl:g} MW", 2: f"SETVL {setvl:g} A"}
+    return (
+        f"two-terminal dc line '{rec.text(0, 0, '')}' from bus {rec.int(1, 0)} to bus "
+        f"{rec.int(2, 0)}, {mode.get(mdc, f'MDC {mdc}')}"
+    )
+
+
+def _facts(rec: _Rec) -> str:
+    """A FACTS device as its record says: name, its bus I and the far bus J of a series
+    part (0: none)."""
+    j = rec.int(0, 2, 0)
+    series = f" in series to bus {j}" if j else ""
+    return f"FACTS device '{rec.text(0, 0, '')}' at bus {rec.int(0, 1)}{series}"
+
+
+#: the unmodelled sections: what a record is (from its first fields) and what a run
+#: without it lacks
+_UNMODELLED = {
+    "two-terminal dc line": (_dc_line, "dc lines are not modelled: the power it carries is lost"),
+    "vsc dc line": (
+        lambda rec: (
+            f"VSC dc line '{rec.text(0, 0, '')}' between buses {rec.int(1, 0)} and {rec.int(2, 0)}"
+        ),
+        "dc lines are not modelled: the power it carries and its converters' reactive "
+        "power are lost",
+    ),
+    "multi-terminal dc line": (
+        lambda rec: (
+            f"multi-terminal dc line '{rec.text(0, 0, '')}' ({rec.int(0, 1, 0)} converters)"
+        ),
+        "dc lines are not modelled: the power it carries is lost",
+    ),
+    "facts device": (_facts, "FACTS devices are not modelled: its compensation is lost"),
+    "induction machine": (
+        lambda rec: f"induction machine at bus {rec.int(0, 0)} '{rec.text(0, 1, '')}'",
+        "induction machines in the RAW are not modelled (give motors in the case's "
+        "motor table): its power is lost",
+    ),
+}
+
+
+def _unmodelled(rec: _Rec) -> str:
+    """What an unsupported record of an unmodelled section is and why it matters
+    (:data:`_UNMODELLED`; a record whose first fields do not read: its section alone)."""
+    describe, lost = _UNMODELLED.get(rec.section, (None, "not modelled"))
+    try:
+        what = describe(rec) if describe else f"{rec.section} record"
+    except (CaseError, IndexError):  # the fields read for the name are malformed
+        what = f"{rec.section} record"
+    return f"{what}: {lost}"
 
 
 def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawData:
@@ -1852,12 +1935,14 @@ def _finish(b: _Builder, path: Path, titles, version: int, freq: float) -> RawDa
         noted=tuple(b.noted),
         unused=tuple(
             f"{len(lines)} {section} record(s) ({path.name}:{_line_span(lines)})"
+            + _UNUSED_NOTE.get(section, "")
             for section, lines in b.unused.items()
         ),
         netted_ids=frozenset(b.netted_ids),
         held=tuple(sorted(b.held, key=lambda h: h.source.line)),
         load_buses=tuple(b.load_buses),
         circuit_order=_circuit_order(b),
+        load_model=b.load_model,
     )
 
 

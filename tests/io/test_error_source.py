@@ -775,7 +775,8 @@ MULTI_TERMINAL = (
             "'MTDC1', 2, 2, 1,",
             "'MTDC1', 2, 2, 1,",
             "edited.raw + five_bus.dyr: 1 unsupported record(s) (--skip-unsupported leaves "
-            "them out): edited.raw:40 multi-terminal dc line record",
+            "them out): edited.raw:40 multi-terminal dc line 'MTDC1' (2 converters): dc lines "
+            "are not modelled: the power it carries is lost",
         ),
         (
             "'MTDC1', 2, 2, 1,",

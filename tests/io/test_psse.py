@@ -588,25 +588,51 @@ def _with_unsupported(tmp_path):
     return path
 
 
+_FACTS = "edited.raw:47 FACTS device 'SVC1' at bus 4: FACTS devices are not modelled: its "
+
+
 def test_unsupported_records_refused_together_by_default(tmp_path):
+    """Each unsupported record is named with what it is (its name and buses) and what a
+    run lacks without it (round 49: 'facts device record' alone); a multi-section line
+    grouping is read without use: its sections are branch records, read as such."""
     path = _with_unsupported(tmp_path)
     with pytest.raises(CaseError) as err:
         load_psse(path)
     msg = str(err.value)
-    assert "2 unsupported record(s)" in msg
-    assert "edited.raw:41 multi-section line record" in msg
-    assert "edited.raw:47 facts device record" in msg
+    assert "1 unsupported record(s)" in msg
+    assert _FACTS + "compensation is lost" in msg
+    path.write_text(path.read_text().replace("'SVC1', 4, 0, 1\n", ""))
+    unused = read_raw(path).unused
+    assert (
+        "1 multi-section line record(s) (edited.raw:41): groupings of branch records, whose "
+        "sections are read as the branches they are" in " ".join(unused)
+    )
 
 
 def test_unsupported_records_skipped_with_a_warning(tmp_path):
     path = _with_unsupported(tmp_path)
-    with pytest.warns(UserWarning, match="left out 2 unsupported record"):
+    with pytest.warns(UserWarning, match="left out 1 unsupported record"):
         case, left_out, *_ = import_psse(path, on_unsupported="skip")
-    assert left_out == (
-        "edited.raw:41 multi-section line record",
-        "edited.raw:47 facts device record",
-    )
+    assert left_out == (_FACTS + "compensation is lost",)
     assert len(case.branches) == 4  # the case without them
+
+
+def test_a_dc_line_is_named_with_its_buses_and_setting(tmp_path):
+    """A two-terminal dc line left out is named with its name, rectifier and inverter
+    buses and its scheduled power (round 49: 'two-terminal dc line record')."""
+    dc = (
+        "'DC1',1,5.0,10.0,500.0,0,0,0,'I',0,20,1.0\n"
+        "    1,1,90,5,13.0,0.0,2.0,1.0,230,1,1,1.5,0.51,0.0,0,0,0,'1',0.0\n"
+        "    4,1,90,5,13.0,0.0,2.0,1.0,115,1,1,1.5,0.51,0.0,0,0,0,'1',0.0\n"
+    )
+    path = _edit(
+        tmp_path, "0 / END OF TWO-TERMINAL DC DATA", dc + "0 / END OF TWO-TERMINAL DC DATA"
+    )
+    left_out = [str(s) for s in read_raw(path).unsupported]
+    assert left_out == [
+        "edited.raw:37 two-terminal dc line 'DC1' from bus 1 to bus 4, SETVL 10 MW: dc lines "
+        "are not modelled: the power it carries is lost"
+    ]
 
 
 @pytest.mark.andes
@@ -710,11 +736,11 @@ def test_import_psse_bad_input_exits_2_and_writes_nothing(tmp_path):
     res = run("import-psse", src, "-o", out_dir / "x.json")
     assert res.exit_code == 2, res.output
     lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: edited.raw: 2 unsupported")
+    assert len(lines) == 1 and lines[0].startswith("error: edited.raw: 1 unsupported")
     assert list(out_dir.iterdir()) == []
     res = run("import-psse", src, "-o", out_dir / "x.json", "--skip-unsupported", "--static")
     assert res.exit_code == 0, res.output
-    assert "warning: edited.raw: left out 2 unsupported record(s)" in res.stderr
+    assert "warning: edited.raw: left out 1 unsupported record(s)" in res.stderr
     assert [p.name for p in out_dir.iterdir()] == ["x.json"]
 
 
@@ -1228,13 +1254,18 @@ def test_a_saturation_value_the_model_ignores_is_named(tmp_path):
 def test_a_source_reactance_other_than_the_subtransient_one_is_named(tmp_path):
     """Round 47: generator 102's ZSORCE X 0.1 beside its GENROU's X''d 0.25 was left
     unused without a word (PSS/E's Model Library wants ZSORCE = R_a + j X''d); the model
-    runs with X''d, and the import says so.  The file's own 0.25 says nothing."""
+    runs with X''d, and the import says so.  The file's own 0.25 says nothing, nor does
+    0.25015, the two files' rounding (round 49: Nordic 44's RAW 0.19375 against its DYR's
+    0.1937 was said ten times)."""
     from stabctl.io.psse import import_psse
 
     runs = Path(__file__).parents[1] / "data" / "psse_runs" / "GENROU"
     raw = tmp_path / "z.raw"
     raw.write_text((runs / "ThreeBusMulti.raw").read_text().replace("2.500E-1", "1.000E-1"))
-    for path, said in ((raw, True), (runs / "ThreeBusMulti.raw", False)):
+    rounded = tmp_path / "r.raw"
+    rounded.write_text((runs / "ThreeBusMulti.raw").read_text().replace("2.500E-1", "2.5015E-1"))
+    assert rounded.read_text() != (runs / "ThreeBusMulti.raw").read_text()
+    for path, said in ((raw, True), (runs / "ThreeBusMulti.raw", False), (rounded, False)):
         with warnings.catch_warnings(record=True) as got:
             warnings.simplefilter("always")
             import_psse(path, runs / "ThreeBus_GENROU.dyr")
@@ -1351,3 +1382,25 @@ def test_a_header_s_blank_version_or_frequency_is_named(tmp_path, header, named)
         assert text.startswith("edited.raw:1 ") and want in text
     with pytest.warns(UserWarning, match=r"case identification: (REV|BASFRQ) not given"):
         load_psse(path)
+
+
+def test_the_loads_change_of_model_is_said(tmp_path):
+    """Round 49 (AG06): WECC-240's 139 constant-current loads ran as constant impedance
+    (--loads impedance, the default) with nothing in the summary (the docs alone said it).
+    The summary's `load_model` names it, in the caller's words; with loads='raw' the
+    RAW's composition is kept and nothing is said."""
+    said = (
+        "the loads at 2 bus(es) (from five_bus_v33.raw:10 on): their constant-power (PL, QL) "
+        "and constant-current (IP, IQ) parts run as constant impedance at the power-flow "
+        "voltage ({}, the default; {} keeps the RAW's composition)"
+    )
+    assert read_raw(V33).load_model == said.format("loads='impedance'", "loads='raw'")
+    assert read_raw(V33, loads="raw").load_model == ""
+    dyr = DATA / "five_bus.dyr"
+    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json")
+    assert res.exit_code == 0, res.output
+    assert "  load model: " + said.format("--loads impedance", "--loads raw") in res.stdout
+    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json", "--json")
+    assert json.loads(res.stdout)["load_model"].startswith("the loads at 2 bus(es)")
+    res = run("import-psse", V33, "-o", tmp_path / "x.json", "--static", "--json")
+    assert json.loads(res.stdout)["load_model"] == ""  # no dynamic run

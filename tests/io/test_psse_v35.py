@@ -189,7 +189,9 @@ def test_v36_voltage_droop_control_is_unsupported(tmp_path):
         "VLOW,   VHIGH\n'VLTDRP_A', 1, 3, 10.0, -50.0, 100.0, 0.97, 1.03, 0.95, 1.05\n",
     )
     raw = read_raw(_write(tmp_path, text))
-    assert [str(u) for u in raw.unsupported] == ["v35.raw:34 voltage droop control record"]
+    assert [str(u) for u in raw.unsupported] == [
+        "v35.raw:34 voltage droop control record: not modelled"
+    ]
 
 
 _SUBSTATIONS = """0 / END OF INDUCTION MACHINE DATA, BEGIN SUBSTATION DATA
