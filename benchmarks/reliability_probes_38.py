@@ -49,18 +49,14 @@ leave the eigenvalues unchanged.
 import json
 import os
 import re
-import shutil
-import subprocess
 import sys
-import tempfile
 import textwrap
 
-CLONE = os.environ.get(
-    "CLONE", os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-)  # the package under test
-WD = tempfile.mkdtemp(prefix="probes_ah49_")
-ENV = dict(os.environ, PYTHONPATH=CLONE, XDG_CACHE_HOME=os.path.join(WD, "xdg"))
-RESULTS = []
+from _probe_kit import Kit
+
+KIT = Kit("probes_ah49_", path=False, prefixes=False)
+CLONE, ENV, WD, RESULTS, PROBES = KIT.clone, KIT.env, KIT.wd, KIT.results, KIT.probes
+rec, probe = KIT.rec, KIT.probe
 ANDES_CASES = None
 try:
     import andes  # only to find its case files; its EIG runs in the children
@@ -90,60 +86,22 @@ PRELUDE = textwrap.dedent(
 
 def py(code, timeout=300):
     """Run a snippet (after PRELUDE) in a fresh interpreter; the dict it says last."""
-    try:
-        p = subprocess.run(
-            [sys.executable, "-c", (PRELUDE % ANDES_CASES) + textwrap.dedent(code)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=ENV,
-        )
-    except subprocess.TimeoutExpired:
+    rc, out, err, _dt = KIT.run_argv(
+        [sys.executable, "-c", (PRELUDE % ANDES_CASES) + textwrap.dedent(code)],
+        timeout,
+        partial=False,
+    )
+    if rc == "timeout":
         return {"kind": "timeout"}
-    lines = [ln for ln in p.stdout.splitlines() if ln.startswith("@@")]
+    lines = [ln for ln in out.splitlines() if ln.startswith("@@")]
     if not lines:
-        return {"kind": "crashed", "rc": p.returncode, "err": p.stderr.strip()[-600:]}
+        return {"kind": "crashed", "rc": rc, "err": err.strip()[-600:]}
     return json.loads(lines[-1][2:])
 
 
 def cli(args, timeout=300, env=None):
-    try:
-        p = subprocess.run(
-            [sys.executable, "-m", "stabctl", *map(str, args)],
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-            cwd=WD,
-            env=env or ENV,
-        )
-        return p.returncode, p.stdout, p.stderr
-    except subprocess.TimeoutExpired:
-        return "timeout", "", ""
-
-
-def rec(pid, ok, why):
-    RESULTS.append((pid, ok, why))
-    print(f"{pid:<6} {'ok' if ok else 'SHORT':<5} {why}", flush=True)
-
-
-PROBES = []
-
-
-def probe(pid):
-    def deco(f):
-        def g():
-            try:
-                ok, why = f()
-            except Exception as e:
-                ok, why = False, f"probe raised {type(e).__name__}: {e}"
-            rec(pid, ok, why)
-
-        g.pid = pid
-        PROBES.append(g)
-        return g
-
-    return deco
+    """(rc, stdout, stderr) of `python -m stabctl args` in WD; rc "timeout" with nothing."""
+    return KIT.cli(args, timeout, env=env, partial=False)
 
 
 def failed(o):
@@ -990,19 +948,5 @@ def _():
     )
 
 
-def main():
-    want = sys.argv[1:]
-    try:
-        for p in PROBES:
-            if not want or p.pid in want:
-                p()
-    finally:
-        if os.environ.get("KEEP") != "1":
-            shutil.rmtree(WD, ignore_errors=True)
-    short = [r for r in RESULTS if not r[1]]
-    print(f"\n{len(RESULTS) - len(short)} ok, {len(short)} SHORT")
-    sys.exit(1 if short else 0)
-
-
 if __name__ == "__main__":
-    main()
+    KIT.main(kept=None)
