@@ -400,8 +400,25 @@ def test_ggov1_valve_stays_within_its_limits_and_rates():
     assert pm == pytest.approx(1.5 * (1.0 * 0.98 - 0.2), abs=1e-6)
 
 
+def test_ggov1_rselect_minus_1_is_the_droop_on_the_fuel_valve_stroke():
+    """PSS/E's (and PSLF's, the CIM's DroopSignalFeedbackKind, OpenIPSL's R_select)
+    Rselect codes: 1 electrical power, 0 none, -1 fuel valve stroke, -2 governor output.
+    stabctl had -1 and -2 swapped (round 50: -2 fed back the valve stroke, 4.2 % of a Pref
+    step's response off; -1, PSS/E's valve stroke, refused): with -1 the set point is R
+    times the stroke at rest, and a stroke 0.01 above rest moves the governor's integrator
+    by -Kigov R 0.01; -2, the requested stroke (an algebraic loop), is refused."""
+    P, x = started(ggov1_row(Rselect=-1))
+    valve = x[gov.ggov1.S.valve, 0]
+    assert P[0, gov.G.PREF] == pytest.approx(0.04 * valve, rel=1e-14)
+    x[gov.ggov1.S.valve, 0] += 0.01
+    dx = derivatives(P, x)
+    assert dx[gov.ggov1.S.gov_i, 0] == pytest.approx(-2.0 * 0.04 * 0.01, rel=1e-9)
+    with pytest.raises(CaseError, match=r"-2 \(governor output, the requested stroke\)"):
+        params(ggov1_row(Rselect=-2))
+
+
 def test_ggov1_options_it_does_not_model_are_refused():
-    for changed, field in (({"Teng": 0.1}, "Teng"), ({"Rselect": -1}, "Rselect"),
+    for changed, field in (({"Teng": 0.1}, "Teng"), ({"Rselect": -2}, "Rselect"),
                            ({"Kimw": 0.01}, "Kimw"), ({"Dm": -0.1}, "Dm")):  # fmt: skip
         with pytest.raises(CaseError, match=f"'{field}'"):
             params(ggov1_row(**changed))

@@ -5,7 +5,8 @@ Trate / MVA.
 
 * Governor: the electrical power measured through 1/(1 + s Tpelec); the speed error
   e = P_ref - (omega - 1) - R sig, sig chosen by Rselect (1 the measured electrical
-  power, -2 the valve stroke, 0 none: isochronous), through the deadband +-db and limited
+  power, -1 the fuel valve stroke (the true stroke), 0 none: isochronous), through the
+  deadband +-db and limited
   to [minerr, maxerr], into the PID Kpgov + Kigov/s + s Kdgov/(1 + s Tdgov) -> fsrn.
 * Load (temperature) limiter: the fuel flow w_f through the lead-lag (1 + s Tsa)/(1 + s
   Tsb) and the lag Tfload is the measured exhaust temperature; the PI Kpload + Kiload/s
@@ -28,8 +29,12 @@ fixed step DELT (fsra = fsr + Ka DELT (Aset - accel)); the tracking integrator h
 same threshold (accel = Aset) and, selected, the same rate Ka (Aset - accel) of fsr.
 
 Not modelled, refused by name (`check`): the diesel engine's transport delay Teng > 0
-(PSS/E asks for 0 or a multiple of its step; an ODE model has no delay), Rselect = -1
-(the requested stroke fed back closes an algebraic loop through Kpgov), the supplementary
+(PSS/E asks for 0 or a multiple of its step; an ODE model has no delay), Rselect = -2
+(the governor output, the requested stroke, fed back closes an algebraic loop through
+Kpgov; until 2026-12-02 stabctl read -2 as the valve stroke and refused -1, the codes
+swapped: PSS/E's, PSLF's and the CIM's DroopSignalFeedbackKind are 1 electrical power, 0
+none, -1 fuel valve stroke, -2 governor output; OpenIPSL's GGOV1 R_select alike), the
+supplementary
 load controller Kimw != 0 and Dm < 0 (fuel flow scaled by speed^Dm).  The rates Rup,
 Rdown bound the load limiter's integrator (OpenIPSL has none).
 
@@ -125,10 +130,11 @@ def check(g, r: int) -> str | None:
             "field 'Teng': GGOV1's transport delay is not modelled (PSS/E: 0 or a "
             "multiple of its step); only Teng = 0"
         )
-    if g.Rselect[r] not in (1, 0, -2):
+    if g.Rselect[r] not in (1, 0, -1):
         return (
-            "field 'Rselect': GGOV1 takes 1 (electrical power), 0 (isochronous) or -2 "
-            "(valve stroke); -1 (requested stroke) closes an algebraic loop"
+            "field 'Rselect': GGOV1 takes 1 (electrical power), 0 (isochronous) or -1 "
+            "(fuel valve stroke); -2 (governor output, the requested stroke) closes an "
+            "algebraic loop through Kpgov"
         )
     if g.Kimw[r] != 0:
         return "field 'Kimw': GGOV1's supplementary load controller is not modelled"
@@ -191,7 +197,7 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
     x[S.load_i, r] = fsr0[r]
     x[S.accel_d, r] = 0.0
     x[S.accel_i, r] = (fsr0 + p.Tacc * p.Kacc * p.Aset)[r]
-    sig = np.where(p.Rselect == 1, pm0, np.where(p.Rselect == -2, fsr0, 0.0))
+    sig = np.where(p.Rselect == 1, pm0, np.where(p.Rselect == -1, fsr0, 0.0))
     return (p.Rdroop * sig)[r]
 
 
@@ -229,7 +235,7 @@ def derivatives(P, x, k, omega, pe, dx):
     pe_m, dx[S.Pe, k] = lag(pe_t, x[S.Pe, k], P[k, G.TPELEC])
     # the low-value gate's inputs
     sel = P[k, G.RSELECT]
-    sig = pe_m if sel == 1 else (x[S.valve, k] if sel == -2 else 0.0)
+    sig = pe_m if sel == 1 else (x[S.valve, k] if sel == -1 else 0.0)
     err = _deadband(P[k, G.PREF] - dw - P[k, G.RDROOP] * sig, P[k, G.DB])
     err = clip(err, P[k, G.MINERR], P[k, G.MAXERR])
     fsrn = P[k, G.KPGOV] * err + x[S.gov_i, k]

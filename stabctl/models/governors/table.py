@@ -142,7 +142,7 @@ PARAMS = (
                     "Rselect",
                     "code",
                     "",
-                    "droop feedback: 1 electrical power, 0 none, -2 valve stroke",
+                    "droop feedback: 1 electrical power, 0 none, -1 fuel valve stroke",
                 ),
                 ("Flag", "code", "", "1 fuel flow proportional to speed, 0 independent of it"),
                 ("Rdroop", "pu", "+", "permanent droop R"),
