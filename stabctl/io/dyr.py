@@ -39,6 +39,7 @@ from stabctl.io.provenance import Origin, Written
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
 from stabctl.models.exciters import EXCITER, ac8b
+from stabctl.models.exciters.dc import VRMAX_NO_LIMIT
 from stabctl.models.governors import GOVERNOR
 from stabctl.models.machines import MACHINE
 from stabctl.models.pss import PSS
@@ -984,7 +985,7 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
 
 
 #: ESDC2A's VRMAX = 0 read as no upper limit (ANDES; PST would compute it from E2)
-VRMAX_UNLIMITED = 999.0
+VRMAX_UNLIMITED = VRMAX_NO_LIMIT
 
 
 def _dc(model, zero_vrmax_unlimited=False, andes=False, psse=False):
@@ -996,11 +997,13 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False, psse=False):
         TE KF TF1 Switch E1 SE(E1) E2 SE(E2) -> exc_dc12; IEEET2 (type 5): TR KA TA VRMAX
         VRMIN KE TE KF TF1 TF2 E1 SE(E1) E2 SE(E2), DC1 without the lead-lag and with the
         rate feedback's second lag TF2 (exc_con column 18); saturation as Asat, Bsat (E2
-        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3).  andes: the
+        column 0); K_E = 0 is computed at initialisation (V_R0 = 0, docs 2.3; psse: V_R0 =
+        VRMAX/10, below).  andes: the
         quadratic saturation through the points and K_E as given (exc_con columns 23, 24).
         psse: the quadratic saturation through the points, S_E(E) = B (E - A)^2 / E (the PSS/E
         Model Library's exciter saturation; OpenIPSL's ``NonElectrical.Functions.SE``), and
-        K_E = 0 computed at initialisation as PSS/E does (V_R0 = 0)."""
+        K_E = 0 computed at initialisation as PSS/E does (V_R0 = VRMAX/10: PAG 15.2.4,
+        OpenIPSL's ``calculate_dc_exciter_params``)."""
         v = decl.values(rec.params)
         cols = {}
         if zero_vrmax_unlimited and v["VRMAX"] == 0:

@@ -520,17 +520,6 @@ def test_esac1a_va_is_non_windup_and_vr_clips_it():
     assert x[2, 0] == 14.5 and dx[2, 0] == 0.0
 
 
-def test_esac1a_exciter_voltage_does_not_go_negative():
-    """ESAC1A's V_E is held at 0 when V_R - V_FE drives it down (the rectifier's diodes;
-    IEEE 421.5-2005 6.1); EXAC1's at the same point falls through 0."""
-    for row, held in ((AC1A, True), (AC1, False)):
-        P, x = started(row)
-        x[3, 0], x[2, 0] = 0.0, -5.0
-        dx = derivatives(P, x)
-        assert x[3, 0] == 0.0 and (dx[3, 0] == 0.0) == held
-        assert held or dx[3, 0] < 0
-
-
 def test_ac8b_starts_with_the_reference_at_the_terminal_voltage():
     """AC8B at rest (ANDES 2.0 ac8b.py): the PID's integral holds V_R0/K_A = V_FE0/K_A,
     its derivative washout 0, and V_ref = V_t (the PID integrates any error)."""
@@ -772,3 +761,36 @@ def test_st6b_gate_hands_the_field_current_limiter_on():
     assert efd == pytest.approx(EFD0, rel=1e-14)
     limited = exc.field_voltage_at(P, x, 0, VT0, 0.0, 1.0, 2.2, True)
     assert limited == pytest.approx(17.33 * (1.0577 * 2.15 - 2.2) * VT0, rel=1e-14)
+
+
+@pytest.mark.parametrize("name", ["EXAC1", "EXAC2", "ESAC1A"])
+def test_ac_exciter_voltage_is_held_at_zero(name):
+    """V_E >= 0, non-windup, in every AC exciter (the rectifier's diodes; OpenIPSL's and
+    OPAL-RT's PSS/E EXAC1 and EXAC2): round 50 found EXAC1's and EXAC2's V_E unlimited, to
+    -17 pu after a 0.6 pu VREF pulse.  V_E below 0 driven down is put back on 0 with a zero
+    derivative; driven up it leaves at once."""
+    P, x = started(ROWS[name])
+    ve = exc.exac1.S.VE  # (EXAC2's slot too)
+    regulator = 2  # V_R (EXAC1) or V_A (EXAC2, ESAC1A): the slot before V_E
+    x[ve, 0], x[regulator, 0] = -0.5, P[0, exc.E.VRMIN]
+    down = P.copy()
+    down[0, exc.E.VREF] -= 1.0
+    dx = derivatives(down, x)
+    assert x[ve, 0] == 0.0 and dx[ve, 0] == 0.0
+    x[regulator, 0] = 5.0
+    assert derivatives(P, x)[ve, 0] > 0
+
+
+def test_dc_exciter_with_ke_zero_starts_at_a_tenth_of_its_ceiling_as_psse():
+    """K_E = 0 in a DC exciter read as PSS/E reads it (quadratic saturation, exc_con column
+    23 = 1): PSS/E's self-excited exciter, K_E = V_Rmax/(10 Efd0) - S_E(Efd0), V_R0 =
+    V_Rmax/10 (PAG 15.2.4; OpenIPSL's calculate_dc_exciter_params; round 50: V_R started at
+    0, K_E 0 against 0.191 for VRMAX 3, and Efd 4 s after a step 0.11-0.35 pu off).  With
+    PST's exponential fit (column 23 = 0) V_R0 stays 0."""
+    sat = [3.0, 0.1, 4.0, 0.3]  # E1 SE1 E2 SE2 (columns 12-15)
+    base = DC1[:9] + [0.0, 0.83] + sat + DC1[15:] + [0, 0]  # K_E 0; columns 21-22 0
+    P, x = started(base + [1, 0])  # quadratic, K_E computed
+    assert x[2, 0] == pytest.approx(5.2 / 10, rel=1e-12)  # V_R0 = Vrmax/10
+    assert all(abs(v) < 1e-12 for v in derivatives(P, x).ravel() if not np.isnan(v))
+    P, x = started(base + [0, 0])  # PST's exponential fit
+    assert abs(x[2, 0]) < 1e-12

@@ -178,4 +178,4 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
         P[i, E.KA] * y, x[S.VR, i], P[i, E.TA], P[i, E.VRMIN], P[i, E.VRMAX], IEEE_RULE, 0.0
     )
     VFE = exciter_feedback(P, i, x[S.VE, i], ifd)
-    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], x[S.VR, i], VFE, IEEE_RULE)
+    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], x[S.VR, i], VFE)

@@ -47,6 +47,8 @@ LIMITS = {
         LEAD_LAG,
     ),
 }
+#: a Vrmax at or above this is "no upper limit" (a DYR's VRMAX = 0, `stabctl.io.dyr`)
+VRMAX_NO_LIMIT = 999.0
 #: reads the machine's field current (`stabctl.models.exciters.field_current`)
 READS_IFD = False
 #: has a rate feedback s K_F/(1 + s T_F) from exc_con columns 21-22 (KF, TF)
@@ -224,14 +226,19 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 
 
 def initial_regulator(p: ExciterParams, r, Efd, eterm):
-    """DC exciters on rows r (a mask): KE resolved (0 -> -SE(Efd0) unless ke_given) and V_R0 the
+    """DC exciters on rows r (a mask): KE resolved where 0 (unless ke_given) and V_R0 the
     exciter feedback at Efd0 (`dc_feedback`), checked against [Vrmin, Vrmax] times 1 (DC1)
-    or eterm (DC2, bus fed); returns (p, V_R0 of rows r)."""
+    or eterm (DC2, bus fed); returns (p, V_R0 of rows r).  K_E = 0 is resolved so that
+    V_R starts at Vrmax/10 with PSS/E's quadratic saturation (PSS/E's self-excited exciter,
+    its rheostat set for a tenth of the regulator's ceiling: PAG 15.2.4 as OpenIPSL's
+    ``calculate_dc_exciter_params`` and OPAL-RT's PSS/E DC exciters read it; round 50: V_R
+    started at 0), and at 0 with PST's exponential one (or a Vrmax read as no limit)."""
     KE, VR = p.KE.copy(), np.zeros(p.n)
     for k in np.nonzero(r)[0]:
         sat = (p.Asat[k], p.Bsat[k], float(p.sat_quadratic[k]), Efd[k])
-        if KE[k] == 0 and not p.ke_given[k] and Efd[k] != 0:  # V_R starts at 0
-            KE[k] = -dc_feedback(0.0, *sat) / Efd[k]
+        if KE[k] == 0 and not p.ke_given[k] and Efd[k] != 0:
+            psse = p.sat_quadratic[k] and p.Vrmax[k] < VRMAX_NO_LIMIT
+            KE[k] = ((p.Vrmax[k] / 10 if psse else 0.0) - dc_feedback(0.0, *sat)) / Efd[k]
         VR[k] = dc_feedback(KE[k], *sat)
     mult = np.where(p.kind == DC2, eterm, 1.0)
     refuse_initial(

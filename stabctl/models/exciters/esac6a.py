@@ -22,7 +22,7 @@ from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import LBND, clip, leadlag, leadlag_input_state
 from stabctl.models.declaration import DyrModel, Limits, states
 from stabctl.models.exciters.exac1 import exciter, exciter_feedback, initial_exciter, rectified
-from stabctl.models.exciters.table import IEEE_RULE, LEAD_LAG, REGULATOR_GAIN, E, upper
+from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E, upper
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -180,4 +180,4 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     uh = clip(P[i, E.KH] * (VFE - P[i, E.VFELIM]), 0.0, P[i, E.VHMAX])
     VH, dx[S.VHs, i] = leadlag(uh, x[S.VHs, i], P[i, E.TJ], P[i, E.TH])
     VR = clip(VA - VH, eterm * P[i, E.VRMIN], eterm * P[i, E.VRMAX])
-    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE, IEEE_RULE)
+    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE)

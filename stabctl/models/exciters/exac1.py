@@ -219,19 +219,18 @@ def exciter_feedback(P, i, VE, ifd):
 
 
 @kernel(inline="always")
-def exciter(P, i, VE, VR, VFE, hold):
-    """The AC exciters' T_E dV_E/dt = V_R - V_FE; with hold (ESAC1A, AC8B) V_E >= 0,
-    non-windup (the rectifier's diodes).
+def exciter(P, i, VE, VR, VFE):
+    """The AC exciters' T_E dV_E/dt = V_R - V_FE with V_E >= 0, non-windup (the
+    rectifier's diodes; every AC exciter: EXAC1, ESAC1A, EXAC2, AC8B, ESAC6A, as OpenIPSL's
+    and OPAL-RT's PSS/E models; round 50: EXAC1's and EXAC2's V_E ran unlimited, to -17 pu
+    after a 0.6 pu VREF pulse).
 
     Returns
     -------
     (float, float)
-        V_E (clamped with hold), its derivative.
+        V_E (clamped), its derivative.
     """
-    d = (VR - VFE) / P[i, E.TE]
-    if hold:
-        return nonwindup(VE, d, 0.0, np.inf, IEEE_RULE, 0.0)
-    return VE, d
+    return nonwindup(VE, (VR - VFE) / P[i, E.TE], 0.0, np.inf, IEEE_RULE, 0.0)
 
 
 @kernel(inline="always")
@@ -245,7 +244,7 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """EXAC1 and ESAC1A (docs/pst_models.md 2.7): the rate feedback of V_FE (state R_f,
     with K_F != 0) subtracted from the error, the lead-lag T_C/T_B, the regulator lag
     non-windup (EXAC1: V_R on [Vrmin, Vrmax]; ESAC1A: V_A on [VAmin, VAmax], then V_R = V_A
-    clipped to [Vrmin, Vrmax]), the exciter T_E dV_E/dt = V_R - V_FE (ESAC1A: V_E >= 0,
+    clipped to [Vrmin, Vrmax]), the exciter T_E dV_E/dt = V_R - V_FE (V_E >= 0,
     non-windup: IEEE 421.5-2005 6.1, as OpenIPSL's and Dynawo's AC1A)."""
     VFE = exciter_feedback(P, i, x[S.VE, i], ifd)
     if P[i, E.KF] != 0:
@@ -260,4 +259,4 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
         P[i, E.KA] * u, x[S.VR, i], P[i, E.TA], lo, hi, IEEE_RULE, 0.0
     )
     VR = clip(x[S.VR, i], P[i, E.VRMIN], P[i, E.VRMAX])
-    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE, P[i, E.KIND] != AC1)
+    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE)

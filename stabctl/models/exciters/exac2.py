@@ -41,9 +41,6 @@ if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
 
 AC2 = 13
-#: ``hold=False`` of `exac1.exciter` (V_E unlimited, as EXAC1's) as a numpy boolean: a
-#: Python False passed from compiled code is typed as a literal, a second compile
-UNLIMITED_VE = np.bool_(False)
 KINDS = {AC2: "EXAC2 (IEEE AC2)"}
 #: AC2's saturation point E2 and T_E >= 0, its V_A limits ordered (PSS/E Model Library
 #: EXAC2; IEEE Std 421.5 AC2A)
@@ -202,7 +199,7 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     )
     gate = min(x[S.VA, i] - P[i, E.KH] * VFE, P[i, E.KL] * (P[i, E.VLR] - VFE))
     VR = clip(P[i, E.KB] * gate, P[i, E.VRMIN], P[i, E.VRMAX])
-    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE, UNLIMITED_VE)
+    x[S.VE, i], dx[S.VE, i] = exciter(P, i, x[S.VE, i], VR, VFE)
 
 
 def heun_step_limit(lam: np.ndarray) -> float:
