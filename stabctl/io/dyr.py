@@ -1011,6 +1011,8 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False, psse=False):
         if v.get("Switch", 0.0) != 0:
             raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
         points = (v["E1"], v["SE(E1)"], v["E2"], v["SE(E2)"])
+        if psse and model in ("ESDC1A", "ESDC2A"):  # OpenIPSL's RotatingExciterLimited
+            cols["efd_floor"] = 1
         if andes or psse:
             return _exc_row(
                 rec,

@@ -188,8 +188,9 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
     """conventions="psse" (the default) marks WECC's EXST1 rows psse_st1 = 1 (PSS/E's
     output limits and rate feedback, docs/pst_models.md 12.6), gives its DC exciters
     (ESDC2A) PSS/E's quadratic saturation through their own points (next tests), its
-    ESST3A the machine's field current (ifd_machine = 1, as PSS/E's I_N = K_C I_FD / V_E)
-    and leaves every other exciter, PSS and governor column as "pst" reads it."""
+    ESST3A the machine's field current (ifd_machine = 1, as PSS/E's I_N = K_C I_FD / V_E),
+    its ESDC2A a field voltage held at >= 0 (efd_floor = 1, round 50) and leaves every
+    other exciter, PSS and governor column as "pst" reads it."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     pst = dyr_tables(recs, gens, on_unsupported="skip", conventions="pst")
@@ -206,8 +207,10 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
     st3 = pst.exc_con[:, 0] == exc.ST3
     assert st3.sum() == 4 and np.all(psse.exc_con[st3, ifd] == 1)
     assert np.all(psse.exc_con[~st3, ifd] == 0) and np.all(pst.exc_con[:, ifd] == 0)
+    floor = ExciterTable.columns().index("efd_floor")  # ESDC2A's Efd >= 0 (PSS/E's)
+    assert np.all(psse.exc_con[dc, floor] == 1) and np.all(pst.exc_con[:, floor] == 0)
     others = (np.arange(pst.exc_con.shape[1]) != col) & ~np.isin(
-        np.arange(pst.exc_con.shape[1]), [*sat, ifd]
+        np.arange(pst.exc_con.shape[1]), [*sat, ifd, floor]
     )
     np.testing.assert_array_equal(pst.exc_con[:, others], psse.exc_con[:, others])
     np.testing.assert_array_equal(pst.exc_con[~dc][:, sat], psse.exc_con[~dc][:, sat])

@@ -271,7 +271,7 @@ def test_ieeet2_rate_feedback_is_of_v_r_through_its_second_lag():
     x1[2, 0] += 0.1
     vf = 0.0754 / 1.246 * 0.1
     assert derivatives(P1, x1)[2, 0] == pytest.approx((-20 * vf - 0.1) / 0.02, rel=1e-12)
-    with pytest.raises(CaseError, match=r"TA and TF2 both below 0.001 s: IEEET2's rate"):
+    with pytest.raises(CaseError, match=r"'TF2' \(column 18\): IEEET2 needs TA or TF2 >= 0.001 s"):
         started(IEEET2[:4] + [0.0] + IEEET2[5:17] + [0.0] + IEEET2[18:])
 
 
@@ -794,3 +794,16 @@ def test_dc_exciter_with_ke_zero_starts_at_a_tenth_of_its_ceiling_as_psse():
     assert all(abs(v) < 1e-12 for v in derivatives(P, x).ravel() if not np.isnan(v))
     P, x = started(base + [0, 0])  # PST's exponential fit
     assert abs(x[2, 0]) < 1e-12
+
+
+def test_dc_exciter_field_voltage_floor_holds_at_zero():
+    """efd_floor (exc_con column 75; PSS/E's ESDC1A and ESDC2A as OpenIPSL's
+    RotatingExciterLimited reads them; round 50: Efd went to -3 pu after a 0.6 pu VREF
+    drop): Efd at 0 driven down stays at 0 with a zero derivative; without it (DC1 as PST's
+    exc_dc12, IEEEX1) Efd falls through 0."""
+    for floor in (1, 0):
+        P, x = started(DC1 + [0] * (74 - len(DC1)) + [floor])
+        x[3, 0], x[2, 0] = 0.0, P[0, exc.E.VRMIN]  # Efd at 0, V_R at its floor
+        dx = derivatives(P, x)
+        assert x[3, 0] == 0.0 and (dx[3, 0] == 0.0) == bool(floor)
+        assert floor or dx[3, 0] < 0

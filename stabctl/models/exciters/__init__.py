@@ -131,7 +131,6 @@ __all__ = [
 MODULES = type_modules(
     __name__,
     "st3",
-    "dc",
     "exst1",
     "esst1a",
     "exac4",
@@ -145,6 +144,7 @@ MODULES = type_modules(
     "st6b",
     "st8c",
     "sexs",
+    "dc",  # last: its own exc_con column (75) after the others' (67-74)
 )
 #: exc_con type -> the module of its equations; -> its state names, in slot order (``S``)
 TYPES, STATE_NAMES = model_types(MODULES, "exc_con")

@@ -35,8 +35,6 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     kind = P[i, E.KIND]
     if kind == 3:  # ST3 (exc_st3)
         return st3.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
-    if kind == 1 or kind == 2 or kind == 5:
-        return dc.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
     if kind == 4:  # EXST1
         return exst1.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
     if kind == 6:  # ESST1A (IEEE 421.5 ST1A)
@@ -61,7 +59,9 @@ def field_voltage_at(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
         return st6b.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
     if kind == 17:  # ST8C (IEEE 421.5 ST8C, field current regulator)
         return st8c.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
-    return sexs.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)  # simple (smpexc)
+    if kind == 0:  # simple (smpexc)
+        return sexs.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
+    return dc.field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee)
 
 
 @kernel(inline="always")
@@ -71,8 +71,6 @@ def type_derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach
     kind = P[i, E.KIND]
     if kind == 3:  # ST3 (exc_st3)
         st3.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
-    elif kind == 1 or kind == 2 or kind == 5:
-        dc.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
     elif kind == 4:  # EXST1
         exst1.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
     elif kind == 6:  # ESST1A (IEEE 421.5 ST1A)
@@ -97,8 +95,10 @@ def type_derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach
         st6b.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
     elif kind == 17:  # ST8C (IEEE 421.5 ST8C, field current regulator)
         st8c.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
-    else:  # simple (smpexc)
+    elif kind == 0:  # simple (smpexc)
         sexs.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
+    else:  # DC1; DC2 (exc_dc12); IEEET2 (DC1 with a two-lag V_R feedback)
+        dc.derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach)
 
 
 @kernel(inline="always")
@@ -106,12 +106,12 @@ def type_recorded_efd(P, x, i, efd_alg):
     """Efd as PST records exciter i's: its type module's ``recorded_efd`` where it has one,
     else the algebraic field voltage efd_alg."""
     kind = P[i, E.KIND]
-    if kind == 1 or kind == 2 or kind == 5:
-        return dc.recorded_efd(P, x, i, efd_alg)
     if kind == 11:  # IEEET3 (IEEE 1968 type 3, compound source)
         return ieeet3.recorded_efd(P, x, i, efd_alg)
     if kind == 0:  # simple (smpexc)
         return sexs.recorded_efd(P, x, i, efd_alg)
+    if kind == 1 or kind == 2 or kind == 5:
+        return dc.recorded_efd(P, x, i, efd_alg)
     return efd_alg  # the other types
 
 

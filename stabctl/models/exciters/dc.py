@@ -25,11 +25,12 @@ from stabctl.models.blocks import (
     LBND,
     lag,
     leadlag_input_state,
+    nonwindup,
     nonwindup_lag,
     washout,
 )
-from stabctl.models.declaration import DyrModel, Limits, beyond, states
-from stabctl.models.exciters.table import LEAD_LAG, REGULATOR_GAIN, E
+from stabctl.models.declaration import DyrModel, Limits, Param, beyond, states
+from stabctl.models.exciters.table import IEEE_RULE, LEAD_LAG, REGULATOR_GAIN, E, col, own
 
 if TYPE_CHECKING:
     from stabctl.models.exciters import ExciterParams
@@ -61,6 +62,20 @@ SOURCE = False
 EXCITER_COLUMNS = "dc"
 #: the time constants that must be >= 1e-3 s: (name in messages, declared field)
 NEEDS: tuple[tuple[str, str], ...] = (("TE", "TE"), ("TF", "TF_dc"))  # no T_A: PST's algebraic V_R
+
+#: the DC exciters' own exc_con column
+PARAMS = (
+    Param(
+        "efd_floor",
+        "code",
+        75,
+        choices=(0, 1),
+        doc="DC1/2: 1 Efd held at >= 0, non-windup (PSS/E's ESDC1A, ESDC2A: OpenIPSL's "
+        "RotatingExciterLimited), 0 unlimited (PST's exc_dc12, IEEEX1, EXDC2, IEEET1)",
+    ),
+)
+#: the packed columns of `PARAMS`: P[i, O.EFD_FLOOR]
+O = own("DCColumns", PARAMS)
 
 #: the copies the IEEE 1968 DC records IEEET1 and IEEET2 share (PSS/E Model Library)
 _IEEET_COPY = {
@@ -194,10 +209,12 @@ def check(e, r: int) -> str | None:
     if e.Vrmax[r] == 0:
         return "field 'Vrmax': 0 (PST computes it from E2) is not supported; give the limit"
     if int(e.type[r]) == T2 and max(e.TA[r], e.Efdmax[r]) < LBND:
-        return (
-            f"TA and TF2 both below {LBND} s: IEEET2's rate feedback of V_R would be an "
-            "algebraic loop; give TA or TF2 >= 1e-3 s"
+        rule = (
+            f"IEEET2 needs TA or TF2 >= {LBND} s (its rate feedback of V_R would be an "
+            "algebraic loop)"
         )
+        got = f"got TA = {e.TA[r]:g}, TF2 = {e.Efdmax[r]:g}"
+        e._fail(r, "TF2", f"{rule}, {got}", col("TF2"), fields=("TA", "TF2"), rule=rule)
     return None
 
 
@@ -270,7 +287,8 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     """exc_dc12 flag 2: the rate feedback K_F/T_F (Efd - R_f) = s K_F/(1 + s T_F) Efd,
     subtracted from the error; IEEET2: s K_F/(1 + s T_F1) of V_R, then the lag 1/(1 + s
     T_F2) (state V_F; without it V_R is a state, `check`); V_R non-windup (DC2: limits
-    times eterm, held within `reach`); T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`)."""
+    times eterm, held within `reach`); T_E dEfd/dt = V_R - V_FE(Efd) (`dc_feedback`),
+    Efd >= 0 non-windup where `efd_floor` (PSS/E's ESDC1A, ESDC2A)."""
     kind = P[i, E.KIND]
     if kind == T2:  # the fed-back V_R: V_F's state, or V_R's state through the washout
         VF = x[S.VF, i]
@@ -295,3 +313,7 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     dx[S.Efd, i] = (
         x[S.VR, i] - dc_feedback(P[i, E.KE], P[i, E.ASAT], P[i, E.BSAT], P[i, E.SATQ], x[S.Efd, i])
     ) / P[i, E.TE]
+    if P[i, O.EFD_FLOOR] > 0:  # PSS/E's ESDC1A, ESDC2A
+        x[S.Efd, i], dx[S.Efd, i] = nonwindup(
+            x[S.Efd, i], dx[S.Efd, i], 0.0, np.inf, IEEE_RULE, 0.0
+        )
