@@ -25,6 +25,19 @@ lag below :data:`stabctl.models.blocks.LBND` is bypassed); REPCA1's Pmax, Pmin b
 plant's P reference (PSS/E's block diagram, GridPACK's ``repca1.cpp``: the PI starts at the
 dispatch), where ANDES's bound the increment Pext that the table holds, so the table gets
 Pmax - P0, Pmin - P0 (P0 = PG / MBASE; ``conventions="andes"`` keeps ANDES's reading);
+and the row's ``psse`` 1, the models' own PSS/E readings (``conventions="andes"``: 0,
+ANDES 2.0's): REECB1 with QFLAG 1 regulates the filtered voltage, its V PI on clip(VFLAG ?
+the Q PI's output : Vref0, VMIN, VMAX) - Vt_filt, the Q PI starting at |V0| (OpenIPSL's
+PSS/E-verified ``REECB1.mo``; ANDES 2.0's reecb1.py feeds the V PI clip(VFLAG Q PI) with
+no reference and no voltage: with VFLAG 0 no voltage control, with VMIN > 0 no start), and
+REECA1 with VFLAG and QFLAG 1 likewise, with QFLAG 1 and VFLAG 0 its Q reference |V0| -
+Vref1 (``REECA1.mo``: Vsel = V0 at the start; ANDES's Vref1 - |V0|); WTDTA1's Freq1 is in
+Hz, Kshaft = 2 Ht Hg (2 pi Freq1)^2/(H w0) on the shaft angle (``WTDTA1.mo``; ANDES reads
+it as rad/s: a 1.8 Hz mode at 0.27 Hz); WTARA1's theta is the pitch angle in degrees, Pm =
+Pm0 - Ka theta (theta - theta0), at rest at theta0, WTPTA1's pitch starting there (ANDES
+mixes rad(Theta0) with degrees: no start with Theta0 not 0); WTPTA1's speed PI acts on wt
+- wref, WTTQA1's speed reference (ANDES: the constant w0 = 1), its rate limits RTetaMax,
+RTetaMin on dtheta/dt (ANDES: on Tp dtheta/dt).
 REPCA1's monitored branch
 (BUS1, BUS2, CKTID; 0 0: none) is the RAW branch between those buses (its r, x on the
 system base).  REGCA1's Accel (the network solution's acceleration factor) is not a model
@@ -124,8 +137,10 @@ def converter_rows(records, generators, branches, conventions: str = "psse") -> 
     conventions : str, optional
         ``"psse"`` (default): a REPCA1's Pmax, Pmin bound its P reference, as PSS/E's
         (and GridPACK's) REPCA1, so the table's bounds of the increment Pext are
-        Pmax - P0 and Pmin - P0 with P0 = PG / MBASE the plant's dispatch; ``"andes"``
-        or ``"pst"``: as given (ANDES 2.0's REPCA1 bounds the increment itself).
+        Pmax - P0 and Pmin - P0 with P0 = PG / MBASE the plant's dispatch, and the row's
+        ``psse`` 1 (PSS/E's REECB1/REECA1 voltage loop, WTDTA1, WTARA1 and WTPTA1: the
+        module's docstring); ``"andes"`` or ``"pst"``: as given (ANDES 2.0's REPCA1
+        bounds the increment itself) and ``psse`` 0, ANDES 2.0's readings.
 
     Returns
     -------
@@ -270,6 +285,7 @@ def _plant_row(
         _copy(rec, v)
         if rec.model == "REECA1":
             _no_curve_noted(rec, v)
+    v["psse"] = 1.0 if conventions == "psse" else 0.0  # the models' readings
     if "REPCA1" in plant:
         rec = plant["REPCA1"]
         if not reec:

@@ -176,7 +176,8 @@ def test_wind_turbine_records_read_as_andes_reads_its_wind_case(tmp_path):
             v = m.params[name].vin[0]
             vals.append(repr(float(0.0 if v is None or not np.isfinite(v) else v)))
         lines.append(f"103 '{model}' 1 {' '.join(vals)} /\n")
-    got = _row(load_psse(RAW, _dyr(tmp_path, lines)).converters)
+    # read like for like: ANDES's readings of the wind models (PSS/E's: ``psse`` 1)
+    got = _row(load_psse(RAW, _dyr(tmp_path, lines), conventions="andes").converters)
     plant = ("repc", "Tfm", "Twm")  # ieee14_wt3's REPCA1, on its own network: not written
     same = [k for k in got if k not in _PLACE + plant and not k.startswith("pc_")]
     differ = {k: (got[k], want[k]) for k in same if got[k] != want[k]}
@@ -501,3 +502,231 @@ def test_a_converter_record_of_no_generator_is_named_with_the_generator_it_left_
         "; so generator(s) without a machine model record in the DYR data: machine 2 (bus 103"
         in said
     )
+
+
+# ---------------------------------------------------------------- PSS/E's readings (round 50
+# AJ08-AJ12): the models read as PSS/E reads them (``psse`` 1, import-psse's default), the
+# sources OpenIPSL's PSS/E-verified OpenIPSL/Electrical/Renewables/PSSE/* and the PSS/E Model
+# Library; ANDES 2.0's readings kept under conventions="andes"
+
+
+def _rena_text(flags="0 0 0 0 0", vmin=None, drop=("REPCA1",), extra="") -> str:
+    """RENA's DYR text without ``drop``, its REECB1 ICONs IREG PFFLAG VFLAG QFLAG PQFLAG
+    ``flags`` (RENA's 0 0 0 0 0), VMIN ``vmin`` (RENA's 0.9), ``extra`` records appended."""
+    out = []
+    for r in read_dyr(DYR):
+        if r.model in drop:
+            continue
+        change = {}
+        if r.model == "REECB1":
+            change = dict(zip(("IREG", "PFFLAG", "VFLAG", "QFLAG", "PQFLAG"), flags.split()))
+            change = {k: float(v) for k, v in change.items()}
+            if vmin is not None:
+                change["VMIN"] = vmin
+        out.append(_text(r, **change))
+    return "".join(out) + extra
+
+
+def _evaluate(case):
+    """(f(x), model, state names, evaluate) of ``case``'s dynamic model at its initial
+    states: evaluate(x) the derivatives at states x, the network at its initial
+    voltages."""
+    from stabctl.dynamics.model import StageConfig
+    from stabctl.smallsignal.linearise import default_esd_buses
+
+    model = Simulator(case, background_compile=False).model_for(default_esd_buses(case))
+    net = model.network(StageConfig())
+    names = [model.state_name(k) for k in range(len(model.x0))]
+
+    def evaluate(x):
+        return np.asarray(model.evaluate(np.array(x, float), net, model.V_nc0)[0])
+
+    x0 = np.array(model.x0, float)
+    return x0, names, evaluate
+
+
+@pytest.mark.parametrize("flags", ["0 0 0 1 0", "0 0 1 1 0"])
+def test_reecb1_qflag_1_starts_at_rest_as_pss_e_reads_it(tmp_path, flags):
+    """REECB1 with QFLAG 1 (VFLAG 0: the V PI regulates Vt_filt to Vref0, RENA's 0 the
+    initial 1.015 pu; VFLAG 1: the Q PI's output, started at V0, is its reference) and
+    RENA's VMIN 0.9 runs 5 s flat (OpenIPSL REECB1.mo: V PI input clip(VFLAG ? Q PI :
+    Vref0, Vmin, Vmax) - Vt_filt, 0 at the start).  ANDES 2.0's reading (V PI input
+    clip(VFLAG Q PI, VMIN, VMAX), no voltage) cannot start there: its input is VMIN."""
+    from runs import flat_run
+
+    dyr = _dyr(tmp_path, [_rena_text(flags)])
+    case = load_psse(RAW, dyr)
+    assert _row(case.converters)["psse"] == 1.0
+    drift, _ = flat_run(case, t_end=5.0)
+    assert drift < 1e-8
+    with pytest.raises(CaseError, match="PIV"):
+        Simulator(load_psse(RAW, dyr, conventions="andes")).run([], 0.01, h=0.005)
+
+
+def test_reecb1_voltage_control_returns_the_voltage_to_vref0_after_a_q_step(tmp_path):
+    """REECB1 QFLAG 1 VFLAG 0 (VMIN 0, as round 50's probe): a 0.2 pu reactive load step
+    at the plant's bus 103 pulls |V| down; PSS/E's integral voltage control (Kvi 60 on
+    Vref0 - Vt_filt, Vref0 the initial 1.015 pu) brings it back to Vref0 (within 1e-5 pu
+    after 5 s), with the plant's Q up.  ANDES 2.0's reading leaves it at 0.9999 pu."""
+    from stabctl.case.events import LoadStep
+
+    case = load_psse(RAW, _dyr(tmp_path, [_rena_text("0 0 0 1 0", vmin=0.0)]))
+    res = Simulator(case, q_limits=False).run([LoadStep(103, 0.5, 0.0, 0.2)], 6.0, h=0.005)
+    v = res.vmag[:, list(case.buses.number).index(103)]
+    step = np.searchsorted(res.t, 0.6)
+    assert v[0] == pytest.approx(1.015, abs=1e-4)
+    assert v[step] < v[0] - 2e-3  # the step pulls the voltage down ...
+    assert abs(v[-1] - v[0]) < 1e-5  # ... and the integral control restores Vref0
+    assert res.ibr_q[-1, 0] > res.ibr_q[0, 0] + 0.1
+
+
+@pytest.mark.parametrize("vflag", [0, 1])
+def test_reeca1_qflag_1_starts_at_rest_as_pss_e_reads_it(tmp_path, vflag):
+    """REECA1 with QFLAG 1 (RENA's REECB1 values in a REECA1 record, Vref1 0, no VDL
+    curves): PSS/E's V PI compares with Vt_filt the Q PI's output, started at V0, Q0 its
+    reference (VFLAG 1), or Vref1 + the Q reference, V0 at the start (VFLAG 0; OpenIPSL
+    REECA1.mo ``Vmod = V0 - PFsel``): a flat start, where ANDES 2.0's reading (VFLAG 1: no
+    voltage in the V PI; the Q reference Vref1 - V0) is refused."""
+    from runs import flat_run
+
+    reeca1 = (
+        f"103 'REECA1' 1 0 0 {vflag} 1 0 0 -99.0 99.0 0.02 -0.01 0.01 1.0 1.1 -1.1 0.0 0.0 0.0 0.0 "
+        "0.0 0.44 -0.44 1.05 0.9 0.0 0.01 10.0 60.0 0.0 0.02 99.0 -99.0 1.2 0.0 1.11 0.02 "
+        + "0 " * 16
+        + "/\n"
+    )
+    dyr = _dyr(tmp_path, [_rena_text(drop=("REPCA1", "REECB1"), extra=reeca1)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # its all-0 VDL curves: no curve, told
+        case = load_psse(RAW, dyr)
+        andes = load_psse(RAW, dyr, conventions="andes")
+    drift, _ = flat_run(case, t_end=5.0)
+    assert drift < 1e-8
+    with pytest.raises(CaseError):
+        Simulator(andes).run([], 0.01, h=0.005)
+
+
+#: a REECA1 of RENA's REECB1 values (flags 0, no VDL curves) for the wind turbine, and a
+#: WTDTA1 of WECC-typical values: H 4.95 s, DAMP 0, Htfrac 0.875, Freq1 1.8 Hz, Dshaft 1.5
+_WIND_REECA1 = (
+    "103 'REECA1' 1 0 0 0 0 0 0 -99.0 99.0 0.02 -0.01 0.01 1.0 1.1 -1.1 0.0 0.0 0.0 0.0 "
+    "0.0 0.44 -0.44 1.05 0.9 0.0 0.01 10.0 60.0 0.0 0.02 99.0 -99.0 1.2 0.0 1.11 0.02 "
+    + "0 " * 16
+    + "/\n"
+)
+_WTDTA1 = "103 'WTDTA1' 1 4.95 0.0 0.875 1.8 1.5 /\n"
+_WTPTA1 = "103 'WTPTA1' 1 25.0 150.0 30.0 3.0 0.0 0.3 27.0 0.0 10.0 -10.0 /\n"
+_WTTQA1 = "103 'WTTQA1' 1 0 3.0 0.6 0.05 60.0 1.2 0.0 0.2 0.58 0.4 0.72 0.6 0.86 0.8 1.0 0.0 /\n"
+
+
+def _wind_case(tmp_path, *records, conventions="psse"):
+    """RENA's plant with `_WIND_REECA1` in place of its REECB1 (no REPCA1) and the wind
+    ``records``."""
+    text = _rena_text(drop=("REPCA1", "REECB1"), extra=_WIND_REECA1 + "".join(records))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the REECA1's all-0 VDL curves: no curve, told
+        return load_psse(RAW, _dyr(tmp_path, [text]), conventions=conventions)
+
+
+def test_wtdta1_torsional_mode_is_at_freq1_hz(tmp_path):
+    """WTDTA1's Freq1 is in Hz (PSS/E Model Library; OpenIPSL WTDTA1.mo: Kshaft = 2 Ht Hg
+    (2 pi Freq1)^2/(H w0) on the shaft angle, whose rate is w0 (wt - wg)): the shaft
+    torque's rate per pu speed difference is 2 Ht Hg (2 pi Freq1)^2/H, and the
+    three-state drive train (wt, wg, Tshaft; Pm, Pe constant), its Jacobian taken from
+    stabctl's own derivatives, has its torsional mode at the closed form's 1.798 Hz
+    (H 4.95, Htfrac 0.875, Freq1 1.8, Dshaft 1.5, P0 0.4).  ANDES's reading (Freq1 in
+    rad/s, Kshaft = 2 Ht Hg Freq1^2/H) keeps its 0.272 Hz under conventions="andes"."""
+    H, frac, f1, D = 4.95, 0.875, 1.8, 1.5
+    Ht, Hg = frac * H, (1 - frac) * H
+    K = {"psse": 2 * Ht * Hg * (2 * np.pi * f1) ** 2 / H, "andes": 2 * Ht * Hg * f1**2 / H}
+
+    def closed_form(K, P0):
+        A = [
+            [(-P0 - D) / (2 * Ht), D / (2 * Ht), -1 / (2 * Ht)],
+            [D / (2 * Hg), (P0 - D) / (2 * Hg), 1 / (2 * Hg)],
+            [K, -K, 0.0],
+        ]
+        return np.abs(np.linalg.eigvals(A).imag).max() / (2 * np.pi)
+
+    modes = {}
+    for conventions in ("psse", "andes"):
+        case = _wind_case(tmp_path, _WTDTA1, conventions=conventions)
+        x0, names, f = _evaluate(case)
+        idx = [names.index(f"ibr.{s}.C1") for s in ("wt", "wg", "Tshaft")]
+        f0 = f(x0)
+        assert np.max(np.abs(f0[idx])) < 1e-12  # at rest
+        J = np.empty((3, 3))
+        for j, i in enumerate(idx):
+            dx = np.zeros_like(x0)
+            dx[i] = 1e-6
+            J[:, j] = (f(x0 + dx)[idx] - f(x0 - dx)[idx]) / 2e-6
+        modes[conventions] = np.abs(np.linalg.eigvals(J).imag).max() / (2 * np.pi)
+        # H, Dshaft and so Kshaft on the system base: x Sn/Sb
+        scale = case.converters.mva[0] / case.base_mva
+        assert J[2, 0] == pytest.approx(K[conventions] * scale, rel=1e-6)
+        bus = list(case.buses.number).index(103)
+        P0 = case.converters.pfrac[0] * case.buses.pgen[bus] / scale  # device base
+        want = closed_form(K[conventions], P0)
+        assert modes[conventions] == pytest.approx(want, rel=1e-6)
+    assert modes["psse"] == pytest.approx(1.798, abs=1e-3)
+    assert modes["andes"] == pytest.approx(0.272, abs=1e-3)  # Freq1 1.8 rad/s
+
+
+@pytest.mark.parametrize("pitch", [False, True])
+def test_wtara1_theta0_starts_at_rest_as_pss_e_reads_it(tmp_path, pitch):
+    """WTARA1 with Theta0 5 deg (Ka 0.007): PSS/E's Pm = Pm0 - Ka theta (theta - theta0),
+    theta the pitch angle in degrees, is Pm0 at theta = theta0, where WTPTA1's pitch
+    starts (its speed PI's integrator at theta0): 5 s flat.  ANDES 2.0's mix of
+    rad(theta0) and degrees (theta = rad(theta0) - theta0 + pitch) is refused at the
+    start under conventions="andes"."""
+    from runs import flat_run
+
+    records = [_WTDTA1, "103 'WTARA1' 1 0.007 5.0 /\n", *([_WTPTA1] if pitch else [])]
+    case = _wind_case(tmp_path, *records)
+    drift, _ = flat_run(case, t_end=5.0)
+    assert drift < 1e-8
+    if pitch:
+        x0, names, _ = _evaluate(case)
+        assert x0[names.index("ibr.theta_pitch.C1")] == 5.0
+    with pytest.raises(CaseError, match="cannot start"):
+        Simulator(_wind_case(tmp_path, *records, conventions="andes")).run([], 0.01, h=0.005)
+
+
+def test_wtpta1_speed_pi_acts_on_wttqa1_speed_reference(tmp_path):
+    """WTPTA1 with WTTQA1 (speed curve 0.2/0.58 ... 0.8/1.0: at P0 0.4 the turbine runs
+    at wref 0.72 pu): PSS/E's speed PI acts on wt - wref, wref WTTQA1's speed reference
+    (PSS/E Model Library WTPTA1, WECC WTGPT_A; GridPACK wtpta1.cpp).  At rest at 0.72 pu
+    no pitch state moves; with the turbine 0.01 pu above wref the speed PI's integrator
+    moves at Kiw 0.01 = 0.25 deg/s and the pitch at Kpw 0.01/Tp = 5 deg/s (no limit
+    reached), where ANDES's reading (wt - 1) holds the pitch at its lower limit 0."""
+    records = [_WTDTA1, "103 'WTARA1' 1 0.007 0.0 /\n", _WTPTA1, _WTTQA1]
+    rates = {}
+    for conventions in ("psse", "andes"):
+        x0, names, f = _evaluate(_wind_case(tmp_path, *records, conventions=conventions))
+        wt = names.index("ibr.wt.C1")
+        pitch = [k for k, n in enumerate(names) if "pitch" in n]
+        assert x0[wt] == pytest.approx(0.72, abs=1e-12)
+        assert x0[names.index("ibr.wref_tq.C1")] == x0[wt]
+        assert np.max(np.abs(f(x0)[pitch])) < 1e-12
+        x = x0.copy()
+        x[wt] += 0.01
+        d = f(x)
+        rates[conventions] = (
+            d[names.index("ibr.PIw_pitch.C1")],
+            d[names.index("ibr.theta_pitch.C1")],
+        )
+    assert rates["psse"][0] == pytest.approx(25.0 * 0.01, rel=1e-9)
+    assert rates["psse"][1] == pytest.approx(150.0 * 0.01 / 0.3, rel=1e-9)
+    assert rates["andes"] == (0.0, 0.0)
+
+
+def test_wtpta1_rate_limits_bound_the_pitch_rate(tmp_path):
+    """PSS/E's WTPTA1 rate limits RTetaMax, RTetaMin (10, -10) bound dtheta/dt in deg/s:
+    the turbine 0.05 pu above WTTQA1's wref asks Kpw 0.05 = 7.5 deg through Tp 0.3 s (25
+    deg/s) and pitches at 10 deg/s (ANDES's LagAntiWindupRate bounds Tp dtheta/dt, which
+    would allow 10/Tp = 33 deg/s)."""
+    records = [_WTDTA1, "103 'WTARA1' 1 0.007 0.0 /\n", _WTPTA1, _WTTQA1]
+    x0, names, f = _evaluate(_wind_case(tmp_path, *records))
+    x = x0.copy()
+    x[names.index("ibr.wt.C1")] += 0.05
+    assert f(x)[names.index("ibr.theta_pitch.C1")] == pytest.approx(10.0, rel=1e-12)

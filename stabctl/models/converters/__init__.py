@@ -239,7 +239,8 @@ class ConverterParams(Declared):
     -Q0/|V0| (ANDES's Ipcmd0_LVG, Iqcmd0), the gains kLVG = 1/(Lvpnt1 - Lvpnt0), kLVPL =
     Lvplsw Lvpl1/(Brkpt - Zerox) (0 for the other types); REECA1 or REECB1 (``reec``,
     ANDES reeca1.py, reecb1.py): Vref0r (Vref0, the initial |V| where 0), Qref = -qref0
-    (its Q reference: Q0, or with a REECA1's QFLAG Vref1 - |V0|), tanpf = Q0/P0 (the
+    (its Q reference: Q0, or with a REECA1's QFLAG Vref1 - |V0|; read as PSS/E's, ``psse``
+    1, with QFLAG 1 and VFLAG 0 |V0| - Vref1, else Q0, as a REECD1's), tanpf = Q0/P0 (the
     power-factor reference, 0 where P0 = 0: Qcpf held at Q0), Ipoff = Ipcmd0 - P0/|V0|
     (the REGCA1's Ipcmd less the REECA1's, ANDES's two initial commands summed; 0 for a
     REGC_B, whose Ipcmd0 is P0/|V0|: it has no LVG), Imaxr

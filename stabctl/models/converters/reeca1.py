@@ -21,7 +21,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel
 from stabctl.models.blocks import anti_windup, clip, deadband, lag, pi_track_aw_freeze
-from stabctl.models.converters.table import NO_REEC, REECB1, REECD1, C
+from stabctl.models.converters.table import NO_REEC, REECA1, REECB1, REECD1, C
 from stabctl.models.declaration import DyrModel, slots
 
 if TYPE_CHECKING:
@@ -87,7 +87,8 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
     `ConverterParams`) from the system-base fields ``vals``, for the rows with an
     electrical control ``reec`` (0 elsewhere); a REECD1's the same but its Q reference
     (Q0, or with QFLAG 1 and VFLAG 0 vc0 - Vbias, vc0 the voltage its voltage control
-    compares, `reecd1.initial_voltage`; |V0| of the others) and the point counts nVDL1,
+    compares, `reecd1.initial_voltage`; |V0| of the others; a REECA1's read as PSS/E's,
+    ``psse`` 1, the same as a REECD1's) and the point counts nVDL1,
     nVDL2 of its ten-point curves (`_table_points`)."""
 
     # qref0 (reeca1.py 412): QFLAG (v - Vref1), else Iqcmd0 vp (vp = v above 0.01 pu);
@@ -96,9 +97,12 @@ def services(vals: dict, reec, P0, Q0, v0, Ipcmd0, vc0) -> dict[str, np.ndarray]
     qref0 = np.where(vals["QFLAG"] == 1, vc0 - vals["Vref1"], -Q0 / v0 * vp0)
     qref0 = np.where(reec == REECB1, -Q0, qref0)
     # REECD1 (PSS/E's diagram): Q0 the Q PI's reference, or with QFLAG 1, VFLAG 0 the
-    # offset Vc0 - Vbias that puts Vsel = Vbias + Qref at its compensated voltage vc0
+    # offset Vc0 - Vbias that puts Vsel = Vbias + Qref at its compensated voltage vc0; a
+    # REECA1 read as PSS/E's (``psse`` 1) the same (OpenIPSL REECA1.mo: Q0 the Q PI's
+    # reference, and Vsel = V0 at the start, its ``Vmod = V0 - PFsel``)
     offset = (vals["QFLAG"] == 1) & (vals["VFLAG"] == 0)
-    qref0 = np.where(reec == REECD1, np.where(offset, vals["Vref1"] - vc0, -Q0), qref0)
+    psse = (reec == REECD1) | ((reec == REECA1) & (vals["psse"] == 1))
+    qref0 = np.where(psse, np.where(offset, vals["Vref1"] - vc0, -Q0), qref0)
     with np.errstate(divide="ignore", invalid="ignore"):
         tanpf = np.where(P0 != 0, Q0 / np.where(P0 != 0, P0, 1.0), 0.0)
     on = {
@@ -152,7 +156,9 @@ def initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
     """REECA1's initial states in x (N_STATES, n_ibr), in place, at the voltage
     magnitudes v (ANDES reeca1.py v_str): the filters at |V0|, P0, P0, P0; the Q filter
     at PFsel/vp (Qref, or Q0 with PFFLAG); the V PI's integrator at QFLAG Q0/|V0| (its
-    x0 -QFLAG Iqcmd0), the Q PI's at 0; the last Ipcmd the REGCA1's Ipcmd0."""
+    x0 -QFLAG Iqcmd0), the Q PI's at 0 (ANDES's; PSS/E's reading, ``psse`` 1, with VFLAG
+    and QFLAG 1: at |V0|, its output the V PI's voltage reference, OpenIPSL REECB1.mo,
+    REECA1.mo ``y_start=V0``); the last Ipcmd the REGCA1's Ipcmd0."""
     ree = cp.reec != NO_REEC
     vp = np.where(v <= 0.01, 0.01, v)
     pfsel = np.where(cp.PFFLAG == 1, cp.Q0, cp.Qref)
@@ -167,6 +173,8 @@ def initial(cp: ConverterParams, x: np.ndarray, v: np.ndarray) -> None:
     }
     for slot, value in init.items():
         x[slot] = np.where(ree, value, 0.0)
+    psse_q = ree & (cp.psse == 1) & (cp.VFLAG == 1) & (cp.QFLAG == 1)
+    x[RE.PIQ] = np.where(psse_q, v, x[RE.PIQ])
 
 
 @kernel
@@ -341,7 +349,14 @@ def control(P, x, k, v, S, ref, wg, vc, dx):
     IqHL), pu.  Frozen (Volt_dip) while v < Vdip or v > Vup
     (strict).  A REECB1 (ANDES reecb1.py) the same but: the V PI's input the selected
     Vsel (the Q PI's output with VFLAG, else 0), no VDL curves, Iqinj at all times, no
-    holds (its Thld, Thld2 0) and no PFLAG (0)."""
+    holds (its Thld, Thld2 0) and no PFLAG (0).
+
+    PSS/E's reading (``psse`` 1, import-psse's default; PSS/E Model Library REECB1,
+    REECA1, as OpenIPSL's PSS/E-verified ``REECB1.mo``, ``REECA1.mo``): with QFLAG 1 the V
+    PI's input is clip(VFLAG ? the Q PI's output : Vref0r (REECB1; REECA1 Vref1 + PFsel),
+    VMIN, VMAX) - vc, the Q PI started at |V0| (`initial`), where ANDES 2.0's REECB1 feeds
+    clip(VFLAG Q PI, VMIN, VMAX) with no reference and no voltage (and its REECA1 no
+    voltage with VFLAG 1)."""
     ext = ref - P[k, C.P0]
     frz = v < P[k, C.VDIP] or v > P[k, C.VUP]
     extended = extended_event(x, dx, RE.Iqinj_timer, k, frz, abs(P[k, C.THLD]))
@@ -375,12 +390,15 @@ def control(P, x, k, v, S, ref, wg, vc, dx):
             frz,
         )
         x[RE.PIQ_held, k] = piq
-    if P[k, C.REEC] == REECB1:
+    psse = P[k, C.PSSE] == 1.0
+    if P[k, C.REEC] == REECB1 and psse:  # PSS/E: the V PI regulates Vt_filter
+        u = P[k, C.QFLAG] * (clip(P[k, C.VREF0R] if vflag == 0.0 else piq, lo, hi) - vc)
+    elif P[k, C.REEC] == REECB1:  # ANDES 2.0's reecb1.py: no reference, no voltage
         u = P[k, C.QFLAG] * clip(vflag * piq, lo, hi)
     else:
         Vsel = clip(P[k, C.VREF1] + PFsel if vflag == 0.0 else piq, lo, hi)
-        # ANDES's REECA1 compares no voltage with VFLAG 1; PSS/E's REECD1 always does
-        seen = 1.0 if P[k, C.REEC] == REECD1 else 1.0 - vflag
+        # ANDES's REECA1 compares no voltage with VFLAG 1; PSS/E's always does
+        seen = 1.0 if P[k, C.REEC] == REECD1 or psse else 1.0 - vflag
         u = P[k, C.QFLAG] * (Vsel - vc * seen)
     s4 = x[RE.Iq_filter, k]
     dx[RE.Iq_filter, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]

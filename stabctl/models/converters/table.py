@@ -1,9 +1,9 @@
 """The ``ibr_con`` table every converter component reads: its columns (the device's own,
 then each component's: REECA1 54-104, REPCA1 105-143, the wind turbine 145-182, the PLL1
 183-187, the DG protection 188-213, the DERA1 214-227 and 271-302, the REGCB1 228-237, the
-REECD1 238-270; ANDES 2.0's and PSS/E's parameters, docs/ibr.md), the codes that
-switch the components on, and the packed parameter layout of the compiled kernels
-(`PACKED`, its named columns `C`).
+REECD1 238-270, the reading ``psse`` 303; ANDES 2.0's and PSS/E's parameters,
+docs/ibr.md), the codes that switch the components on, and the packed parameter layout of
+the compiled kernels (`PACKED`, its named columns `C`).
 
 The columns are declared here, once, not in the component modules of
 :mod:`stabctl.models.converters`: every kernel reads the packed matrix by the names of `C`,
@@ -656,6 +656,19 @@ PARAMS = (
     *_REGCB1_PARAMS,
     *_REECD1_PARAMS,
     *_DERA1_CONTROL_PARAMS,
+    Param(
+        "psse",
+        "code",
+        303,
+        choices=(0.0, 1.0),
+        doc="the reading of the REEC_A/REEC_B voltage loop and the wind turbine: 0 ANDES 2.0's "
+        "(import-andes), 1 PSS/E's Model Library (import-psse's default; OpenIPSL "
+        "REECB1.mo, REECA1.mo, WTDTA1.mo): QFLAG 1's V PI on clip(VFLAG ? Q PI (started "
+        "at |V0|) : Vref0 (REECB1), Vmin, Vmax) - Vt_filter (REECA1's VFLAG 0 Q reference "
+        "|V0| - Vref1), WTDTA1's Freq1 in Hz, WTARA1's pitch theta in degrees (theta0 at "
+        "rest), WTPTA1's speed error wt - WTTQA1's wref and its rates on dtheta/dt "
+        "(docs/ibr.md 6, 8, 11)",
+    ),
 )
 
 #: the ibr_con fields the kernels take as given (pu quantities after the base change)

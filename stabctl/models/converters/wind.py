@@ -103,7 +103,11 @@ def initial(cp: ConverterParams, x: np.ndarray) -> None:
     a torque control (WTTQA1), else at w0; the shaft torque P0 over that speed (WTDTA1);
     WTTQA1's Pe filter at P0, its speed reference at fPe(P0), its PI's integrator at
     P0/fPe(P0); WTPTA1's integrators at 0 and its pitch angle at the PIs' outputs (the
-    speed PI's clip(Kpw (w - w0), thmin, thmax))."""
+    speed PI's clip(Kpw (w - w0), thmin, thmax)).  PSS/E's reading (``psse`` 1): the pitch
+    angle at WTARA1's theta0 (deg), held by the speed PI's integrator (its error wt -
+    wref 0 at the start), the power PI's at 0 (PSS/E Model Library WTPTA1, WTARA1: the
+    aerodynamics at rest at theta = theta0; GridPACK ``wtpta1.cpp`` starts the pitch lag
+    at WTARA1's Theta0)."""
     P = cp.packed()
     for k in np.flatnonzero(cp.wind != NO_WIND):
         w = _speed_curve.py_func(P, k, cp.P0[k]) if cp.torque[k] == 1 else cp.wt_w0[k]
@@ -113,7 +117,10 @@ def initial(cp: ConverterParams, x: np.ndarray) -> None:
             x[WT.Tshaft, k] = cp.P0[k] / w
         if cp.torque[k] == 1:
             x[WT.Pe_filter_tq, k], x[WT.wref_tq, k], x[WT.PI_tq, k] = cp.P0[k], w, cp.P0[k] / w
-        if cp.pitch[k] == 1:
+        if cp.pitch[k] == 1 and cp.psse[k] == 1:
+            theta0 = np.clip(cp.wa_theta0[k], cp.wp_thmin[k], cp.wp_thmax[k])
+            x[WT.PIw_pitch, k] = x[WT.theta_pitch, k] = theta0
+        elif cp.pitch[k] == 1:
             lo, hi = cp.wp_thmin[k], cp.wp_thmax[k]
             yw = np.clip(cp.wp_Kpw[k] * (w - cp.wt_w0[k]), lo, hi)
             x[WT.theta_pitch, k] = yw + np.clip(0.0, lo, hi)
@@ -185,19 +192,31 @@ def _pitch_angle(P, x, k, wt, Pord, Pref, dx):
     reference: the drive train's w0, as ANDES initialises it), each limited to [thmin,
     thmax] (ANDES's PIAWHardLimit, `blocks.pi_aw_hard_limit`), through the lag Tp with
     the rate limits [dthmin, dthmax] on Tp dtheta/dt and the anti-windup limits [thmin,
-    thmax] (LagAntiWindupRate; `blocks.anti_windup`)."""
+    thmax] (LagAntiWindupRate; `blocks.anti_windup`).  PSS/E's reading (``psse`` 1): the
+    speed reference is WTTQA1's wref (the Twref lag's state; w0 without a torque
+    control), as the PSS/E Model Library's WTPTA1 and WECC's WTGPT_A take it from the
+    torque control (GridPACK ``wtpta1.cpp``: wt - wref, ``setSpeedReference``), and the
+    rate limits RTetaMax, RTetaMin bound dtheta/dt (deg/s), not Tp dtheta/dt."""
     lo, hi = P[k, C.WP_THMIN], P[k, C.WP_THMAX]
     e = Pord - Pref
     yc, x[WT.PIc_pitch, k], dx[WT.PIc_pitch, k] = pi_aw_hard_limit(
         e, x[WT.PIc_pitch, k], P[k, C.WP_KPC], P[k, C.WP_KIC], lo, hi
     )
-    u = P[k, C.WP_KCC] * e + wt - P[k, C.WT_W0]
+    wref = P[k, C.WT_W0]
+    if P[k, C.PSSE] == 1.0 and P[k, C.TORQUE] == 1.0:
+        wref = x[WT.wref_tq, k]
+    u = P[k, C.WP_KCC] * e + wt - wref
     yw, x[WT.PIw_pitch, k], dx[WT.PIw_pitch, k] = pi_aw_hard_limit(
         u, x[WT.PIw_pitch, k], P[k, C.WP_KPW], P[k, C.WP_KIW], lo, hi
     )
-    r = clip(yw + yc - x[WT.theta_pitch, k], P[k, C.WP_DTHMIN], P[k, C.WP_DTHMAX])
+    Tp = P[k, C.WP_TP]
+    if P[k, C.PSSE] == 1.0:  # PSS/E: RTetaMax, RTetaMin bound dtheta/dt, deg/s
+        r = clip((yw + yc - x[WT.theta_pitch, k]) / Tp, P[k, C.WP_DTHMIN], P[k, C.WP_DTHMAX])
+        Tp = 1.0
+    else:  # ANDES's LagAntiWindupRate: Tp dtheta/dt
+        r = clip(yw + yc - x[WT.theta_pitch, k], P[k, C.WP_DTHMIN], P[k, C.WP_DTHMAX])
     x[WT.theta_pitch, k], r = anti_windup(x[WT.theta_pitch, k], r, lo, hi)
-    dx[WT.theta_pitch, k] = r / P[k, C.WP_TP]
+    dx[WT.theta_pitch, k] = r / Tp
     return x[WT.theta_pitch, k]
 
 
@@ -209,10 +228,17 @@ def mechanics(P, x, k, Pe, wg_ree, wr0, Pref, dx):
     the pitch angle, ANDES's mix of radians and degrees kept), P0 without; WTDTA1 2 Ht
     dwt/dt = Pm/wt - Tshaft - pd, 2 Hg dwg/dt = -Pe/wg + Tshaft - DAMP (wg - w0) + pd,
     dTshaft/dt = Kshaft (wt - wg), pd = Dshaft (wt - wg), Ht = Htfrac H, Hg = H - Ht,
-    Kshaft = 2 Ht Hg Freq1^2/H; WTDS 2 H dw/dt = (Pm - Pe)/wg_ree - DAMP (w - wr0)."""
+    Kshaft = 2 Ht Hg Freq1^2/H; WTDS 2 H dw/dt = (Pm - Pe)/wg_ree - DAMP (w - wr0).
+
+    PSS/E's reading (``psse`` 1, import-psse's default): theta is the pitch angle in
+    degrees throughout (theta0 without a pitch control), so that Pm = P0 at theta =
+    theta0 (PSS/E Model Library WTARA1); Freq1 is in Hz, Kshaft = 2 Ht Hg (2 pi
+    Freq1)^2/H (OpenIPSL ``WTDTA1.mo``: Kshaft = 2 Ht Hg (2 pi Freq1)^2/(H w0) on the
+    shaft angle, whose rate is w0 (wt - wg)), the torsional mode at about Freq1 Hz."""
     wt, wg = _speeds(P, x, k)
     theta0 = P[k, C.WA_THETA0]
-    theta = np.deg2rad(theta0)
+    psse = P[k, C.PSSE] == 1.0
+    theta = theta0 if psse else np.deg2rad(theta0)
     if P[k, C.PITCH] == 1.0:
         theta += _pitch_angle(P, x, k, wt, x[RE.Pord, k], Pref, dx) - theta0
     Pm = P[k, C.P0]
@@ -228,4 +254,5 @@ def mechanics(P, x, k, Pe, wg_ree, wr0, Pref, dx):
     pd = P[k, C.WT_DSHAFT] * (wt - wg)
     dx[WT.wt, k] = (Pm / wt - x[WT.Tshaft, k] - pd) / Ht2
     dx[WT.wg, k] = (-Pe / wg + x[WT.Tshaft, k] - P[k, C.WT_DAMP] * (wg - P[k, C.WT_W0]) + pd) / Hg2
-    dx[WT.Tshaft, k] = Ht2 * Hg2 * 0.5 * P[k, C.WT_FREQ1] ** 2 / H * (wt - wg)
+    w_shaft = 2.0 * np.pi * P[k, C.WT_FREQ1] if psse else P[k, C.WT_FREQ1]
+    dx[WT.Tshaft, k] = Ht2 * Hg2 * 0.5 * w_shaft**2 / H * (wt - wg)
