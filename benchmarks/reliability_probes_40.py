@@ -41,8 +41,9 @@ compile`).  Prints per probe: id, ok/SHORT, reason; exits 1 if any is SHORT.  Ev
 has a timeout; work in a temporary directory (removed at the end unless KEEP=1).  About 5
 minutes with a warm kernel cache.
 
-The round found short (REAL, all fixed the same day): AJ02-AJ03, GGOV1's Rselect -1 and -2
-swapped; AJ08-AJ09, REECB1 with QFLAG 1 read as ANDES reads it (no Vref0, no Vt_filter:
+The round found short (REAL, fixed the same day but AJ02): AJ02-AJ03, GGOV1's Rselect -1
+and -2 swapped (now -1 is the fuel valve stroke; -2, the governor output, is refused by name
+as an algebraic loop stabctl does not solve, so AJ02 stays short); AJ08-AJ09, REECB1 with QFLAG 1 read as ANDES reads it (no Vref0, no Vt_filter:
 refused to start, or no voltage control); AJ10, WTDTA1's Freq1 read in pu (the torsional
 mode 0.274 Hz for 1.8 Hz); AJ11, WTARA1's Theta0 mixing radians and degrees (refused to
 start); AJ12, WTPTA1's speed PI against w0 = 1 instead of WTTQA1's reference.  The PSS/E
