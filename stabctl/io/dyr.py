@@ -108,7 +108,8 @@ class DyrTables:
     unsupported: the records skipped (`on_unsupported="skip"`), in file order; why: the
     reason each was skipped (same order), e.g. "model TOGGLE is not mapped"; changed: the
     records read with a value other than the file's, ``"file:line MODEL (bus B, id I):
-    what"`` (VRMAX = 0 read as no upper limit; with conventions="andes" an SCRX read as
+    what"`` (a DC exciter's VRMAX = 0 computed as PSS/E computes it, or read as no upper
+    limit with conventions "andes" and "pst"; with conventions="andes" an SCRX read as
     ANDES's SEXS with its defaults)."""
 
     mac_con: np.ndarray
@@ -984,7 +985,7 @@ def exp_saturation(E1, SE1, E2, SE2) -> tuple[float, float]:
     return float(SE1 * np.exp(-B * E1)), float(B)
 
 
-#: ESDC2A's VRMAX = 0 read as no upper limit (ANDES; PST would compute it from E2)
+#: a VRMAX = 0 read as no upper limit (ANDES; conventions "andes" and "pst", and IEEET3)
 VRMAX_UNLIMITED = VRMAX_NO_LIMIT
 
 
@@ -1006,7 +1007,9 @@ def _dc(model, zero_vrmax_unlimited=False, andes=False, psse=False):
         OpenIPSL's ``calculate_dc_exciter_params``)."""
         v = decl.values(rec.params)
         cols = {}
-        if zero_vrmax_unlimited and v["VRMAX"] == 0:
+        if psse and v["VRMAX"] == 0:
+            cols["Vrmax"], cols["Vrmin"] = _psse_vrmax(rec, v)
+        elif zero_vrmax_unlimited and v["VRMAX"] == 0:
             cols["Vrmax"] = _unlimited_vrmax(rec)
         if v.get("Switch", 0.0) != 0:
             raise _Unsupported(f"Switch = {v['Switch']} is not modelled (only 0)")
@@ -1119,6 +1122,29 @@ def _ieeet3(rec, gen):
     no upper limit (ANDES ``ieeet3.py`` ``VRMAXc``)."""
     v = DYR_MODELS["IEEET3"].values(rec.params)
     return _exc_row(rec, gen, **({"Vrmax": _unlimited_vrmax(rec)} if v["VRMAX"] == 0 else {}))
+
+
+def _psse_vrmax(rec, v) -> tuple[float, float]:
+    """A DC exciter's VRMAX = 0 as PSS/E computes it (PAG 15.2.4, as OpenIPSL's
+    ``calculate_dc_exciter_params`` reads it): the ceiling that holds Efd at E2 in steady
+    state, VRMAX = (KE + SE(E2)) E2 with KE taken as 0 when it is 0 (computed later from
+    VRMAX) or negative, and VRMIN = -VRMAX; named as read so.  OpenIPSL writes the KE > 0
+    branch SE(E2) + KE, without the factor E2 its KE <= 0 branch has; stabctl keeps the
+    factor (the steady-state ceiling at Efd = E2 in both).  Raises CaseError when that
+    ceiling is not positive (no saturation point E2)."""
+    ke = max(v["KE"], 0.0)
+    vrmax = (ke + v["SE(E2)"]) * v["E2"]
+    if not vrmax > 0:
+        raise CaseError(
+            f"{rec.label()}: VRMAX = 0 is computed as (KE + SE(E2)) E2 = {vrmax:g} "
+            "(PSS/E PAG 15.2.4), not a ceiling: give VRMAX, or E2 and SE(E2)"
+        )
+    _read_as(
+        rec,
+        f"VRMAX = 0 computed as PSS/E does, (KE + SE(E2)) E2 = ({ke:g} + {v['SE(E2)']:g}) "
+        f"{v['E2']:g} = {vrmax:.6g}, VRMIN = -VRMAX (PAG 15.2.4)",
+    )
+    return vrmax, -vrmax
 
 
 def _unlimited_vrmax(rec) -> float:

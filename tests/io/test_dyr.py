@@ -209,10 +209,18 @@ def test_psse_conventions_read_exst1_as_pss_e_and_no_other_control_differently()
     assert np.all(psse.exc_con[~st3, ifd] == 0) and np.all(pst.exc_con[:, ifd] == 0)
     floor = ExciterTable.columns().index("efd_floor")  # ESDC2A's Efd >= 0 (PSS/E's)
     assert np.all(psse.exc_con[dc, floor] == 1) and np.all(pst.exc_con[:, floor] == 0)
+    zero = dc & (pst.exc_con[:, 7] == VRMAX_UNLIMITED)  # VRMAX = 0: computed from E2
+    assert zero.sum() == 8
+    ke, e2, se2 = (psse.exc_con[zero, c] for c in (9, 13, 14))  # E2 SE2: the points
+    ceiling = (np.maximum(ke, 0) + se2) * e2  # PSS/E PAG 15.2.4 (docs 12.4)
+    np.testing.assert_allclose(psse.exc_con[zero, 7], ceiling, rtol=1e-14)
+    np.testing.assert_array_equal(psse.exc_con[zero, 8], -psse.exc_con[zero, 7])
     others = (np.arange(pst.exc_con.shape[1]) != col) & ~np.isin(
         np.arange(pst.exc_con.shape[1]), [*sat, ifd, floor]
     )
-    np.testing.assert_array_equal(pst.exc_con[:, others], psse.exc_con[:, others])
+    np.testing.assert_array_equal(pst.exc_con[~zero][:, others], psse.exc_con[~zero][:, others])
+    limits = others & ~np.isin(np.arange(pst.exc_con.shape[1]), [7, 8])
+    np.testing.assert_array_equal(pst.exc_con[zero][:, limits], psse.exc_con[zero][:, limits])
     np.testing.assert_array_equal(pst.exc_con[~dc][:, sat], psse.exc_con[~dc][:, sat])
     np.testing.assert_array_equal(pst.tg_con, psse.tg_con)  # WECC has no HYGOV
     np.testing.assert_array_equal(pst.pss_con, psse.pss_con)
@@ -338,7 +346,9 @@ def test_wecc_imports_completely():
 
 
 def test_wecc_esdc2a_to_dc2():
-    """Line 60 (bus 10): TR .02 KA 50 TA .05 TB .02 TC 0 VRMAX 0 (no limit, as ANDES) VRMIN -3
+    """Line 60 (bus 10): TR .02 KA 50 TA .05 TB .02 TC 0 VRMAX 0 (read as PSS/E: computed
+    from E2, (KE + SE(E2)) E2 = 5.57019 with VRMIN = -VRMAX, PAG 15.2.4; as PST: no limit,
+    as ANDES, and VRMIN as given) VRMIN -3
     KE 0 (computed at initialisation) TE .512 KF .07 TF1 1.3 Switch 0 E1 3.9825 SE1 .5
     E2 5.31 SE2 1.049.  Saturation: read as PSS/E (the default), the two points themselves
     for PSS/E's quadratic (dc_sat = 1, column 23) with K_E computed (ke_given = 0, column
@@ -349,8 +359,10 @@ def test_wecc_esdc2a_to_dc2():
     for conventions in ("psse", "pst"):
         t = dyr_tables(recs, gens, conventions=conventions)
         e = t.exc_con[t.exc_con[:, 1] == n10][0]
-        head = [2, n10, 0.02, 50, 0.05, 0.02, 0, 999, -3, 0, 0.512]
-        np.testing.assert_array_equal(e[:11], head)
+        ceiling = (0 + 1.049) * 5.31 if conventions == "psse" else None  # (KE + SE(E2)) E2
+        limits = [ceiling, -ceiling] if ceiling else [999, -3]
+        head = [2, n10, 0.02, 50, 0.05, 0.02, 0, *limits, 0, 0.512]
+        np.testing.assert_allclose(e[:11], head, rtol=1e-15)
         assert (e[15], e[16]) == (0.07, 1.3)
         if conventions == "psse":
             assert (e[11], e[12], e[13], e[14], e[22], e[23]) == (3.9825, 0.5, 5.31, 1.049, 1, 0)
@@ -364,7 +376,8 @@ def test_wecc_esdc2a_to_dc2():
 def test_psse_dc_exciter_saturation_is_pss_e_quadratic():
     """Read as PSS/E, WECC's ESDC2A at bus 10 saturates as the PSS/E Model Library's
     S_E(E) = B (E - A)^2 / E through its two points (OpenIPSL's "PTI PSS/E" ``SE``):
-    S_E(3.9825) = 0.5 and S_E(5.31) = 1.049; K_E = 0 resolves to -S_E(Efd0) (V_R0 = 0)."""
+    S_E(3.9825) = 0.5 and S_E(5.31) = 1.049, where the exciter's feedback with K_E =
+    -S_E(E) vanishes."""
     from stabctl.models.exciters import _dc_saturation, dc_feedback
 
     recs = read_dyr(WECC_DYR)
@@ -1144,8 +1157,9 @@ def test_ieeex1_initialisation_matches_andes_npcc():
 
 
 def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):
-    """WECC's ESDC2A (K_E = 0 computed so that V_R0 = 0, exponential saturation) on Kundur's
-    machines: equilibrium, V_R0 = 0, no drift."""
+    """WECC's ESDC2A read as PSS/E (VRMAX = 0 computed from E2, 5.57019; K_E = 0 computed so
+    that V_R0 = VRMAX/10, PAG 15.2.4) on Kundur's machines: equilibrium, V_R0 = 0.557019,
+    no drift."""
     recs = read_dyr(WECC_DYR)
     gens = wecc_generators(recs)
     t = dyr_tables(recs, gens)
@@ -1155,7 +1169,7 @@ def test_flat_run_with_wecc_esdc2a_has_no_drift(kundur_tables):
     sim = Simulator(replaced_kundur(e, kundur_tables.tg_con))
     m = sim.model_for([])
     assert m.initial_residual[0] < 1e-9, m.initial_residual[1]
-    np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 0.0, atol=1e-15)  # V_R0
+    np.testing.assert_allclose(m.layout.view(m.x0, "exc")[2], 1.049 * 5.31 / 10, rtol=1e-14)
     r = sim.run([], 10.0)
     assert np.abs(r.speed - 1).max() < 1e-9 and np.abs(r.efd - r.efd[0]).max() < 1e-9
 

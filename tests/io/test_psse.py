@@ -14,6 +14,7 @@ from click.testing import CliRunner
 
 from stabctl.case import PQ, PV, SWING
 from stabctl.cli import main
+from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.results import SimulationResult
 from stabctl.errors import CaseError
 from stabctl.io import load_case
@@ -963,8 +964,9 @@ def test_power_flow_is_reported_against_the_raw_files_own_solution(tmp_path):
 
 
 def test_a_dyr_value_read_otherwise_is_named_changed(tmp_path):
-    """Issue 50: nothing changed silently.  An ESDC2A's VRMAX = 0 is read as no upper
-    limit (ANDES's reading): named with file:line in `changed`, a warning and the CLI's
+    """Issue 50: nothing changed silently.  An ESDC2A's VRMAX = 0 is computed as PSS/E
+    computes it (`test_dc_exciter_vrmax_zero_is_computed_as_psse`), read as no upper limit
+    with conventions="pst": each named with file:line in `changed`, a warning and the CLI's
     summary; an SCRX read with conventions="andes" (ANDES's SEXS with SEXS's defaults)
     likewise."""
     esdc2a = "1 'ESDC2A' 1 0.0 400 0.04 0 0 0.0 -7.3 1.0 0.8 0.03 1.0 0 3.1 0.33 2.3 0.1 /"
@@ -973,17 +975,47 @@ def test_a_dyr_value_read_otherwise_is_named_changed(tmp_path):
     with pytest.warns(UserWarning, match=r"read 1 record\(s\) with a value other than"):
         imported = import_psse(V33, dyr)
     assert imported.changed == (
+        "edited.dyr:5 ESDC2A (bus 1, id 1): VRMAX = 0 computed as PSS/E does, (KE + SE(E2)) "
+        "E2 = (1 + 0.1) 2.3 = 2.53, VRMIN = -VRMAX (PAG 15.2.4)",
+    )
+    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json", "--json")
+    assert json.loads(res.stdout)["changed"] == list(imported.changed)
+    with pytest.warns(UserWarning, match=r"read 1 record\(s\) with a value other than"):
+        imported = import_psse(V33, dyr, conventions="pst")
+    assert imported.changed == (
         "edited.dyr:5 ESDC2A (bus 1, id 1): VRMAX = 0 read as no upper limit (999)",
     )
     assert imported.case.exciters.Vrmax[0] == 999.0
-    res = run("import-psse", V33, dyr, "-o", tmp_path / "x.json", "--json")
-    assert json.loads(res.stdout)["changed"] == list(imported.changed)
     scrx = _dyr(tmp_path, *lines, "1 'SCRX' 1 0.1 10 200 0.05 -5 5 0 0 /")
     with pytest.warns(UserWarning, match="SEXS's defaults"):
         imported = import_psse(V33, scrx, conventions="andes")
     (changed,) = imported.changed
     assert changed.startswith("edited.dyr:5 SCRX (bus 1, id 1): read as ANDES 2.0 reads it")
     assert import_psse(V33, scrx).changed == ()
+
+
+@pytest.mark.parametrize(
+    ("model", "ke", "vrmax"),
+    [("ESDC2A", 1.0, (1.0 + 0.1) * 2.3), ("ESDC1A", 0.0, 0.1 * 2.3), ("IEEEX1", -0.05, 0.1 * 2.3)],
+)
+def test_dc_exciter_vrmax_zero_is_computed_as_psse(tmp_path, model, ke, vrmax):
+    """A DC exciter's VRMAX = 0 read as PSS/E reads it (PAG 15.2.4; OpenIPSL's
+    ``calculate_dc_exciter_params``): VRMAX = SE(E2) E2 when KE <= 0 (OpenIPSL's value),
+    (KE + SE(E2)) E2 when KE > 0 (the ceiling that holds Efd at E2 in steady state), VRMIN
+    = -VRMAX (with KE = 0, K_E is then computed from it so that V_R starts at VRMAX/10),
+    and a run without disturbance stays at rest (Efd, speeds and voltages).  It was read as
+    no upper limit (999), and IEEEX1's refused.  No ceiling (SE(E2) = 0, KE = 0) is refused
+    by name."""
+    rec = f"1 '{model}' 1 0.0 400 0.04 0 0 0.0 -7.3 {ke} 0.8 0.03 1.0 0 3.1 0.33 2.3 0.1 /"
+    lines = (DATA / "five_bus.dyr").read_text().splitlines()
+    with pytest.warns(UserWarning, match="VRMAX = 0 computed as PSS/E does"):
+        case = import_psse(V33, _dyr(tmp_path, *lines, rec)).case
+    e = case.exciters
+    assert e.Vrmax[0] == pytest.approx(vrmax, rel=1e-14) and e.Vrmin[0] == -e.Vrmax[0]
+    assert Simulator(case).run(t_end=2.0).drift()["pu"] < 1e-9
+    dead = rec.replace("2.3 0.1 /", "2.3 0.0 /").replace(f" {ke} 0.8", " 0 0.8")
+    with pytest.raises(CaseError, match=r"VRMAX = 0 is computed as \(KE \+ SE\(E2\)\) E2 = 0"):
+        import_psse(V33, _dyr(tmp_path, *lines, dead))
 
 
 _T1_WINDING_1 = "240.00,   0.000,   0.000,"
