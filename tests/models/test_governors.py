@@ -406,19 +406,80 @@ def test_ggov1_rselect_minus_1_is_the_droop_on_the_fuel_valve_stroke():
     stabctl had -1 and -2 swapped (round 50: -2 fed back the valve stroke, 4.2 % of a Pref
     step's response off; -1, PSS/E's valve stroke, refused): with -1 the set point is R
     times the stroke at rest, and a stroke 0.01 above rest moves the governor's integrator
-    by -Kigov R 0.01; -2, the requested stroke (an algebraic loop), is refused."""
+    by -Kigov R 0.01 (-2: next test)."""
     P, x = started(ggov1_row(Rselect=-1))
     valve = x[gov.ggov1.S.valve, 0]
     assert P[0, gov.G.PREF] == pytest.approx(0.04 * valve, rel=1e-14)
     x[gov.ggov1.S.valve, 0] += 0.01
     dx = derivatives(P, x)
     assert dx[gov.ggov1.S.gov_i, 0] == pytest.approx(-2.0 * 0.04 * 0.01, rel=1e-9)
-    with pytest.raises(CaseError, match=r"-2 \(governor output, the requested stroke\)"):
-        params(ggov1_row(Rselect=-2))
+
+
+def test_ggov1_rselect_minus_2_feeds_back_the_governor_output_its_loop_solved():
+    """Rselect -2 (PSS/E, PSLF, the CIM: the governor output fsr, the requested stroke, fed
+    back; refused until 2026-12-02): e = P_ref - (omega - 1) - R fsr with fsr = Kpgov e +
+    the integral, an algebraic loop solved exactly, as PSS/E's one-step delay tends to.
+    Closed forms: the set point R fsr0 at rest; 0.1 % slow, fsr = fsr0 + Kpgov 0.001/(1 +
+    Kpgov R) (the valve's rate (fsr - stroke)/Tact, 0.0143 pu/s within Ropen) and the
+    integral's rate Kigov e; 10 % slow, e at maxerr asks fsr0 + 0.5, the acceleration
+    limiter's fsr0 + Ta Ka Aset = fsr0 + 0.1 takes the gate (the error then 0.05, the
+    integral tracking at Kigov (0.05 - 0.4/Kpgov)); held 0.1 % slow, the droop R on the
+    stroke: the valve settles at fsr0 + 0.001/R, as with -1 (the valve stroke at rest is
+    fsr).  An unknown code (2) is refused."""
+    S, G = gov.ggov1.S, gov.G
+    P, x = started(ggov1_row(Rselect=-2))
+    fsr0 = x[S.valve, 0]
+    assert P[0, G.PREF] == pytest.approx(0.04 * fsr0, rel=1e-14)
+    dx = derivatives(P, x, omega=0.999)
+    step = 10.0 * 0.001 / (1 + 10.0 * 0.04)
+    assert dx[S.valve, 0] * 0.5 == pytest.approx(step, rel=1e-12)
+    assert dx[S.gov_i, 0] == pytest.approx(2.0 * (0.001 - 0.04 * step), rel=1e-12)
+    dx = derivatives(P, x, omega=0.9)
+    assert dx[S.valve, 0] == 0.1  # Ropen
+    assert dx[S.gov_i, 0] == pytest.approx(2.0 * (0.05 - 0.4 / 10.0), rel=1e-12)
+    pm = pmech_after(P, x, 400.0, omega=0.999)  # the loop's time constant 17.5 s
+    assert pm == pytest.approx(1.5 * ((fsr0 + 0.001 / 0.04) * 0.999 - 0.2), abs=1e-7)
+    with pytest.raises(CaseError, match="'Rselect'"):
+        params(ggov1_row(Rselect=2))
+
+
+def test_ggov1_rselect_minus_2_loop_against_a_root_finder():
+    """The loop of Rselect -2 with the dead zone, the error limits and the PID's
+    derivative path, on 200 random states: the requested stroke the kernel hands the
+    actuator (stroke + Tact times its rate, the rates wide) is the root of f = clip(fsrn(
+    error(P_ref - (omega - 1) - R f)), Vmin, Vmax), found by scipy's brentq (fsrn = Kpgov e
+    + the integral + Kdgov (e - its state)/Tdgov; the limiters' orders above Vmax)."""
+    from scipy.optimize import brentq
+
+    S, G = gov.ggov1.S, gov.G
+    rng = np.random.default_rng(54)
+    for _ in range(200):
+        kp, kd, r = rng.uniform(1, 20), rng.choice([0.0, 1.5]), rng.uniform(0, 0.1)
+        db = rng.choice([0.0, rng.uniform(0, 0.01)])
+        row = ggov1_row(Rselect=-2, Kpgov=kp, Kdgov=kd, Tdgov=0.2, Rdroop=r, db=db)
+        P, x = started(row)
+        P[0, G.TACT], P[0, G.ROPEN], P[0, G.RCLOSE] = 1.0, 99.0, -99.0
+        x[S.gov_i, 0], x[S.gov_d, 0] = rng.uniform(0.2, 1.0), rng.uniform(-0.05, 0.05)
+        x[S.valve, 0], x[S.load_i, 0], x[S.accel_i, 0] = 0.5, 5.0, 5.0
+        omega = rng.uniform(0.95, 1.05)
+        d = P[0, G.PREF] - (omega - 1)
+
+        def error(u):
+            u = u - db if u > db else (u + db if u < -db else 0.0)
+            return min(max(u, -0.05), 0.05)
+
+        def g(f):
+            e = error(d - r * f)
+            fsrn = kp * e + x[S.gov_i, 0] + kd * (e - x[S.gov_d, 0]) / 0.2
+            return min(max(fsrn, 0.15), 1.0) - f
+
+        want = brentq(g, -1.0, 3.0, xtol=1e-15, rtol=1e-15)
+        dx = derivatives(P, x.copy(), omega=omega)
+        assert 0.5 + dx[S.valve, 0] == pytest.approx(want, abs=1e-12), row
 
 
 def test_ggov1_options_it_does_not_model_are_refused():
-    for changed, field in (({"Teng": 0.1}, "Teng"), ({"Rselect": -2}, "Rselect"),
+    for changed, field in (({"Teng": 0.1}, "Teng"), ({"Rselect": -3}, "Rselect"),
                            ({"Kimw": 0.01}, "Kimw"), ({"Dm": -0.1}, "Dm")):  # fmt: skip
         with pytest.raises(CaseError, match=f"'{field}'"):
             params(ggov1_row(**changed))

@@ -5,9 +5,13 @@ Trate / MVA.
 
 * Governor: the electrical power measured through 1/(1 + s Tpelec); the speed error
   e = P_ref - (omega - 1) - R sig, sig chosen by Rselect (1 the measured electrical
-  power, -1 the fuel valve stroke (the true stroke), 0 none: isochronous), through the
-  deadband +-db and limited
-  to [minerr, maxerr], into the PID Kpgov + Kigov/s + s Kdgov/(1 + s Tdgov) -> fsrn.
+  power, -1 the fuel valve stroke (the true stroke), -2 the governor output fsr (the
+  requested stroke), 0 none: isochronous), through the deadband +-db and limited to
+  [minerr, maxerr], into the PID Kpgov + Kigov/s + s Kdgov/(1 + s Tdgov) -> fsrn.  With
+  -2 the error depends on fsr through the PID's proportional and derivative paths, an
+  algebraic loop: PSS/E and PSLF break it with the previous step's fsr (one step's
+  delay); stabctl solves it exactly (`_order_error`), the limit of that as the step
+  shrinks.
 * Load (temperature) limiter: the fuel flow w_f through the lead-lag (1 + s Tsa)/(1 + s
   Tsb) and the lag Tfload is the measured exhaust temperature; the PI Kpload + Kiload/s
   of Ldref/Kturb + Wfnl minus it, at most 1 -> fsrt, its integrator's rate within [Rdown,
@@ -29,13 +33,12 @@ fixed step DELT (fsra = fsr + Ka DELT (Aset - accel)); the tracking integrator h
 same threshold (accel = Aset) and, selected, the same rate Ka (Aset - accel) of fsr.
 
 Not modelled, refused by name (`check`): the diesel engine's transport delay Teng > 0
-(PSS/E asks for 0 or a multiple of its step; an ODE model has no delay), Rselect = -2
-(the governor output, the requested stroke, fed back closes an algebraic loop through
-Kpgov; until 2026-12-02 stabctl read -2 as the valve stroke and refused -1, the codes
-swapped: PSS/E's, PSLF's and the CIM's DroopSignalFeedbackKind are 1 electrical power, 0
-none, -1 fuel valve stroke, -2 governor output; OpenIPSL's GGOV1 R_select alike), the
-supplementary
-load controller Kimw != 0 and Dm < 0 (fuel flow scaled by speed^Dm).  The rates Rup,
+(PSS/E asks for 0 or a multiple of its step; an ODE model has no delay), the
+supplementary load controller Kimw != 0 and Dm < 0 (fuel flow scaled by speed^Dm).
+Rselect's codes are PSS/E's, PSLF's, the CIM's DroopSignalFeedbackKind's and OpenIPSL's
+R_select: 1 electrical power, 0 none, -1 fuel valve stroke, -2 governor output (until
+2026-12-02 stabctl read -2 as the valve stroke and refused -1; then -2 was refused until
+its loop was solved).  The rates Rup,
 Rdown bound the load limiter's integrator (OpenIPSL has none).
 
 Sources: PSS/E Model Library GGOV1 (the DYR record: ICONs Rselect, Flag; CONs R,
@@ -130,12 +133,13 @@ def check(g, r: int) -> str | None:
             "field 'Teng': GGOV1's transport delay is not modelled (PSS/E: 0 or a "
             "multiple of its step); only Teng = 0"
         )
-    if g.Rselect[r] not in (1, 0, -1):
+    if g.Rselect[r] not in (1, 0, -1, -2):
         return (
-            "field 'Rselect': GGOV1 takes 1 (electrical power), 0 (isochronous) or -1 "
-            "(fuel valve stroke); -2 (governor output, the requested stroke) closes an "
-            "algebraic loop through Kpgov"
+            "field 'Rselect': GGOV1 takes 1 (electrical power), 0 (isochronous), -1 "
+            "(fuel valve stroke) or -2 (governor output)"
         )
+    if g.Rselect[r] == -2 and g.Rdroop[r] < 0:
+        return "field 'R': must be >= 0 with Rselect -2 (the governor output fed back)"
     if g.Kimw[r] != 0:
         return "field 'Kimw': GGOV1's supplementary load controller is not modelled"
     if g.Dm[r] < 0:
@@ -157,7 +161,8 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
     Dm's term 0), the valve, the governor's and the load limiter's integrals and the
     temperature at fsr0, the turbine lead-lag at (1 - Tc/Tb) pm0, the measured power at
     pm0, the acceleration limiter's integral at fsr0 + Ta Ka Aset (its rest with the
-    tracking); returns P_ref = R sig0 (sig0 = pm0, fsr0 or 0 by Rselect).
+    tracking); returns P_ref = R sig0 (sig0 = pm0, fsr0 (Rselect -1 and -2) or 0 by
+    Rselect).
 
     Raises CaseError (`refuse_initial`) where the start lies outside a limit: fsr0
     outside [Vmin, Vmax] (PSS/E's valve limits), the load limiter or the acceleration
@@ -197,7 +202,7 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
     x[S.load_i, r] = fsr0[r]
     x[S.accel_d, r] = 0.0
     x[S.accel_i, r] = (fsr0 + p.Tacc * p.Kacc * p.Aset)[r]
-    sig = np.where(p.Rselect == 1, pm0, np.where(p.Rselect == -1, fsr0, 0.0))
+    sig = np.where(p.Rselect == 1, pm0, np.where(np.isin(p.Rselect, (-1, -2)), fsr0, 0.0))
     return (p.Rdroop * sig)[r]
 
 
@@ -227,21 +232,51 @@ def _deadband(u, db):
 
 
 @kernel(inline="always")
+def _error(u, P, k):
+    """The governor's speed error: u through the dead zone +-db, limited to [minerr,
+    maxerr]."""
+    return clip(_deadband(u, P[k, G.DB]), P[k, G.MINERR], P[k, G.MAXERR])
+
+
+@kernel(inline="always")
+def _order_error(P, x, k, d, others):
+    """The speed error with Rselect -2: the governor output fsr (the requested stroke) fed
+    back, e = error(d - R fsr), fsr = clip(min(fsrn(e), others), Vmin, Vmax), fsrn(e) = a e
+    + b (the PID's proportional and derivative paths and its integral), an algebraic loop
+    solved exactly.  fsrn falls as fsr rises (a > 0, R >= 0), so the loop has one solution:
+    f, the fixed point of f = fsrn(error(d - R f)), found on the piece of the piecewise-linear
+    error that holds it (the limits maxerr and minerr, the dead zone, the two slopes), then
+    clipped as the gate and the valve limits clip it.  d = P_ref - (omega - 1); others =
+    min(fsrt, fsra)."""
+    R, db = P[k, G.RDROOP], P[k, G.DB]
+    a, b = P[k, G.KPGOV], x[S.gov_i, k]
+    if P[k, G.KDGOV] != 0 and P[k, G.TDGOV] >= LBND:
+        a += P[k, G.KDGOV] / P[k, G.TDGOV]
+        b -= P[k, G.KDGOV] * x[S.gov_d, k] / P[k, G.TDGOV]
+    hi, lo = P[k, G.MAXERR], P[k, G.MINERR]
+    f = a * hi + b
+    if _deadband(d - R * f, db) < hi:
+        f = a * lo + b
+        if _deadband(d - R * f, db) <= lo:
+            pass
+        elif abs(d - R * b) <= db and lo <= 0.0 <= hi:
+            f = b
+        elif d - R * b > db:
+            f = (a * (d - db) + b) / (1.0 + a * R)
+        else:
+            f = (a * (d + db) + b) / (1.0 + a * R)
+    f = clip(min(f, others), P[k, G.TMIN], P[k, G.TMAX])
+    return _error(d - R * f, P, k)
+
+
+@kernel(inline="always")
 def derivatives(P, x, k, omega, pe, dx):
     """GGOV1's derivatives into dx[:, k] (module docstring) for its machine's speed omega
     and electrical power pe (pu, machine base); clamps the valve stroke in x."""
     dw = omega - 1.0
     pe_t = pe / P[k, G.TSCALE]
     pe_m, dx[S.Pe, k] = lag(pe_t, x[S.Pe, k], P[k, G.TPELEC])
-    # the low-value gate's inputs
-    sel = P[k, G.RSELECT]
-    sig = pe_m if sel == 1 else (x[S.valve, k] if sel == -1 else 0.0)
-    err = _deadband(P[k, G.PREF] - dw - P[k, G.RDROOP] * sig, P[k, G.DB])
-    err = clip(err, P[k, G.MINERR], P[k, G.MAXERR])
-    fsrn = P[k, G.KPGOV] * err + x[S.gov_i, k]
-    if P[k, G.KDGOV] != 0 and P[k, G.TDGOV] >= LBND:
-        yd, dx[S.gov_d, k] = washout(err, x[S.gov_d, k], P[k, G.TDGOV], P[k, G.KDGOV], GAIN_BEFORE)
-        fsrn += yd
+    # the low-value gate's limiters
     w_f = _fuel(P, x, k, omega)
     t1, dx[S.temp_ll, k] = leadlag(w_f, x[S.temp_ll, k], P[k, G.TSA], P[k, G.TSB])
     texm, dx[S.texm, k] = lag(t1, x[S.texm, k], P[k, G.TFLOAD])
@@ -250,6 +285,17 @@ def derivatives(P, x, k, omega, pe, dx):
     fsrt = min(fsrt_pi, 1.0)
     accel, dx[S.accel_d, k] = washout(dw, x[S.accel_d, k], P[k, G.TACC], 1.0, GAIN_BEFORE)
     fsra = x[S.accel_i, k]
+    # the governor
+    sel = P[k, G.RSELECT]
+    if sel == -2:
+        err = _order_error(P, x, k, P[k, G.PREF] - dw, min(fsrt, fsra))
+    else:
+        sig = pe_m if sel == 1 else (x[S.valve, k] if sel == -1 else 0.0)
+        err = _error(P[k, G.PREF] - dw - P[k, G.RDROOP] * sig, P, k)
+    fsrn = P[k, G.KPGOV] * err + x[S.gov_i, k]
+    if P[k, G.KDGOV] != 0 and P[k, G.TDGOV] >= LBND:
+        yd, dx[S.gov_d, k] = washout(err, x[S.gov_d, k], P[k, G.TDGOV], P[k, G.KDGOV], GAIN_BEFORE)
+        fsrn += yd
     lvg = min(fsrn, fsrt, fsra)
     # the integrators: their own input, and the tracking of the gate's output
     dx[S.gov_i, k] = P[k, G.KIGOV] * (err + (lvg - fsrn) / P[k, G.KPGOV])
