@@ -443,14 +443,28 @@ def test_ggov1_rselect_minus_2_feeds_back_the_governor_output_its_loop_solved():
         params(ggov1_row(Rselect=2))
 
 
+def _stroke_root(d, r, db, pid):
+    """The root of f = clip(fsrn(error(d - r f)), 0.15, 1) by scipy's brentq: error the
+    dead zone +-db and the limits +-0.05, fsrn(e) = kp e + xi + kd_t (e - xd)."""
+    from scipy.optimize import brentq
+
+    kp, xi, kd_t, xd = pid
+
+    def g(f):
+        u = d - r * f
+        u = u - db if u > db else (u + db if u < -db else 0.0)
+        e = min(max(u, -0.05), 0.05)
+        return min(max(kp * e + xi + kd_t * (e - xd), 0.15), 1.0) - f
+
+    return brentq(g, -1.0, 3.0, xtol=1e-15, rtol=1e-15)
+
+
 def test_ggov1_rselect_minus_2_loop_against_a_root_finder():
     """The loop of Rselect -2 with the dead zone, the error limits and the PID's
     derivative path, on 200 random states: the requested stroke the kernel hands the
     actuator (stroke + Tact times its rate, the rates wide) is the root of f = clip(fsrn(
     error(P_ref - (omega - 1) - R f)), Vmin, Vmax), found by scipy's brentq (fsrn = Kpgov e
     + the integral + Kdgov (e - its state)/Tdgov; the limiters' orders above Vmax)."""
-    from scipy.optimize import brentq
-
     S, G = gov.ggov1.S, gov.G
     rng = np.random.default_rng(54)
     for _ in range(200):
@@ -462,18 +476,8 @@ def test_ggov1_rselect_minus_2_loop_against_a_root_finder():
         x[S.gov_i, 0], x[S.gov_d, 0] = rng.uniform(0.2, 1.0), rng.uniform(-0.05, 0.05)
         x[S.valve, 0], x[S.load_i, 0], x[S.accel_i, 0] = 0.5, 5.0, 5.0
         omega = rng.uniform(0.95, 1.05)
-        d = P[0, G.PREF] - (omega - 1)
-
-        def error(u):
-            u = u - db if u > db else (u + db if u < -db else 0.0)
-            return min(max(u, -0.05), 0.05)
-
-        def g(f):
-            e = error(d - r * f)
-            fsrn = kp * e + x[S.gov_i, 0] + kd * (e - x[S.gov_d, 0]) / 0.2
-            return min(max(fsrn, 0.15), 1.0) - f
-
-        want = brentq(g, -1.0, 3.0, xtol=1e-15, rtol=1e-15)
+        pid = (kp, x[S.gov_i, 0], kd / 0.2, x[S.gov_d, 0])
+        want = _stroke_root(P[0, G.PREF] - (omega - 1), r, db, pid)
         dx = derivatives(P, x.copy(), omega=omega)
         assert 0.5 + dx[S.valve, 0] == pytest.approx(want, abs=1e-12), row
 
