@@ -14,7 +14,7 @@ that only the governor differs), or with the model's eigenvalues, or its start:
  AJ01 GGOV1 Rselect = 1 (electrical power droop): stabctl's pmech against OpenIPSL's
       GGOV1 blocks (PIDGovernor, Turbine) integrated here (checks the harness);
  AJ02 GGOV1 Rselect = -2: PSS/E (and PSLF, the CIM GovCT1, OpenIPSL's R_select) feed back
-      the governor output (requested stroke); stabctl feeds back the valve stroke;
+      the governor output (requested stroke), an algebraic loop, solved here in closed form;
  AJ03 GGOV1 Rselect = -1 (PSS/E: the true valve stroke): refused as "requested stroke";
  AJ04 IEEEG1, AJ05 IEESGO, AJ06 IEEEG2: pmech after a PREF step against OpenIPSL's
       ``IEEEG1.mo``, ``IEESGO.mo``, ``IEEEG2.mo`` integrated here;
@@ -42,8 +42,8 @@ has a timeout; work in a temporary directory (removed at the end unless KEEP=1).
 minutes with a warm kernel cache.
 
 The round found short (REAL, fixed the same day but AJ02): AJ02-AJ03, GGOV1's Rselect -1
-and -2 swapped (now -1 is the fuel valve stroke; -2, the governor output, is refused by name
-as an algebraic loop stabctl does not solve, so AJ02 stays short); AJ08-AJ09, REECB1 with QFLAG 1 read as ANDES reads it (no Vref0, no Vt_filter:
+and -2 swapped (now -1 is the fuel valve stroke; -2, the governor output, was refused by name
+as an algebraic loop, and AJ02 stayed short, until the next session solved the loop); AJ08-AJ09, REECB1 with QFLAG 1 read as ANDES reads it (no Vref0, no Vt_filter:
 refused to start, or no voltage control); AJ10, WTDTA1's Freq1 read in pu (the torsional
 mode 0.274 Hz for 1.8 Hz); AJ11, WTARA1's Theta0 mixing radians and degrees (refused to
 start); AJ12, WTPTA1's speed PI against w0 = 1 instead of WTTQA1's reference.  The PSS/E
@@ -247,9 +247,7 @@ def _():
     return ok, (
         f"stabctl's pmech vs PSS/E's -2 (requested stroke fed back): max diff {o['requested']:.2e} pu "
         f"({o['requested'] / o['peak']:.1%} of the {o['peak']:.4f} pu response); vs the valve stroke "
-        f"(PSS/E's -1): {o['valve']:.1e} pu -- stabctl's -2 is PSS/E's -1 "
-        "(stabctl/models/governors/ggov1.py:derivatives `sel == -2` -> x[S.valve]; table.py Rselect doc "
-        "'-2 valve stroke')"
+        f"(PSS/E's -1): {o['valve']:.1e} pu"
     )
 
 
