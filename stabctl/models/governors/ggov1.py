@@ -22,7 +22,8 @@ Trate / MVA.
   1/(s Tact) rate-limited to [Rclose, Ropen], position non-windup on [Vmin, Vmax] (the
   valve stroke); the fuel flow w_f = the stroke times the speed (Flag = 1) or times 1
   (Flag = 0); the turbine Kturb (w_f - Wfnl) through (1 + s Tc)/(1 + s Tb); pmech =
-  that - Dm (omega - 1).
+  that - Dm (omega - 1) (Dm > 0 as GridPACK's GGOV1 reads it, fsr0 free of Dm; OpenIPSL's
+  Turbine subtracts Dm times its Dm_select of the speed and starts fsr0 Dm/Kturb higher).
 
 The integrators of the controllers the low-value gate does not select track its output
 (the governor's and the load limiter's at the rate (K_I/K_P)(fsr - their output), the
@@ -45,8 +46,9 @@ Sources: PSS/E Model Library GGOV1 (the DYR record: ICONs Rselect, Flag; CONs R,
 Tpelec, maxerr, minerr, Kpgov, Kigov, Kdgov, Tdgov, Vmax, Vmin, Tact, Kturb, Wfnl, Tb,
 Tc, Teng, Tfload, Kpload, Kiload, Ldref, Dm, Ropen, Rclose, Kimw, Aset, Ka, Ta, Trate,
 db, Tsa, Tsb, Rup, Rdown, as PowerSystems.jl's GeneralGovModel reads it); OpenIPSL
-``Electrical/Controls/PSSE/TG/GGOV1.mo`` and its ``BaseClasses/GGOV1`` blocks; the WECC
-GGOV1 specification.  ANDES 2.0 has no GGOV1.
+``Electrical/Controls/PSSE/TG/GGOV1.mo`` and its ``BaseClasses/GGOV1`` blocks; GridPACK's
+``ggov1.cpp`` (PNNL; Rselect -2 fed back with the previous step's fsr); the WECC GGOV1
+specification.  ANDES 2.0 has no GGOV1.
 """
 
 from __future__ import annotations
