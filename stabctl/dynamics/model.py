@@ -188,7 +188,7 @@ class DynamicModel:
         self.conventions = check_conventions(conventions)
         self.mp = mac.machine_params(case)
         self.ep = exc.exciter_params(case)
-        self.pp = pss_.pss_params(case)
+        self.pp = pss_.pss_params(case, np.abs(op.V[self.mp.bus_idx]))
         self.gp = gov.governor_params(case)
         self.cp = conv.converter_params(case, op.V, op.S_gen)
         self.tp = shaft.shaft_params(case)

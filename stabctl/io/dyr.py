@@ -1290,13 +1290,15 @@ def _pss1a(rec, gen):
 def _st2cut(rec, gen):
     """ST2CUT: MODE BUSR MODE2 BUSR2 K1 K2 T1..T10 LSMAX LSMIN VCU VCL -> stabctl's PSS/E
     stabiliser (type 3): K1/(1 + sT1) + K2/(1 + sT2) inputs, washout sT3/(1 + sT4), lead-lags
-    T5/T6, T7/T8, T9/T10; VCU/VCL: the output cut-off (pss_con columns 25-26)."""
+    T5/T6, T7/T8, T9/T10; VCU/VCL: the output cut-off (pss_con columns 25-26), offsets
+    from the initial terminal voltage (cut_relative, column 45: PSS/E's ST2CUT as
+    OPAL-RT's and ANDES's read it)."""
     v = DYR_MODELS["ST2CUT"].values(rec.params)
     _local_inputs(rec, ("MODE", "BUSR"), ("MODE2", "BUSR2"))
     _washout(rec, v, "T3", "T4")
     if v["MODE"] == 0:
         raise _Unsupported("no first input (MODE 0)")
-    return _pss_row(rec, gen)
+    return _pss_row(rec, gen, cut_relative=1)
 
 
 def _stab2a(rec, gen):

@@ -961,6 +961,36 @@ def test_wecc_st2cut_mapping():
     assert (s.ymax[0], s.ymin[0]) == (0.05, -0.05)
 
 
+def test_st2cut_cut_off_is_relative_to_the_initial_terminal_voltage(tmp_path):
+    """PSS/E's ST2CUT passes its output while VT0 + VCL < VT < VT0 + VCU, VT0 the initial
+    terminal voltage (OPAL-RT's PSS/E ST2CUT, ``Output_Limiter_2``: VCL + VTO < VT < VCU +
+    VTO; ANDES 2.0 ``st2cut.py``: VOU = VCUr + v0, VOL = VCLr + v0); IEEEST's and PSS1A's
+    VCU, VCL are terminal voltages.  Round 51 found ST2CUT's read as terminal voltages: VCU
+    0.1, VCL -0.1 cut the output off at all times (VT0 1.02).  PSS/E's GENROU run's case
+    with an SEXS and an ST2CUT on the speed, its states moved from rest: with VCU 0.1, VCL
+    -0.1 the output passes at VT0 and VT0 - 0.09, and is 0 at VT0 - 0.11 and VT0 + 0.11;
+    with VCU = VCL = 0 it passes everywhere."""
+    run = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "GENROU"
+    dyr = (run / "ThreeBus_GENROU.dyr").read_text().rstrip() + "\n"
+    st2cut = "102 'ST2CUT' 1 1 0 0 0 20 0 0.02 0 5 5 0.2 0.05 0.3 0.1 0 0 0.1 -0.1 {} {} /\n"
+    sexs = "102 'SEXS' 1 0.1 10 100 0.1 0 5 /\n"
+    for vcu, vcl in ((0.1, -0.1), (0.0, 0.0)):
+        path = tmp_path / f"st2cut_{vcu}.dyr"
+        path.write_text(dyr + sexs + st2cut.format(vcu, vcl))
+        sim = Simulator(load_psse(run / "ThreeBusMulti.raw", path))
+        model = sim.model_for([])
+        pp = model.pp
+        vt0 = abs(sim.op.V[model.mp.bus_idx[pp.mac[0]]])
+        assert vt0 > 1.0 and pp.cut_relative[0] == 1
+        P, x = pp.packed(), model.layout.view(model.x0, "pss") + 0.01  # away from rest
+        out = []
+        for vt in (vt0, vt0 - 0.09, vt0 - 0.11, vt0 + 0.11):
+            dx = np.zeros_like(x)
+            out.append(pss_.output_and_derivatives(P, x, 0, 1.001, 0.5, vt, dx))
+        assert out[0] == out[1] != 0
+        assert out[2:] == ([0.0, 0.0] if vcu else out[:2])
+
+
 PSSE_ROW = [
     3,
     1,

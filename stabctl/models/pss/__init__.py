@@ -159,7 +159,8 @@ class PssParams(Declared):
     PSS/E inputs).  Type 3: the filter in controllable canonical form of order nf (<= 4):
     fa (n, 4) the monic denominator coefficients a_0..a_3, fc (n, 4) output
     coefficients, fe the feedthrough.  Every type: v_cut_high, v_cut_low the output
-    cut-off's terminal voltages (pu; VCU, VCL with 0 read as none: +inf, -inf).  PSS2B,
+    cut-off's terminal voltages (pu; VCU, VCL with 0 read as none: +inf, -inf; plus the
+    initial terminal voltage where ``cut_relative``).  PSS2B,
     PSS2C: in1_lo, in1_hi, in2_lo, in2_hi the input limits VS1MIN .. VS2MAX (pu; -inf,
     +inf for the other types); then every type's own fields (:data:`OWN_PARAMS`)."""
 
@@ -257,26 +258,47 @@ def check_table(s) -> None:
             s._refuse(r, problem)
 
 
-def pss_params(case: Case) -> PssParams:
+def pss_params(case: Case, vt0: np.ndarray | None = None) -> PssParams:
     """PSS parameters of a case (the table refused the types and options stabctl does not
-    model as it was made, `check_table`)."""
+    model as it was made, `check_table`).
+
+    Parameters
+    ----------
+    case : Case
+        The case.
+    vt0 : numpy.ndarray or None, optional
+        Initial terminal voltage magnitude of each machine (pu), shape (n_mac,): the
+        origin of the cut-off of a row with ``cut_relative`` (ST2CUT's VT0 + VCU, VT0 +
+        VCL).  None: such a cut-off is left at VCU, VCL (for what does not run the
+        model, e.g. its time constants).
+
+    Returns
+    -------
+    PssParams
+        The stabilisers.
+    """
     s = case.pss
     nf, fa, fc, fe = ieeest.filters(s)
     e = np.isin(s.type, PSSE_INPUTS)
     limited = np.isin(s.type, INPUT_LIMITED)
-    given = {n: getattr(s, n).copy() for n in TABLE_FIELDS + PSS2_FIELDS}
+    own = tuple(p.name for p in OWN_PARAMS)
+    given = {n: getattr(s, n).copy() for n in TABLE_FIELDS + PSS2_FIELDS + own}
     given.update(input1=np.where(e, s.input1, 0), input2=np.where(e, s.input2, 0))
     inf = np.full(len(s), np.inf)
+    mac = np.array([case.machine_index(m) for m in s.machine], int)
+    origin = np.zeros(len(s))
+    if vt0 is not None:
+        origin = np.where(s.cut_relative == 1, np.asarray(vt0, float)[mac], 0.0)
     return PssParams(
         kind=s.type.astype(int),
-        mac=np.array([case.machine_index(m) for m in s.machine], int),
+        mac=mac,
         **given,
         nf=nf,
         fa=fa,
         fc=fc,
         fe=fe,
-        v_cut_high=np.where(s.VCU == 0, np.inf, s.VCU),
-        v_cut_low=np.where(s.VCL == 0, -np.inf, s.VCL),
+        v_cut_high=np.where(s.VCU == 0, np.inf, origin + s.VCU),
+        v_cut_low=np.where(s.VCL == 0, -np.inf, origin + s.VCL),
         in1_lo=np.where(limited, s.VS1MIN, -inf),
         in1_hi=np.where(limited, s.VS1MAX, inf),
         in2_lo=np.where(limited, s.VS2MIN, -inf),

@@ -2,7 +2,10 @@
 
 Input lags K_i/(1 + s Tr_i) on one or two PSS/E inputs (speed deviation or electrical
 power) summed, the filter (1 + A5 s + A6 s^2)/((1 + A1 s + A2 s^2)(1 + A3 s + A4 s^2)),
-washout K_w s/(1 + s T_w), three lead-lags, output limits [LSMIN, LSMAX].  Source: PSS/E
+washout K_w s/(1 + s T_w), three lead-lags, output limits [LSMIN, LSMAX], the output
+cut off (0) while the terminal voltage is outside [VCL, VCU] (IEEEST, PSS1A) or [VT0 +
+VCL, VT0 + VCU] (ST2CUT, VT0 the initial terminal voltage; pss_con column 45
+``cut_relative``), a 0 limit none.  Source: PSS/E
 Model Library IEEEST (IEEE Std 421.5 PSS1A-type with its filter) and ST2CUT (as ANDES
 ``andes/models/pss/ieeest.py``, ``st2cut.py``), docs/pst_models.md 3.1.  An IEEEST
 without filter whose lead-lags have their lags is PST's `pss` (types 1, 2; the mapper
@@ -29,7 +32,7 @@ from stabctl._jit.arrays import zero_column
 from stabctl._jit.decorators import kernel
 from stabctl.errors import CaseError
 from stabctl.models.blocks import GAIN_BEFORE, LBND, clip, lag, leadlag, washout
-from stabctl.models.declaration import DyrModel, Limits, states
+from stabctl.models.declaration import DyrModel, Limits, Param, states
 from stabctl.models.pss.table import POWER, SPEED, C, signal
 
 if TYPE_CHECKING:
@@ -43,6 +46,18 @@ LIMITS = Limits("PSS/E Model Library IEEEST", nonnegative=("T5",))
 NEEDS_TW = True
 #: pss_con input1, input2 are PSS/E input codes (else read as 0)
 PSSE_INPUTS = True
+#: the type's own pss_con column: how its cut-off VCU, VCL reads the terminal voltage
+PARAMS = (
+    Param(
+        "cut_relative",
+        "code",
+        45,
+        choices=(0, 1),
+        doc="type 3: 1 the output cut-off VCU, VCL offsets from the initial terminal "
+        "voltage (PSS/E ST2CUT: VT0 + VCL < VT < VT0 + VCU; OPAL-RT's Output_Limiter_2, "
+        "ANDES st2cut.py), 0 terminal voltages (IEEEST, PSS1A)",
+    ),
+)
 #: reads the input limits VS1MIN .. VS2MAX (else -inf, +inf)
 INPUT_LIMITS = False
 DYR = (

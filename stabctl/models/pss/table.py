@@ -94,14 +94,14 @@ PARAMS = (
         "pu",
         25,
         doc="output cut-off: the output is 0 while the terminal voltage is above VCU "
-        "(PSS/E IEEEST, ST2CUT VCU; 0 none)",
+        "(PSS/E IEEEST, PSS1A VCU; ST2CUT: above VT0 + VCU, cut_relative; 0 none)",
     ),
     Param(
         "VCL",
         "pu",
         26,
         doc="output cut-off: the output is 0 while the terminal voltage is below VCL "
-        "(PSS/E IEEEST, ST2CUT VCL; 0 none)",
+        "(PSS/E IEEEST, PSS1A VCL; ST2CUT: below VT0 + VCL, cut_relative; 0 none)",
     ),
     *(
         Param(name, unit, 27 + i, lo=lo, integer=integer, doc="PSS2A/B/C: " + doc)
