@@ -545,6 +545,28 @@ def _evaluate(case):
     return x0, names, evaluate
 
 
+@pytest.mark.parametrize(("conventions", "rate"), [("psse", 0.5), ("andes", 0.1 / 0.02)])
+def test_p_reference_rate_limit_is_in_pu_per_second_as_pss_e_reads_it(tmp_path, conventions, rate):
+    """PSS/E's REEC_A/B/D limit the P reference's rate to [dPmin, dPmax] pu/s (Dynawo's
+    BaseREEC: a SlewRateLimiter on Pref; round 51 AK11).  RENA's REECB1 with dPmax 0.5,
+    dPmin -0.5 and its P reference filter's state 0.1 pu below Pref: read as PSS/E's, the
+    filter moves at 0.5 pu/s; read as ANDES's (LagRate, the limit on Pref - state before
+    1/Tpfilt), at min(0.1, 0.5)/Tpfilt = 5 pu/s.  It was 5 pu/s under both: dPmax/Tpfilt,
+    50 times PSS/E's rate."""
+    recs = [r for r in read_dyr(DYR) if r.model != "REPCA1"]
+    texts = [
+        _text(r, **({"dPmax": 0.5, "dPmin": -0.5} if r.model == "REECB1" else {})) for r in recs
+    ]
+    case = load_psse(RAW, _dyr(tmp_path, texts), conventions=conventions)
+    assert _row(case.converters)["psse"] == (conventions == "psse")
+    x0, names, evaluate = _evaluate(case)
+    (k,) = [i for i, n in enumerate(names) if "Pref_filter" in n]
+    assert abs(evaluate(x0)[k]) < 1e-12
+    x = x0.copy()
+    x[k] -= 0.1
+    assert evaluate(x)[k] == pytest.approx(rate, rel=1e-12)
+
+
 @pytest.mark.parametrize("flags", ["0 0 0 1 0", "0 0 1 1 0"])
 def test_reecb1_qflag_1_starts_at_rest_as_pss_e_reads_it(tmp_path, flags):
     """REECB1 with QFLAG 1 (VFLAG 0: the V PI regulates Vt_filt to Vref0, RENA's 0 the

@@ -309,12 +309,18 @@ def _ip_command(P, x, k, Ip_order, Ipmax, hold):
 @kernel
 def _p_order(P, x, k, Pref, wg, frz, dx):
     """REECA1's power order Pord of device k: the reference Pref through the rate-limited
-    filter Tpfilt (ANDES LagRate, rates dPmin, dPmax on its right-hand side), times the
-    speed wg with PFLAG (Psel), then the lag Tpord frozen in a dip with the anti-windup
-    limits [PMIN, PMAX] (LagAWFreeze; `blocks.anti_windup`, the state reset to a limit in
-    place)."""
-    e = clip(Pref - x[RE.Pref_filter, k], P[k, C.DPMIN], P[k, C.DPMAX])
-    dx[RE.Pref_filter, k] = e / P[k, C.TPFILT]
+    filter Tpfilt, times the speed wg with PFLAG (Psel), then the lag Tpord frozen in a dip
+    with the anti-windup limits [PMIN, PMAX] (LagAWFreeze; `blocks.anti_windup`, the state
+    reset to a limit in place).  The rate limits dPmin, dPmax: read as PSS/E's (ibr_con
+    ``psse``), the filter's rate in pu/s (PSS/E REEC_A/B/D: Pref's slew rate, Dynawo's
+    ``BaseREEC`` SlewRateLimiter; the filter, Tpfilt 0.02 s, stands for the limiter's
+    tracking); read as ANDES's, on its right-hand side Pref - state (ANDES LagRate: the rate
+    dPmax/Tpfilt)."""
+    d = Pref - x[RE.Pref_filter, k]
+    if P[k, C.PSSE] == 1.0:
+        dx[RE.Pref_filter, k] = clip(d / P[k, C.TPFILT], P[k, C.DPMIN], P[k, C.DPMAX])
+    else:
+        dx[RE.Pref_filter, k] = clip(d, P[k, C.DPMIN], P[k, C.DPMAX]) / P[k, C.TPFILT]
     Psel = wg * x[RE.Pref_filter, k] if P[k, C.PFLAG] == 1.0 else x[RE.Pref_filter, k]
     e = 0.0 if frz else Psel - x[RE.Pord, k]
     x[RE.Pord, k], e = anti_windup(x[RE.Pord, k], e, P[k, C.PMIN], P[k, C.PMAX])

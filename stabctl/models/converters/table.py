@@ -79,8 +79,15 @@ def _reeca1_params(col: int) -> tuple[Param, ...]:
         ("Kvp", dict(unit="pu", default=1.0, lo=0.0, doc="REECA1: V PI proportional gain")),
         ("Kvi", dict(unit="1/s", default=0.1, lo=0.0, doc="REECA1: V PI integral gain")),
         ("Vref1", dict(unit="pu", default=1.0, doc="REECA1: voltage reference (VFLAG 0)")),
-        ("dPmax", dict(_DEV_PU, default=999.0, doc="REECA1: upper P reference rate (x tpfilt)")),
-        ("dPmin", dict(_DEV_PU, default=-999.0, doc="REECA1: lower P reference rate")),
+        (
+            "dPmax",
+            dict(
+                _DEV_PU,
+                default=999.0,
+                doc="REECA1: upper P reference rate (pu/s read as PSS/E's; ANDES: x Tpfilt)",
+            ),
+        ),
+        ("dPmin", dict(_DEV_PU, default=-999.0, doc="REECA1: lower P reference rate (as dPmax)")),
         ("PMAX", dict(_DEV_PU, default=999.0, doc="REECA1: upper P order limit")),
         ("PMIN", dict(_DEV_PU, doc="REECA1: lower P order limit")),
         ("Imax", dict(_DEV_PU, default=999.0, doc="REECA1: apparent current limit")),
