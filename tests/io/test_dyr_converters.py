@@ -742,6 +742,28 @@ def test_wtpta1_speed_pi_acts_on_wttqa1_speed_reference(tmp_path):
     assert rates["andes"] == (0.0, 0.0)
 
 
+def test_wttqa1_power_control_holds_the_power_at_its_reference_as_pss_e_reads_it(tmp_path):
+    """WTTQA1 with Tflag 1 (power control): PSS/E's torque PI acts on (Pref0 - the
+    Tp-filtered Pe)/wg (GridPACK wttqa1.cpp: (Pref0 - Pelec_filter_blk_out)/(1 +
+    domega_g); InterPSS's Wttqa1Model: (powerReference - filteredPower)/generatorSpeed), a
+    negative feedback; ANDES 2.0's wttqa1.py takes (Pe - Pref0)/wg, its unfiltered Pe.
+    Round 51 (AK09) found the ANDES form under both readings.  At rest nothing moves; the
+    filtered power 0.05 pu above P0 moves the PI's integrator at Kip (-0.05)/wg (Kip 0.6)
+    read as PSS/E's, not at all read as ANDES's (its Pe unchanged)."""
+    tq = _WTTQA1.replace("'WTTQA1' 1 0 3.0", "'WTTQA1' 1 1 3.0")
+    records = [_WTDTA1, "103 'WTARA1' 1 0.007 0.0 /\n", _WTPTA1, tq]
+    rates = {}
+    for conventions in ("psse", "andes"):
+        x0, names, f = _evaluate(_wind_case(tmp_path, *records, conventions=conventions))
+        pi, pef = names.index("ibr.PI_tq.C1"), names.index("ibr.Pe_filter_tq.C1")
+        assert abs(f(x0)[pi]) < 1e-12
+        x = x0.copy()
+        x[pef] += 0.05
+        rates[conventions] = (f(x)[pi], x0[names.index("ibr.wg.C1")])
+    assert rates["psse"][0] == pytest.approx(0.6 * -0.05 / rates["psse"][1], rel=1e-12)
+    assert abs(rates["andes"][0]) < 1e-12
+
+
 def test_wtpta1_rate_limits_bound_the_pitch_rate(tmp_path):
     """PSS/E's WTPTA1 rate limits RTetaMax, RTetaMin (10, -10) bound dtheta/dt in deg/s:
     the turbine 0.05 pu above WTTQA1's wref asks Kpw 0.05 = 7.5 deg through Tp 0.3 s (25

@@ -168,7 +168,11 @@ def reference(P, x, k, Pe, dx):
     through the lag Twref to wref, the PI (Kpp, Kip; windup and output limits [Temin,
     Temax]: ANDES's PIAWHardLimit, `blocks.pi_aw_hard_limit`) of (Pe - P0)/wg (Tflag 1)
     or wref - wg (0), Pref = PI wg; the REECA1's speed 1 + wg - fPe (ANDES's sum of the
-    drive train's wg - 1 and the torque control's 1 - fPe).  Without a torque control:
+    drive train's wg - 1 and the torque control's 1 - fPe).  PSS/E's reading (``psse``
+    1) of Tflag 1: (P0 - the Tp-filtered Pe)/wg, the power held at its reference (GridPACK
+    ``wttqa1.cpp``: (Pref0 - Pelec_filter)/(1 + domega_g); InterPSS's ``Wttqa1Model``:
+    (Pref - filtered P)/wg), where ANDES's (Pe - P0)/wg raises the reference with the
+    power (a positive feedback through the converter's P order).  Without a torque control:
     Pref = P0/wg, the speed wg.  Returns (speed, Pref, the drive train's speed reference
     wr0: fPe, or w0 without WTTQA1)."""
     _, wg = _speeds(P, x, k)
@@ -177,7 +181,12 @@ def reference(P, x, k, Pe, dx):
     Pef, dx[WT.Pe_filter_tq, k] = lag(Pe, x[WT.Pe_filter_tq, k], P[k, C.WQ_TP])
     fPe = _speed_curve(P, k, Pef)
     wref, dx[WT.wref_tq, k] = lag(fPe, x[WT.wref_tq, k], P[k, C.WQ_TWREF])
-    Tsel = (Pe - P[k, C.P0]) / wg if P[k, C.WQ_TFLAG] == 1.0 else wref - wg
+    if P[k, C.WQ_TFLAG] != 1.0:
+        Tsel = wref - wg
+    elif P[k, C.PSSE] == 1.0:  # PSS/E: (Pref0 - the filtered Pe)/wg, negative feedback
+        Tsel = (P[k, C.P0] - Pef) / wg
+    else:
+        Tsel = (Pe - P[k, C.P0]) / wg
     lo, hi = P[k, C.WQ_TEMIN], P[k, C.WQ_TEMAX]
     y, x[WT.PI_tq, k], dx[WT.PI_tq, k] = pi_aw_hard_limit(
         Tsel, x[WT.PI_tq, k], P[k, C.WQ_KPP], P[k, C.WQ_KIP], lo, hi
