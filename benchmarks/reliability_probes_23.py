@@ -573,25 +573,26 @@ def _():
 
 @probe("R08-import-andes-json-under-the-cap-memory")
 def _():
-    """import-andes of a 254 MiB JSON (under the 256 MiB input cap) whose one Bus record
-    holds a 254 MB text: refused with one error line naming the long text (round 42's fix),
-    max RSS under 1 GiB (4x the file)."""
+    """import-andes of a 57 MiB JSON (under the 64 MiB cap of a JSON file read whole, round
+    44 W; the round's 254 MiB file is now refused for its size) whose one Bus record holds a
+    60 M-character text: refused with one error line naming the long text (round 42's fix),
+    max RSS under 1 GiB."""
     d = ROOT / "r08"
     d.mkdir()
     with open(d / "str.json", "w") as f:
-        f.write('{"Bus": [{"idx": "' + "0" * 266_000_000 + '"}]}')
+        f.write('{"Bus": [{"idx": "' + "0" * 60_000_000 + '"}]}')
     rc, out, err, secs, rss = run(["import-andes", "str.json", "-o", "o.json"], d, timeout=180)
     (d / "str.json").unlink()
     why = one_error(rc, err)
     if rss > 1024:
-        why += f" max RSS {rss:.0f} MiB for a 254 MiB file ({secs:.0f} s)"
+        why += f" max RSS {rss:.0f} MiB for a 57 MiB file ({secs:.0f} s)"
     said = [l for l in err.splitlines() if l.startswith("error:")]
     # fixed (round 42): a field text beyond 1024 characters is refused naming its row and
     # field before ANDES reads the file ("str.json: Bus row 1: idx holds a text of
-    # 266000000 characters, more than 1024 ...: not read"); the tester's run ended in
+    # 60000000 characters, more than 1024 ...: not read"); the tester's run ended in
     # "the data defines no 'line' matrix" after 2 GB
     if said and not (
-        "Bus row 1: idx holds a text of 266000000 characters" in said[0] and "not read" in said[0]
+        "Bus row 1: idx holds a text of 60000000 characters" in said[0] and "not read" in said[0]
     ):
         why += " not refused for its long text"
     return not why, (why.strip() + " | " if why else "") + (said[0][:200] if said else err[-200:])

@@ -175,7 +175,10 @@ def screen_probe(name, case, buses, wd, timeout=420):
         # machines: "N fault(s) island load bus(es) (M in all; ...), N fault(s) island
         # machine(s) (M in all; ...)" (it said "N island machines" of N rows)
         m = re.search(
-            r"(\d+) CCT\(s\) found, (\d+) above the search limit \(robust\), (\d+) N-1 insecure "
+            # a note in parentheses after "found" since round 45 Y (CCTs not converged in the
+            # run's end)
+            r"(\d+) CCT\(s\) found(?: \([^)]*\))?, (\d+) above the search limit \(robust\), "
+            r"(\d+) N-1 insecure "
             r"\(CCT 0\), (\d+) failed; (\d+) fault\(s\) island load bus\(es\) \((\d+) in all",
             summ,
         )

@@ -747,12 +747,14 @@ def track_csv_summary():
     if len(rows) != 181:
         bad.append(f"{len(rows)} rows for 181 frames")
     for c in cols:
-        if c != "t_s" and not c.startswith("mode_") and not re.search(r"_(hz|mhz)$", c):
+        if c != "t_s" and not c.startswith("mode_") and not re.search(r"_(hz|mhz|s)$", c):
             bad.append(f"column {c} without unit")
     rel = [c for c in cols if c.startswith("rel_")]
     mx = max((abs(float(r[c])), c, float(r["t_s"])) for r in rows for c in rel)
     m = re.search(
-        r"largest \|f_i - f_COI\| ([\d.]+) mHz \((\S+) at ([\d.]+) s\); (\d+) ESD starts; wrote",
+        # the machine as every output names it since 2026-12-02: "G2 (bus 2; PMU B2:G2)"
+        r"largest \|f_i - f_COI\| ([\d.]+) mHz \(.*?PMU (\S+?)\) at ([\d.]+) s\); (\d+) ESD "
+        r"starts; wrote",
         out,
     )
     if not m:
