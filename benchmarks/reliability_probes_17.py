@@ -133,7 +133,8 @@ def main():
         S["k1"] = recs
         last = out.strip().splitlines()[-1]
         m = re.search(
-            r"(\d+) fault\(s\).*?(\d+) CCT\(s\) found, (\d+) above.*?, (\d+) N-1 insecure.*?, (\d+) failed",
+            r"(\d+) fault\(s\).*?(\d+) CCT\(s\) found(?: \([^)]*\))?, (\d+) above.*?, (\d+) N-1 "
+            r"insecure.*?, (\d+) failed",
             last,
         )
         if rc != 0 or not m:
@@ -149,7 +150,11 @@ def main():
         )
         if (n, ncct, nrob, nins, nfail) != got or ncct + nrob + nins + nfail != n:
             return False, f"summary {(n, ncct, nrob, nins, nfail)} vs records {got}"
-        m2 = re.search(r"(\d+) island load buses.*?(\d+) island machines", last)
+        # round 42's words: "N fault(s) island load bus(es) (M in all; ...)", the machines'
+        # part left out when no fault islands one
+        m2 = re.search(r"(\d+) fault\(s\) island load bus\(es\)", last)
+        m3 = re.search(r"(\d+) fault\(s\) island machine\(s\)", last)
+        m2 = m2 and (m2.group(1), m3.group(1) if m3 else "0")
         isl_load = sum(
             1
             for r in recs.values()
@@ -166,10 +171,10 @@ def main():
                 for i in (r.get("islanded") or r.get("result", {}).get("islanded") or [])
             )
         )
-        if not m2 or (int(m2.group(1)), int(m2.group(2))) != (isl_load, isl_mach):
+        if not m2 or (int(m2[0]), int(m2[1])) != (isl_load, isl_mach):
             return (
                 False,
-                f"island counts in text {m2 and m2.groups()} vs records {(isl_load, isl_mach)}",
+                f"island counts in text {m2} vs records {(isl_load, isl_mach)}",
             )
         nrows_named = len(re.findall(r"islands ", out))
         if nrows_named != isl_load + isl_mach:
@@ -809,7 +814,8 @@ def main():
         recs = records(os.path.join(W, "i14.jsonl"))
         last = out.strip().splitlines()[-1]
         m = re.search(
-            r"(\d+) fault\(s\).*?(\d+) CCT\(s\) found, (\d+) above.*?, (\d+) N-1 insecure.*?, (\d+) failed",
+            r"(\d+) fault\(s\).*?(\d+) CCT\(s\) found(?: \([^)]*\))?, (\d+) above.*?, (\d+) N-1 "
+            r"insecure.*?, (\d+) failed",
             last,
         )
         kinds = [verdict_of(r)[1] for r in recs.values()]
