@@ -256,17 +256,14 @@ def _order_error(P, x, k, d, others):
         a += P[k, G.KDGOV] / P[k, G.TDGOV]
         b -= P[k, G.KDGOV] * x[S.gov_d, k] / P[k, G.TDGOV]
     hi, lo = P[k, G.MAXERR], P[k, G.MINERR]
-    f = a * hi + b
-    if _deadband(d - R * f, db) < hi:
+    if _deadband(d - R * (a * hi + b), db) >= hi:  # the error at maxerr
+        f = a * hi + b
+    elif _deadband(d - R * (a * lo + b), db) <= lo:  # at minerr
         f = a * lo + b
-        if _deadband(d - R * f, db) <= lo:
-            pass
-        elif abs(d - R * b) <= db and lo <= 0.0 <= hi:
-            f = b
-        elif d - R * b > db:
-            f = (a * (d - db) + b) / (1.0 + a * R)
-        else:
-            f = (a * (d + db) + b) / (1.0 + a * R)
+    elif abs(d - R * b) <= db and lo <= 0.0 <= hi:  # in the dead zone
+        f = b
+    else:  # on a slope, above or below the dead zone
+        f = (a * (d - np.sign(d - R * b) * db) + b) / (1.0 + a * R)
     f = clip(min(f, others), P[k, G.TMIN], P[k, G.TMAX])
     return _error(d - R * f, P, k)
 
