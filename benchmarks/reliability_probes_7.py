@@ -110,6 +110,9 @@ def run(
         out, err = p.communicate()
         err = (err or b"").decode(errors="replace") + "\n[TIMEOUT]"
         return 124, (out or b"").decode(errors="replace"), err
+    except BaseException:  # the script ended by a signal (`_terminated`): the command too
+        os.killpg(p.pid, signal.SIGKILL)
+        raise
     return p.returncode, (out or b"").decode(errors="replace"), err.decode(errors="replace")
 
 
@@ -1903,6 +1906,10 @@ ORDER = [
 ]  # fmt: skip
 
 
+def _terminated(signum, _frame):
+    raise SystemExit(128 + signum)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("ids", nargs="*", help="prefixes of probe names (A10, C0)")
@@ -1911,6 +1918,10 @@ def main(argv=None) -> int:
         "--skip-compile", action="store_true", help="skip B03 and C10 (kernels compiled anew)"
     )
     ap.parse_args(argv, namespace=OPTS)
+    # a timeout's SIGTERM (or a closed terminal's SIGHUP) ends the run through the finally
+    # below, which stops the Dask servers started and unmounts the tmpfs mounts
+    for s in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, _terminated)
     by_name = {f.__name__: f for f in PROBES}
     selected = [
         by_name[n]
