@@ -774,3 +774,31 @@ def test_wtpta1_rate_limits_bound_the_pitch_rate(tmp_path):
     x = x0.copy()
     x[names.index("ibr.wt.C1")] += 0.05
     assert f(x)[names.index("ibr.theta_pitch.C1")] == pytest.approx(10.0, rel=1e-12)
+
+
+def test_wttqa1_speed_control_slows_a_fast_generator_as_pss_e_reads_it(tmp_path):
+    """WTTQA1 with Tflag 0 (speed control) on a WTDTA1 drive train: PSS/E's torque PI acts
+    on wg - wref (GridPACK wttqa1.cpp 1 + domega_g - omega_ref; Dynawo WTGQa.mo; the
+    PowerWorld WTGTRQ_A diagram), so a generator 0.01 pu above its reference moves the PI's
+    integrator at +Kip 0.01 (more torque, which slows it) and the plant's linearisation
+    (central differences of stabctl's own derivatives) has no eigenvalue in the right half
+    plane; ANDES 2.0's wref - wg (and InterPSS's) lowers the torque of a fast generator: a
+    real eigenvalue near +0.6 1/s, the speed running away.  Round 52 (AN03-AN05) found
+    ANDES's sign under both readings."""
+    records = [_WTDTA1, "103 'WTARA1' 1 0.007 0.0 /\n", _WTPTA1, _WTTQA1]
+    for conventions, sign in (("psse", 1.0), ("andes", -1.0)):
+        x0, names, f = _evaluate(_wind_case(tmp_path, *records, conventions=conventions))
+        x = x0.copy()
+        x[names.index("ibr.wg.C1")] += 0.01
+        assert f(x)[names.index("ibr.PI_tq.C1")] == pytest.approx(sign * 0.6 * 0.01, rel=1e-9)
+        n = len(x0)
+        J = np.empty((n, n))
+        for j in range(n):
+            dx = np.zeros(n)
+            dx[j] = 1e-6
+            J[:, j] = (f(x0 + dx) - f(x0 - dx)) / 2e-6
+        worst = np.linalg.eigvals(J).real.max()
+        if conventions == "psse":
+            assert worst < 1e-6
+        else:
+            assert worst > 0.3

@@ -172,7 +172,11 @@ def reference(P, x, k, Pe, dx):
     1) of Tflag 1: (P0 - the Tp-filtered Pe)/wg, the power held at its reference (GridPACK
     ``wttqa1.cpp``: (Pref0 - Pelec_filter)/(1 + domega_g); InterPSS's ``Wttqa1Model``:
     (Pref - filtered P)/wg), where ANDES's (Pe - P0)/wg raises the reference with the
-    power (a positive feedback through the converter's P order).  Without a torque control:
+    power (a positive feedback through the converter's P order); of Tflag 0: wg - wref, a
+    generator above its speed reference takes more torque and slows (GridPACK's
+    ``wttqa1.cpp`` 1 + domega_g - omega_ref; Dynawo's ``WTGQa.mo``; PowerWorld's WTGTRQ_A
+    diagram), where ANDES's and InterPSS's wref - wg lowers the torque of a fast generator:
+    a real eigenvalue of +0.405 1/s on a WTDTA1 drive train (round 52, AN03).  Without a torque control:
     Pref = P0/wg, the speed wg.  Returns (speed, Pref, the drive train's speed reference
     wr0: fPe, or w0 without WTTQA1)."""
     _, wg = _speeds(P, x, k)
@@ -181,8 +185,8 @@ def reference(P, x, k, Pe, dx):
     Pef, dx[WT.Pe_filter_tq, k] = lag(Pe, x[WT.Pe_filter_tq, k], P[k, C.WQ_TP])
     fPe = _speed_curve(P, k, Pef)
     wref, dx[WT.wref_tq, k] = lag(fPe, x[WT.wref_tq, k], P[k, C.WQ_TWREF])
-    if P[k, C.WQ_TFLAG] != 1.0:
-        Tsel = wref - wg
+    if P[k, C.WQ_TFLAG] != 1.0:  # PSS/E: a fast generator takes more torque
+        Tsel = wg - wref if P[k, C.PSSE] == 1.0 else wref - wg
     elif P[k, C.PSSE] == 1.0:  # PSS/E: (Pref0 - the filtered Pe)/wg, negative feedback
         Tsel = (P[k, C.P0] - Pef) / wg
     else:
