@@ -28,6 +28,7 @@ _EXPORTS = {
     "Fault": "stabctl.dynamics.events",
     "LineTrip": "stabctl.dynamics.events",
     "GeneratorTrip": "stabctl.dynamics.events",
+    "ConverterTrip": "stabctl.dynamics.events",
     "LoadStep": "stabctl.dynamics.events",
     "MotorSwitch": "stabctl.dynamics.events",
     "Playback": "stabctl.dynamics.events",

@@ -48,6 +48,9 @@ class Quantity:
     at: tuple[int, ...]
     tol: float | None
     norm: str = "max"
+    #: compared at the event time too (False: PSS/E's post-event row repeats the
+    #: pre-event value, as for an exciter's algebraic output, `Run` SEXS_NOTE)
+    event_row: bool = True
 
     @property
     def label(self) -> str:
@@ -139,6 +142,10 @@ RUNS: tuple[Run, ...] = (
         (_delta(2e-3),), models="GENCLS"),
     Run("GENROU", _THREE, "ThreeBus_GENROU.dyr", "TEST_GENROU.csv", _trip(101, 102), 20.0,
         (_delta(0.1),), models="GENROU"),
+    Run("GENROU_HIGH_SAT", _THREE, "ThreeBus_GENROU_HIGH_SAT.dyr",
+        "TEST_GENROU_HIGH_SAT.csv", _trip(101, 102), 20.0, (_delta(0.1),), models="GENROU"),
+    Run("GENROE_HIGH_SAT", _THREE, "ThreeBus_GENROE_HIGH_SAT.dyr",
+        "TEST_GENROE_HIGH_SAT.csv", _trip(101, 102), 20.0, (_delta(0.1),), models="GENROE"),
     Run("GENROU_NO_SAT", _THREE, "ThreeBus_GENROU_NO_SAT.dyr", "TEST_GENROU_NO_SAT.csv",
         _trip(101, 102), 20.0, (_delta(0.1),), models="GENROU"),
     Run("GENROE", _THREE, "ThreeBus_GENROE.dyr", "TEST_GENROE.csv", _trip(101, 102), 20.0,
@@ -149,6 +156,9 @@ RUNS: tuple[Run, ...] = (
         (_delta(0.1),), models="GENSAE"),
     Run("ESAC1A", _THREE, "ThreeBus_ESAC1A.dyr", "TEST_ESAC1A.csv", _trip(101, 102), 20.0,
         (_delta(0.01), Quantity(2, "v", (102,), 0.01)), models="GENROU ESAC1A"),
+    Run("ESAC1A_SAT", _THREE, "ThreeBus_ESAC1A_SAT.dyr", "TEST_ESAC1A_SAT.csv",
+        _trip(101, 102), 20.0, (_delta(0.01), Quantity(2, "v", (102,), 0.01)),
+        models="GENROU ESAC1A (saturated)"),
     Run("GAST", _THREE, "ThreeBus_GAST.dyr", "GAST_TEST.csv", _trip(101, 102), 20.0,
         (_delta(0.01), Quantity(2, "efd", (102,), None)), models="GENROU ESAC1A GAST"),
     Run("TGOV1", _THREE, "ThreeBus_TGOV1.dyr", "TEST_TGOV1.csv", _trip(101, 102), 20.0,
@@ -163,10 +173,28 @@ RUNS: tuple[Run, ...] = (
             Quantity(6, "efd", (102,), 0.01),
             Quantity(7, "pm", (102,), 0.01),
         ), models="GENROU SEXS"),
+    # SEXS with TE = 0: its Efd is algebraic, which PSS/E's channel writes one step late
+    # (at 1.005 s the value stabctl has at 1.0 s): its post-event row repeats the
+    # pre-event Efd, 0.24 pu below the post-event one; compared from the next row on
+    Run("SEXS_NOTE", _THREE, "ThreeBus_SEXS_noTE.dyr", "SEXS_RESULTS_NoTE.csv",
+        _trip(101, 102), 20.0,
+        (
+            Quantity(1, "v", (102,), 0.01),
+            Quantity(2, "p_flow", (101, 103), 0.01),
+            Quantity(3, "q_flow", (101, 103), 0.01),
+            Quantity(4, "p_flow", (103, 101), 0.01),
+            Quantity(5, "q_flow", (103, 101), 0.01),
+            Quantity(6, "efd", (102,), 0.01, event_row=False),
+            Quantity(7, "pm", (102,), 0.01),
+        ), models="GENROU SEXS (TE 0)"),
     Run("IEEEST", _THREE, "ThreeBus_IEEEST.dyr", "IEEEST_SEXS_RESULTS_NOFILT.csv",
         _trip(101, 102), 20.0,
         (Quantity(1, "efd", (102,), 0.01), Quantity(2, "v", (102,), 0.01)),
         models="GENROU SEXS IEEEST"),
+    Run("IEEEST_FILT", _THREE, "ThreeBus_IEEEST_with_filter.dyr",
+        "IEEEST_SEXS_RESULTS_FILT.csv", _trip(101, 102), 20.0,
+        (Quantity(1, "efd", (102,), 0.01), Quantity(2, "v", (102,), 0.01)),
+        models="GENROU SEXS IEEEST (filter)"),
     Run("HYGOV", _THREE, "ThreeBus_HYGOV.dyr", "HYGOV_RESULTS.csv", _trip(101, 102), 20.0,
         (
             Quantity(1, "v", (102,), 1e-3),
@@ -201,6 +229,18 @@ RUNS: tuple[Run, ...] = (
             Quantity(2, "q_ibr", (103,), 0.01, "l2"),
             Quantity(3, "v", (103,), 0.01, "l2"),
         ), inf_bus=102, models="REGCA1 REECB1 REPCA1"),
+    Run("RENA_FREQ_FLAG", "ThreeBusRenewable.raw", "ThreeBus_REN_A_FREQ_FLAG.dyr",
+        "TEST_RENA_FREQ_FLAG.csv", _trip(101, 103), 5.0,
+        (
+            Quantity(1, "p_ibr", (103,), 0.01, "l2"),
+            Quantity(2, "q_ibr", (103,), 0.01, "l2"),
+            Quantity(3, "v", (103,), 0.01, "l2"),
+        ), inf_bus=102, models="REGCA1 REECB1 REPCA1 (Fflag 1)"),
+    Run("RENA_Q_FLAG", "ThreeBusRenewable.raw",
+        "ThreeBus_REN_A_NOFREQFLAG_with_REF_FLAG_Q_FLAG.dyr",
+        "TEST_RENA_NOFREQ_REF_FLAG_Q_FLAG.csv", _trip(101, 103), 20.0,
+        (Quantity(1, "angle", (103, 102), 0.01, "l2"), Quantity(2, "v", (103,), 0.01, "l2")),
+        inf_bus=102, models="REGCA1 REECB1 (QFLAG 1) REPCA1"),
     Run("RENA_REF_FLAG", "ThreeBusRenewable.raw",
         "ThreeBus_REN_A_NOFREQFLAG_with_REF_FLAG.dyr", "TEST_RENA_NOFREQ_REF_FLAG.csv",
         _trip(101, 103), 10.0,
@@ -216,6 +256,10 @@ RUNS: tuple[Run, ...] = (
     Run("DEGOV", _THREE, "ThreeBus_DEGOV.dyr", "degov_nodelay_speed_final.csv",
         _trip(101, 102), 5.0, (Quantity(1, "speed", (102,), 4.7e-5),),
         models="GENCLS DEGOV"),
+    # the same with the engine's transport delay TD = 1 s (as its Julia test)
+    Run("DEGOV_DELAY", _THREE, "ThreeBus_DEGOV_delay.dyr", "degov_delay_speed_final.csv",
+        _trip(101, 102), 5.0, (Quantity(1, "speed", (102,), 3.1e-5),),
+        models="GENCLS DEGOV (TD 1 s)"),
     # CSVGN1: 455 -> 400 MW of constant-impedance load at bus 2 at 5 ms, 70 ms at PSS/E's
     # 0.1 ms channel step; the SVC written as the Julia test builds it (README there)
     Run("CSVGN1", "3_BUS_System_SVC.raw", "3_BUS_System_SVC.dyr", "results_PSSe.csv",
@@ -228,6 +272,16 @@ RUNS: tuple[Run, ...] = (
         ("--trip", "101", "102", "--t-trip", "2"), 4.0,
         (Quantity(1, "v", (102,), 0.1), Quantity(2, "angle", (102, 101), 0.1)),
         models="GENCLS DERA1"),
+    Run("DERA_FREQFLAG1", _THREE, "ThreeBus_DERA1.dyr", "dera_freqflag1.csv",
+        ("--trip", "101", "102", "--t-trip", "2"), 4.0,
+        (Quantity(1, "v", (102,), 0.1), Quantity(2, "angle", (102, 101), 0.1)),
+        models="GENCLS DERA1 (FreqFlag 1)"),
+    # nine units at bus 102 (GENROU with SEXS, GAST, TGOV1, HYGOV, IEEEST; two REGCA1
+    # plants); the plant 'SW' (converter 2) tripped at 1 s; PSS/E's V101-V104
+    Run("MULTIGEN_GEN_TRIP", "FourBusMulti.raw", "FourBus_multigen.dyr",
+        "gen_trip_results.csv", ("--trip-converter", "2", "1"), 20.0,
+        tuple(Quantity(k, "v", (100 + k,), 1e-3) for k in (1, 2, 3, 4)),
+        models="GENROU SEXS GAST TGOV1 HYGOV IEEEST REGCA1 REECB1 REPCA1"),
     # the stabiliser runs: VREF of the machine at bus 1 stepped at 1 s (PSS/E's own
     # runs; the PSS2 DYRs written from the Julia tests' values, README there)
     Run("STAB1", "OMIB_SSS_60Hz.raw", "OMIB_SSS.dyr", "results_PSSe.csv", (), 20.0,
@@ -307,6 +361,7 @@ def _event_times(run: Run) -> list[float]:
     d = run.disturbance
     return (
         [float(d[k + 1]) for k, a in enumerate(d) if a == "--t-trip"]
+        + [float(d[k + 2]) for k, a in enumerate(d) if a == "--trip-converter"]
         + [float(d[k + 2]) for k, a in enumerate(d) if a == "--load-step"]
         + ([run.vref[1]] if run.vref else [])
     )
@@ -473,7 +528,7 @@ def compare(run: Run, workdir: Path | None = None) -> Outcome:
     for k, q in enumerate(run.quantities):
         # PSS/E's post-event row repeats the pre-event bus angle (RENA: V103 1.015 ->
         # 1.02464 there, ANGL 103 still 1.0995 deg, 2.627 deg 5 ms later): not compared
-        use = ~at_event if q.kind == "angle" else np.ones(len(t_ref), bool)
+        use = ~at_event if q.kind == "angle" or not q.event_row else np.ones(len(t_ref), bool)
         d = series[0][k] - _psse_series(q, ref[:, q.col])
         out.diff.append(_norm(d[use], q.norm))
         out.halving.append(_norm((series[0][k] - series[1][k])[use], q.norm))

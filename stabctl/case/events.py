@@ -37,6 +37,7 @@ __all__ = [
     "LineTrip",
     "LineClose",
     "GeneratorTrip",
+    "ConverterTrip",
     "LoadStep",
     "VrefStep",
     "PrefStep",
@@ -253,6 +254,29 @@ class GeneratorTrip(_AtOneTime):
 
 
 @dataclass(frozen=True)
+class ConverterTrip(_AtOneTime):
+    """Disconnect a converter (a REGCA1/REGCB1 plant, a PVD1, an ESD1, a DERA1; the
+    case's ``converters``) at `t`: from then on it injects nothing and its states stand
+    still (PSS/E's ``dist_machine_trip`` of a renewable machine).
+
+    Attributes
+    ----------
+    converter : int
+        Converter number (``ibr_con`` column 1); an unknown converter raises CaseError
+        when the run starts.
+    t : float
+        Disconnection time, s (absolute run time, >= 0).
+    """
+
+    converter: int
+    t: float
+
+    def __str__(self) -> str:
+        """The event in words, as messages and the CLI give it."""
+        return f"converter {self.converter} tripped at {self.t:g} s"
+
+
+@dataclass(frozen=True)
 class LoadStep(_AtOneTime):
     """Add P + jQ of constant-impedance load at `bus` from `t`.
 
@@ -435,6 +459,7 @@ EVENT_KINDS = {
         LineTrip,
         LineClose,
         GeneratorTrip,
+        ConverterTrip,
         LoadStep,
         VrefStep,
         PrefStep,
@@ -472,7 +497,8 @@ def as_record(ev, source: str) -> dict:
 
     Parameters
     ----------
-    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep or MotorSwitch
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, ConverterTrip, LoadStep, VrefStep, \
+PrefStep or MotorSwitch
         The event.
     source : str
         The record it was read from.
@@ -542,7 +568,7 @@ def check_names(case: Case, ev) -> None:
     ----------
     case : Case
         The case.
-    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep, \
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, ConverterTrip, LoadStep, VrefStep, PrefStep, \
 MotorSwitch or Playback
         The event.
 
@@ -552,8 +578,8 @@ MotorSwitch or Playback
         A bus not in the case (`Case.bus_index`), the message naming it.
     CaseError
         A line (circuit) not in the case (`Case.circuit_row`), a machine
-        (`Case.machine_index`) or a motor (`Case.motor_index`) it lacks, the message
-        naming it.
+        (`Case.machine_index`), a converter (`Case.converter_index`) or a motor
+        (`Case.motor_index`) it lacks, the message naming it.
     """
     if isinstance(ev, Fault):
         case.bus_index(ev.bus)
@@ -567,6 +593,8 @@ MotorSwitch or Playback
         case.machine_index(ev.machine)
     elif isinstance(ev, MotorSwitch):
         case.motor_index(ev.motor)
+    elif isinstance(ev, ConverterTrip):
+        case.converter_index(ev.converter)
 
 
 #: largest VREF step, pu: the reference is the terminal voltage's set point, about 1 pu,
@@ -644,7 +672,7 @@ def check_values(case: Case, ev) -> None:
     ----------
     case : Case
         The case.
-    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep, \
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, ConverterTrip, LoadStep, VrefStep, PrefStep, \
 MotorSwitch or Playback
         The event (only the steps have sizes to check).
 
@@ -684,7 +712,7 @@ def check_event(case: Case, ev) -> None:
     ----------
     case : Case
         The case.
-    ev : Fault, LineTrip, LineClose, GeneratorTrip, LoadStep, VrefStep, PrefStep, \
+    ev : Fault, LineTrip, LineClose, GeneratorTrip, ConverterTrip, LoadStep, VrefStep, PrefStep, \
 MotorSwitch or Playback
         The event.
 

@@ -1830,6 +1830,29 @@ class Case:
             raise CaseError(f"motor {number} does not exist in mot_con")
         return int(hit[0])
 
+    def converter_index(self, number) -> int:
+        """0-based row of converter ``number`` in ``converters``.
+
+        Parameters
+        ----------
+        number : int
+            Converter number (``ibr_con`` column 1), a scalar.
+
+        Returns
+        -------
+        int
+            0-based row of the converter in ``converters``.
+
+        Raises
+        ------
+        CaseError
+            The case has no such converter; the message names it.
+        """
+        hit = np.flatnonzero(np.asarray(self.converters.number) == number)
+        if hit.size == 0:
+            raise CaseError(f"converter {number} is not in case '{self.name}'")
+        return int(hit[0])
+
     def branch_rows(self, bus_a, bus_b) -> np.ndarray:
         """0-based rows of every branch joining buses ``bus_a`` and ``bus_b``.
 

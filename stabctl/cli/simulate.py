@@ -102,16 +102,19 @@ def _line_close(a: int, b: str, t: float):
     return LineClose(a, to, t, circuit=k)
 
 
-def _study_events(case, bus_faults, closes, gen_trips, load_steps, vref_steps, pref_steps):
-    """The events of the PSS/E-study options, in the order given per option; InputError
-    naming the option of the first whose bus, line or machine the case lacks."""
+def _study_events(case, bus_faults, closes, trips, load_steps, vref_steps, pref_steps):
+    """The events of the PSS/E-study options, in the order given per option (trips: the
+    --trip-gen and --trip-converter pairs); InputError naming the option of the first
+    whose bus, line, machine or converter the case lacks."""
     from stabctl.case.events import check_totals
-    from stabctl.dynamics.events import GeneratorTrip, LoadStep, PrefStep, VrefStep
+    from stabctl.dynamics.events import ConverterTrip, GeneratorTrip, LoadStep, PrefStep, VrefStep
 
+    gen_trips, converter_trips = trips
     given = [
         *((f"--bus-fault {s} {a:g} {b:g}", _bus_fault(s, a, b)) for s, a, b in bus_faults),
         *((f"--close {a} {b} {t:g}", _line_close(a, b, t)) for a, b, t in closes),
         *((f"--trip-gen {m} {t:g}", GeneratorTrip(m, t)) for m, t in gen_trips),
+        *((f"--trip-converter {c} {t:g}", ConverterTrip(c, t)) for c, t in converter_trips),
         *(
             (f"--load-step {b} {t:g} {p:g} {q:g}", LoadStep(b, t, p, q))
             for b, t, p, q in load_steps
@@ -295,6 +298,15 @@ def _check_ends(own: list, given: list, tf: float, end: _RunEnd) -> None:
     help="Disconnect machine MACHINE (number as in the data) at T (s) (repeatable).",
 )
 @click.option(
+    "--trip-converter",
+    type=(INT, FLOAT),
+    multiple=True,
+    metavar="CONVERTER T",
+    help="Disconnect converter CONVERTER (number as in the data: a REGCA1/REGCB1 plant, "
+    "PVD1, ESD1 or DERA1; `stabctl cases CASE` lists them) at T (s): from then it injects "
+    "nothing and its states stand still (repeatable).",
+)
+@click.option(
     "--load-step",
     type=(INT, FLOAT, FLOAT, FLOAT),
     multiple=True,
@@ -390,6 +402,7 @@ def simulate(
     bus_fault,
     close,
     trip_gen,
+    trip_converter,
     load_step,
     vref_step,
     pref_step,
@@ -431,9 +444,9 @@ def simulate(
 
     \b
     PSS/E study events, each with its time, in any number and order: --bus-fault (through
-    an impedance as BUS:R:X), --trip with --close (a reclosure), --trip-gen, --load-step,
-    --vref-step, --pref-step; --case-events adds the case's own (ANDES Toggle, Fault,
-    Alter).
+    an impedance as BUS:R:X), --trip with --close (a reclosure), --trip-gen,
+    --trip-converter, --load-step, --vref-step, --pref-step; --case-events adds the case's
+    own (ANDES Toggle, Fault, Alter).
 
     \b
     Units: times s, cycles of the case frequency (60 Hz: 1 cycle = 16.67 ms), speeds pu,
@@ -496,7 +509,7 @@ def simulate(
         case_events,
     )
     given = events + _study_events(
-        case, bus_fault, close, trip_gen, load_step, vref_step, pref_step
+        case, bus_fault, close, (trip_gen, trip_converter), load_step, vref_step, pref_step
     )
     events = own + given  # the case's own first
     end = _RunEnd(f"--tf {tf:g} s" if tf is not None else "", "lengthen --tf")

@@ -22,6 +22,7 @@ import numpy as np
 from stabctl.case import Case, require_case
 from stabctl.case.events import EVENT_KINDS as EVENT_KINDS
 from stabctl.case.events import (
+    ConverterTrip,
     Fault,
     GeneratorTrip,
     LineClose,
@@ -88,6 +89,8 @@ def validate(case: Case, events, t_end: float) -> None:
             _controlled(case, ev)
         elif isinstance(ev, GeneratorTrip):
             _open_once(opened, f"machine {ev.machine}", ev)
+        elif isinstance(ev, ConverterTrip):
+            _open_once(opened, f"converter {ev.converter}", ev)
         elif isinstance(ev, Playback):
             _check_playback(case, ev)
         # a LoadStep or MotorSwitch: check_event was all (any other is refused above)
@@ -205,7 +208,7 @@ def stage_boundaries(events, t_end: float) -> list[tuple[float, int, int]]:
 def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
     """Network configuration with phases[i] changes of event i applied (see
     `stage_boundaries`)."""
-    faults, feeds, tripped, loads, lines = [], [], [], [], []
+    faults, feeds, tripped, loads, lines, converters = [], [], [], [], [], []
     on = {k: bool(case.motors.in_service[k]) for k in range(len(case.motors))}
     switched, played = [], []
     vref: dict = {}
@@ -231,6 +234,8 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
             pref[m] = pref.get(m, 0.0) + ev.dP
         elif isinstance(ev, GeneratorTrip):
             tripped.append(case.machine_index(ev.machine))
+        elif isinstance(ev, ConverterTrip):
+            converters.append(case.converter_index(ev.converter))
         elif isinstance(ev, LoadStep):
             b = case.bus_index(ev.bus)
             loads.append((b, complex(ev.P, -ev.Q) / abs(V0[b]) ** 2))
@@ -249,6 +254,7 @@ def configuration(case: Case, events, phases, V0: np.ndarray) -> StageConfig:
         opened=tuple(sorted(r for r, o in is_open.items() if o and r not in faulted)),
         fault_feeds=tuple(f for f in feeds if is_open[f[0]]),
         tripped_machines=tuple(sorted(set(tripped))),
+        tripped_converters=tuple(sorted(set(converters))),
         load_steps=tuple(loads),
         motors_on=tuple(k for k, v in on.items() if v),
         playback=tuple(played),

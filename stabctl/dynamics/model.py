@@ -83,7 +83,9 @@ class StageConfig:
     fault_feeds: (branch row, far-end bus number, still_faulted) for a line cleared at the
         near end: a copy of the line (with its charging) feeds a fault node from the far
         end until the far end clears too (PST y_switch; then, under ieee, without it);
-    tripped_machines: machine indices disconnected; load_steps: (bus index, admittance);
+    tripped_machines: machine indices disconnected; tripped_converters: converter indices
+    disconnected (they inject nothing, their states stand still); load_steps: (bus index,
+    admittance);
     motors_on: motor indices in service (switched on by events; `stabctl.models.motors`);
     playback: (machine index, dV, df) of playback sources whose targets moved from their
     initial E' and speed 1 pu (a Playback event);
@@ -96,6 +98,7 @@ class StageConfig:
     opened: tuple = ()
     fault_feeds: tuple = ()
     tripped_machines: tuple = ()
+    tripped_converters: tuple = ()
     load_steps: tuple = ()
     motors_on: tuple = ()
     playback: tuple = ()
@@ -345,6 +348,8 @@ class DynamicModel:
         )
         online = np.ones(self.mp.n, bool)
         online[list(config.tripped_machines)] = False
+        converters_on = np.ones(self.cp.n)
+        converters_on[list(config.tripped_converters)] = 0.0
         label = bus_islands(_check_machines(stage))
         dead = _islanded(label, self.mp.bus_idx[online], case.n_bus)
         if dead.size:  # PSS/E: the island is de-energised, its load and shunts shed
@@ -374,7 +379,7 @@ class DynamicModel:
         islanded = tuple((int(case.buses.number[b]), complex(shed[k])) for k, b in enumerate(dead))
         return replace(
             net,
-            switched_on=on,
+            switched_on=np.concatenate([on, converters_on]),
             targets=targets,
             steps=steps,
             islanded=islanded,
@@ -791,8 +796,9 @@ class KernelNetwork(NamedTuple):
     (n_bus, n_mac + n_nc), R_mac (n_mac, n_mac + n_nc) its machine buses' rows (R (0, n_mac +
     n_nc) in a run that records no bus voltage), Z_mac (n_mac,) the machines' internal
     impedances (0: tripped); complex pu on the system base; targets (n_mac,
-    2) the playback sources' targets (`ReducedNetwork.targets`); switched_on (n_motor,) float,
-    1.0 for each motor in service in the stage (`ReducedNetwork.switched_on`); steps (n_exc +
+    2) the playback sources' targets (`ReducedNetwork.targets`); switched_on (n_motor +
+    n_ibr,) float, 1.0 for each motor, then each converter, in service in the stage
+    (`ReducedNetwork.switched_on`); steps (n_exc +
     n_tg,) float, the exciters' VREF and governors' PREF changes in the stage
     (`ReducedNetwork.steps`)."""
 
@@ -934,7 +940,8 @@ SLOPE_DV = 1e-6
 class KeptDevices(NamedTuple):
     """The devices drawing current at the kept buses, for the network solution: the
     converters' packed parameters IP (n_ibr, ...) and states xi (`conv.N_STATES`,
-    n_ibr), the motors' MO and states xmo, on (n_motor,) 1.0 for each motor in service,
+    n_ibr), the motors' MO and states xmo, on (n_motor + n_ibr,) 1.0 for each motor, then
+    each converter, in service,
     the switched shunts' SWP, levels SWY and memory xsw, the compensators' SVP and states
     xsv (`KernelParams`, `Layout`).  The kernels below take these ten arrays, not the
     whole `KernelParams`: a compiled call costs about 10 ns for every array it is passed
@@ -961,7 +968,10 @@ def _summed_currents(dev, V_nc, dv):
     I_fix), each (n_nc,) complex; dev the `KeptDevices`."""
     rel = np.zeros(V_nc.size, np.complex128)
     fix = np.zeros(V_nc.size, np.complex128)
+    n_motor = dev.xmo.shape[1]
     for k in range(dev.xi.shape[1]):
+        if dev.on[n_motor + k] == 0.0:  # tripped (`ConverterTrip`)
+            continue
         pos = int(dev.IP[k, conv.C.POS])
         a, b = conv.drawn_current(dev.IP, dev.xi, k, abs(V_nc[pos]) + dv)
         rel[pos] += a
@@ -1269,6 +1279,9 @@ def _evaluate_into(x, p, net, kept, want_vbus, dx, out, scratch):
     for k in range(ni):
         V_k = V_nc[int(p.IP[k, conv.C.POS])]
         S_ibr[k] = conv.derivatives(p.IP, xi, k, V_k, V_nc, p.reach, dxi)
+        if on[nmo + k] == 0.0:  # tripped (`ConverterTrip`): no output, states still
+            S_ibr[k] = 0.0
+            dxi[:, k] = 0.0
     for k in range(nmo):
         mot.derivatives(p.MO, xmo, k, V_nc[int(p.MO[k, mot.Q.POS])], on[k], dxmo)
     for k in range(nv):

@@ -66,8 +66,9 @@ class ReducedNetwork:
     machine, in machine order: their terminal voltages); Z_mac (n_mac,) each machine's internal
     impedance 1 / y_mac in this stage (0 for a tripped machine), with which V_term = psi - Z_mac
     I_mac gives the same terminal voltages in O(n_mac). switched_on (n_dev,) float: 1.0 for each
-    device switched by events (a motor, `stabctl.models.motors`) in service in this stage, else
-    0.0; targets (n_mac, 2) float: each playback source's targets of E' and speed in this stage
+    device switched by events (a motor, `stabctl.models.motors`, then a converter, tripped by a
+    `ConverterTrip`) in service in this stage, else 0.0; targets (n_mac, 2) float: each
+    playback source's targets of E' and speed in this stage
     (pu; `stabctl.models.machines`, the ``playback`` column); steps (n_exc + n_tg,) float: each
     exciter's VREF change (pu), then each governor's PREF change (pu on its machine's base) in
     this stage (VrefStep / PrefStep events; empty: none); islanded: (bus number, load P + jQ

@@ -561,6 +561,7 @@ def test_trip_and_close_name_a_circuit(tmp_path):
             ],
         ),
         (["--trip-gen", 9, 1.0], ["machine 9"]),
+        (["--trip-converter", 1, 1.0], ["converter 1 is not in case 'kundur'"]),
         (["--load-step", 999, 1.0, 0.1, 0.0], ["bus 999"]),
         (["--vref-step", 9, 1.0, 0.01], ["machine 9"]),
     ],

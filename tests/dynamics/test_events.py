@@ -195,3 +195,38 @@ def test_a_fault_impedance_that_is_no_impedance_is_refused_by_name(kundur, r, x)
     run = kundur.run([Fault(3, 1.0, 1.1, x=0.05)], t_end=1.5)
     k = np.searchsorted(run.t, 1.05)
     assert 0.05 < run.vmag[k, run.bus(3)] < 0.9
+
+
+def test_a_tripped_converter_injects_nothing_from_its_trip():
+    """PSS/E's MultiGen case (nine units at bus 102, two REGCA1 plants): converter 2 (the
+    plant 'SW', 664 MW) tripped at 1 s (`ConverterTrip`, PSS/E's dist_machine_trip; the
+    PSS/E run MULTIGEN_GEN_TRIP, tests/psse_reference.py).  Before the trip the run is
+    flat at the power flow's 6.64 pu; from the trip the converter's recorded P and Q are 0
+    and its states stand still, while the other plant goes on; the machines and that plant
+    deliver the load at every step (a lossless network).  Tripping it twice
+    or tripping a converter the case lacks is refused by name."""
+    import warnings
+    from pathlib import Path
+
+    from stabctl.dynamics.events import ConverterTrip, validate
+    from stabctl.io.psse import load_psse
+
+    d = Path(__file__).resolve().parents[1] / "data" / "psse_runs" / "MULTIGEN_GEN_TRIP"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # bus 103's IDE 2 read as a load bus: named
+        case = load_psse(d / "FourBusMulti.raw", d / "FourBus_multigen.dyr")
+    sim = Simulator(case)
+    r = sim.run([ConverterTrip(2, 1.0)], 2.0, h=0.005)
+    before, after = r.t < 1.0, r.t >= 1.0
+    assert np.allclose(r.ibr_p[before, 1], 6.64, atol=1e-6)
+    assert np.all(r.ibr_p[after, 1] == 0.0) and np.all(r.ibr_q[after, 1] == 0.0)
+    assert abs(r.ibr_p[after, 0].mean() - 2.21) < 0.05  # the other plant goes on
+    # a lossless network (R = 0 everywhere, ra = 0): the machines and the plant left
+    # deliver the constant-impedance load at bus 104, 47 pu at the power flow's 1.01634 pu
+    v104 = r.vmag[:, list(case.buses.number).index(104)]
+    load = 47.0 * (v104 / 1.01634) ** 2
+    assert np.max(np.abs(r.pelect.sum(axis=1) + r.ibr_p.sum(axis=1) - load)) < 1e-3
+    with pytest.raises(InputError, match="converter 2"):
+        validate(case, [ConverterTrip(2, 1.0), ConverterTrip(2, 1.5)], 2.0)
+    with pytest.raises(CaseError, match="converter 9 is not in case"):
+        validate(case, [ConverterTrip(9, 1.0)], 2.0)

@@ -176,9 +176,9 @@ def reference(P, x, k, Pe, dx):
     generator above its speed reference takes more torque and slows (GridPACK's
     ``wttqa1.cpp`` 1 + domega_g - omega_ref; Dynawo's ``WTGQa.mo``; PowerWorld's WTGTRQ_A
     diagram), where ANDES's and InterPSS's wref - wg lowers the torque of a fast generator:
-    a real eigenvalue of +0.405 1/s on a WTDTA1 drive train (round 52, AN03).  Without a torque control:
-    Pref = P0/wg, the speed wg.  Returns (speed, Pref, the drive train's speed reference
-    wr0: fPe, or w0 without WTTQA1)."""
+    a real eigenvalue of +0.405 1/s on a WTDTA1 drive train (round 52, AN03).  Without a
+    torque control: Pref = P0/wg, the speed wg.  Returns (speed, Pref, the drive train's
+    speed reference wr0: fPe, or w0 without WTTQA1)."""
     _, wg = _speeds(P, x, k)
     if P[k, C.TORQUE] == 0.0:
         return wg, P[k, C.P0] / wg, P[k, C.WT_W0]
