@@ -30,7 +30,8 @@ References (read with the search tools; equations written here, never stabctl's)
             REECA1.mo, InverterInterface/REGCA1.mo (rrpwr on the lag's error),
             PlantController/REPCA1.mo
 
-Found (round 52): REAL AL02 (REECA1/REECB1 divide the power order and the Q reference by
+Found (round 52; the four REAL fixed the same day under PSS/E's reading, the probes since
+compared with the references' Vt_filt divisions): REAL AL02 (REECA1/REECB1 divide the power order and the Q reference by
 the raw |V|, the references by Vt_filt: P 0.444 vs 0.554 pu 10 ms after clearing), AL06
 (the VDL curve of the lower-priority current is not applied: Q priority Ipmax = room
 only, P priority Iqmax = room only; all three references take min(VDL, room)), AL08
@@ -541,12 +542,12 @@ def _():
     reeca1.cpp predictor: Thld > 0 -> Iqinj_sw 2 = Iqfrz; OpenIPSL REECA1.mo's parameter
     text 'Iqinj is held at Iqfrz for Thld seconds following a voltage dip if Thld > 0');
     Dynawo IqInjectionLogic.mo reads the sign the other way (HoldIq > 0: the
-    voltage-dependent injection, < 0: IqFrz).  Compared with the raw-|V| divisions (AL02)."""
+    voltage-dependent injection, < 0: IqFrz).  Compared with the Vt_filt divisions, AL02 (AL02)."""
     reec = {"Thld": 0.3, "Iqfrz": 0.2}
     rec = _dip_run(reec)
     skip = (0.1, 0.25, 0.55)
-    dg = compare(rec, reference(rec, reec=reec, div="raw"), skip=skip, n=12)
-    dd = compare(rec, reference(rec, reec=reec, div="raw", thld_sign="dynawo"), skip=skip, n=12)
+    dg = compare(rec, reference(rec, reec=reec), skip=skip, n=12)
+    dd = compare(rec, reference(rec, reec=reec, thld_sign="dynawo"), skip=skip, n=12)
     q = [at(rec, tt, "q") / at(rec, tt, "v") for tt in (0.45, 0.54, 0.6, 0.8)]
     return max(dg) < 5e-3, (
         f"Iq = Q/|V| at 0.45, 0.54, 0.60, 0.80 s: {', '.join(f'{v:.4f}' for v in q)} (Q0/V0 + "
@@ -564,8 +565,8 @@ def _():
     reec = {"Thld": -0.3, "Vref0": 1.15, "Kqv": 10.0}
     rec = _dip_run(reec)
     skip = (0.1, 0.25, 0.55)
-    dg = compare(rec, reference(rec, reec=reec, div="raw"), skip=skip, n=12)
-    dd = compare(rec, reference(rec, reec=reec, div="raw", thld_sign="dynawo"), skip=skip, n=12)
+    dg = compare(rec, reference(rec, reec=reec), skip=skip, n=12)
+    dd = compare(rec, reference(rec, reec=reec, thld_sign="dynawo"), skip=skip, n=12)
     return max(dg) < 5e-3, (
         f"max |dP|, |dQ| vs GridPACK's reading {dg[0]:.1e}, {dg[1]:.1e} (Q at 0.45 s "
         f"{at(rec, 0.45, 'q'):.4f}, at 0.6 s {at(rec, 0.6, 'q'):.4f}); vs Dynawo's (IqFrz 0 "
@@ -582,13 +583,13 @@ def _():
     0.1 pu until 0.45 s; closed form: the time P first exceeds 0.2 pu."""
     reec = {"Thld2": 0.2, "Imax": 1.02}
     rec = _dip_run(reec)
-    d = compare(rec, reference(rec, reec=reec, div="raw"), skip=(0.1, 0.25, 0.45), n=12)
+    d = compare(rec, reference(rec, reec=reec), skip=(0.1, 0.25, 0.45), n=12)
     t, p = rec["t"], rec["p"]
     rise = float(t[np.flatnonzero((t > 0.26) & (p > 0.2))[0]])
     return max(d) < 5e-3 and 0.45 <= rise <= 0.47, (
         f"P at 0.35 s {at(rec, 0.35, 'p'):.4f} pu (held Ipmax {at(rec, 0.35, 'p') / at(rec, 0.35, 'v'):.4f}), "
         f"P > 0.2 pu first at {rise:.4f} s (0.25 + Thld2 = 0.45); max |dP|, |dQ| vs Dynawo's "
-        f"hold (raw-|V| divisions) {d[0]:.1e}, {d[1]:.1e}"
+        f"hold (Vt_filt divisions, AL02) {d[0]:.1e}, {d[1]:.1e}"
     )
 
 
@@ -623,7 +624,7 @@ def _():
     for pq in (0, 1):
         reec = dict(curve, Kqv=4.0, PQFLAG=pq)
         rec = _dip_run(reec, regc=regc)
-        d = compare(rec, reference(rec, reec=reec, regc=regc, div="raw"), skip=rec["events"])
+        d = compare(rec, reference(rec, reec=reec, regc=regc), skip=rec["events"])
         worst = max(worst, *d)
         v = at(rec, 0.24, "v")
         out.append(
@@ -633,7 +634,7 @@ def _():
     return worst < 5e-3, (
         "REAL: "
         + "; ".join(out)
-        + " (vs GridPACK/Dynawo/OpenIPSL, raw-|V| divisions): the VDL curve "
+        + " (vs GridPACK/Dynawo/OpenIPSL, Vt_filt divisions, AL02): the VDL curve "
         "of the other current is not applied (Q priority: Ipmax = room only, VDLp 0.35 "
         "ignored; P priority: Iqmax = room only, VDLq 0.6 ignored)"
         if worst >= 5e-3
@@ -665,12 +666,12 @@ def _():
     limit, so the current rises with Tg after the limit lifts."""
     regc = {"Lvplsw": 1, "Lvpl1": 0.5}
     rec = _dip_run({}, x=0.15, regc=regc)
-    do = compare(rec, reference(rec, regc=regc, div="raw", lvpl_kind="output"), skip=rec["events"])
-    ds = compare(rec, reference(rec, regc=regc, div="raw", lvpl_kind="state"), skip=rec["events"])
+    do = compare(rec, reference(rec, regc=regc, lvpl_kind="output"), skip=rec["events"])
+    ds = compare(rec, reference(rec, regc=regc, lvpl_kind="state"), skip=rec["events"])
     k = int(round(0.2 / H))
     return max(do) < 5e-3, (
         f"REAL: at 0.2 s (|V| {rec['v'][k]:.3f}) P stabctl {rec['p'][k]:.4f}, LVPL-limited "
-        f"references {reference(rec, regc=regc, div='raw')[0][k]:.4f}; "
+        f"references {reference(rec, regc=regc)[0][k]:.4f}; "
         f"max |dP|, |dQ| vs the output limit (Dynawo, OpenIPSL) {do[0]:.1e}, {do[1]:.1e}; vs "
         f"a state clamp {ds[0]:.1e}, {ds[1]:.1e} (P at 0.3 s {at(rec, 0.3, 'p'):.4f})"
     )
@@ -688,7 +689,7 @@ def _():
     regc, reec = {"Rrpwr": 2.0}, {"Imax": 1.02}
     rec = _dip_run(reec, regc=regc)
     runs = {
-        kind: reference(rec, regc=regc, reec=reec, div="raw", rrpwr_kind=kind)
+        kind: reference(rec, regc=regc, reec=reec, rrpwr_kind=kind)
         for kind in ("pu/s", "over Tg", "rise pu/s")
     }
     d = {kind: compare(rec, r, skip=rec["events"])[0] for kind, r in runs.items()}
@@ -710,7 +711,7 @@ def _():
     regc = {"Volim": 1.05, "Khv": 2.0}
     rec = simulate([LoadStep(103, 0.1, 0.0, -0.8)], t_end=0.6, regc=regc)
     rec["events"] = (0.1,)
-    d = compare(rec, reference(rec, regc=regc, div="raw"), skip=rec["events"])
+    d = compare(rec, reference(rec, regc=regc), skip=rec["events"])
     return max(d) < 5e-3, (
         f"|V| {at(rec, 0.0, 'v'):.4f} -> {at(rec, 0.5, 'v'):.4f}: Q at 0.5 s {at(rec, 0.5, 'q'):.4f}; "
         f"max |dP|, |dQ| vs GridPACK/OpenIPSL {d[0]:.1e}, {d[1]:.1e}"

@@ -802,3 +802,98 @@ def test_wttqa1_speed_control_slows_a_fast_generator_as_pss_e_reads_it(tmp_path)
             assert worst < 1e-6
         else:
             assert worst > 0.3
+
+
+def _commands(case, change):
+    """(REECx's active current command Ipcmd, reactive Iq target as dIq/dt, REGCA1's Ip
+    output, the REPCA1's initial line P and Q) of ``case``'s plant after the states named
+    in ``change`` (state name -> value) are set, from one evaluation of stabctl's model
+    (its memory slot Ipcmd_last written in place)."""
+    from stabctl.dynamics.model import StageConfig
+    from stabctl.smallsignal.linearise import default_esd_buses
+
+    model = Simulator(case, background_compile=False).model_for(default_esd_buses(case))
+    names = [model.state_name(k) for k in range(len(model.x0))]
+    x = np.array(model.x0, float)
+    for name, value in change.items():
+        x[names.index(f"ibr.{name}.C1")] = value
+    dx, _ = model.evaluate(x, model.network(StageConfig()), model.V_nc0)
+    cp = model.cp
+    return x[names.index("ibr.Ipcmd_last.C1")], cp, x, names, np.asarray(dx)
+
+
+@pytest.mark.parametrize("conventions", ["psse", "andes"])
+def test_reec_divides_the_power_order_by_the_filtered_voltage_as_pss_e_reads_it(conventions):
+    """REEC_B (RENA) divides its power order by the Trv-filtered voltage under PSS/E's
+    reading (GridPACK reeca1.cpp Vt_filter_lowcap_out, Dynawo BaseREEC UFilteredPu, OpenIPSL
+    REECA1.mo/REECB1.mo; round 52 AL02), by |V| under ANDES's: with the filter's state at
+    0.9 |V0| the command is P0/(0.9 |V0|) read as PSS/E's, P0/|V0| read as ANDES's."""
+    case = load_psse(RAW, DYR, conventions=conventions)
+    at_rest, _, x, names, _ = _commands(case, {})
+    v0 = x[names.index("ibr.Vt_filter.C1")]
+    ipcmd, *_ = _commands(case, {"Vt_filter": 0.9 * v0})
+    want = at_rest / 0.9 if conventions == "psse" else at_rest
+    assert ipcmd == pytest.approx(want, rel=1e-12)
+
+
+@pytest.mark.parametrize("conventions", ["psse", "andes"])
+def test_reeca1_caps_the_lower_priority_current_by_its_vdl_curve_as_pss_e_reads_it(
+    tmp_path, conventions
+):
+    """REECA1 with Q priority (PQFLAG 0) and a VDL2 (P) curve 0.2 0.1 / 0.4 0.2 / 0.8 0.3 /
+    1.0 0.5: at a filtered voltage of 0.6 pu VDL2 gives 0.25 pu; PSS/E's reading caps Ip
+    by min(VDL2, the room Imax leaves the Iq command) (GridPACK's CurrentLimitLogic,
+    Dynawo's CurrentLimitsCalculationA, OpenIPSL's CurrentLimitLogicREECA; round 52 AL06),
+    ANDES's by the room alone (here above 0.25)."""
+    text = _REECA1_PLANT.format(
+        vdl="0.2 2.0 0.4 4.0 0.8 8.0 1.0 10.0 0.2 0.1 0.4 0.2 0.8 0.3 1.0 0.5"
+    )
+    case = load_psse(RAW, _dyr(tmp_path, [text]), conventions=conventions)
+    ipcmd, *_ = _commands(case, {"Vt_filter": 0.6})
+    if conventions == "psse":
+        assert ipcmd == pytest.approx(0.25, rel=1e-12)
+    else:
+        assert ipcmd > 0.3
+
+
+@pytest.mark.parametrize("conventions", ["psse", "andes"])
+def test_regca1_lvpl_limits_the_output_as_pss_e_reads_it(tmp_path, conventions):
+    """REGCA1's low-voltage power logic (RENA's with Lvplsw 1: Zerox 0.4, Brkpt 0.9, Lvpl1
+    1.22): with the filtered voltage at 0.6 pu the limit is (0.6 - 0.4) 1.22/0.5 = 0.488
+    pu, below an Ip of 0.7 above its command 0.6.  PSS/E's reading limits the
+    output to it (Dynawo REGCa.mo, OpenIPSL REGCA1.mo: a limiter after the lag; round 52
+    AL08) and lets the state run on (never clamped); ANDES's AntiWindup neither clamps nor
+    limits an Ip that is not driven into the limit: its output stays 0.7."""
+    from stabctl.models.converters import N_STATES, regca1
+
+    case = load_psse(RAW, _rena(tmp_path, REGCA1={"Lvplsw": 1}), conventions=conventions)
+    _, cp, x, names, _ = _commands(case, {"V_filter": 0.6, "Ip": 0.7, "Ipcmd_last": 0.6})
+    first = names.index("ibr.Ip.C1")  # slot 0: the device's states in slot order
+    xi = x[first : first + N_STATES].reshape(N_STATES, 1).copy()
+    assert xi[regca1.RG.Ip, 0] == 0.7  # not clamped
+    Ipout, _ = regca1.currents(cp.packed(), xi, 0, 1.0)
+    assert Ipout == pytest.approx(0.488 if conventions == "psse" else 0.7, rel=1e-12)
+
+
+@pytest.mark.parametrize("conventions", ["psse", "andes"])
+def test_repca1_without_a_monitored_branch_measures_the_plant_as_pss_e_reads_it(
+    conventions,
+):
+    """RENA's REPCA1 monitors no branch (BUS1 = BUS2 = 0).  PSS/E's reading measures the
+    plant's own output then (GridPACK's plant control fed the generator's P, Q, V; Dynawo's
+    WECC plant its terminal; round 52 AL13): its line P and Q at rest are the plant's P0,
+    Q0, and its Q filter follows the plant's Q; ANDES's no-line patch measures nothing (0),
+    so that a frequency droop integrates to its deadband's edge and a Q control holds
+    nothing."""
+    case = load_psse(RAW, DYR, conventions=conventions)
+    _, cp, _, names, dx = _commands(case, {})
+    P = cp.packed()
+    from stabctl.models.converters.table import C
+
+    if conventions == "psse":
+        assert cp.pc_Pline0[0] == pytest.approx(P[0, C.P0], rel=1e-12) and P[0, C.P0] > 0.3
+        assert cp.pc_Qline0[0] == pytest.approx(P[0, C.Q0], rel=1e-12)
+    else:
+        assert cp.pc_Pline0[0] == 0.0 and cp.pc_Qline0[0] == 0.0
+    # at rest nothing moves under either reading
+    assert abs(dx[names.index("ibr.Qline_filter.C1")]) < 1e-12

@@ -612,7 +612,7 @@ def derivatives(P, x, k, V, V_nc, reach, dx):
         Iq_target = -P[k, C.IQCMD0]
         wind.rest(P, k, dx)
         if P[k, C.REEC] != NO_REEC:
-            ext = repca1.control(P, x, k, V, V_nc, dx) if P[k, C.REPC] == REPCA1 else 0.0j
+            ext = repca1.control(P, x, k, V, V_nc, S, dx) if P[k, C.REPC] == REPCA1 else 0.0j
             wg, Pref, wr0 = 1.0, P[k, C.P0], 1.0
             if P[k, C.WIND] != NO_WIND:
                 wg, Pref, wr0 = wind.reference(P, x, k, S.real, dx)

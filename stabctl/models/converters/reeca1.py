@@ -373,7 +373,10 @@ def control(P, x, k, v, S, ref, wg, vc, dx):
     pe, dx[RE.Pe_filter, k] = lag(
         S.real, x[RE.Pe_filter, k], P[k, C.TP]
     )  # Tp < LBND: no filter (PSS/E 0)
-    vp = 0.01 if v <= 0.01 else v
+    psse = P[k, C.PSSE] == 1.0
+    # PSS/E divides Pord and Qext by the Trv-filtered voltage (GridPACK reeca1.cpp
+    # Vt_filter_lowcap_out, Dynawo UFilteredPu, OpenIPSL REECA1.mo); ANDES by |V|
+    vp = max(vt if psse else v, 0.01)
     # reactive power reference: Q, or the power factor of the filtered Pe (Q0 at P0 = 0)
     PFsel = P[k, C.QREF] + ext.imag
     if P[k, C.PFFLAG] == 1.0:
@@ -396,7 +399,6 @@ def control(P, x, k, v, S, ref, wg, vc, dx):
             frz,
         )
         x[RE.PIQ_held, k] = piq
-    psse = P[k, C.PSSE] == 1.0
     if P[k, C.REEC] == REECB1 and psse:  # PSS/E: the V PI regulates Vt_filter
         u = P[k, C.QFLAG] * (clip(P[k, C.VREF0R] if vflag == 0.0 else piq, lo, hi) - vc)
     elif P[k, C.REEC] == REECB1:  # ANDES 2.0's reecb1.py: no reference, no voltage
@@ -410,11 +412,20 @@ def control(P, x, k, v, S, ref, wg, vc, dx):
     dx[RE.Iq_filter, k] = 0.0 if frz else (PFsel / vp - s4) / P[k, C.TIQ]
     Iqinj = _iq_injection(P, k, vt, frz, extended)
     Ip_order = _p_order(P, x, k, ref.real, wg, frz, dx) / vp
+    # PSS/E caps the lower-priority current by its own VDL curve too (GridPACK's
+    # CurrentLimitLogic, Dynawo's CurrentLimitsCalculationA, OpenIPSL's
+    # CurrentLimitLogicREECA: min(VDL, the room left)); ANDES by the room alone
     if P[k, C.PQFLAG] == 0.0:  # Q priority
         Iqmax = _vdl_limit(P, k, _VDL1, vt)
         IqHL = _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx)
-        IpHL = _ip_command(P, x, k, Ip_order, _room(P, k, IqHL), hold)
+        Ipmax = _room(P, k, IqHL)
+        if psse:
+            Ipmax = min(Ipmax, _vdl_limit(P, k, _VDL2, vt))
+        IpHL = _ip_command(P, x, k, Ip_order, Ipmax, hold)
     else:
         IpHL = _ip_command(P, x, k, Ip_order, _vdl_limit(P, k, _VDL2, vt), hold)
-        IqHL = _iq_command(P, x, k, u, s4, Iqinj, _room(P, k, IpHL), frz, dx)
+        Iqmax = _room(P, k, IpHL)
+        if psse:
+            Iqmax = min(Iqmax, _vdl_limit(P, k, _VDL1, vt))
+        IqHL = _iq_command(P, x, k, u, s4, Iqinj, Iqmax, frz, dx)
     return IpHL, IqHL

@@ -81,8 +81,17 @@ def flat_side_of_lvg(P: np.ndarray, v0: np.ndarray) -> tuple[np.ndarray, np.ndar
 def currents(P, x, k, v):
     """REGCA1's output currents (Ipout, Iqout) of device k at voltage magnitude v (ANDES
     regca1.py 258-278): Ipout = Ip LVG(v); Iqout = Iq - HVG, HVG = Khv (v - Volim) at or
-    above 0 (GainLimiter, lower 0), Iqout held at Iolim at or below it."""
-    Ipout = x[RG.Ip, k] * _lvg(v, P[k, C.LVPNT0], P[k, C.LVPNT1], P[k, C.KLVG])
+    above 0 (GainLimiter, lower 0), Iqout held at Iolim at or below it.  PSS/E's reading
+    (``psse`` 1): LVPL limits the output, min(Ip, LVPL), and not the state (`_at_lvpl`),
+    so that a limit falling below an Ip that has reached its command binds and the lag
+    runs on toward its command beneath it (Dynawo's ``REGCa.mo``: a VariableLimiter after
+    the lag; OpenIPSL's ``REGCA1.mo``: its variableLimiter after the integrator), where
+    ANDES's AntiWindup holds the state at the limit only while driven into it and the
+    output is the state (round 52, AL08)."""
+    Ip = x[RG.Ip, k]
+    if P[k, C.PSSE] == 1.0:
+        Ip = min(Ip, _ip_limits(P, x, k)[0])
+    Ipout = Ip * _lvg(v, P[k, C.LVPNT0], P[k, C.LVPNT1], P[k, C.KLVG])
     HVG = P[k, C.KHV] * (v - P[k, C.VOLIM])
     if HVG <= 0.0:
         HVG = 0.0
@@ -130,6 +139,8 @@ def _at_lvpl(P, x, k, reach):
     a hair below it at each step would alternate between the full derivative and 0).
     Returns (held, LVPL, e)."""
     LVPL, e = _ip_limits(P, x, k)
+    if P[k, C.PSSE] == 1.0:  # PSS/E: the limit on the output only (`currents`)
+        return False, LVPL, e
     held = e >= 0.0 and x[RG.Ip, k] + reach * e / P[k, C.TG] >= LVPL
     return held, LVPL, e
 

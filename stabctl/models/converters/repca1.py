@@ -64,8 +64,8 @@ MEMORY = (PC.e_held, PC.Plant_pref_command)
 
 def services(case: Case, idx: np.ndarray) -> dict[str, np.ndarray]:
     """REPCA1's line services (`ConverterParams`) of the devices on bus rows idx; without
-    a line (bus1 = bus2 = 0) both ends the device's bus (no line current, ANDES's no-line
-    patch)."""
+    a line (bus1 = bus2 = 0) both ends the device's bus and isign 0 (`line_measures`:
+    ANDES's no-line patch, no line current; PSS/E's reading, the device's own output)."""
     t = case.converters
     pc = t.repc == REPCA1
     line = pc & (t.pc_bus1 > 0)
@@ -79,7 +79,7 @@ def services(case: Case, idx: np.ndarray) -> dict[str, np.ndarray]:
         "pos2": np.full(len(t), -1, np.int64),
         "bus1_idx": np.asarray(b1, np.int64),
         "bus2_idx": np.asarray(b2, np.int64),
-        "isign": np.where(b1 == idx, 1.0, -1.0),
+        "isign": np.where(pc & ~line, 0.0, np.where(b1 == idx, 1.0, -1.0)),
         "pc_Vref0": np.zeros(len(t)),  # `references`
         "pc_Qline0": np.zeros(len(t)),
         "pc_Pline0": np.zeros(len(t)),
@@ -93,7 +93,8 @@ def references(cp: ConverterParams, V0: np.ndarray) -> None:
     P = cp.packed()
     for k in np.flatnonzero(cp.repc == REPCA1):
         ends = (V0[cp.bus_idx[k]], V0[cp.bus1_idx[k]], V0[cp.bus2_idx[k]])
-        cp.pc_Vref0[k], Sline = line_measures(P, k, *ends)
+        S0 = complex(P[k, C.P0], P[k, C.Q0])  # the device's output at the power flow
+        cp.pc_Vref0[k], Sline = line_measures(P, k, *ends, S0)
         cp.pc_Qline0[k], cp.pc_Pline0[k] = Sline.imag, Sline.real
 
 
@@ -107,28 +108,41 @@ def initial(cp: ConverterParams, x: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def line_measures(P, k, V, V1, V2):
+def line_measures(P, k, V, V1, V2, S):
     """REPCA1 k's measured signals at its bus voltage V and its line's end voltages V1,
     V2 (complex pu; ANDES repca1.py Iline, Vcomp, Pline, Qline): the line current from
     the device's bus Iline = isign (V1 - V2)/(r + j x); returns (VCsel, Sline) with Sline
     = Pline + j Qline = isign V1 conj((V1 - V2)/(r + j x)) and VCsel = |V - (Rc + j Xc)
-    Iline| (VCFlag 1) or Kc Qline + |V| (VCFlag 0)."""
-    Z = P[k, C.PC_R] + 1j * P[k, C.PC_X]
+    Iline| (VCFlag 1) or Kc Qline + |V| (VCFlag 0).  Without a monitored line (isign 0):
+    PSS/E's reading (``psse`` 1) measures the device's own output S (complex pu, system
+    base), Sline = S, Iline = conj(S/V) (GridPACK's plant control fed the generator's
+    P, Q, V; Dynawo's WECC plant measuring its terminal; round 52, AL13), where ANDES's
+    no-line patch measures nothing (Iline = Sline = 0: a frequency droop then integrates
+    to the deadband's edge, a Q control holds Q at nothing)."""
     s = P[k, C.ISIGN]
-    Iline = s * (V1 - V2) / Z
-    Sline = s * V1 * np.conj((V1 - V2) / Z)
+    if s == 0.0:
+        if P[k, C.PSSE] == 1.0:
+            Sline = S
+            Iline = np.conj(S / V)
+        else:
+            Sline = Iline = 0.0j
+    else:
+        Z = P[k, C.PC_R] + 1j * P[k, C.PC_X]
+        Iline = s * (V1 - V2) / Z
+        Sline = s * V1 * np.conj((V1 - V2) / Z)
     if P[k, C.PC_VCFLAG] == 1.0:
         return abs(V - (P[k, C.PC_RC] + 1j * P[k, C.PC_XC]) * Iline), Sline
     return Sline.imag * P[k, C.PC_KC] + abs(V), Sline
 
 
 @kernel
-def control(P, x, k, V, V_nc, dx):
+def control(P, x, k, V, V_nc, S, dx):
     """REPCA1 (ANDES 2.0 repca1.py, reactive path; docs/ibr.md 7) of device k at its bus
     voltage V with the kept-bus voltages V_nc (its line's ends at columns POS1, POS2): the
     derivatives of its slots written, the held error updated in place; returns ext =
     Pext + j Qext, the increments of its REECA1's P and Q references (pu; `_frequency_path`)."""
-    VCsel, Sline = line_measures(P, k, V, V_nc[int(P[k, C.POS1])], V_nc[int(P[k, C.POS2])])
+    V1, V2 = V_nc[int(P[k, C.POS1])], V_nc[int(P[k, C.POS2])]
+    VCsel, Sline = line_measures(P, k, V, V1, V2, S)
     T = P[k, C.PC_TFLTR]
     s0, dx[PC.Vc_filter, k] = lag(VCsel, x[PC.Vc_filter, k], T)
     s1, dx[PC.Qline_filter, k] = lag(Sline.imag, x[PC.Qline_filter, k], T)
