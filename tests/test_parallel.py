@@ -1073,7 +1073,10 @@ def test_a_scheduler_killed_mid_map_is_said_as_jobs_not_run_not_a_traceback(capl
         ):
             run_map(sleepy, jobs, kill_after_two)
         said = str(lost.value)
-        assert re.match(rf"[1-4] of 6 jobs not run: the Dask cluster at {address} lost them", said)
+        # which of the two the sweep sees first depends on timing: the jobs' futures lost,
+        # or the scheduler's connection closed under its poll (`_DaskWorkers.ask`)
+        why = "(lost them|closed its connection \\(its scheduler stopped or was killed)"
+        assert re.match(rf"[1-4] of 6 jobs not run: the Dask cluster at {address} {why}", said)
         assert not [r for r in caplog.records if r.name.startswith("distributed.")]
 
 
