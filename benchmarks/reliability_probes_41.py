@@ -27,6 +27,10 @@ limits: Dynawo, OpenIPSL and stabctl three different readings); AK11 REAL (REECD
 Tpfilt Pref filter, 0.02 s by default, no PSS/E REEC has, its rise dPmax/Tpfilt); AK10 DOUBTFUL (WTTQA1 Tflag
 0's sign: InterPSS = stabctl, GridPACK opposite).  IEEEG3, PSS1A, ST2CUT's blocks and
 limits, REGCB1's voltage source and REECD1's compensated voltage agree to 1e-14 pu.
+Round 52 settled both (reliability_probes_44.py): AK07 stabctl's reading is the newest
+Dynawo's, GridPACK's and InterPSS's (the rise limited, the fall free), now checked so;
+AK10 PSS/E's sign is wg - wref (GridPACK, Dynawo, PowerWorld; the other sign destabilises
+the drive train), stabctl's since then.
 """
 
 # ruff: noqa
@@ -542,7 +546,7 @@ def _():
     on the Iq error (dIq/dt in [Iqrmin/Tg, Iqrmax/Tg]) always."""
     Tg, R = 0.02, 2.0
     cols = dict(gb_Rrpwr=R, gb_Te=0.0)
-    out = []
+    out, worst = [], 0.0
     for name, cmd in (("rise 0.5->1.0", 1.0), ("fall 0.5->0.2", 0.2)):
         ts, Ss = regcb1_stabctl(lambda t: 1.0, 0.4, 1e-4, P_changes=[("IPCMD0", cmd)], **cols)
         ip_s = Ss.real
@@ -566,12 +570,18 @@ def _():
         else:
             oip = lag
         k = int(round(t / 5e-4))
-        out.append(f"{name}: Ip(0.1 s) stabctl {ip_s[k]:.4f}, Dynawo {dyn:.4f}, OpenIPSL {oip:.4f}")
-    return False, (
-        "DOUBTFUL (the references disagree): Rrpwr 2 pu/s, Tg 0.02 s: "
-        + "; ".join(out)
-        + "; stabctl agrees with Dynawo on the rise, with OpenIPSL on the fall; Iq rate "
-        "limits: stabctl always (by Q0's sign), Dynawo only after an FRT, OpenIPSL always both"
+        # settled in round 52 (reliability_probes_44.py AN01-AN02): the lag's output rise
+        # limited to Rrpwr pu/s, its fall free (Dynawo's 2025 BaseREGC.mo, GridPACK's
+        # regcb1.cpp, InterPSS's Regcb1Model); Dynawo 2021-2023 limited both ways
+        settled = dyn if cmd > 0.5 else lag
+        worst = max(worst, abs(ip_s[k] - settled))
+        out.append(
+            f"{name}: Ip(0.1 s) stabctl {ip_s[k]:.4f}, rise-limited {settled:.4f} "
+            f"(Dynawo 2023 {dyn:.4f}, OpenIPSL {oip:.4f})"
+        )
+    return worst < 1e-3, (
+        "Rrpwr 2 pu/s, Tg 0.02 s: " + "; ".join(out) + "; Iq rate limits: stabctl always "
+        "(by Q0's sign), Dynawo only after an FRT, OpenIPSL always both"
     )
 
 
@@ -777,10 +787,13 @@ def _():
     tr, pg = wttqa1_ref(0, lambda t: 0.5, wg, 5.0, 1e-3, cp, -1.0)  # GridPACK: wg - wref
     di = float(np.max(np.abs(ps - pi)))
     dg = float(np.max(np.abs(ps - pg)))
-    return di < 1e-5 and dg < 1e-5, (
-        f"WTTQA1 Tflag 0: wg 0.79->0.78 at 0.1 s: Pref at 5 s stabctl {ps[-1]:.5f}, InterPSS "
-        f"(wref - wg) {pi[-1]:.5f} (max diff {di:.1e}), GridPACK (wg - wref) {pg[-1]:.5f} (max "
-        f"diff {dg:.1e}) -> the references disagree on the sign"
+    # settled in round 52 (reliability_probes_44.py AN03-AN05): wg - wref, as GridPACK,
+    # Dynawo's WTGQa.mo and PowerWorld's WTGTRQ_A diagram; InterPSS's (ANDES's) sign makes
+    # the drive train's loop unstable
+    return dg < 1e-5, (
+        f"WTTQA1 Tflag 0: wg 0.79->0.78 at 0.1 s: Pref at 5 s stabctl {ps[-1]:.5f}, GridPACK "
+        f"(wg - wref, PSS/E's reading since round 52) {pg[-1]:.5f} (max diff {dg:.1e}); "
+        f"InterPSS/ANDES (wref - wg) {pi[-1]:.5f} (max diff {di:.1e})"
     )
 
 
