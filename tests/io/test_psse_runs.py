@@ -20,10 +20,7 @@ from stabctl.io.psse import load_psse
 from stabctl.models.pss import PSS
 
 #: run -> why it is short today (measured with benchmarks/psse_runs.py)
-SHORT: dict[str, str] = {
-    "DEGOV_DELAY": "import-psse refuses DEGOV's TD = 1 s: the engine's transport delay is not "
-    "modelled (an ODE model has no delay; TD = 0 only)",
-}
+SHORT: dict[str, str] = {}
 
 
 def _param(run):

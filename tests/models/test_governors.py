@@ -529,10 +529,42 @@ def test_degov_torque_is_non_windup_at_tmax():
     assert x[gov.degov.S.torque, 0] == 1.1 and dx[gov.degov.S.torque, 0] == 0.0
 
 
+def test_degov_transport_delay_is_its_pade_approximant():
+    """DEGOV's engine delay TD = 1 s (tg_con 'Teng'): the torque reaches the machine
+    through the Pade approximant of e^(-s TD) of order 8 (`degov.pade_order`).  At rest
+    every state is still and P_m is the torque; a torque step of 0.1 pu held (speed 1,
+    the chain at rest) comes out as python-control's step response of ``pade(1, 8)``
+    (within 1e-9 pu at 0.25-3 s: the realisation is the approximant), 0.1 pu after the
+    delay; TD 0.25 s gets order 3, below 1e-3 s none."""
+    import control
+
+    assert [gov.degov.pade_order(td) for td in (0.0, 5e-4, 0.05, 0.25, 0.75, 3.0)] == [
+        0,
+        0,
+        1,
+        3,
+        8,
+        8,
+    ]
+    P, x0 = started(degov_row(Teng=1.0))
+    state = [k for k, on in enumerate(params(degov_row(Teng=1.0)).has_state()[:, 0]) if on]
+    assert np.max(np.abs(derivatives(P, x0)[state])) < 1e-12
+    assert gov.pmech(P, x0, 0, 1.0) == pytest.approx(PM0, rel=1e-12)
+    x = x0.copy()
+    x[gov.degov.S.torque, 0] += 0.1
+    times = np.array([0.25, 0.5, 0.9, 1.1, 1.5, 2.0, 3.0])
+    grid = np.linspace(0.0, 3.0, 12001)
+    resp = control.step_response(control.tf(*control.pade(1.0, 8)), T=grid)
+    step = np.interp(times, resp.time, np.squeeze(resp.outputs))
+    got = [pmech_after(P, x, t) - PM0 for t in times]
+    assert np.allclose(got, 0.1 * step, atol=1e-9)
+    assert got[-1] == pytest.approx(0.1, abs=1e-4)
+
+
 def test_degov_options_it_does_not_model_are_refused():
-    """The engine delay TD (tg_con 'Teng'), a lead without its lag, TMAX below TMIN."""
+    """A lead without its lag, TMAX below TMIN (the engine delay TD is modelled,
+    `test_degov_transport_delay_is_its_pade_approximant`; DEGOV1's is refused)."""
     for changed, match in (
-        ({"Teng": 0.1}, "DEGOV's TD"),
         ({"T3": 0.2}, "'T3'"),
         ({"T5": 0.0, "T6": 0.0}, "'T4'"),
         ({"Tmin": 1.2}, "field 'Tmax': must be >= Tmin = 1.2"),

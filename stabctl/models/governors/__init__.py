@@ -41,7 +41,7 @@ from stabctl.models.declaration import (
     type_modules,
     typed_family,
 )
-from stabctl.models.governors import ggov1, ieeeg1
+from stabctl.models.governors import degov, ggov1, ieeeg1
 from stabctl.models.governors._dispatch import derivatives, pmech
 from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
@@ -141,6 +141,7 @@ _TIME_CONSTANT_LABELS = {
     "T7": "tg_con T_7",
     **{n: f"tg_con {n}" for n in (*ggov1.NEEDS, "Tdgov")},
     **{p.name: f"tg_con {p.name}" for p in OWN_PARAMS if p.unit == "s"},
+    "delay_tc": "tg_con Teng (DEGOV's TD over its Pade approximant's fastest pole)",
 }
 
 
@@ -155,7 +156,9 @@ class GovernorParams(Declared):
     rt, qNL, Kg, velm_rel, psse_gate: HYGOV's columns 17-22 (0 for other types; T4 is its
     T_w, T5 its A_t); GGOV1's fields :data:`GGOV1_FIELDS` (tg_con columns 28-59) and
     turbine_scale, its turbine rating Trate over its machine's MVA (1 where Trate = 0
-    or another type); then every type's own fields (:data:`OWN_PARAMS`)."""
+    or another type); delay_tc, a DEGOV's transport delay's fastest time constant (s;
+    `stabctl.models.governors.degov.delay_time_constant`, inf without one); then every
+    type's own fields (:data:`OWN_PARAMS`)."""
 
     K: np.ndarray
     mac2: np.ndarray
@@ -168,6 +171,7 @@ class GovernorParams(Declared):
     velm_rel: np.ndarray
     psse_gate: np.ndarray
     turbine_scale: np.ndarray
+    delay_tc: np.ndarray
 
     @property
     def n(self) -> int:
@@ -284,6 +288,7 @@ def governor_params(case: Case) -> GovernorParams:
         lp_base=np.where(cross, mva[mac] / mva[np.maximum(mac2, 0)], 0.0),
         **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)},
         turbine_scale=np.where((g.type == GGOV1) & (g.Trate > 0), g.Trate / mva[mac], 1.0),
+        delay_tc=degov.delay_time_constant(g.type, g.Teng),
     )
 
 

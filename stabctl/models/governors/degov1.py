@@ -78,19 +78,21 @@ DYR = (
 
 #: the states: DEGOV's five (its `chain` writes them), then the measured electrical
 #: power (droop flag 1)
-S = states("DEGOV1States", (*degov.S._fields, "pelec"))
+S = states("DEGOV1States", (*degov.CHAIN, "pelec"))
 STATE_NAMES = {DEGOV1: S._fields}
 
 
 def has_state(p: GovernorParams):
-    """Which slots of `S` are states: DEGOV's five (`degov.has_state`), the measured
-    power with droop flag 1 and TE."""
-    return (*degov.has_state(p), (p.droop_flag == 1) & (p.Te >= LBND))
+    """Which slots of `S` are states: DEGOV's chain's five (`degov.has_state`'s first
+    five; DEGOV1 refuses a transport delay), the measured power with droop flag 1 and TE."""
+    chain = degov.has_state(p)[: len(degov.CHAIN)]
+    return (*chain, (p.droop_flag == 1) & (p.Te >= LBND))
 
 
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
-    return {**degov.time_constants(p), "Te": (p.droop_flag == 1) & (p.Te >= LBND)}
+    own = {n: on for n, on in degov.time_constants(p).items() if n != "delay_tc"}
+    return {**own, "Te": (p.droop_flag == 1) & (p.Te >= LBND)}
 
 
 def check(g, r: int) -> str | None:

@@ -157,7 +157,7 @@ PARAMS = (
                 ("Kturb", "pu", "+", "turbine gain"),
                 ("Wfnl", "pu", "+", "no-load fuel flow"),
                 ("Tb", "s", "+", "turbine lag time constant (the lead is Tc, column 7)"),
-                ("Teng", "s", "+", "transport delay of a diesel engine (0 only; also DEGOV's TD)"),
+                ("Teng", "s", "+", "transport delay of a diesel engine (GGOV1 0; DEGOV's TD)"),
                 ("Tfload", "s", "+", "load limiter time constant"),
                 ("Kpload", "pu", "+", "load limiter proportional gain"),
                 ("Kiload", "1/s", "+", "load limiter integral gain"),
