@@ -125,12 +125,40 @@ def test_speed_held_off_rated_settles_on_the_droop_line():
     assert x[gov.degov1.S.torque, 0] == pytest.approx(PM0 - d / R, rel=1e-8)
 
 
+@pytest.mark.parametrize("flag", [0, 1])
+def test_transport_delay_holds_the_droop_line_and_delays_the_torque(flag):
+    """DEGOV1 with the engine delay TD = 0.5 s (DEGOV's Pade approximant, order 6, its
+    states after the measured power): at rest every state is still and P_m is the
+    torque; the speed held 1e-3 above rated settles the torque on the droop line as
+    without the delay (flag 0 feeds the torque back before the delay), and P_m follows the
+    torque."""
+    row = _row(flag)
+    row[gov.GOVERNOR.col("Teng") - 1] = 0.5
+    p, x, Pref = started(row, PM0)
+    P = p.packed(Pref)
+    state = [k for k, on in enumerate(p.has_state()[:, 0]) if on]
+    assert len(state) == len(_states(_row(flag))) + 6
+    dx = np.zeros_like(x)
+    gov.derivatives(P, x, 0, 1.0, PM0, dx)
+    assert np.max(np.abs(dx[state])) < 1e-12
+    assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0, rel=1e-12)
+    if flag == 0:
+        d, R = 1e-3, 0.07
+        x = settled(P, x, 1.0 + d, T_SETTLE)
+        assert x[gov.degov1.S.torque, 0] == pytest.approx(PM0 - d / R, rel=1e-8)
+        assert gov.pmech(P, x, 0, 1.0) == pytest.approx(PM0 - d / R, rel=1e-8)
+
+
+def _states(row):
+    p, _, _ = started(row, PM0)
+    return [k for k, on in enumerate(p.has_state()[:, 0]) if on]
+
+
 def test_options_it_does_not_model_are_refused():
-    """The engine delay TD (tg_con 'Teng'), a lead without its lag, TMAX below TMIN, a
-    droop flag other than 0 or 1."""
+    """A lead without its lag, TMAX below TMIN, a droop flag other than 0 or 1 (the
+    engine delay TD is modelled, as DEGOV's)."""
     row = _row(0)
     for name, value, match in (
-        ("Teng", 0.1, "DEGOV1's TD"),
         ("Tmin", 100.0, "field 'Tmax': must be >= Tmin = 100"),
         ("droop_flag", 2.0, "droop_flag must be 0 or 1"),
     ):

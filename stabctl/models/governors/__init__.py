@@ -43,6 +43,7 @@ from stabctl.models.declaration import (
 )
 from stabctl.models.governors import degov, ggov1, ieeeg1
 from stabctl.models.governors._dispatch import derivatives, pmech
+from stabctl.models.governors.degov1 import DEGOV1
 from stabctl.models.governors.ggov1 import GGOV1
 from stabctl.models.governors.hygov import HYGOV
 from stabctl.models.governors.hygov4 import HYGOV4
@@ -156,7 +157,8 @@ class GovernorParams(Declared):
     rt, qNL, Kg, velm_rel, psse_gate: HYGOV's columns 17-22 (0 for other types; T4 is its
     T_w, T5 its A_t); GGOV1's fields :data:`GGOV1_FIELDS` (tg_con columns 28-59) and
     turbine_scale, its turbine rating Trate over its machine's MVA (1 where Trate = 0
-    or another type); delay_tc, a DEGOV's transport delay's fastest time constant (s;
+    or another type); delay_tc, a DEGOV's or DEGOV1's transport delay's fastest time
+    constant (s;
     `stabctl.models.governors.degov.delay_time_constant`, inf without one); then every
     type's own fields (:data:`OWN_PARAMS`)."""
 
@@ -288,7 +290,9 @@ def governor_params(case: Case) -> GovernorParams:
         lp_base=np.where(cross, mva[mac] / mva[np.maximum(mac2, 0)], 0.0),
         **{n: np.where(hy, g.col(17 + i), 0.0) for i, n in enumerate(HYGOV_FIELDS)},
         turbine_scale=np.where((g.type == GGOV1) & (g.Trate > 0), g.Trate / mva[mac], 1.0),
-        delay_tc=degov.delay_time_constant(g.type, g.Teng),
+        delay_tc=np.where(
+            np.isin(g.type, (degov.DEGOV, DEGOV1)), degov.delay_time_constant(g.Teng), np.inf
+        ),
     )
 
 

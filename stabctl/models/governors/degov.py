@@ -35,8 +35,8 @@ DDE within 3.1e-5 pu of speed) is within its tolerance.  TD below 1e-3 s: no del
 A block whose lag is below 1e-3 s is absent: T1 (with T2) the control box's, T5 and T6
 the actuator's (the second-order lag falls to the one left).  Refused by name (`check`):
 a lead T3 without the control box's lag T1 or a lead T4 without an actuator lag
-(improper); DEGOV1's transport delay (its own chain, `stabctl.models.governors.degov1`);
-TMAX < TMIN by the tg_con table (every governor's limits).
+(improper); TMAX < TMIN by the tg_con table (every governor's limits).  DEGOV1 shares
+the chain and the delay (`delayed`).
 
 The DYR record (PSS/E Model Library DEGOV; PowerWorld's DEGOV, the same ten CONs): T1
 T2 T3 K T4 T5 T6 TD TMAX TMIN, stored in the shared tg_con columns T1 -> Tc, T2 -> Ts,
@@ -142,13 +142,12 @@ def pade_orders(TD) -> np.ndarray:
     return np.where(TD < LBND, 0, np.minimum(1 + (TD / PADE_STEP_S).astype(int), PADE_MAX))
 
 
-def delay_time_constant(kind, TD) -> np.ndarray:
-    """The fastest time constant of each DEGOV's transport delay (s; TD over its
-    approximant's fastest pole, `PADE_FASTEST`; inf without a delay or another type),
-    from the tg_con types and TD (Teng) columns, (n_tg,)."""
+def delay_time_constant(TD) -> np.ndarray:
+    """The fastest time constant of each transport delay TD (s; TD over its approximant's
+    fastest pole, `PADE_FASTEST`; inf without a delay), (n,)."""
     order = pade_orders(TD)
     fastest = PADE_FASTEST[np.maximum(order, 1) - 1]
-    return np.where((np.asarray(kind) == DEGOV) & (order > 0), np.asarray(TD) / fastest, np.inf)
+    return np.where(order > 0, np.asarray(TD, float) / fastest, np.inf)
 
 
 def has_state(p: GovernorParams):
@@ -176,12 +175,7 @@ def time_constants(p: GovernorParams):
 def check(g, r: int, model: str = "DEGOV") -> str | None:
     """The first DEGOV option of tg_con row r (0-based) stabctl does not model (module
     docstring), with the reason, or None; ``model`` the name in the message (DEGOV1, which
-    shares the chain, but not DEGOV's transport delay)."""
-    if model != "DEGOV" and g.Teng[r] != 0:
-        return (
-            f"field 'Teng' ({model}'s TD): the engine's transport delay is not modelled; "
-            "only TD = 0"
-        )
+    shares the chain)."""
     if g.Tc[r] < LBND and abs(g.T3[r]) >= LBND:
         return (
             f"field 'T3': {model}'s control-box lead T3 needs its lag T1 (field 'Tc') >= {LBND} s"
@@ -193,7 +187,7 @@ def check(g, r: int, model: str = "DEGOV") -> str | None:
 
 def initialise(p: GovernorParams, r, pmech0, order, x):
     """DEGOV at rest on rows r: the torque at pmech0 (rated speed; the family refuses it
-    outside [TMIN, TMAX]), its transport delay's first state too (`_delayed`), the other
+    outside [TMIN, TMAX]), its transport delay's first state too (`delayed`), the other
     states 0; returns P_ref = 0 on r."""
     x[S.torque, r] = pmech0[r]
     x[S.delay1, r] = np.where(p.Teng[r] >= LBND, pmech0[r], 0.0)
@@ -208,9 +202,9 @@ def _lag(T):
 
 @kernel(inline="always")
 def pmech(P, x, k, omega):
-    """DEGOV: the engine's torque TD later (`_delayed`), handed to the machine as its P_m
+    """DEGOV: the engine's torque TD later (`delayed`), handed to the machine as its P_m
     (module docstring)."""
-    return _delayed(P, x, k, x, False)
+    return delayed(P, x, k, x, False, S.delay1)
 
 
 @kernel(inline="always")
@@ -218,24 +212,24 @@ def derivatives(P, x, k, omega, pe, dx):
     """DEGOV (module docstring): P_ref - (omega - 1) through `chain`, the torque into its
     transport delay."""
     chain(P, x, k, P[k, G.PREF] - (omega - 1.0), dx)
-    _delayed(P, x, k, dx, True)
+    delayed(P, x, k, dx, True, S.delay1)
 
 
 @kernel(inline="always")
-def _delayed(P, x, k, dx, write):
+def delayed(P, x, k, dx, write, d1):
     """The torque of governor k through its transport delay's Pade approximant (module
-    docstring; the torque itself without one), its states' derivatives written into dx
-    when write.  In time scaled by TD the approximant (b_0 + ... + b_n s^n)/(a_0 + ... +
-    s^n) is z1' = z2, ..., zn' = -(a_0 z1 + ... + a_n-1 zn) + u in controllable canonical
-    form, y = sum (b_i - b_n a_i) z_i+1 + b_n u; the states here are w = a_0 z, so that
-    at rest w1 = u (b_0 = a_0) and the others 0."""
+    docstring; the torque itself without one), its states from slot d1 on (DEGOV's, or
+    DEGOV1's after its measured power), their derivatives written into dx when write.  In
+    time scaled by TD the approximant (b_0 + ... + b_n s^n)/(a_0 + ... + s^n) is z1' = z2,
+    ..., zn' = -(a_0 z1 + ... + a_n-1 zn) + u in controllable canonical form, y = sum
+    (b_i - b_n a_i) z_i+1 + b_n u; the states here are w = a_0 z, so that at rest w1 = u
+    (b_0 = a_0) and the others 0."""
     u = x[S.torque, k]
     TD = P[k, G.TENG]
     n = pade_order(TD)
     if n == 0:
         return u
     a, b = PADE_DEN[n - 1], PADE_NUM[n - 1]
-    d1 = S.delay1
     y = b[n] * u
     for i in range(n):
         y += (b[i] - b[n] * a[i]) * x[d1 + i, k] / a[0]

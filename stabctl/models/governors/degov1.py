@@ -14,9 +14,10 @@ At rest every state but the torque (at Pm0) and the measured power (at the elect
 power, Pm0 at rated speed) is 0, with P_ref = R Pm0: after a step dP of P_ref the unit
 settles where P_ref - (omega - 1) = R f, its droop line.
 
-A block whose lag is below 1e-3 s is absent, as DEGOV's.  Refused by name (`check`): the
-engine's transport delay TD > 0 (an ODE model has no delay; PSS/E's runs are "nodelay"),
-a lead without its lag; TMAX < TMIN by the tg_con table.
+The engine's transport delay TD as DEGOV's (its Pade approximant, `degov.delayed`; its
+states after the measured power); the droop's throttle feedback (flag 0) is the torque
+before it.  A block whose lag is below 1e-3 s is absent, as DEGOV's.  Refused by name
+(`check`): a lead without its lag; TMAX < TMIN by the tg_con table.
 
 The DYR record (PSS/E Model Library DEGOV1; PowerSystems.jl's DEGOV1): ICON M, then T1
 T2 T3 K T4 T5 T6 TD TMAX TMIN DROOP TE; T1 .. TMIN in DEGOV's tg_con columns, M, DROOP
@@ -78,21 +79,24 @@ DYR = (
 
 #: the states: DEGOV's five (its `chain` writes them), then the measured electrical
 #: power (droop flag 1)
-S = states("DEGOV1States", (*degov.CHAIN, "pelec"))
+S = states(
+    "DEGOV1States",
+    (*degov.CHAIN, "pelec", *(f"delay{i + 1}" for i in range(degov.PADE_MAX))),
+)
 STATE_NAMES = {DEGOV1: S._fields}
 
 
 def has_state(p: GovernorParams):
-    """Which slots of `S` are states: DEGOV's chain's five (`degov.has_state`'s first
-    five; DEGOV1 refuses a transport delay), the measured power with droop flag 1 and TE."""
-    chain = degov.has_state(p)[: len(degov.CHAIN)]
-    return (*chain, (p.droop_flag == 1) & (p.Te >= LBND))
+    """Which slots of `S` are states: DEGOV's chain's five, the measured power with droop
+    flag 1 and TE, then the transport delay's (`degov.has_state`)."""
+    chain = degov.has_state(p)
+    n = len(degov.CHAIN)
+    return (*chain[:n], (p.droop_flag == 1) & (p.Te >= LBND), *chain[n:])
 
 
 def time_constants(p: GovernorParams):
     """The declared time constants that set a state's speed: field -> where."""
-    own = {n: on for n, on in degov.time_constants(p).items() if n != "delay_tc"}
-    return {**own, "Te": (p.droop_flag == 1) & (p.Te >= LBND)}
+    return {**degov.time_constants(p), "Te": (p.droop_flag == 1) & (p.Te >= LBND)}
 
 
 def check(g, r: int) -> str | None:
@@ -107,13 +111,15 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
     P_ref = R pmech0 on r."""
     x[S.torque, r] = pmech0[r]
     x[S.pelec, r] = np.where(p.droop_flag[r] == 1, pmech0[r], 0.0)
+    x[S.delay1, r] = np.where(p.Teng[r] >= LBND, pmech0[r], 0.0)  # `degov.delayed`
     return p.droop[r] * pmech0[r]
 
 
 @kernel(inline="always")
 def pmech(P, x, k, omega):
-    """DEGOV1: the engine's torque times the speed (module docstring)."""
-    return x[S.torque, k] * omega
+    """DEGOV1: the engine's torque TD later (`degov.delayed`) times the speed (module
+    docstring)."""
+    return degov.delayed(P, x, k, x, False, S.delay1) * omega
 
 
 @kernel(inline="always")
@@ -126,3 +132,4 @@ def derivatives(P, x, k, omega, pe, dx):
     else:
         feedback = x[S.torque, k]
     degov.chain(P, x, k, P[k, G.PREF] - (omega - 1.0) - P[k, O.DROOP] * feedback, dx)
+    degov.delayed(P, x, k, dx, True, S.delay1)
