@@ -83,12 +83,12 @@ def test_the_import_says_what_it_left_out_and_netted(imported):
     reasons = {r.split(": ", 1)[1] for r in summary["left_out"]}
     assert "no such generator in the RAW data (or out of service)" not in reasons
     assert not any(r.startswith("model ") and r.endswith("is not mapped") for r in reasons)
-    assert len(summary["infeasible"]) == 34
+    assert len(summary["infeasible"]) == 36
     assert all(
         re.match(r"(exciter|governor) of G\d+ \(bus \d+, id '\w+'\): ", line)
         for line in summary["infeasible"]
     )
-    assert len(case.exciters) == 330 and len(case.governors) == 304
+    assert len(case.exciters) == 328 and len(case.governors) == 304
 
 
 def test_power_flow_reproduces_the_raw_solution(files, imported):
@@ -109,9 +109,11 @@ def test_power_flow_reproduces_the_raw_solution(files, imported):
 def test_without_the_leave_out_the_case_is_refused_by_name(files):
     """stabctl refuses to start a control outside its limits (the ESDC2A at bus 6216,
     whose saturation data give V_R = 11.4 pu against VRMAX = 1.17); the leave-out names
-    all 34 (4 exciters, each with its stabiliser -- the ESDC2A, an ESST4B and two ESAC6A
-    whose K_D = 22.5 gives V_A0 = 36.9 pu against VAMAX = 9.08 -- 28 governors dispatched
-    above Tmax and 2 GGOV1 whose fuel order starts above Vmax)."""
+    all 36 (6 exciters, each with its stabiliser -- the ESDC2A, an ESST4B, two ESAC6A
+    whose K_D = 22.5 gives V_A0 = 36.9 pu against VAMAX = 9.08, and two SCRX without TE
+    whose EMAX 5 lies below their E_fd0/V_t, 6.42 and 5.11 pu, since round 53 clipped as
+    PSS/E does -- 28 governors dispatched above Tmax and 2 GGOV1 whose fuel order starts
+    above Vmax)."""
     case = import_psse(*files, on_unsupported="skip", unmodelled="net").case
     # the first exciter type checked refuses first (the registry's order: the DC
     # exciters' module is checked last since 2026-12-02)
@@ -121,11 +123,13 @@ def test_without_the_leave_out_the_case_is_refused_by_name(files):
     left, names = leave_out_infeasible(case)
     dc = "exciter of G157 (bus 6216, id '1'): initial DC regulator output V_R = "
     assert sum(n.startswith(dc) for n in names) == 1
-    assert sum(n.startswith("exciter") for n in names) == 4 and len(names) == 34
+    assert sum(n.startswith("exciter") for n in names) == 6 and len(names) == 36
+    scrx = [n for n in names if "bus fed" in n]
+    assert [n.split(" (bus ")[1][:4] for n in scrx] == ["3105", "6266"]
     esac6a = [n for n in names if "ESAC6A" in n]
     assert [n.split(" (bus ")[1][:4] for n in esac6a] == ["4030", "6110"]
     assert all("V_A = 36." in n and "[VAmin, VAmax] = [-9.0800, 9.0800]" in n for n in esac6a)
-    assert len(left.pss) == len(case.pss) - 4 and len(left.governors) == len(case.governors) - 30
+    assert len(left.pss) == len(case.pss) - 6 and len(left.governors) == len(case.governors) - 30
 
 
 def test_flat_run_stays_at_rest(imported):

@@ -166,3 +166,30 @@ def test_a_cswitch_other_than_0_or_1_is_refused(tmp_path):
     dyr.write_text(text.replace("50.0     1     0.0/", "50.0     2     0.0/"))
     with pytest.raises(CaseError, match=r"SCRX.*CSWITCH = 2 must be 0 \(bus fed\) or 1"):
         load_psse(RAW, dyr)
+
+
+@pytest.mark.parametrize("conventions", ["ieee", "pstess"])
+def test_sexs_without_te_holds_efd_within_its_limits_under_pss_e_s_reading(tmp_path, conventions):
+    """SEXS with TE = 0 (Efd = K times the lead-lag's output) and EMIN -2, EMAX 4 on the
+    GENROU at bus 102 of PSS/E's ThreeBus case, a bolted fault at bus 102 for 0.15 s: PSS/E's
+    reading (ieee, import-psse's) clips Efd to [EMIN, EMAX] (OpenIPSL's SimpleLagLim,
+    OPAL-RT's Lag_NonWindupLimit; round 53, AO05: it reached 24.9 pu), so the field
+    voltage rides at EMAX = 4 through the fault; PSTess's smpexc without T_A has no limit
+    (docs/pst_models.md 2.1): above 4."""
+    from stabctl.case.events import Fault
+
+    dyr = tmp_path / "sexs_te0.dyr"
+    dyr.write_text(
+        "101 'GENCLS' 1 0 0 /\n"
+        "102 'GENROU' 1 8.0 0.03 0.4 0.05 6.175 0.05 1.8 1.7 0.3 0.55 0.25 0.2 0.1 0.8 /\n"
+        "102 'SEXS' 1 0.2 5.0 100.0 0.0 -2.0 4.0 /\n"
+    )
+    case = load_psse(RAW, dyr)
+    r = Simulator(case, conventions=conventions).run(
+        [Fault(102, 1.0, clear_near=1.15)], 1.5, h=1e-3
+    )
+    efd = r.efd[:, list(case.machines.bus).index(102)]
+    if conventions == "ieee":
+        assert efd.max() == pytest.approx(4.0, abs=1e-12) and efd.min() >= -2.0 - 1e-12
+    else:
+        assert efd.max() > 10.0

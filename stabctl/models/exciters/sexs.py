@@ -112,8 +112,9 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
     lag Efd0 (bus fed: Efd0/V_t); writes x, returns (V_ref - V_TR, p).
 
     Raises CaseError (`refuse_initial`) for an SCRX with rc/rfd != 0 whose Efd0 (its
-    field current at rest) is <= 0, and for a lag T_A whose output limits [Vrmin, Vrmax]
-    (PSS/E's EMIN, EMAX; bus fed, times V_t) do not hold Efd0."""
+    field current at rest) is <= 0, and for output limits [Vrmin, Vrmax] (PSS/E's EMIN,
+    EMAX; bus fed, times V_t) that do not hold Efd0: the lag T_A's, or without it (TE = 0)
+    the output's, which PSS/E's reading clips too (`field_voltage`)."""
     refuse_initial(
         "exc_con",
         r & (p.rc_rfd != 0) & (vex <= 0),
@@ -123,12 +124,13 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
         ),
     )
     # the Efd state, limited to [Vrmin, Vrmax] where T_A gives it (both conventions clip
-    # it), must hold the field voltage the machine needs: a limit short of it starts the
-    # run off its rest point (PSS/E: "initial conditions suspect")
+    # it; without T_A the ieee conventions clip the output), must hold the field voltage
+    # the machine needs: a limit short of it starts the run off its rest point (PSS/E:
+    # "initial conditions suspect")
     state = np.where(p.KG == 1, vex / np.where(eterm != 0, eterm, 1.0), vex)
     refuse_initial(
         "exc_con",
-        r & (p.TA >= LBND) & beyond(state, p.Vrmin, p.Vrmax),
+        r & beyond(state, p.Vrmin, p.Vrmax),
         lambda k: (
             f"exc_con row {k + 1}: "
             + (
@@ -152,9 +154,11 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
 @kernel(inline="always")
 def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     """smpexc: the Efd state when T_A exists (PSTess: unclamped, docs/pst_models.md 2.1;
-    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error, without
-    limits; bus fed (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg;
-    SCRX with rc/rfd != 0 and the field current ifd <= 0: -rc/rfd ifd."""
+    ieee: clipped to [Vrmin, Vrmax]), else K_A times the (lead-lag of the) error (PSTess:
+    without limits; ieee: clipped to [Vrmin, Vrmax] too, as PSS/E's SEXS and SCRX with TE
+    = 0: OpenIPSL's SimpleLagLim, OPAL-RT's Lag_NonWindupLimit; round 53, AO05); bus fed
+    (SCRX, exc_con column 19 = 1): times the terminal voltage VTR_alg; SCRX with rc/rfd !=
+    0 and the field current ifd <= 0: -rc/rfd ifd."""
     rc_rfd = P[i, O.RC_RFD]
     if rc_rfd != 0.0 and ifd <= 0.0:
         return -rc_rfd * ifd
@@ -164,7 +168,8 @@ def field_voltage(P, x, i, VTR_alg, pss_out, VB, ifd, ieee):
     VTR = lag(VTR_alg, x[S.VTR, i], P[i, E.TR])[0]
     err = P[i, E.VREF] - VTR + pss_out
     VA = leadlag_input_state(err, x[S.VAs, i], P[i, E.TCTB], P[i, E.TB])[0]
-    return P[i, E.KA] * VA * mult
+    efd = P[i, E.KA] * VA
+    return (clip(efd, P[i, E.VRMIN], P[i, E.VRMAX]) if ieee else efd) * mult
 
 
 @kernel(inline="always")

@@ -102,6 +102,10 @@ CHAIN = ("ecb1", "ecb2", "act1", "act2", "torque")
 #: them states, the rest unused)
 S = states("DEGOVStates", (*CHAIN, *(f"delay{i + 1}" for i in range(PADE_MAX))))
 STATE_NAMES = {DEGOV: S._fields}
+#: `delayed`'s arguments as numpy scalars (the kernel coding rules: one compilation for
+#: every value): read only, or write the derivatives; DEGOV's first delay slot
+READ, WRITE = np.bool_(False), np.bool_(True)
+DELAY1 = np.int64(S.delay1)
 
 
 def _pade_coefficients():
@@ -204,7 +208,7 @@ def _lag(T):
 def pmech(P, x, k, omega):
     """DEGOV: the engine's torque TD later (`delayed`), handed to the machine as its P_m
     (module docstring)."""
-    return delayed(P, x, k, x, False, S.delay1)
+    return delayed(P, x, k, x, READ, DELAY1)
 
 
 @kernel(inline="always")
@@ -212,7 +216,7 @@ def derivatives(P, x, k, omega, pe, dx):
     """DEGOV (module docstring): P_ref - (omega - 1) through `chain`, the torque into its
     transport delay."""
     chain(P, x, k, P[k, G.PREF] - (omega - 1.0), dx)
-    delayed(P, x, k, dx, True, S.delay1)
+    delayed(P, x, k, dx, WRITE, DELAY1)
 
 
 @kernel(inline="always")

@@ -84,6 +84,8 @@ S = states(
     (*degov.CHAIN, "pelec", *(f"delay{i + 1}" for i in range(degov.PADE_MAX))),
 )
 STATE_NAMES = {DEGOV1: S._fields}
+#: the first delay slot, a numpy scalar (`degov.delayed`; the kernel coding rules)
+_DELAY1 = np.int64(S.delay1)
 
 
 def has_state(p: GovernorParams):
@@ -119,7 +121,7 @@ def initialise(p: GovernorParams, r, pmech0, order, x):
 def pmech(P, x, k, omega):
     """DEGOV1: the engine's torque TD later (`degov.delayed`) times the speed (module
     docstring)."""
-    return degov.delayed(P, x, k, x, False, S.delay1) * omega
+    return degov.delayed(P, x, k, x, degov.READ, _DELAY1) * omega
 
 
 @kernel(inline="always")
@@ -132,4 +134,4 @@ def derivatives(P, x, k, omega, pe, dx):
     else:
         feedback = x[S.torque, k]
     degov.chain(P, x, k, P[k, G.PREF] - (omega - 1.0) - P[k, O.DROOP] * feedback, dx)
-    degov.delayed(P, x, k, dx, True, S.delay1)
+    degov.delayed(P, x, k, dx, degov.WRITE, _DELAY1)
