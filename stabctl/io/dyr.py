@@ -1153,11 +1153,12 @@ def _unlimited_vrmax(rec) -> float:
     return VRMAX_UNLIMITED
 
 
-def _esst4b(rec, gen, vgmax=VRMAX_UNLIMITED):
+def _esst4b(rec, gen, vgmax=VRMAX_UNLIMITED, psse=1.0):
     """ESST4B: TR KPR KIR VRMAX VRMIN TA KPM KIM VMMAX VMMIN KG KP KI VBMAX KC XL THETAP ->
     type 12; the inner-loop feedback K_G Efd unlimited (PSS/E's record has no VGMAX):
-    VGmax = ``vgmax``."""
-    return _exc_row(rec, gen, VGmax=vgmax)
+    VGmax = ``vgmax``; its PIs non-windup (exc_con psse_st1 = ``psse`` 1: PSS/E's reading;
+    ANDES's 0, tracking anti-windup)."""
+    return _exc_row(rec, gen, VGmax=vgmax, psse_st1=psse)
 
 
 def _source_on_system_base(mapper, names=("KI", "XL")):
@@ -1603,7 +1604,7 @@ _ANDES_MAPPERS = {
     "ESST3A": _source_on_system_base(_esst3a_psse),
     "IEEET3": _source_on_system_base(_ieeet3),
     #: ESST4B: ANDES's VGMAX, 20 (its default; stabctl.io.andes_case refuses others)
-    "ESST4B": _source_on_system_base(lambda rec, gen: _esst4b(rec, gen, vgmax=20.0)),
+    "ESST4B": _source_on_system_base(lambda rec, gen: _esst4b(rec, gen, vgmax=20.0, psse=0.0)),
     "GENSAL": _gensal_andes,
     "GENROE": _not_in_andes,
     "GENSAE": _not_in_andes,

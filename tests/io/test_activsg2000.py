@@ -190,16 +190,34 @@ def test_terminal_voltages_behind_the_machine_impedance_equal_the_bus_voltages(i
     assert np.abs(every_bus.efd - machines_only.efd).max() < 1e-6
 
 
+def _esst4b_as_andes_reads_it(case):
+    """The case with its ESST4B exciters' PIs read as ANDES 2.0 reads them (exc_con
+    psse_st1 0: tracking anti-windup) instead of PSS/E's non-windup limits."""
+    from stabctl.case import ExciterTable
+    from stabctl.models.exciters import EXCITER
+
+    m = case.exciters.matrix().copy()
+    m[m[:, 0] == 12, EXCITER.col("psse_st1") - 1] = 0.0
+    return case.replace(exciters=ExciterTable.from_matrix(m))
+
+
 def test_sime_keeps_the_lowest_end_of_a_verdict_that_is_not_monotone(imported):
-    """Bus 4162 is unstable cleared at 0.224-0.3 s but stable again at 0.392 s (unstable at
-    0.393, 0.4 and 0.5 s).  The sime search runs t_max (0.5 s) first; were that run's
-    margin used at once, with 0.4 s's, it extrapolated to 0.393 s and called the CCT
-    0.392 s.  It waits for the doubling, whose 0.3 s probe finds the bisection's CCT,
-    0.223 s (the earlier screening's record of this fault)."""
+    """With its ESST4B read as ANDES reads them (tracking anti-windup, whose integrals wind
+    back while a regulator rides its limit), bus 4162 is unstable cleared at 0.224-0.3 s
+    but stable again at 0.392 s (unstable at 0.393, 0.4 and 0.5 s).  The sime search runs
+    t_max (0.5 s) first; were that run's margin used at once, with 0.4 s's, it
+    extrapolated to 0.393 s and called the CCT 0.392 s.  It waits for the doubling, whose
+    0.3 s probe finds the bisection's CCT, 0.223 s (the earlier screening's record of this
+    fault).  Read as PSS/E reads them (non-windup limits, round 53) the verdict is
+    monotone, the CCT 0.394 s by both searches."""
     from stabctl.stability.cct import LineFault, SearchOptions, critical_clearing_time
 
-    sim = Simulator(imported[1])
     fault = LineFault(4162, None, 1.0)
+    sim = Simulator(_esst4b_as_andes_reads_it(imported[1]))
     res = critical_clearing_time(sim, fault, SearchOptions(method="sime", t_max=0.5))
     assert res.bracket == (0.223, 0.224)
     assert res.probes[0] == (0.5, False) and (0.3, False) in res.probes
+    psse = Simulator(imported[1])
+    for method in ("sime", "bisection"):
+        res = critical_clearing_time(psse, fault, SearchOptions(method=method, t_max=0.5))
+        assert res.bracket == (0.394, 0.395) and (0.3, True) in res.probes

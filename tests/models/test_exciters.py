@@ -611,6 +611,26 @@ def test_esst4b_regulators_track_their_limits():
     assert dx[3, 0] == 0.0  # the inner loop still balanced: V_M = K_G Efd
 
 
+def test_esst4b_regulators_hold_their_integrals_at_a_limit_as_pss_e_reads_them():
+    """PSS/E's reading (exc_con psse_st1 1, import-psse's): both PIs with non-windup limits
+    (IEEE 421.5-2016 ST4B and E.6; OpenIPSL's PSS/E-verified ESST4B.mo, OPAL-RT's): with
+    the regulator's ys above Vrmax = 8 and its error driving it further, its integral
+    stands still (ANDES's tracking moves it at K_I (u - 2 (ys - y)), above); driven back
+    inside, it integrates K_I u.  Round 53 (AO11): the tracking took the integral to -1.3
+    pu through a fault, Efd -0.68 pu after clearing where both PSS/E libraries give 2.8."""
+    row = ST4B + [0.0] * (48 - len(ST4B))
+    row[47] = 1.0  # psse_st1: PSS/E's reading
+    P, x = started(row)
+    dx = np.zeros_like(x)
+    x[0, 0] = VT0 - 10.0  # the transducer's output 10 pu below V_ref: u = 10
+    exc.derivatives(P, x, 0, VT0 - 10.0, VT0 - 10.0, 0.0, EFD0, EFD0, VB0, dx, True, 0.0)
+    assert dx[1, 0] == 0.0
+    x[0, 0] = VT0 + 0.5  # the error negative: back inside, K_I u
+    exc.derivatives(P, x, 0, VT0 + 0.5, VT0 + 0.5, 0.0, EFD0, EFD0, VB0, dx, True, 0.0)
+    u = P[0, exc.E.VREF] - (VT0 + 0.5)
+    assert dx[1, 0] == pytest.approx(0.5 * u, rel=1e-12)
+
+
 def test_esst4b_without_its_lag_feeds_the_regulator_output_to_the_inner_loop():
     """ESST4B with T_A = 0 (PSS/E: no lag; ACTIVSg2000's records): the inner loop takes
     the regulator PI's clipped output y = clip(K_PR (V_ref - V_TR) + PIi, Vrmin, Vrmax)

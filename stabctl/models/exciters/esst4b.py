@@ -5,6 +5,11 @@ The regulator PI K_PR + K_IR/s with tracking anti-windup on [Vrmin, Vrmax] (stat
 the lag 1/(1 + s T_A) (state V_M), the inner-loop PI K_PM + K_IM/s on V_M - min(K_G Efd,
 VGmax), tracking anti-windup on [VMmin, VMmax] (state PIMi), both `blocks.pi_track_aw`
 (ANDES's PITrackAW); Efd = V_B times the inner PI's output, V_B = min(V_E F_EX, VBmax).
+PSS/E's reading (exc_con ``psse_st1`` 1, set by import-psse): both PIs with non-windup
+limits (`blocks.pi_nonwindup`; IEEE 421.5-2016 ST4B and E.6; OpenIPSL's PSS/E-verified
+``ESST4B.mo`` and OPAL-RT's hold their integrals at the limits): ANDES's tracking drove
+the regulator's integral to -1.3 pu while its output rode Vrmax through a fault, Efd then
+-0.68 pu 0.85 s after clearing where both PSS/E libraries give 2.8 (round 53, AO11).
 The feedback K_G Efd closes an algebraic loop, solved exactly (`field_voltage`).
 docs/pst_models.md 2.10.
 """
@@ -17,7 +22,7 @@ import numpy as np
 
 from stabctl._jit.decorators import kernel, njit
 from stabctl.errors import refuse_initial
-from stabctl.models.blocks import LBND, clip, lag, pi_track_aw, rectifier_loading
+from stabctl.models.blocks import LBND, clip, lag, pi_nonwindup, pi_track_aw, rectifier_loading
 from stabctl.models.declaration import DyrModel, Limits, beyond, states
 from stabctl.models.exciters.table import PID_TRACKING, E, potential_source, upper
 
@@ -150,12 +155,20 @@ def source_voltage(KP, KI, XL, KC, cap, machine, init):
 
 
 @kernel(inline="always")
+def _pi(P, i, u, xi, KP, KI, lo, hi):
+    """One of ESST4B's PIs: non-windup under PSS/E's reading (exc_con ``psse_st1`` 1,
+    `blocks.pi_nonwindup`), else ANDES's tracking (`blocks.pi_track_aw`): (output, the
+    integral's derivative)."""
+    if P[i, E.PSSE_ST1] == 1.0:
+        return pi_nonwindup(u, xi, KP, KI, lo, hi)
+    return pi_track_aw(u, xi, KP, KI, lo, hi, PID_TRACKING)
+
+
+@kernel(inline="always")
 def regulator(P, x, i, err):
-    """ESST4B's regulator PI K_PR err + PIi on [Vrmin, Vrmax] (`blocks.pi_track_aw`):
-    (output, the integral's derivative)."""
-    return pi_track_aw(
-        err, x[S.PIi, i], P[i, E.KPID_P], P[i, E.KPID_I], P[i, E.VRMIN], P[i, E.VRMAX], PID_TRACKING
-    )
+    """ESST4B's regulator PI K_PR err + PIi on [Vrmin, Vrmax] (`_pi`): (output, the
+    integral's derivative)."""
+    return _pi(P, i, err, x[S.PIi, i], P[i, E.KPID_P], P[i, E.KPID_I], P[i, E.VRMIN], P[i, E.VRMAX])
 
 
 @kernel(inline="always")
@@ -186,6 +199,6 @@ def derivatives(P, x, i, err, eterm, efd, ifd, pss_out, VB, dx, ieee, reach):
     y, dx[S.PIi, i] = regulator(P, x, i, err)
     VM, dx[S.VM, i] = lag(y, x[S.VM, i], P[i, E.TA])
     u = VM - min(P[i, E.KG] * efd, P[i, E.VGMAX])
-    dx[S.PIMi, i] = pi_track_aw(
-        u, x[S.PIMi, i], P[i, E.KPM], P[i, E.KIM], P[i, E.VMMIN], P[i, E.VMMAX], PID_TRACKING
+    dx[S.PIMi, i] = _pi(
+        P, i, u, x[S.PIMi, i], P[i, E.KPM], P[i, E.KIM], P[i, E.VMMIN], P[i, E.VMMAX]
     )[1]

@@ -236,10 +236,14 @@ PARAMS = (
         "code",
         48,
         choices=(0, 1),
-        doc="EXST1: 1 the PSS/E Model Library's output limits [V_t VRMIN - K_C I_fd, "
-        "V_t VRMAX - K_C I_fd] and rate feedback of V_R before them (OpenIPSL's "
-        "PSSE.ES.EXST1, PowerSimulationsDynamics.jl); 0 (default) the lower limit "
-        "V_t VRMIN and the feedback of the field voltage",
+        doc="the PSS/E Model Library's reading (import-psse's) of EXST1 and ESST4B: 1 "
+        "EXST1's output limits [V_t VRMIN - K_C I_fd, V_t VRMAX - K_C I_fd] and rate "
+        "feedback of V_R before them (OpenIPSL's PSSE.ES.EXST1, "
+        "PowerSimulationsDynamics.jl), ESST4B's two PIs with non-windup limits, the "
+        "integral held while the output is at a limit and driven beyond it (IEEE "
+        "421.5-2016 ST4B and E.6; OpenIPSL's PSS/E-verified ESST4B, OPAL-RT's); 0 "
+        "(default) EXST1's lower limit V_t VRMIN and the feedback of the field voltage, "
+        "ESST4B's tracking anti-windup (ANDES 2.0's PITrackAW, k_s 2)",
     ),
     Param("KB", "", 49, lo=0.0, doc="EXAC2: second stage regulator gain K_B (> 0)"),
     Param("KL", "", 50, lo=0.0, doc="EXAC2: gain of the exciter field current limit signal V_L"),
