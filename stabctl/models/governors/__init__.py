@@ -158,9 +158,8 @@ class GovernorParams(Declared):
     T_w, T5 its A_t); GGOV1's fields :data:`GGOV1_FIELDS` (tg_con columns 28-59) and
     turbine_scale, its turbine rating Trate over its machine's MVA (1 where Trate = 0
     or another type); delay_tc, a DEGOV's or DEGOV1's transport delay's fastest time
-    constant (s;
-    `stabctl.models.governors.degov.delay_time_constant`, inf without one); then every
-    type's own fields (:data:`OWN_PARAMS`)."""
+    constant (s; `stabctl.models.governors.degov.delay_time_constant`, inf without one);
+    then every type's own fields (:data:`OWN_PARAMS`)."""
 
     K: np.ndarray
     mac2: np.ndarray
