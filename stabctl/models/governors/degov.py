@@ -25,12 +25,13 @@ the closed form, as python-control's ``pade``), n states (``delay1`` ...) realis
 controllable canonical form in time scaled by TD and by the approximant's constant term,
 so that at rest every delay state but the first is 0 and the first equals the torque.
 The order grows with the delay, so that the approximant's phase holds through the
-governor's frequencies and its fastest pole, 2 / TD at order 1 to 13.9 / TD at order 8, stays slower than the
-machines' subtransients (declared as a time constant, `delay_time_constant`: 29-72 ms
-for TD 0.1-1 s).  On the torque of PSS/E's run with TD = 1 s the approximant of order
-2, 4, 6 is within 3.5e-3, 5.0e-4, 5.0e-5 pu of the exact delay (a swing of 4.1e-3 pu)
-and order 8 within 1.8e-5; the run (tests/data/psse_runs/DEGOV_DELAY, PSID's
-DDE within 3.1e-5 pu of speed) is within its tolerance.  TD below 1e-3 s: no delay.
+governor's frequencies and its fastest pole, 2 / TD at order 1 to 13.9 / TD at order 8,
+stays slower than the machines' subtransients (declared as a time constant,
+`delay_time_constant`: 29-72 ms for TD 0.1-1 s).  On the torque of PSS/E's run with TD =
+1 s the approximant of order 2, 4, 6 is within 3.5e-3, 5.0e-4, 5.0e-5 pu of the exact
+delay (a swing of 4.1e-3 pu) and order 8 within 1.8e-5; the run
+(tests/data/psse_runs/DEGOV_DELAY, PSID's DDE within 3.1e-5 pu of speed) is within its
+tolerance.  TD below 1e-3 s: no delay.
 
 A block whose lag is below 1e-3 s is absent: T1 (with T2) the control box's, T5 and T6
 the actuator's (the second-order lag falls to the one left).  Refused by name (`check`):
