@@ -140,9 +140,7 @@ def activsg_placement(workers: int = 2) -> None:
         wall = time.perf_counter() - t
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    lines = out.stdout.strip().splitlines()
-    print(lines[0] if lines else out.stderr[-500:])
-    print(lines[-1] if lines else "")
+    print(out.stdout.strip() or out.stderr[-500:])  # the plan, contingency by contingency
     print(
         f"activsg2000: 10 contingencies x 3 load levels, {workers} workers: wall "
         f"{wall / 60:.1f} min, CPU {cpu / 60:.1f} min, exit {out.returncode} "

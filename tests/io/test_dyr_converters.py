@@ -876,6 +876,28 @@ def test_regca1_lvpl_limits_the_output_as_pss_e_reads_it(tmp_path, conventions):
 
 
 @pytest.mark.parametrize("conventions", ["psse", "andes"])
+def test_regca1_rate_limits_bound_the_currents_rates_as_pss_e_reads_them(tmp_path, conventions):
+    """REGCA1's Rrpwr 2 and Iqrmax 3 (RENA's plant, Tg 0.02 s, Q0 > 0), its Ip state 0.5 pu
+    and its Iq state 0.3 pu below their commands, the lags asking 25 and 15 pu/s.  PSS/E's
+    reading bounds the rates, pu/s (the Model Library's unit; GridPACK ``regca1.cpp``
+    setdxlimits, InterPSS ``PsseRegca1ConverterTest``: Rrpwr 0.2, Ip up 0.002 pu in 0.01 s;
+    Dynawo ``BaseREGC.mo``; round 54 AL09): 2 and 3 pu/s.  ANDES's bounds Tg times the
+    rates by them (its RateLimiter on the right-hand side, OpenIPSL's ``REGCA1.mo`` alike),
+    rates of 100 and 150 pu/s: neither binds (about 25, 15)."""
+    case = load_psse(
+        RAW, _rena(tmp_path, REGCA1={"Rrpwr": 2.0, "Iqrmax": 3.0}), conventions=conventions
+    )
+    _, cp, x, names, _ = _commands(case, {})
+    assert cp.Q0[0] > 0.0
+    ip, iq = x[names.index("ibr.Ip.C1")], x[names.index("ibr.Iq.C1")]
+    ipcmd, *_, dx = _commands(case, {"Ip": ip - 0.5, "Iq": iq - 0.3})
+    rates = dx[names.index("ibr.Ip.C1")], dx[names.index("ibr.Iq.C1")]
+    # (the command moves with the network's voltage, P0/|V| under ANDES's reading)
+    want = (2.0, 3.0) if conventions == "psse" else ((ipcmd - ip + 0.5) / 0.02, 0.3 / 0.02)
+    assert rates == pytest.approx(want, rel=1e-9)
+
+
+@pytest.mark.parametrize("conventions", ["psse", "andes"])
 def test_repca1_without_a_monitored_branch_measures_the_plant_as_pss_e_reads_it(
     conventions,
 ):

@@ -316,14 +316,17 @@ def vtrip_sim(tmp_path_factory):
 
 def test_a_dip_below_vl1_trips_the_share_then_vrfrac_reconnects(vtrip_sim):
     """|V| held at 0.47 pu for 1 s (between vl0 0.44 and vl1 0.49, beyond tvl1 0.16 s):
-    the share (vl1 - 0.47)/(vl1 - vl0) = 0.4 trips, the multiplier settles at 0.6 (not
-    before tvl1: 1 at 0.15 s); the currents there are 0.6 times their commands (Iq = 0.6
-    Q0/0.47, Ip = 0.6 sqrt(Imax^2 - Iq^2), Q priority).  Back at 1 pu for 1 s, Vrfrac 0.7
-    of the tripped reconnect: 0.6 + 0.7 0.4 = 0.88 of P0 + j Q0."""
+    the output is lowered at once to (0.47 - vl0)/(vl1 - vl0) = 0.6 (before tvl1, through
+    Tv 0.02 s: forward Euler's 0.6 + 0.4 0.95^150 at 0.15 s; PowerWorld's DER_A page,
+    InterPSS, Dynawo), then the share 0.4 trips and the multiplier stays at 0.6; the
+    currents there are 0.6 times their commands (Iq = 0.6 Q0/0.47, Ip = 0.6 sqrt(Imax^2 -
+    Iq^2), Q priority).  Back at 1 pu for 1 s, Vrfrac 0.7 of the tripped reconnect: 0.6 +
+    0.7 0.4 = 0.88 of P0 + j Q0."""
     P0, Q0 = vtrip_sim.model.cp.P0[0], vtrip_sim.model.cp.Q0[0]
     x, S, seen = _held(vtrip_sim, _dip(0.47, 1.0), 1.0, record=(0.15,))
-    assert seen[0.15][DA.Mult] == 1.0
     m = (0.47 - 0.44) / (0.49 - 0.44)
+    assert seen[0.15][DA.Mult] == pytest.approx(m + (1 - m) * 0.95**150, abs=1e-12)
+    assert seen[0.15][DA.mpre_l] == 1.0  # nothing tripped yet
     assert x[DA.Mult, 0] == pytest.approx(m, abs=1e-9)
     iq = m * Q0 / 0.47
     assert x[DA.Iq, 0] == pytest.approx(iq, abs=1e-9)
@@ -335,12 +338,31 @@ def test_a_dip_below_vl1_trips_the_share_then_vrfrac_reconnects(vtrip_sim):
 
 
 def test_a_dip_shorter_than_tvl1_trips_nothing(vtrip_sim):
-    """|V| at 0.47 pu for 0.1 s (< tvl1 0.16 s), then 1 pu: nothing trips (the multiplier
-    stays 1 throughout) and it settles back at P0 + j Q0."""
+    """|V| at 0.47 pu for 0.1 s (< tvl1 0.16 s), then 1 pu: the output lowered with the
+    voltage during the dip (the multiplier toward 0.6 through Tv: forward Euler's 0.6 +
+    0.4 0.95^n after n steps of 1 ms), nothing tripped (m_pre stays 1), and it settles back
+    at P0 + j Q0."""
     P0, Q0 = vtrip_sim.model.cp.P0[0], vtrip_sim.model.cp.Q0[0]
     x, S, seen = _held(vtrip_sim, _dip(0.47, 0.1), 2.0, record=(0.05, 0.1, 0.5))
-    assert all(s[DA.Mult] == 1.0 for s in seen.values()) and x[DA.Mult, 0] == 1.0
+    for t in (0.05, 0.1):
+        assert seen[t][DA.Mult] == pytest.approx(0.6 + 0.4 * 0.95 ** round(t / 1e-3), abs=1e-12)
+    assert all(s[DA.mpre_l] == 1.0 for s in seen.values()) and x[DA.mpre_l, 0] == 1.0
+    assert x[DA.Mult, 0] == pytest.approx(1.0, abs=1e-12)
     assert S == pytest.approx(P0 + 1j * Q0, abs=1e-9)
+
+
+def test_after_the_trip_the_multiplier_follows_the_depressed_curve(vtrip_sim):
+    """|V| 0.47 pu for 0.3 s (the trip at tvl1 0.16 s with the minimum from then on,
+    0.47), then 0.48 pu (still below vl1 0.49) for 0.7 s: the multiplier rises with the
+    share Vrfrac 0.7 of the recovery, ((0.47 - 0.44) + 0.7 (0.48 - 0.47))/(0.49 - 0.44) =
+    0.74 (PowerWorld's "depressed curve according to Vrfrac and ... the minimum voltage",
+    InterPSS's DER_A_PosSeqImpl), and back above vl1 it is the reconnected share 0.6 + 0.7
+    0.4 = 0.88, continuous with that curve at vl1."""
+    x, _, _ = _held(vtrip_sim, lambda t: 0.47 if t < 0.3 else 0.48, 1.0)
+    assert x[DA.Mult, 0] == pytest.approx(((0.47 - 0.44) + 0.7 * 0.01) / 0.05, abs=1e-9)
+    x, _, _ = _held(vtrip_sim, lambda t: 0.47 if t < 0.3 else (0.48 if t < 1.0 else 1.0), 2.0)
+    assert x[DA.Mult, 0] == pytest.approx(0.88, abs=1e-9)
+    assert x[DA.mpre_l, 0] == pytest.approx(0.88, abs=1e-12)
 
 
 def test_a_dip_below_vl0_beyond_tvl0_trips_all_for_good(vtrip_sim):

@@ -56,19 +56,26 @@ VtripFlag 1 (the voltage tripping with partial reconnection), a multiplier on th
 current commands with timers, on the terminal voltage v = |V|; the low side:
 
 * v below vl0 for tvl0 s: all trip, for good (multiplier 0);
-* v below vl1 for tvl1 s: a share trips: the multiplier is m_pre (vmin - vl0)/(vl1 -
-  vl0) (clipped to [0, 1]) with vmin the lowest v since it fell below vl1 and m_pre the
-  multiplier before the dip (1 at the start); before tvl1 s nothing trips;
+* v below vl1, for less than tvl1 s: the output lowered with the voltage, m_pre (v -
+  vl0)/(vl1 - vl0) (clipped to [0, 1]), nothing tripped: back above vl1 it is m_pre
+  again; m_pre is the multiplier before the dip (1 at the start);
+* v below vl1 for tvl1 s: a share trips: with vmin the lowest v from then on (within
+  [vl0, vl1]), the multiplier is m_pre ((vmin - vl0) + Vrfrac (v - vmin))/(vl1 - vl0)
+  (clipped to [0, 1]): m_pre (vmin - vl0)/(vl1 - vl0) at the lowest voltage, rising
+  with the share Vrfrac of the voltage's recovery;
 * when v returns above vl1 after such a trip, the share Vrfrac of those tripped
-  reconnects: m_pre becomes m + Vrfrac (m_pre - m), m the multiplier at the return; a
-  dip shorter than tvl1 leaves nothing;
+  reconnects: m_pre becomes m + Vrfrac (m_pre - m), m = m_pre (vmin - vl0)/(vl1 - vl0);
 * the high side alike with vh1, vh0, tvh1, tvh0 and the highest v: (vh0 - vmax)/(vh0 -
   vh1); the multiplier is the product of the two sides'.
 
-This is the reading of the WECC DER_A specification's partial tripping (the share
-tripped linear in the voltage between vl1 and vl0, a share Vrfrac of it reconnecting);
-Dynawo's ``der_a`` LVRT/OVRT reads it alike after the timer, and lowers the output
-linearly before it (a momentary cessation), which stabctl does not.
+This is the WECC DER_A specification's partial tripping as PowerWorld's DER_A page
+states it (vl0, vl1 the voltages of multipliers 0 and 1; beyond tvl1 the multiplier
+"tracks a depressed curve according to Vrfrac and an internally tracked value of the
+minimum voltage") and InterPSS's ``DER_A_PosSeqImpl`` (written from PowerWorld's
+pseudocode) and Dynawo's ``der_a`` LVRT/OVRT code it: both lower the output linearly
+before tvl1 (a momentary reduction), and take the minimum from the trip on (Dynawo: the
+voltage when tvl1 expires).  Until round 54 (AM03) stabctl lowered nothing before tvl1
+and took the lowest voltage since the dip began.
 
 FtripFlag 1 (the frequency tripping): Fmeas below fl for tfl s, or above fh for tfh s,
 while Vmeas >= Vpr (below Vpr the frequency trip is blocked): all trip, for good (the
@@ -167,11 +174,24 @@ def frequency(P, x, k, V):
 
 
 @kernel
+def _tripped_share(ext, u, u1, u0, frac):
+    """The multiplier left after a partial voltage trip at the extreme ext (from the
+    trip on) and voltage u, both as `_voltage_side`'s: ((e - u0) + Vrfrac (u - e))/(u1 -
+    u0) with e = ext within [u0, u1], clipped to [0, 1]: (e - u0)/(u1 - u0) at the
+    extreme, rising with slope Vrfrac toward the reconnected share at u1 (InterPSS's
+    ``DER_A_PosSeqImpl``, PowerWorld's DER_A pseudocode; Dynawo's ``LVRT.mo`` takes e as
+    the voltage when tvl1 expires)."""
+    e = clip(ext, u0, u1)
+    return clip(((e - u0) + frac * (u - e)) / (u1 - u0), 0.0, 1.0)
+
+
+@kernel
 def _voltage_side(x, k, dx, u, u1, u0, t1, t0, frac, s1, s0, sext, spre):
     """One side of the voltage tripping of device k (the module's VtripFlag 1) at u = s
     v (s = 1 the low side, -1 the high side; u1 = s vl1, u0 = s vl0 or the high side's):
-    its timers s1 (below u1), s0 (below u0), extreme sext and multiplier before the dip
-    spre updated in place (the timers' rates into dx); returns the side's multiplier."""
+    its timers s1 (below u1), s0 (below u0), extreme sext (since the s1 trip) and
+    multiplier before the dip spre updated in place (the timers' rates into dx); returns
+    the side's multiplier (the module's VtripFlag 1)."""
     dx[s1, k] = dx[s0, k] = dx[sext, k] = dx[spre, k] = 0.0
     if u < u0:
         if x[s0, k] >= t0:
@@ -182,14 +202,13 @@ def _voltage_side(x, k, dx, u, u1, u0, t1, t0, frac, s1, s0, sext, spre):
         x[s0, k] = 0.0
     pre = x[spre, k]
     if u < u1:
-        x[sext, k] = min(x[sext, k], u)
-        if x[s1, k] < t1:
+        if x[s1, k] < t1:  # before the trip: the output lowered with the voltage
             dx[s1, k] = 1.0
-            return pre
-        return pre * clip((x[sext, k] - u0) / (u1 - u0), 0.0, 1.0)
+            return pre * clip((u - u0) / (u1 - u0), 0.0, 1.0)
+        x[sext, k] = min(x[sext, k], u)
+        return pre * _tripped_share(x[sext, k], u, u1, u0, frac)
     if x[s1, k] >= t1 and x[sext, k] < u1:  # back after a trip: a share reconnects
-        m = pre * clip((x[sext, k] - u0) / (u1 - u0), 0.0, 1.0)
-        pre = m + frac * (pre - m)
+        pre = pre * _tripped_share(x[sext, k], u1, u1, u0, frac)
         x[spre, k] = pre
     x[s1, k] = 0.0
     x[sext, k] = u1

@@ -4,7 +4,8 @@ record, its named states, its output currents and its derivatives (docs/ibr.md).
 
 The converter lags its current commands (Ipcmd, Iqcmd: constant, or its electrical
 control's, :mod:`.reeca1`) through Tg with the rate limits Rrpwr (Ip) and Iqrmax, Iqrmin
-(Iq), the Ip state held under the low-voltage power logic LVPL of the voltage filtered
+(Iq; pu/s on the currents under PSS/E's reading, on Tg times them under ANDES's:
+`rate_scale`), the Ip state held under the low-voltage power logic LVPL of the voltage filtered
 through Tfltr; its output currents are Ip times the low-voltage gain LVG and Iq less the
 high-voltage management.  Its parameters are ibr_con columns 39-52 (:mod:`.table`).
 """
@@ -112,11 +113,25 @@ def ipcmd(P, x, k):
 
 
 @kernel
+def rate_scale(P, k):
+    """What REGCA1 k's rate limits Rrpwr, Iqrmax and Iqrmin bound, as a factor on them in
+    the lag's equation value e = Tg dy/dt: Tg under PSS/E's reading (``psse`` 1: the
+    Model Library's unit, pu/s, on dy/dt, as GridPACK's ``regca1.cpp`` ``setdxlimits``,
+    InterPSS's ``Regca1Model`` and Dynawo's ``BaseREGC.mo`` bound it; round 54, AL09), 1
+    under ANDES's (its RateLimiter compares the right-hand side Tg dy/dt, not dy/dt:
+    andes/core/discrete.py RateLimiter.check_eq, as OpenIPSL's ``REGCA1.mo``)."""
+    if P[k, C.PSSE] == 1.0:
+        return P[k, C.TG]
+    return 1.0
+
+
+@kernel
 def _ip_limits(P, x, k):
     """REGCA1's Ip lag S0 (ANDES regca1.py 238-256) at the states x: the LVPL upper limit
     (Piecewise, 242-249) of the filtered voltage S2 (slot V_filter) and the equation value e =
-    Ipcmd - Ip after the rate limit Rrpwr (ANDES compares the right-hand side Tg dIp/dt,
-    not dIp/dt: andes/core/discrete.py RateLimiter.check_eq)."""
+    Ipcmd - Ip after the rate limit Rrpwr (`rate_scale`): on its rise under ANDES's
+    reading; under PSS/E's on the rise of |Ip|, the rise for a command >= 0 and the fall
+    for one < 0 (a battery charging), as REGCB1's (:mod:`.regcb1`)."""
     S2 = x[RG.V_filter, k]
     sw = P[k, C.LVPLSW]
     if S2 <= P[k, C.ZEROX]:
@@ -125,9 +140,13 @@ def _ip_limits(P, x, k):
         LVPL = (S2 - P[k, C.ZEROX]) * P[k, C.KLVPL] + 9999.0 * (1.0 - sw)
     else:
         LVPL = 9999.0
-    e = ipcmd(P, x, k) - x[RG.Ip, k]
-    if e > P[k, C.RRPWR]:
-        e = P[k, C.RRPWR]
+    cmd = ipcmd(P, x, k)
+    e = cmd - x[RG.Ip, k]
+    cap = P[k, C.RRPWR] * rate_scale(P, k)
+    if e > cap and (cmd >= 0.0 or P[k, C.PSSE] != 1.0):
+        e = cap
+    if e < -cap and cmd < 0.0 and P[k, C.PSSE] == 1.0:
+        e = -cap
     return LVPL, e
 
 
@@ -170,11 +189,12 @@ def derivatives(P, x, k, v, Iq_target, reach, dx):
         e = 0.0
     Tg = P[k, C.TG]
     dx[RG.Ip, k] = e / Tg
-    # S1: Iq lag (gain -1 on Iqcmd), rate limits enabled by the sign of Q0
+    # S1: Iq lag (gain -1 on Iqcmd), rate limits enabled by the sign of Q0 (`rate_scale`)
     e = Iq_target - x[RG.Iq, k]
-    if P[k, C.Q0] < 0.0 and e < P[k, C.IQRMIN]:
-        e = P[k, C.IQRMIN]
-    if P[k, C.Q0] > 0.0 and e > P[k, C.IQRMAX]:
-        e = P[k, C.IQRMAX]
+    scale = rate_scale(P, k)
+    if P[k, C.Q0] < 0.0 and e < P[k, C.IQRMIN] * scale:
+        e = P[k, C.IQRMIN] * scale
+    if P[k, C.Q0] > 0.0 and e > P[k, C.IQRMAX] * scale:
+        e = P[k, C.IQRMAX] * scale
     dx[RG.Iq, k] = e / Tg
     dx[SPARE, k] = 0.0
