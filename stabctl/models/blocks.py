@@ -37,6 +37,14 @@ def clip(v, lo, hi):
 
 
 @kernel
+def magnitude_rate(d, sign, rate):
+    """A rate d of a signal bounded on its magnitude's rise (the WECC converters' Rrpwr:
+    REGCA1, REGCB1, DERA1): at most rate where ``sign`` (the signal or its command) is >= 0,
+    at least -rate where it is < 0; the fall of the magnitude is free."""
+    return min(d, rate) if sign >= 0.0 else max(d, -rate)
+
+
+@kernel
 def deadband(u, lo, hi):
     """Deadband without offset (WECC's and PSS/E's ``dbd`` blocks, PowerSimulationsDynamics.jl's
     ``deadband_function``): 0 within [lo, hi], else the distance beyond the nearer edge

@@ -97,7 +97,7 @@ from __future__ import annotations
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import clip, deadband, lag, nonwindup, pi_nonwindup
+from stabctl.models.blocks import clip, deadband, lag, magnitude_rate, nonwindup, pi_nonwindup
 from stabctl.models.converters.table import DERA1, C
 from stabctl.models.declaration import DyrModel, slots
 
@@ -191,7 +191,7 @@ def _voltage_side(x, k, dx, u, u1, u0, t1, t0, frac, s1, s0, sext, spre):
     v (s = 1 the low side, -1 the high side; u1 = s vl1, u0 = s vl0 or the high side's):
     its timers s1 (below u1), s0 (below u0), extreme sext (since the s1 trip) and
     multiplier before the dip spre updated in place (the timers' rates into dx); returns
-    the side's multiplier (the module's VtripFlag 1)."""
+    the side's multiplier."""
     dx[s1, k] = dx[s0, k] = dx[sext, k] = dx[spre, k] = 0.0
     if u < u0:
         if x[s0, k] >= t0:
@@ -317,8 +317,7 @@ def derivatives(P, x, k, V, dx):
     Ipmin, Ipmax, Iqmax = _limits(P, k, Ip, Iq)
     _, dx[DA.Iq, k] = lag(mult * clip(Iqv + Q_V, -Iqmax, Iqmax), Iq, P[k, C.DA_TG])
     _, dIp = lag(mult * clip(Pord / vm, Ipmin, Ipmax), Ip, P[k, C.DA_TG])
-    rate = P[k, C.DA_RRPWR]
-    dx[DA.Ip, k] = min(dIp, rate) if Ip >= 0.0 else max(dIp, -rate)
+    dx[DA.Ip, k] = magnitude_rate(dIp, Ip, P[k, C.DA_RRPWR])
     return S
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import lag
+from stabctl.models.blocks import lag, magnitude_rate
 from stabctl.models.converters.reeca1 import RE
 from stabctl.models.converters.table import NO_REEC, REGC_A, REGCA1, C
 from stabctl.models.declaration import DyrModel, slots
@@ -143,11 +143,9 @@ def _ip_limits(P, x, k):
     cmd = ipcmd(P, x, k)
     e = cmd - x[RG.Ip, k]
     cap = P[k, C.RRPWR] * rate_scale(P, k)
-    if e > cap and (cmd >= 0.0 or P[k, C.PSSE] != 1.0):
-        e = cap
-    if e < -cap and cmd < 0.0 and P[k, C.PSSE] == 1.0:
-        e = -cap
-    return LVPL, e
+    if P[k, C.PSSE] == 1.0:
+        return LVPL, magnitude_rate(e, cmd, cap)
+    return LVPL, min(e, cap)
 
 
 @kernel

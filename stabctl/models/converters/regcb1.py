@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from stabctl._jit.decorators import kernel
-from stabctl.models.blocks import LBND, clip, lag
+from stabctl.models.blocks import LBND, clip, lag, magnitude_rate
 from stabctl.models.converters.pll import PL
 from stabctl.models.converters.regca1 import RG
 from stabctl.models.converters.table import REGC_B, C
@@ -107,9 +107,7 @@ def derivatives(P, x, k, v, Ipcmd, Iq_target, dx):
     vf, dx[RG.V_filter, k] = lag(v, x[RG.V_filter, k], P[k, C.TFLTR])
     Tg = P[k, C.TG]
     u = Ipcmd * max(vf, V_FLOOR) if P[k, C.GB_RATEFLAG] == 1.0 else Ipcmd
-    rate = P[k, C.GB_RRPWR]
-    d = (u - x[RG.Ip, k]) / Tg
-    dx[RG.Ip, k] = min(d, rate) if u >= 0.0 else max(d, -rate)
+    dx[RG.Ip, k] = magnitude_rate((u - x[RG.Ip, k]) / Tg, u, P[k, C.GB_RRPWR])
     d = (Iq_target - x[RG.Iq, k]) / Tg
     if P[k, C.Q0] > 0.0:
         d = min(d, P[k, C.GB_IQRMAX])
