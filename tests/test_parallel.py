@@ -2259,15 +2259,17 @@ def test_a_stopped_scheduler_is_said_then_waited_for_or_given_up(
     from stabctl import parallel
     from stabctl.parallel import SweepIncomplete
 
-    monkeypatch.setattr(parallel, "SCHEDULER_ANSWER_S", 0.5)
-    monkeypatch.setattr(parallel, "SILENT_SCHEDULER_S", 2.0)
-    monkeypatch.setattr(parallel, "SCHEDULER_GIVE_UP_S", 30.0 if continued else 4.0)
     out = tmp_path / "d.jsonl"
     jobs = jobs_of(sleepy, *[0.5 + 0.01 * k for k in range(4)])
     with separate_cluster(1) as (address, sched, _):
 
         def stop_after_one(done, total):
             if done == 1:
+                # the short waits from the stop on only: set before the sweep, a loaded
+                # machine's slow first answers gave the scheduler up before any job ran
+                monkeypatch.setattr(parallel, "SCHEDULER_ANSWER_S", 0.5)
+                monkeypatch.setattr(parallel, "SILENT_SCHEDULER_S", 2.0)
+                monkeypatch.setattr(parallel, "SCHEDULER_GIVE_UP_S", 30.0 if continued else 4.0)
                 os.kill(sched.pid, signal.SIGSTOP)
                 if continued:
                     threading.Timer(6.0, os.kill, (sched.pid, signal.SIGCONT)).start()
