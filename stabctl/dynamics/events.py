@@ -175,13 +175,13 @@ def _circuit(case: Case, row: int) -> str:
 
 
 def _open_once(opened: dict, what: str, ev) -> None:
-    """Record that ``ev`` trips ``what`` (a machine); InputError if an earlier event trips
-    it already."""
+    """Record that ``ev`` trips ``what`` (a machine or a converter, "KIND NUMBER");
+    InputError if an earlier event trips it already."""
     first = opened.setdefault(what, ev)
     if first is not ev:
         raise InputError(
             f"{what} is tripped twice, by {first} and by {ev}: the second would do nothing "
-            "(give each machine once)"
+            f"(give each {what.split()[0]} once)"
         )
 
 

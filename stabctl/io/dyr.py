@@ -110,7 +110,7 @@ class DyrTables:
     records read with a value other than the file's, ``"file:line MODEL (bus B, id I):
     what"`` (a DC exciter's VRMAX = 0 computed as PSS/E computes it, or read as no upper
     limit with conventions "andes" and "pst"; with conventions="andes" an SCRX read as
-    ANDES's SEXS with its defaults)."""
+    ANDES's SEXS with its defaults, and a model ANDES 2.0 lacks read as PSS/E's)."""
 
     mac_con: np.ndarray
     exc_con: np.ndarray | None
@@ -618,6 +618,8 @@ def _map_records(records, generators, conventions):
                 f"{rows[kind][number][0].where()})"
             )
         _saturation_noted(rec, conventions)
+        if andes:
+            _andes_lacks_noted(rec)
         rows[kind][number] = (rec, row)
     for number in [k for k in rows["exciter"] if _classical(rows["machine"].get(k))]:
         skipped.append((rows["exciter"].pop(number)[0], _NO_FIELD_WINDING))
@@ -1564,6 +1566,19 @@ def _gensal_andes(rec, gen):
     _leakage_noted(rec, v)
     _zsorce_noted(rec, gen, v["X''d"])
     return _mac_row(rec, gen, xqp=v["X'd"], Tqop=v["T'do"], xqpp=v["X''d"])
+
+
+def _andes_lacks_noted(rec) -> None:
+    """With conventions="andes", a record of a model ANDES 2.0 lacks and no ANDES reading
+    of stabctl's replaces (DEGOV, GGOV1, PSS2A, ...: `DyrModel.andes` empty, none of
+    `_ANDES_MAPPERS`) is read as PSS/E's Model Library reads it: said in `DyrTables.changed`
+    (round 55 AQ25: it was said of an SCRX read as ANDES's SEXS, not of these)."""
+    if not DYR_MODELS[rec.model].andes and rec.model not in _ANDES_MAPPERS:
+        _read_as(
+            rec,
+            f"ANDES 2.0 has no {rec.model}: read as PSS/E's Model Library reads it (no ANDES "
+            "reading to compare like for like)",
+        )
 
 
 def _not_in_andes(rec, gen):

@@ -320,7 +320,10 @@ def test_a_circuit_or_machine_tripped_twice_is_refused(kundur):
     for events, needle in (
         ([cleared, LineTrip(3, 101, 2.0)], r"circuit 3-101 \(branch row 5\) is tripped twice"),
         ([LineTrip(101, 3, 2.0), LineTrip(3, 101, 3.0)], "circuit 3-101"),
-        ([GeneratorTrip(2, 1.5), GeneratorTrip(2, 2.0)], "machine 2 is tripped twice"),
+        (
+            [GeneratorTrip(2, 1.5), GeneratorTrip(2, 2.0)],
+            r"machine 2 is tripped twice.*machine once",
+        ),
     ):
         with pytest.raises(InputError, match=needle):
             kundur.run(events, t_end=3.0)

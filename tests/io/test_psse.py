@@ -994,6 +994,25 @@ def test_a_dyr_value_read_otherwise_is_named_changed(tmp_path):
     assert import_psse(V33, scrx).changed == ()
 
 
+def test_a_model_andes_lacks_read_with_its_conventions_is_said_read_as_psse(tmp_path):
+    """Round 55 AQ25: with --dyr-conventions andes, a DEGOV (which ANDES 2.0 lacks, and
+    import-andes refuses by name) was read as PSS/E's Model Library without a word, while
+    an SCRX read as ANDES's SEXS was named.  Now it is named in `changed`; under the psse
+    conventions nothing is."""
+    runs = Path(__file__).parents[1] / "data" / "psse_runs" / "DEGOV"
+    raw, dyr = runs / "ThreeBusMulti.raw", runs / "ThreeBus_DEGOV.dyr"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        imported = import_psse(raw, dyr, conventions="andes")
+        plain = import_psse(raw, dyr)
+    degov = [c for c in imported.changed if " DEGOV (bus 102, id 1): " in c]
+    assert degov == [
+        "ThreeBus_DEGOV.dyr:3 DEGOV (bus 102, id 1): ANDES 2.0 has no DEGOV: read as PSS/E's "
+        "Model Library reads it (no ANDES reading to compare like for like)"
+    ]
+    assert not [c for c in plain.changed if "DEGOV" in c]
+
+
 @pytest.mark.parametrize(
     ("model", "ke", "vrmax"),
     [("ESDC2A", 1.0, (1.0 + 0.1) * 2.3), ("ESDC1A", 0.0, 0.1 * 2.3), ("IEEEX1", -0.05, 0.1 * 2.3)],

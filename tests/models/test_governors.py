@@ -535,17 +535,15 @@ def test_degov_transport_delay_is_its_pade_approximant():
     every state is still and P_m is the torque; a torque step of 0.1 pu held (speed 1,
     the chain at rest) comes out as python-control's step response of ``pade(1, 8)``
     (within 1e-9 pu at 0.25-3 s: the realisation is the approximant), 0.1 pu after the
-    delay; TD 0.25 s gets order 3, below 1e-3 s none."""
+    delay; TD 0.25 s gets order 3, below 1e-3 s none, and a multiple of 0.1 s its own
+    step (0.3 s order 4: binary division gave 3, round 55 AQ26), the kernel and the
+    array reading alike."""
     import control
 
-    assert [gov.degov.pade_order(td) for td in (0.0, 5e-4, 0.05, 0.25, 0.75, 3.0)] == [
-        0,
-        0,
-        1,
-        3,
-        8,
-        8,
-    ]
+    tds = (0.0, 5e-4, 0.05, 0.25, 0.3, 0.6, 0.7, 0.75, 3.0)
+    orders = [0, 0, 1, 3, 4, 7, 8, 8, 8]
+    assert [gov.degov.pade_order(td) for td in tds] == orders
+    assert gov.degov.pade_orders(tds).tolist() == orders
     P, x0 = started(degov_row(Teng=1.0))
     state = [k for k, on in enumerate(params(degov_row(Teng=1.0)).has_state()[:, 0]) if on]
     assert np.max(np.abs(derivatives(P, x0)[state])) < 1e-12

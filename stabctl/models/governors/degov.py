@@ -95,6 +95,9 @@ DYR = (
 PADE_MAX = 8
 #: the delay's length per order step (s): order 1 below 0.1 s, 2 below 0.2 s, ...
 PADE_STEP_S = 0.1
+#: the slack of the order's floor: a TD written as a multiple of PADE_STEP_S (0.3, 0.6, 0.7
+#: s) takes that multiple's order, not the one below it that binary division gives
+PADE_ROUND = 1e-9
 #: the states the chain of DEGOV and DEGOV1 share (DEGOV1's begin with these): the electric
 #: control box's two, the actuator's two, the torque (the actuator's integrator,
 #: non-windup)
@@ -137,16 +140,18 @@ PADE_FASTEST = np.array(
 @kernel(inline="always")
 def pade_order(TD):
     """The order of the transport delay TD's Pade approximant (s): 0 (no delay) below
-    1e-3 s, else min(1 + int(TD / PADE_STEP_S), PADE_MAX)."""
+    1e-3 s, else min(1 + floor(TD / PADE_STEP_S), PADE_MAX), the quotient's floor taken
+    with `PADE_ROUND` of slack (0.3 / 0.1 is 2.9999999999999996 in binary: order 4)."""
     if TD < LBND:
         return 0
-    return min(1 + int(TD / PADE_STEP_S), PADE_MAX)
+    return min(1 + int(TD / PADE_STEP_S + PADE_ROUND), PADE_MAX)
 
 
 def pade_orders(TD) -> np.ndarray:
     """`pade_order` of each delay of the array TD (s), int array."""
     TD = np.asarray(TD, float)
-    return np.where(TD < LBND, 0, np.minimum(1 + (TD / PADE_STEP_S).astype(int), PADE_MAX))
+    steps = (TD / PADE_STEP_S + PADE_ROUND).astype(int)
+    return np.where(TD < LBND, 0, np.minimum(1 + steps, PADE_MAX))
 
 
 def delay_time_constant(TD) -> np.ndarray:
