@@ -1024,15 +1024,18 @@ def check_option_events(case, given) -> None:
     Raises
     ------
     InputError
-        The first event naming what the case lacks, or a load, VREF or PREF step of 0 or
-        beyond its bound (`stabctl.case.events.step_limit`): the option as given, and the
-        bus, line, machine or motor missing, or the step's size, the bound and why.
+        The first event naming what the case lacks, at a negative time, or a load, VREF
+        or PREF step of 0 or beyond its bound (`stabctl.case.events.step_limit`): the
+        option as given, and the bus, line, machine or motor missing, the time, or the
+        step's size, the bound and why.
     """
     from stabctl.case.events import check_event
 
     for option, ev in given:
         with named_option(option):
             check_event(case, ev)
+            if any(t < 0 for t in ev.times()):  # the option named (round 55 AQ aside)
+                raise InputError(f"event {ev} has a negative time (a run starts at t = 0 s)")
 
 
 @contextmanager

@@ -95,10 +95,7 @@ def validate(case: Case, events, t_end: float) -> None:
             _check_playback(case, ev)
         # a LoadStep or MotorSwitch: check_event was all (any other is refused above)
         if any(t < 0 for t in ev.times()):
-            raise InputError(
-                f"event {ev} has a negative time (events after t_end = {t_end} s "
-                "simply do not happen)"
-            )
+            raise InputError(f"event {ev} has a negative time (a run starts at t = 0 s)")
     for row, sw in switchings.items():
         _check_switchings(_circuit(case, row), sw)
     check_totals(case, events)

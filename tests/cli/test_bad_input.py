@@ -854,6 +854,11 @@ F313 = f"--fault 3 --far-bus 13: {NO_LINE}"
         ),
         (("simulate", "kundur", "--load-step", 77, 1, 0.1, 0), f"--load-step 77 1 0.1 0: {NO_BUS}"),
         (("simulate", "kundur", "--trip-gen", 9, 1), "--trip-gen 9 1: machine 9 is not in case"),
+        (  # round 55: the option named, and no word of events after t_end
+            ("simulate", "kundur", "--trip-gen", 2, -0.5),
+            "--trip-gen 2 -0.5: event machine 2 tripped at -0.5 s has a negative time (a run "
+            "starts at t = 0 s)",
+        ),
     ],
 )
 def test_an_unknown_bus_or_line_of_an_option_is_named_before_any_work(no_simulation, args, needle):
