@@ -79,12 +79,14 @@ def test_a_simple_exciter_whose_output_limit_is_below_its_field_voltage_is_named
         Simulator(case, background_compile=False)
     assert (err.value.table, err.value.rows) == ("exc_con", (1,))
     assert str(err.value).startswith(
-        "the exciter of G2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0 = "
+        "the exciter of G2 (bus 2): Vrmax (SEXS's, SCRX's EMAX) = 0.5 below the initial field "
+        "voltage E_fd0 = "
     )
     assert " pu: the regulator's output limit cannot deliver it: the run cannot" in str(err.value)
     kept, left = leave_out_infeasible(case)
     assert len(left) == 1 and left[0].startswith(
-        "exciter of G2 (bus 2): Vrmax = 0.5 below the initial field voltage E_fd0"
+        "exciter of G2 (bus 2): Vrmax (SEXS's, SCRX's EMAX) = 0.5 below the initial field "
+        "voltage E_fd0"
     )
     assert list(kept.exciters.machine) == [1, 3, 4]
     assert Simulator(kept, background_compile=False).model.initial_residual[0] < 1e-8

@@ -1123,7 +1123,8 @@ def test_an_exciter_that_cannot_start_is_named_by_the_import_that_keeps_it(tmp_p
     assert res.exit_code == 0 and out.exists(), res.output
     warned = [x for x in res.output.splitlines() if x.startswith("warning: the exciter")]
     assert len(warned) == 1 and warned[0].startswith(
-        "warning: the exciter of G1 (bus 1, id '1'): Vrmax = 0.5 below the initial field voltage"
+        "warning: the exciter of G1 (bus 1, id '1'): Vrmax (SEXS's, SCRX's EMAX) = 0.5 below "
+        "the initial field voltage"
     )
     assert warned[0].endswith(
         "every run refuses the case as written (--leave-out-infeasible leaves such a control"

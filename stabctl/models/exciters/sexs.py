@@ -134,9 +134,9 @@ def initialise(p: ExciterParams, r, vex, eterm, VB, x):
         lambda k: (
             f"exc_con row {k + 1}: "
             + (
-                f"Vrmax = {p.Vrmax[k]:.4g} below"
+                f"Vrmax (SEXS's, SCRX's EMAX) = {p.Vrmax[k]:.4g} below"
                 if state[k] > p.Vrmax[k]
-                else f"Vrmin = {p.Vrmin[k]:.4g} above"
+                else f"Vrmin (SEXS's, SCRX's EMIN) = {p.Vrmin[k]:.4g} above"
             )
             + f" the initial field voltage E_fd0 = {state[k]:.4f} pu"
             + (" (over V_t, bus fed)" if p.KG[k] == 1 else "")
