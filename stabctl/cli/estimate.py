@@ -280,6 +280,11 @@ def rmse(
     check_storage_given(esd_pct, _STORAGE_NOT_COI)
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = rate_for_case(settings, rate, case)
+    if 0 < ambient_s < 1 / settings.rate:  # was said without the option (round 55 AS)
+        raise InputError(
+            f"--ambient-s {ambient_s:g}: an ambient run lasts at least one PMU frame interval, "
+            f"1/{settings.rate:g} s (or give 0: no ambient run)"
+        )
     check_latency(settings, error_window(ev, settle_ms / 1000, tf)[0], tf, f"--tf {tf:g} s")
     mc = ErrorRuns(
         runs=runs,

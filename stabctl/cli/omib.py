@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import click
@@ -57,14 +58,14 @@ def omib(fault_cycles, more_cycles, H, pm, delta0, pmax, f0, as_json):
     if pmax is not None:
         refuse_given(("delta0",), "with --pmax (Pmax is given; delta0 follows from it)")
     if pmax is None:
-        system = OMIB.from_operating_point(H=H, Pm=pm, delta0=delta0, f0=f0)
         lo, hi = _RANGES["--pmax"][:2]
-        if not lo < system.Pmax_pre <= hi:
+        implied = pm / math.sin(delta0)  # delta0 in (0, pi/2): 1e-320 gives inf, named
+        if not lo < implied <= hi:  # before the model's own checks (round 55 AS)
             raise InputError(
                 f"--delta0 {delta0:g} with --pm {pm:g}: Pmax = Pm/sin(delta0) = "
-                f"{system.Pmax_pre:g} pu, outside the --pmax range "
-                f"{interval(_RANGES['--pmax'])}"
+                f"{implied:g} pu, outside the --pmax range {interval(_RANGES['--pmax'])}"
             )
+        system = OMIB.from_operating_point(H=H, Pm=pm, delta0=delta0, f0=f0)
     else:
         system = OMIB(H=H, Pm=pm, Pmax_pre=pmax, Pmax_fault=0.0, Pmax_post=pmax, f0=f0)
     cycles = tuple(fault_cycles) + tuple(more_cycles) or (6.0, 12.0, 15.0)

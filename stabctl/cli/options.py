@@ -407,7 +407,8 @@ _RANGES = {
     "--clear-cycles": (0, 600, True, True, "cycles"),
     "--far-clear-cycles": (0, 600, True, True, "cycles"),
     "--t-trip": (0, 1000, True, True, "s"),
-    "--tf": (0, 3600, False, True, "s"),
+    # a run shorter than a microsecond is none: --tf 1e-320 reported "0-0 s, 0 steps, stable"
+    "--tf": (1e-6, 3600, True, True, "s"),
     "--step": (0, 1, False, True, "s"),
     "--separation-limit": (0, 100, False, True, "rad"),
     "--esd-pct": (0, 100, False, True, "% of machine MVA"),
@@ -433,11 +434,11 @@ _RANGES = {
     "--rate": (1, 1000, True, True, "frames/s"),
     "--latency-ms": (0, 10000, True, True, "ms"),
     "--drop": (0, 1, True, False, ""),
-    "--window-cycles": (0, 60, False, True, "cycles"),
+    "--window-cycles": (1, 60, True, True, "cycles"),  # settings.WINDOW_CYCLES_MIN
     "--tve-pct": (0, 100, True, True, "%"),
     "--fe-hz": (0, 10, True, True, "Hz"),
     "--rfe-hz-s": (0, 100, True, True, "Hz/s"),
-    "--k-sigma": (0, 100, False, True, ""),
+    "--k-sigma": (0.001, 100, True, True, ""),  # settings.K_SIGMA_MIN
     "--runs": (1, 100000, True, True, ""),
     "--seed": (0, 2**32 - 1, True, True, ""),
     "--settle-ms": (0, 100000, True, True, "ms"),

@@ -234,10 +234,14 @@ def data_frame(cfg: StreamConfig, cfg2, frame: Frame) -> bytes:
 
 
 def _int16(value, what: str, k: int) -> int:
-    v = int(round(float(value)))
-    if not -INT16 <= v <= INT16:
-        raise InputError(f"PMU {k}: {what} {v} does not fit C37.118.2's 16-bit field")
-    return v
+    v = float(value)  # a non-finite value named as out of range, not int()'s OverflowError
+    if not (math.isfinite(v) and -INT16 <= round(v) <= INT16):
+        raise InputError(
+            f"PMU {k}: {what} {v:g} does not fit C37.118.2's 16-bit field (FREQ at most "
+            f"{INT16 / MHZ_PER_HZ:g} Hz off nominal, DFREQ {INT16 / DFREQ_PER_HZ_S:g} Hz/s; "
+            "a simulated PMU's errors are --fe-hz and --rfe-hz-s over --k-sigma)"
+        )
+    return int(round(v))
 
 
 #: STAT (C37.118.2-2011 Table 7) words whose PMU values are not a synchronised

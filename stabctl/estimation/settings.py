@@ -34,6 +34,15 @@ def _listed(rates) -> str:
 
 #: the rates of both lists, as messages name them
 RATES_TEXT = " or ".join(f"{_listed(r)} frames/s at {f:g} Hz" for f, r in RATES_AT.items())
+#: the least `PMUSettings.k_sigma`: the errors' standard deviations are the C37.118.1
+#: limits over k, so k = 1e-12 drew frequencies of -3.9e9 Hz and 1e-320 inf (round 55 AS:
+#: non-finite frames, a C37.118.2 encoder's OverflowError); 1e-3 keeps a thousand-sigma
+#: stress test of the estimators
+K_SIGMA_MIN = 1e-3
+#: the shortest `PMUSettings.window_cycles`: a one-cycle DFT, the shortest phasor
+#: estimator (the P-class reference filter of C37.118.1 Annex C spans two); 1e-320 cycles
+#: made inf and NaN frequencies (round 55 AS)
+WINDOW_CYCLES_MIN = 1.0
 
 
 def rates_at(f0: float) -> tuple[float, ...]:
@@ -156,12 +165,19 @@ class PMUSettings:
                     f"PMUSettings({name}): PMU accuracy limits and latency must be finite and "
                     f">= 0, got {getattr(self, name)}"
                 )
-        if not 0 < self.k_sigma < float("inf"):
-            raise InputError(f"PMUSettings(k_sigma): must be finite and > 0, got {self.k_sigma}")
+        if not K_SIGMA_MIN <= self.k_sigma < float("inf"):
+            raise InputError(
+                f"PMUSettings(k_sigma): must be finite and >= {K_SIGMA_MIN:g} (the limits as "
+                f"that many standard deviations: below it the drawn errors leave any PMU's "
+                f"range), got {self.k_sigma}"
+            )
         if not 0 <= self.drop_prob < 1:
             raise InputError(f"dropped-frame probability must be in [0, 1), got {self.drop_prob}")
-        if not 0 < self.window_cycles < float("inf"):
-            raise InputError(f"PMU estimation window must be > 0 cycles, got {self.window_cycles}")
+        if not WINDOW_CYCLES_MIN <= self.window_cycles < float("inf"):
+            raise InputError(
+                f"PMU estimation window must be >= {WINDOW_CYCLES_MIN:g} cycle (a one-cycle "
+                f"DFT, the shortest phasor estimator), got {self.window_cycles}"
+            )
 
     def window_s(self, f0: float) -> float:
         """The frequency estimation window (s) at nominal frequency f0 (Hz)."""

@@ -1456,9 +1456,11 @@ def _dyr_unmatched(path: Path, dyr) -> InputError | None:
     generator the RAW file lacks (ANDES says only "references to unsupported models") or
     is a second model of one kind for a generator (ANDES: "Your input data may be
     inconsistent"): the records, by file:line, with the ids at their buses
-    (`stabctl.io.dyr`'s reading of both files); None if no record is such, the files
-    are not RAW + DYR, or either cannot be read so (ANDES's message is then the better
-    one)."""
+    (`stabctl.io.dyr`'s reading of both files); a DYR file that is none (a JSON case
+    given as the DYR: ANDES said "smib.raw: ... 'int' object is not iterable", naming
+    the RAW file, round 55 AS) by `stabctl.io.dyr`'s words, which name it and its line;
+    None if no record is such, the files are not RAW + DYR, or the RAW file cannot be
+    read so (ANDES's message is then the better one)."""
     from stabctl.io.dyr import _KIND, machine_id, no_generator, read_dyr
     from stabctl.io.psse_raw import read_raw
 
@@ -1466,9 +1468,12 @@ def _dyr_unmatched(path: Path, dyr) -> InputError | None:
         return None
     try:
         gens = {(g.bus, machine_id(g.id)): g for g in read_raw(path).generators}
-        records = read_dyr(dyr)
     except (InputError, CaseError):
         return None
+    try:
+        records = read_dyr(dyr)
+    except (InputError, CaseError) as exc:
+        return InputError(f"ANDES cannot read the DYR file: {exc}")
     first: dict = {}
     for r in records:
         kind = _KIND.get(r.model)

@@ -198,7 +198,10 @@ class CostModel:
                     f"overflows the program's scaling), got {o}"
                 )
         if not self.per_mw + self.per_mwh > 0:
-            raise InputError("need a cost per MW or per MWh > 0")
+            raise InputError(  # the options named too (round 55 AS)
+                "need a cost per MW or per MWh > 0 (CostModel per_mw, per_mwh; the CLI's "
+                f"--cost-mw, --cost-mwh), got {self.per_mw:g} and {self.per_mwh:g}"
+            )
 
     def of(self, machine: int) -> tuple[float, float, float]:
         """(per MW, per MWh, per site) at the site of `machine`."""

@@ -2814,3 +2814,56 @@ def test_a_report_is_written_in_utf_8_whatever_the_locale(tmp_path):
     assert res.returncode == 0 and b"Traceback" not in res.stderr, res.stderr[-800:]
     text = (tmp_path / "lc" / "eig_kundur.md").read_bytes()
     assert "± j".encode() in text  # UTF-8: b"\xc2\xb1"
+
+
+ROUND55_ERRORS = [
+    # a tiny --k-sigma drew PMU errors of 5e9 Hz (1e-320: inf, a C37.118.2 encoder's
+    # OverflowError traceback in pmu serve); the window likewise
+    (
+        ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--k-sigma", 1e-12),
+        "--k-sigma",
+    ),
+    (("pmu", "serve", "kundur", "--fault", 3, "--far-bus", 101, "--k-sigma", 1e-320), "--k-sigma"),
+    (
+        ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--window-cycles", 0.5),
+        "--window-cycles",
+    ),
+    # checked by the model before the option's range: "OMIB: not a finite number"
+    (("omib", "--fault-cycles", 6, "--delta0", 1e-320), "--delta0"),
+    # "the run is shorter than one PMU frame interval", no option named
+    (
+        ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--ambient-s", 0.01),
+        "--ambient-s 0.01",
+    ),
+    # a run of no step: "0-0 s, 0 steps ... stable", exit 0
+    (("simulate", "kundur", "--tf", 1e-320), "--tf 9.99989e-321: must be in [1e-06, 3600] s"),
+    # "need a cost per MW or per MWh > 0"
+    (
+        ("place", "kundur", "--faults", "f.csv", "--required-clearing-cycles", 6, "--cost-mw", 0),
+        "--cost-mw",
+    ),
+]
+
+
+@pytest.mark.parametrize(("args", "needle"), ROUND55_ERRORS)
+def test_round_55_values_are_refused_naming_their_option(
+    no_simulation, args, needle, tmp_path, monkeypatch
+):
+    """Round 55's fuzz of every option (benchmarks/reliability_probes_48.py): values the
+    ranges let through, refused later in words that named no option, or not at all."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "f.csv").write_text(_FAULT_CSV)
+    assert_error(run(*args), needle)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv"]
+
+
+def test_a_file_given_as_the_dyr_that_is_none_is_named_not_the_raw(tmp_path):
+    """Round 55: `import-andes smib.raw case.json` (a stabctl case as the DYR) said
+    "smib_v33.raw: ANDES cannot read the case: 'int' object is not iterable": the RAW
+    named, in Python's words.  The DYR is named, with its line, in stabctl's reader's."""
+    dyr = tmp_path / "c.json"
+    dyr.write_text(json.dumps({"format": "stabctl-case", "version": 1}))
+    out = tmp_path / "o.json"
+    res = run("import-andes", PSSE / "smib_v33.raw", dyr, "-o", out)
+    assert_error(res, "ANDES cannot read the DYR file: c.json:1: ")
+    assert not out.exists()
