@@ -517,7 +517,8 @@ def _check_search_limit(pl: PlanContext, cons, requirement: Requirement, overrid
             f"{c.describe()}: its target CCT {c.target_cct_s:.3f} s ({req.describe()}"
             f"{without}) is at or above the CCT search limit t_max = {pl.t_max:g} s "
             "(--t-max), which bounds every CCT searched, with or without storage: raise "
-            "--t-max above the target, or lower the requirement"
+            "--t-max above the target, or lower the requirement (--required-clearing-cycles, "
+            "--target-cct-gain, --target-cct-s or the fault list's own columns)"
         )
 
 
