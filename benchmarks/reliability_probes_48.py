@@ -39,9 +39,11 @@ words); the file options' errors name their role ('fault list', 'site costs') no
 Fixed (round 55): --k-sigma >= 1e-3 and --window-cycles >= 1 (PMUSettings too), the
 C37.118.2 encoder names a non-finite value as out of range; omib's --delta0 range checked
 before the model; --ambient-s below a frame, the costs of 0 and a DYR that is none named
-by option and file; simulate --tf >= 1e-6 s (1e-320 ran 0 steps, 'stable').  Kept: the
-file options' role words (the path is named), click's own words for extra tuple values,
-omib --fault-cycles 1e-320 (a positive length).
+by option and file; simulate --tf >= 1e-6 s (1e-320 ran 0 steps, 'stable'); the file
+options' refusals prefixed by the option ('--faults: fault list nan: ...', --site-costs,
+--screening); place's target beyond --t-max names the requirement's options.  Kept:
+click's own words for extra tuple values, omib --fault-cycles 1e-320 (a positive length),
+estimate track --until past the recording (the partial track written, as its help says).
 
 The contract (stabctl/errors.py: "Every error names what is wrong and where ... so that
 the CLI can print it and exit non-zero without a traceback"; stabctl.cli.options

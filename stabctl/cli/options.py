@@ -1258,8 +1258,10 @@ def read_fault_list(case, case_name: str, src: str):
         raise InputError("--faults: an empty path; give a file or DEFAULT")
     if src == "DEFAULT":
         rows = [(f, f"--faults {src}") for f in default_faults(case_name)]
-    else:  # each fault named with its file:line
-        rows = [(f, f"--faults {src}:{line}") for f, line in read_fault_rows(src)]
+    else:  # each fault named with its file:line; the file's own refusals with the option
+        with named_option("--faults"):
+            read = read_fault_rows(src)
+        rows = [(f, f"--faults {src}:{line}") for f, line in read]
     for f, where in rows:
         check_option_events(case, ((f"{where}: {f.describe()}", ev) for ev in f.events(0)))
     return [f for f, _ in rows]

@@ -23,6 +23,7 @@ from stabctl.cli.options import (
     json_option,
     keep_until_end,
     model_options,
+    named_option,
     out_file_option,
     parallel_options,
     q_limits_option,
@@ -293,20 +294,18 @@ def place(
     check_suffix(out_path, (".json",), "--out")
     case = load_case(case_name)
     n_mac = len(case.machines.bus)
-    cost = CostModel(
-        cost_mw,
-        cost_mwh,
-        cost_site,
-        read_site_costs(site_costs, n_mac, case.infinite_buses()) if site_costs else {},
-    )
+    with named_option("--site-costs"):  # the file's refusals with the option (round 55)
+        by_site = read_site_costs(site_costs, n_mac, case.infinite_buses()) if site_costs else {}
+    cost = CostModel(cost_mw, cost_mwh, cost_site, by_site)
     model = model_settings(conventions, step, q_limits)
-    brackets = (
-        screening_brackets(
-            screening, case_name, case.digest(), {**model.to_inputs(), "t_end": search.t_end}
+    with named_option("--screening"):
+        brackets = (
+            screening_brackets(
+                screening, case_name, case.digest(), {**model.to_inputs(), "t_end": search.t_end}
+            )
+            if screening
+            else None
         )
-        if screening
-        else None
-    )
     faults = read_fault_list(case, case_name, faults_src)
     overrides = read_requirements(faults_src) if faults_src != "DEFAULT" else {}
     sites = candidate_sites(case, max_site_pct)

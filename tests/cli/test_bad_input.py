@@ -2835,6 +2835,21 @@ ROUND55_ERRORS = [
         ("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--ambient-s", 0.01),
         "--ambient-s 0.01",
     ),
+    # a file option's refusal named its role and path, not the option
+    (("sweep-cct", "kundur", "--faults", "nan"), "--faults: fault list nan: No such file"),
+    (
+        (
+            "place",
+            "kundur",
+            "--faults",
+            "f.csv",
+            "--target-cct-gain",
+            5,
+            "--site-costs",
+            "/dev/null",
+        ),
+        "--site-costs: site costs /dev/null: not a regular file",
+    ),
     # a run of no step: "0-0 s, 0 steps ... stable", exit 0
     (("simulate", "kundur", "--tf", 1e-320), "--tf 9.99989e-321: must be in [1e-06, 3600] s"),
     # "need a cost per MW or per MWh > 0"
