@@ -1031,12 +1031,12 @@ def check_option_events(case, given) -> None:
         step's size, the bound and why.
     """
     from stabctl.case.events import check_event
+    from stabctl.dynamics.events import refuse_negative_time
 
     for option, ev in given:
         with named_option(option):
             check_event(case, ev)
-            if any(t < 0 for t in ev.times()):  # the option named (round 55 AQ aside)
-                raise InputError(f"event {ev} has a negative time (a run starts at t = 0 s)")
+            refuse_negative_time(ev)  # the option named (round 55 AQ aside)
 
 
 @contextmanager

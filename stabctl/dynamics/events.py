@@ -94,8 +94,7 @@ def validate(case: Case, events, t_end: float) -> None:
         elif isinstance(ev, Playback):
             _check_playback(case, ev)
         # a LoadStep or MotorSwitch: check_event was all (any other is refused above)
-        if any(t < 0 for t in ev.times()):
-            raise InputError(f"event {ev} has a negative time (a run starts at t = 0 s)")
+        refuse_negative_time(ev)
     for row, sw in switchings.items():
         _check_switchings(_circuit(case, row), sw)
     check_totals(case, events)
@@ -169,6 +168,13 @@ def _check_playback(case: Case, ev: Playback) -> None:
 def _circuit(case: Case, row: int) -> str:
     br = case.branches
     return f"circuit {int(br.from_bus[row])}-{int(br.to_bus[row])} (branch row {row + 1})"
+
+
+def refuse_negative_time(ev) -> None:
+    """InputError if any time of event ``ev`` (its ``times()``, s) is negative: a run
+    starts at t = 0 (`validate`; the CLI's options name themselves around it)."""
+    if any(t < 0 for t in ev.times()):
+        raise InputError(f"event {ev} has a negative time (a run starts at t = 0 s)")
 
 
 def _open_once(opened: dict, what: str, ev) -> None:
