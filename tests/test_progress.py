@@ -122,7 +122,7 @@ def test_a_plans_batch_says_its_fraction_done_and_time_left():
     with worker_pool(1) as run:
         counted = pl.counting(run, beat)
         counted(_simulated, [{"n": 3}, {"n": 4}, {"n": 5}, {"n": 6}])
-    ran = r", plan running \d\d:\d\d"  # how long the plan has run (it named no whole)
+    ran = r", started \d\d:\d\d into the plan"  # when the batch started (no whole named)
     assert re.fullmatch(
         "4 _simulated job\\(s\\) running, 7 runs simulated before them" + ran, beat.notes[0]
     )
@@ -135,3 +135,32 @@ def test_a_plans_batch_says_its_fraction_done_and_time_left():
     beat = Beat()
     pl.counting(lambda func, jobs: [func(j) for j in jobs], beat)(_simulated, [{"n": 1}])
     assert len(beat.notes) == 1 and pl.n_runs == 26
+
+
+def test_the_papers_plans_say_their_batches_fraction_done():
+    """`stabctl paper`'s placement counts its evaluations on the way to the plan
+    (`stabctl.studies.placement._Evaluations`): its map hands ``done`` on, so the plan's
+    batches say their fraction done and time left there too (issue 54: "placement's
+    stretches show no fraction or time left"; the paper's log repeated "335 evaluate
+    job(s) running" for minutes)."""
+    from stabctl.parallel import worker_pool
+    from stabctl.placement.context import PlanContext
+    from stabctl.studies.placement import _Evaluations
+
+    class Beat:
+        def __init__(self):
+            self.notes = []
+
+        def note(self, status):
+            self.notes.append(status)
+
+    pl = PlanContext("kundur", (), None, None, None, None, 1e-3, 0.5, None)
+    beat, evaluations = Beat(), _Evaluations("kundur")
+    with worker_pool(1) as run:
+        pl.counting(evaluations.counting(run), beat)(_simulated, [{"n": 1}, {"n": 2}])
+    assert [n.split(",")[0] for n in beat.notes[1:]] == [
+        "_simulated: 1 of 2 job(s) done (50%)",
+        "_simulated: 2 of 2 job(s) done (100%)",
+    ]
+    assert evaluations.n == 2 and pl.n_runs == 3
+    assert evaluations.line("plan") == "kundur: plan, 2 contingency evaluations done ..."

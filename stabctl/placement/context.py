@@ -158,7 +158,7 @@ class PlanContext:
 
         def counted(func, jobs):
             ran = tqdm.format_interval(time.monotonic() - self.started)
-            before = f"{self.n_runs} runs simulated before them, plan running {ran}"
+            before = f"{self.n_runs} runs simulated before them, started {ran} into the plan"
             beat.note(f"{len(jobs)} {func.__name__} job(s) running, {before}")
             t0 = time.monotonic()
 

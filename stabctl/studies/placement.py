@@ -312,10 +312,13 @@ class _Evaluations:
         self.case, self.n, self._lock = case_name, 0, threading.Lock()
 
     def counting(self, run_map):
-        """run_map that counts its jobs."""
+        """run_map that counts its jobs and hands ``done`` on to run_map (a
+        `stabctl.parallel.worker_pool` map), so that the plan's heartbeat says each
+        batch's fraction done and time left (`stabctl.placement.context.PlanContext.
+        counting`)."""
 
-        def counted(func, jobs):
-            out = run_map(func, jobs)
+        def counted(func, jobs, done=None):
+            out = run_map(func, jobs, done=done)
             with self._lock:
                 self.n += len(jobs)
             return out
