@@ -41,7 +41,7 @@ from stabctl.placement.plan import PlanOptions, plan
 from stabctl.placement.program import candidate_sites
 from stabctl.placement.requirements import CostModel, Requirement, screening_brackets
 from stabctl.plotting.figures import save_figure as _save
-from stabctl.progress import Heartbeat
+from stabctl.progress import HEARTBEAT_S, Heartbeat
 from stabctl.stability.cct import LineFault, SearchOptions, cct_jobs
 from stabctl.storage.devices import hv_bus
 from stabctl.studies.cases import DEFAULT_FAULTS
@@ -193,7 +193,9 @@ def study(case_name: str, records_dir: Path, workers: int, say, fast: bool = Tru
     mva = np.array([float(case.machines.mva[case.machine_index(s.machine)]) for s in sites])
     wall = time.perf_counter()
     done = _Evaluations(case_name)
-    with Heartbeat(say, done.line) as beat:
+    # twice the plans' own heartbeat (`stabctl.placement.plan`), which speak through this
+    # one: it repeats its line only when no plan has spoken, not beside each of theirs
+    with Heartbeat(say, done.line, every=2 * HEARTBEAT_S) as beat:
         say = beat
         beat.note("screening")
         rows = screen(
