@@ -94,6 +94,11 @@ FROZEN = 2
 #: leaves a derivative unchanged that the other side moves), `linearise` limits
 AUTO = 2
 LIMIT_RULES = {"auto": AUTO, "hold": 1, "free": -1, "refuse": 0}
+#: `_held_side` of a column that meets limits on both sides, each derivative on one side
+#: (two limited controllers blocked in opposite directions: a WTPTA1's speed and
+#: compensation pitch PIs both at the minimum pitch, a perturbation of the torque
+#: controller's speed reference frees one and drives the other into its limit)
+MIXED = 3
 #: auto: the free side counts as linear in h when halving h halves its change within this
 LINEAR_TOL = 0.1
 
@@ -179,7 +184,11 @@ def linearise(
         ANDES 2.0 frees a valve exactly at VMIN), held when it jumps (a state driven
         into its limit, held there as ANDES's ``AntiWindup`` flags freeze it,
         andes/core/discrete.py; such a state, its own rate held at 0, is left out of the
-        model); "refuse": SimulationError.  A `UserWarning` names
+        model); "refuse": SimulationError.  A column that meets limits on both sides,
+        each derivative on one (two limited controllers blocked in opposite
+        directions: a WTPTA1's speed and compensation pitch PIs at the minimum pitch),
+        is taken derivative by derivative by the same rule ("auto": free when each
+        free side is linear in the step).  A `UserWarning` names
         the columns and the choice; a limit crossed within the step but not active at
         the point still raises (a smaller rel_step helps).
 
@@ -724,6 +733,12 @@ def _differences(cols, x0, V_nc0, p, net, res, evaluate):
             assign(V, out.V_bus)
         curv[c] = max_abs(fp - 2.0 * f0 + fm) / max(max_abs(fp - fm), 1e-300)
         clamp = _held_side(fp, fm, f0)
+        if clamp == MIXED:
+            cut = (x0, V_nc0, p, net, S, evaluate, dx, out)
+            if _rowwise(c, kind[c], j, nominal, h, rule, cut, fp, fm, f0, J, held):
+                return c
+            assign(dV[c], (Vp - Vm) / (hi - lo))
+            continue
         side = clamp * rule  # the side whose one-sided slope is taken (AUTO: below)
         if clamp != 0 and rule == AUTO:
             # the free side linear in h (the limit reached, not driven into): free, else held
@@ -781,17 +796,65 @@ def _held_side(fp, fm, f0) -> int:
     """The side of a column on which a limit active at the operating point holds: +1 (or
     -1) when the + (-) perturbation leaves some derivative as at f0 (`UNCHANGED`) that
     the other side moves (`MOVED`; a clamp engaged on that side only), and no derivative
-    the other way round; 0 when neither side or both show that."""
-    big = max(max_abs(fp - f0), max_abs(fm - f0))
-    still, moved = UNCHANGED * big, MOVED * big
-    plus = minus = False
-    for i in range(f0.size):
-        dp, dm = abs(fp[i] - f0[i]), abs(fm[i] - f0[i])
-        plus = plus or (dp <= still and dm > moved)
-        minus = minus or (dm <= still and dp > moved)
+    the other way round; MIXED when both show that (each in other derivatives); 0 when
+    neither."""
+    rows = _clamped_rows(fp, fm, f0)
+    plus, minus = np.any(rows > 0), np.any(rows < 0)
+    if plus and minus:
+        return MIXED
     if plus == minus:
         return 0
     return 1 if plus else -1
+
+
+@njit
+def _clamped_rows(fp, fm, f0) -> np.ndarray:
+    """Per derivative: +1 (-1) where the + (-) perturbation leaves it as at f0
+    (`UNCHANGED`) and the other side moves it (`MOVED`), else 0 (`_held_side`)."""
+    big = max(max_abs(fp - f0), max_abs(fm - f0))
+    still, moved = UNCHANGED * big, MOVED * big
+    rows = np.zeros(f0.size, np.int8)
+    for i in range(f0.size):
+        dp, dm = abs(fp[i] - f0[i]), abs(fm[i] - f0[i])
+        if dp <= still and dm > moved:
+            rows[i] = 1
+        elif dm <= still and dp > moved:
+            rows[i] = -1
+    return rows
+
+
+@njit
+def _rowwise(c, kind, j, nominal, h, rule, model, fp, fm, f0, J, held) -> bool:
+    """Column c of a MIXED column, derivative by derivative: one clamped on one side takes
+    its free side's slope (limits "free"; "auto" when each free side's change is linear
+    in h: the limits reached, not driven into) or its held side's ("hold"), the others
+    the central difference; held[c] -1 (free) or 1 (held; FROZEN: a state whose own
+    derivative its limit holds).  Under "refuse" held[c] is 1 (refused by the caller).
+    model: `_perturbed`'s arguments after v (x0 ... out); fp, fm, f0: the derivatives
+    at +h, -h and the point.  True if a network did not solve."""
+    x0, V_nc0, p, net, S, evaluate, dx, out = model
+    rows = _clamped_rows(fp, fm, f0)
+    free = rule == -1
+    if rule == AUTO:  # free if each free side's change is linear in h
+        free = True
+        for s in (1, -1):  # rows clamped on side s move on side -s
+            if _perturbed(kind, j, nominal - s * h / 2, x0, V_nc0, p, net, S, evaluate, dx, out):
+                return True
+            other = fm if s > 0 else fp
+            sel = rows == s
+            bent = max_abs((other - 2.0 * dx + f0)[sel])
+            free = free and bent <= LINEAR_TOL * max_abs((other - f0)[sel])
+    for i in range(f0.size):
+        if rows[i] == 0:
+            J[c, i] = (fp[i] - fm[i]) / (2.0 * h)
+        elif (rows[i] > 0) != free:  # the + side: held where clamped on +, free where on -
+            J[c, i] = (fp[i] - f0[i]) / h
+        else:
+            J[c, i] = (f0[i] - fm[i]) / h
+    held[c] = -1 if free else 1
+    if held[c] > 0 and kind == STATE and rows[j] != 0:
+        held[c] = FROZEN
+    return False
 
 
 def output_matrices(model: DynamicModel, act, A, B, dVx, dVu, V0):

@@ -13,7 +13,7 @@ import pytest
 
 from stabctl.dynamics.driver import Simulator
 from stabctl.dynamics.events import Fault, LineTrip
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, SimulationError
 from stabctl.io.dyr import CONVERTER_DYR, read_dyr
 from stabctl.io.psse import import_psse, load_psse
 from stabctl.models.converters import CONVERTER, REECB1, REECD1, REGC_B, REGCA1, REPCA1
@@ -762,6 +762,51 @@ def test_wttqa1_power_control_holds_the_power_at_its_reference_as_pss_e_reads_it
         rates[conventions] = (f(x)[pi], x0[names.index("ibr.wg.C1")])
     assert rates["psse"][0] == pytest.approx(0.6 * -0.05 / rates["psse"][1], rel=1e-12)
     assert abs(rates["andes"][0]) < 1e-12
+
+
+def test_wtpta1_both_pitch_pis_at_the_minimum_pitch_linearise_as_with_the_limits_inactive(
+    tmp_path,
+):
+    """WTPTA1 + WTTQA1 below rated power, the pitch at its minimum (WTARA1 Theta0 0,
+    thmin 0): both pitch PIs rest on their lower limit, and a perturbation of the torque
+    controller's speed reference drives one into its limit and frees the other, the other
+    way on the other side (round 56 AU: `linearise` refused it, "no derivative left
+    unchanged on one side", under every `limits`).  Each derivative is now taken on its
+    own side: "auto" and "free" frees both limits (reached, not driven into: each free
+    side linear in the step), as small-signal analysis takes limits inactive, so the
+    modes are the limit of the same plant's just inside the limits (Theta0 0.2, 0.02,
+    0.005 deg: the 0.024 Hz mode's damping 0.834, 0.807, 0.805 against 0.804 at the
+    limit; at 0.005 deg every oscillatory mode within 0.5 % in frequency and damping,
+    rel_step 1e-6 there, whose limit is 0.005 deg away); "hold" leaves the three pitch
+    PIs out (held on their limits, frozen); "refuse" refuses by the column's name."""
+    from stabctl.smallsignal.linearise import linearise
+    from stabctl.smallsignal.modal import modal_analysis
+
+    tq = _WTTQA1.replace("0.58 0.4 0.72", "0.58 0.45 0.72")  # P0 0.4 off the curve's point
+
+    def modes(theta0, limits, rel_step=1e-4):
+        records = [_WTDTA1, f"103 'WTARA1' 1 0.007 {theta0} /\n", _WTPTA1, tq]
+        sim = Simulator(_wind_case(tmp_path, *records), background_compile=False)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            lin = linearise(sim, limits=limits, rel_step=rel_step)
+        said = " ".join(str(w.message) for w in caught)
+        lam = modal_analysis(lin).eigenvalues  # one of each pair, Im >= 0
+        return lin, said, lam[lam.imag > 2 * np.pi * 0.01]  # the oscillatory modes
+
+    lin, said, at_min = modes(0.0, "auto")
+    assert "ibr.wref_tq.C1 of C1 (bus 103) (free)" in said
+    assert "ibr.PIw_pitch.C1 of C1 (bus 103) (free)" in said
+    _, _, inside = modes(0.005, "auto", rel_step=1e-6)
+    assert at_min.imag == pytest.approx(inside.imag, rel=5e-3)
+    assert -at_min.real / np.abs(at_min) == pytest.approx(-inside.real / np.abs(inside), rel=5e-3)
+    free, _, _ = modes(0.0, "free")
+    assert np.allclose(free.A, lin.A)
+    held, said, _ = modes(0.0, "hold")
+    assert "ibr.PIw_pitch.C1 of C1 (bus 103) (held, frozen: left out)" in said
+    assert held.nstates == lin.nstates - 3
+    with pytest.raises(SimulationError, match=r"ibr\.Pord\.C1 of C1 \(bus 103\) meets a limit"):
+        modes(0.0, "refuse")
 
 
 def test_wtpta1_rate_limits_bound_the_pitch_rate(tmp_path):
