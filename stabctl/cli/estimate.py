@@ -20,6 +20,7 @@ import numpy as np
 from stabctl.cli.checks import check_step_given, check_suffix, model_settings
 from stabctl.cli.format import (
     closed_loop_lines,
+    control_record,
     counted,
     estimator_cct_lines,
     print_estimate,
@@ -71,6 +72,9 @@ from stabctl.errors import InputError, StabctlError
 #: the storage settings that mean nothing without --esd-pct here (--coi also picks the
 #: centre of inertia the relative speeds are taken from)
 _STORAGE_NOT_COI = tuple(n for n in STORAGE_SETTINGS if n != "coi")
+#: `estimate rmse`'s controller options: the rule of the false ESD actions of its ambient
+#: runs (its fault run's storage, with --esd-pct, takes the paper's settings)
+_FALSE_ACTION_RULE = ("deadband_hz", "v_gate", "hysteresis_hz")
 
 #: the old mode flags of `estimate CASE`, by the subcommand they select (one at most)
 _LEGACY_FLAGS = (("--cct", "cct"), ("--closed-loop", "closed-loop"))
@@ -277,7 +281,16 @@ def rmse(
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
     )
-    check_storage_given(esd_pct, _STORAGE_NOT_COI)
+    # the controller options set the rule of the false actions, counted on the ambient
+    # runs, which have no storage: they need ambient runs, not --esd-pct (round 56 AT)
+    if src is not None or ambient_s == 0:
+        refuse_given(
+            _FALSE_ACTION_RULE,
+            f"with {'--source' if src is not None else '--ambient-s 0'} (no ambient run: "
+            "they set the rule of the false ESD actions, counted on the runs without "
+            "fault; the fault run's storage takes the paper's settings)",
+        )
+    check_storage_given(esd_pct, ("esd_model",))
     case, ev, tf = fault_event(case_name, fault, far_bus, t_fault, clear_cycles, tf)
     settings = rate_for_case(settings, rate, case)
     if 0 < ambient_s < 1 / settings.rate:  # was said without the option (round 55 AS)
@@ -320,7 +333,7 @@ def rmse(
         "false_actions": d["false_actions"],
         "ambient": {
             "t_s": ambient_s,
-            "deadband_hz": deadband_hz,
+            **control_record(deadband_hz, v_gate, coi, hysteresis_hz),  # the false actions' rule
             "pct": ambient_pct,
             "tau_s": ambient_tau_s,
             "runs": ambient_runs,
@@ -438,13 +451,14 @@ def closed_loop(
         esd_model=esd_model,
         transport=transport,
     )
+    law = control_record(deadband_hz, v_gate, coi, hysteresis_hz)
     out = {
         **_what_ran(case, (fault, far_bus, t_fault, clear_cycles), esd_pct, settings, seed),
-        "control": {"deadband_hz": deadband_hz, "v_gate_pu": v_gate, "coi": coi},
+        "control": law,
         "closed_loop": rows,
         "transport": transport,
         "esd_model": esd_model,
-        "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed, esd_model),
+        "lines": closed_loop_lines(rows, fault, far_bus, esd_pct, seed, esd_model, law),
     }
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(out["lines"]))
 

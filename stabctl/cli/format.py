@@ -1256,9 +1256,15 @@ def estimator_cct_lines(
 
 
 def closed_loop_lines(
-    rows: dict, bus: int, far_bus: int, esd_pct: float, seed: int, esd_model: str = "ideal"
+    rows: dict,
+    bus: int,
+    far_bus: int,
+    esd_pct: float,
+    seed: int,
+    esd_model: str = "ideal",
+    law: dict | None = None,
 ) -> list:
-    """The text lines of `estimate closed-loop`.
+    """The text lines of `estimate closed-loop` (and `pmu plant`).
 
     Parameters
     ----------
@@ -1271,14 +1277,17 @@ def closed_loop_lines(
     seed : int
     esd_model : str, optional
         The ESDs' model ("ideal" or "wecc").
+    law : dict, optional
+        The controller's settings (`control_record`), named on the first line.
 
     Returns
     -------
     list of str
     """
+    said = "" if law is None else f", {law_text(law)}"
     head = (
         f"closed loop, fault at bus {bus} line {bus}-{far_bus}, "
-        f"{_ESD_NAMES[esd_model]} {esd_pct:g} %, seed {seed}:"
+        f"{_ESD_NAMES[esd_model]} {esd_pct:g} %{said}, seed {seed}:"
     )
     return [head] + [
         f"  {e:5} {'stable' if r['stable'] else 'UNSTABLE':8} mode commands "
@@ -1287,6 +1296,39 @@ def closed_loop_lines(
         + _link_text(r.get("link"))
         for e, r in rows.items()
     ]
+
+
+def control_record(deadband_hz, v_gate, coi, hysteresis_hz) -> dict:
+    """The storage controller's settings as a `--json` record (the paper's law, Table 3:
+    `stabctl.storage.control.BangBangCOI`).
+
+    Parameters
+    ----------
+    deadband_hz, v_gate, coi, hysteresis_hz : float, float, str, float
+        The options' values (Hz, pu, "system" or "rest", Hz).
+
+    Returns
+    -------
+    dict
+    """
+    return {
+        "deadband_hz": deadband_hz,
+        "v_gate_pu": v_gate,
+        "coi": coi,
+        "hysteresis_hz": hysteresis_hz,
+    }
+
+
+def law_text(law: dict) -> str:
+    """A `control_record` in words: ``deadband 0.1 Hz, hysteresis 0 Hz, v-gate 0.8 pu,
+    COI system`` (the settings it holds)."""
+    words = (
+        ("deadband_hz", "deadband {:g} Hz"),
+        ("hysteresis_hz", "hysteresis {:g} Hz"),
+        ("v_gate_pu", "v-gate {:g} pu"),
+        ("coi", "COI {}"),
+    )
+    return ", ".join(w.format(law[k]) for k, w in words if k in law)
 
 
 def _frames_used(row: dict) -> str:

@@ -633,7 +633,7 @@ def plant(
       stabctl pmu control miniwecc 127.0.0.1:4713 --esd-pct 5 --estimator ekf
     """
     from stabctl.cli.checks import model_settings
-    from stabctl.cli.format import closed_loop_lines
+    from stabctl.cli.format import closed_loop_lines, control_record
     from stabctl.estimation import closed_loop as cl
     from stabctl.estimation.c37_loop import Listen
     from stabctl.estimation.c37_tcp import hostport
@@ -641,6 +641,12 @@ def plant(
 
     if esd_pct is None:
         raise InputError("pmu plant needs --esd-pct")
+    refuse_given(
+        ("hysteresis_hz",),
+        "to pmu plant: the controller decides the ESD modes and applies its hysteresis "
+        "(pmu control --hysteresis-hz); the plant's --deadband-hz and --coi set the rule "
+        "of the false actions it counts, its --v-gate its devices' voltage gate",
+    )
     peers = _allowed(host, allow)
     settings = pmu_settings(
         rate, latency_ms, drop, tve_pct, fe_hz, rfe_hz_s, k_sigma, window_cycles
@@ -660,8 +666,10 @@ def plant(
         sim, [ev], tf, loop, serve=Listen(host, port, listening, timeout, speed or _INF, peers)
     )
     row = loop_row(run, deadband_hz, controller_here=False)
-    lines = closed_loop_lines({"remote": row}, fault, far_bus, esd_pct, seed, esd_model)
-    out = {"closed_loop": row, "esd_model": esd_model, "lines": lines}
+    rule = control_record(deadband_hz, v_gate, coi, hysteresis_hz)
+    del rule["hysteresis_hz"]  # the controller's (refused above)
+    lines = closed_loop_lines({"remote": row}, fault, far_bus, esd_pct, seed, esd_model, rule)
+    out = {"closed_loop": row, "control": rule, "esd_model": esd_model, "lines": lines}
     click.echo(json.dumps(out, indent=1) if as_json else "\n".join(lines))
 
 

@@ -2882,3 +2882,58 @@ def test_a_file_given_as_the_dyr_that_is_none_is_named_not_the_raw(tmp_path):
     res = run("import-andes", PSSE / "smib_v33.raw", dyr, "-o", out)
     assert_error(res, "ANDES cannot read the DYR file: c.json:1: ")
     assert not out.exists()
+
+
+def test_round_56_pmu_plant_refuses_the_controllers_hysteresis():
+    """`pmu plant --hysteresis-hz` was accepted and changed nothing (round 56 AT F1: 41
+    mode commands and 7 false actions with and without it): the controller decides the
+    modes (`pmu control --hysteresis-hz`), so the plant refuses it by name, as `pmu
+    control` refuses the plant's --v-gate."""
+    res = run(
+        *("pmu", "plant", "kundur", "--fault", 3, "--far-bus", 101, "--esd-pct", 5),
+        *("--port", 0, "--hysteresis-hz", 0.05),
+    )
+    assert_error(res, "--hysteresis-hz given to pmu plant", "pmu control --hysteresis-hz")
+
+
+def test_round_56_estimate_rmse_sets_the_false_action_rule_without_storage():
+    """`estimate rmse --deadband-hz 0.003` was refused without --esd-pct (round 56 AT
+    F2), though the controller options set only the rule of the false actions, counted
+    on the ambient runs, which have no storage (and --esd-pct puts storage in the fault
+    run, moving every RMSE).  Now the rule is taken without storage: at 3 mHz the true
+    relative speeds of the ambient run (largest 3.24 mHz) trigger actions the 100 mHz
+    deadband does not, the fault run's figures unchanged, the rule in the JSON; without
+    an ambient run the options are refused by name."""
+    base = (
+        *("estimate", "rmse", "kundur", "--fault", 3, "--far-bus", 101, "--t-fault", 0.5),
+        *("--tf", 1.5, "--runs", 1, "--ambient-runs", 1, "--ambient-s", 2, "--json"),
+    )
+    out = {}
+    for deadband in (0.1, 0.003):
+        res = run(*base, "--deadband-hz", deadband)
+        assert res.exit_code == 0, res.output
+        out[deadband] = json.loads(res.stdout)
+    wide, narrow = out[0.1], out[0.003]
+    assert wide["false_actions"]["true"]["actions"]["mean"] == 0
+    assert narrow["false_actions"]["true"]["actions"]["mean"] > 0
+    assert narrow["false_actions"]["true"]["max_rel_mhz"]["mean"] > 3.0
+    assert narrow["estimators"] == wide["estimators"]
+    assert narrow["ambient"]["deadband_hz"] == 0.003
+    assert narrow["ambient"]["hysteresis_hz"] == 0 and narrow["ambient"]["v_gate_pu"] == 0.8
+    res = run(*base[:-5], "--ambient-s", 0, "--v-gate", 0.5)
+    assert_error(res, "--v-gate given with --ambient-s 0 (no ambient run")
+
+
+def test_round_56_closed_loop_names_its_law():
+    """`estimate closed-loop --hysteresis-hz 0.05` ran with it (raw: 21 mode commands
+    against 41) but said it nowhere: its --json `control` held deadband, v-gate and COI
+    only, its text none (round 56 AT F3).  Both now name the whole law."""
+    res = run(
+        *("estimate", "closed-loop", "kundur", "--fault", 3, "--far-bus", 101),
+        *("--t-fault", 0.5, "--tf", 1.5, "--esd-pct", 5, "--hysteresis-hz", 0.05, "--json"),
+    )
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    law = {"deadband_hz": 0.1, "v_gate_pu": 0.8, "coi": "system", "hysteresis_hz": 0.05}
+    assert out["control"] == law
+    assert "deadband 0.1 Hz, hysteresis 0.05 Hz, v-gate 0.8 pu, COI system" in out["lines"][0]

@@ -165,7 +165,12 @@ def test_estimate_closed_loop_says_how_many_frames_the_controller_used():
     assert d["case"] == "kundur" and d["esd_pct"] == 10 and d["seed"] == 0
     assert d["fault"] == {"bus": 3, "far_bus": 101, "t_fault_s": 1.0, "clear_cycles": 7.0}
     assert d["pmu"]["drop_prob"] == 0.999 and d["pmu"]["rate"] == 60
-    assert d["control"] == {"deadband_hz": 0.1, "v_gate_pu": 0.8, "coi": "system"}
+    assert d["control"] == {
+        "deadband_hz": 0.1,
+        "v_gate_pu": 0.8,
+        "coi": "system",
+        "hysteresis_hz": 0.0,
+    }
     for e in ("raw", "kf", "ekf"):
         assert rows[e]["frames"] == rows["ideal"]["frames"] and rows[e]["frames_formed"] < 10
     lines = json.loads(res.stdout)["lines"]
