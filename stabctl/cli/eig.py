@@ -89,6 +89,8 @@ def eig(case_name, no_pss, n_areas, report, out_dir, conventions, q_limits, limi
     if report:
         check_writable(out_dir, "--out-dir", directory=True)
     case = load_case(case_name)
+    if no_pss and not len(case.pss):  # it changed nothing, the report named "_nopss"
+        raise InputError(f"--no-pss: case '{case.name}' has no stabiliser (PSS) to leave out")
     if n_areas is not None and n_areas > len(case.machines):
         raise InputError(
             f"--areas {n_areas}: case '{case.name}' has {len(case.machines)} machine(s), "

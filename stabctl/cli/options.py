@@ -950,7 +950,8 @@ def model_options(func):
         help="Integrate the whole model at one step: no exciter in sub-intervals "
         "(ieee; docs/simulator.md; refused with --conventions pstess, which never uses "
         "them).  The default step then falls to half the time constant of the fastest "
-        "exciter loop (ACTIVSg2000: 1.2 ms instead of half a cycle).",
+        "exciter loop where that is shorter (ACTIVSg2000: 1.2 ms instead of half a "
+        "cycle); a case with no such loop (Kundur, miniWECC) runs as without it.",
     )(func)
     func = click.option(
         "--step",

@@ -2937,3 +2937,13 @@ def test_round_56_closed_loop_names_its_law():
     law = {"deadband_hz": 0.1, "v_gate_pu": 0.8, "coi": "system", "hysteresis_hz": 0.05}
     assert out["control"] == law
     assert "deadband 0.1 Hz, hysteresis 0.05 Hz, v-gate 0.8 pu, COI system" in out["lines"][0]
+
+
+def test_round_56_eig_no_pss_on_a_case_without_one_is_refused(tmp_path):
+    """`eig --no-pss` on a case with no stabiliser changed nothing and named its report
+    ``_nopss`` (round 56 AT D2): refused by name, nothing written."""
+    case = load_case("kundur")
+    path = pstio.write_case_json(case.replace(pss=type(case.pss).empty()), tmp_path / "c.json")
+    res = run("eig", str(path), "--no-pss", "--report", "--out-dir", str(tmp_path / "r"))
+    assert_error(res, "--no-pss: case 'kundur' has no stabiliser (PSS) to leave out")
+    assert not (tmp_path / "r").exists()
