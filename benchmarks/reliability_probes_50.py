@@ -40,7 +40,9 @@ error vs h/16 stalls (ESST1A efd 2.3e-4 -> 3.0e-4) or grows when sub-stepping st
 minimum: linearise refused under every `limits`; fixed: such a column is taken derivative
 by derivative, its modes the limit of the plant's just inside the limits).  The halving
 floor of sub-stepped exciters is kept and documented (docs/simulator.md, sub-intervals:
-speeds and angles converge at second order).  Non-windup states are stored before
+speeds and angles converge at second order).  Rerun on main after the fix (2026-12-03):
+184 ok, 3 SHORT of 187, the two halving floors and DEGOV.L, whose error falls 10x per
+10x smaller step (a nonlinearity): L now takes that scaling as ok (185 ok).  Non-windup states are stored before
 their clamp (blocks.py:186-198 clamps at the next evaluation): IEEET1 VR 6.11 over VRMAX 5,
 EXAC2 VA 13.8 over 11.75 at a grid point; no output shows it (efd clamped).
 
@@ -50,6 +52,7 @@ child interpreter per model; about 40-60 minutes for all 62 with a warm kernel c
 
 # ruff: noqa: E501, BLE001, RUF059 - a tester's script, kept as written
 
+import itertools
 import json
 import sys
 import textwrap
@@ -528,7 +531,10 @@ def check_linear(model, fam):
     # (a nonlinearity shrinks 10x a size, rounding grows at the smallest)
     got = [x for x in w if x is not None]
     best = min(got) if got else None
-    ok = best is not None and best < LIN_TOL
+    # or an error that falls about 10x per 10x smaller step at every size: a nonlinearity
+    # (DEGOV's isochronous ramp against the infinite bus), the linear model its limit
+    scaling = len(got) == 3 and all(a > 7 * b for a, b in itertools.pairwise(got))
+    ok = best is not None and (best < LIN_TOL or scaling)
     why = f"{c['input']}: worst rel. error at 1e-3/1e-4/1e-5: " + "/".join(
         f"{x:.1e}" if x is not None else "-" for x in w
     )
