@@ -7,9 +7,13 @@ level INFO (``logging.getLogger(__name__)``), which the command line shows on st
 through two context managers:
 
 - `Heartbeat`: such a callable that also repeats its latest status whenever nothing was
-  said for HEARTBEAT_S, so that a long batch of runs is never silent;
+  said for HEARTBEAT_S, so that a long batch of runs is never silent; a status may be
+  a callable, worked out again at each repeat (`BatchClock.line`: jobs done and the time
+  left, whose clock moves between two finished jobs);
 - `bar`: a tqdm bar on stderr, one step per job, or nothing when asked to be silent;
-  a line said while one is shown goes above it (`bars_cleared`), not onto its line.
+  a line said while one is shown goes above it (`bars_cleared`), not onto its line.  On
+  a stderr that is no terminal (a log file) it is drawn again every LOG_INTERVAL_S while
+  no job ends, its rate the mean since it began, and its last line drawn once.
 
 A long simulation run shows its own bar, of simulated time, when a caller asked for it
 (`runs_shown`, the ``simulate`` command) and the run lasts longer than RUN_SHOWN_AFTER_S:
@@ -18,6 +22,7 @@ the run asks `run_progress` for it and tells it the simulated time at each of it
 
 from __future__ import annotations
 
+import math
 import sys
 import threading
 import time
@@ -51,7 +56,8 @@ class Heartbeat:
         every: float = HEARTBEAT_S,
     ):
         self._say, self._line, self._every = say, line, every
-        self.status, self._last = "", time.monotonic()
+        self.status: str | Callable[[], str] = ""
+        self._last = time.monotonic()
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._loop, daemon=True)
@@ -73,14 +79,67 @@ class Heartbeat:
         if self._say is not None:
             self._say(msg)
 
-    def note(self, status: str) -> None:
-        """The status repeated from now on (not said now)."""
+    def note(self, status: str | Callable[[], str]) -> None:
+        """The status repeated from now on (not said now): a line, or a callable giving
+        it at each repeat."""
         self.status = status
 
     def _loop(self) -> None:
         while not self._stop.wait(0.5):
             if self.status and time.monotonic() - self._last >= self._every:
-                self(self._line(self.status))
+                status = self.status() if callable(self.status) else self.status
+                self(self._line(status))
+
+
+class BatchClock:
+    """How far a batch of `n` jobs is, as a line worked out when asked (`line`, a
+    `Heartbeat` status): jobs done of n (the percentage rounded down: 100 % only when
+    every job is done) and the time left at the pace of the jobs that finished, counted
+    from the first finish the batch was told of (`done`), so that a batch waiting behind
+    another's in a shared pool, or one whose kept jobs come back at once, does not take
+    its waiting for its pace; the time left goes down between finishes, and once spent,
+    the line says how long the jobs left have run past it instead of repeating it.
+
+    Parameters
+    ----------
+    n : int
+        Jobs in the batch.
+    clock : callable, optional
+        Seconds of a monotonic clock; default time.monotonic.
+    """
+
+    def __init__(self, n: int, clock: Callable[[], float] = time.monotonic):
+        self.n, self.k, self._clock = n, 0, clock
+        self.t0 = clock()
+        self._base: tuple[int, float] | None = None  # (k, t) at the first finish told
+        self._t_last = self.t0
+
+    def done(self, k: int, *_) -> None:
+        """k of the n jobs are done (a `stabctl.parallel.worker_pool` map's ``done``)."""
+        now = self._clock()
+        if self._base is None:
+            self._base = (k, now)
+        self.k, self._t_last = k, now
+
+    def line(self) -> str:
+        """'k of n job(s) done (p%)' and the time left, or since when nothing finished."""
+        now, n, k = self._clock(), self.n, self.k
+        head = f"{k} of {n} job(s) done ({math.floor(100 * k / n) if n else 100}%)"
+        if k >= n:
+            return head
+        if self._base is None:
+            return f"{head}, none ended in {now - self.t0:.0f} s"
+        k0, t0 = self._base
+        if k == k0:
+            return f"{head}, the time left known at the next job's end"
+        pace = (self._t_last - t0) / (k - k0)  # s a job, the pool's workers together
+        left = pace * (n - k) - (now - self._t_last)
+        if left >= 0.5:
+            return f"{head}, about {left:.0f} s left"
+        return (
+            f"{head}, the {n - k} left running {now - self._t_last:.0f} s since the last "
+            f"ended (the pace so far gave them {pace * (n - k):.0f} s)"
+        )
 
 
 #: seconds between two redraws of a bar on a stderr that is no terminal (a log file): a
@@ -90,13 +149,15 @@ LOG_INTERVAL_S = 30.0
 
 def bar(total: int, desc: str, show: bool = True, unit: str = "job") -> tqdm:
     """A tqdm bar of `total` steps (``update()`` one) on stderr, a context manager;
-    show False: silent (the same object, disabled).  On a stderr that is no terminal it
-    is redrawn at most every LOG_INTERVAL_S (and at its end), not at every step."""
+    show False: silent (the same object, disabled).  On a stderr that is no terminal (a
+    log file) it is `_LoggedBar`: drawn at most every LOG_INTERVAL_S as steps come, and
+    again every LOG_INTERVAL_S while none comes, its time left from the mean rate since it
+    began, its last line once."""
     try:
         terminal = sys.stderr.isatty()
     except (AttributeError, ValueError):  # closed or replaced by an object without it
         terminal = False
-    return tqdm(
+    return (tqdm if terminal else _LoggedBar)(
         total=total,
         desc=desc,
         unit=unit,
@@ -104,7 +165,42 @@ def bar(total: int, desc: str, show: bool = True, unit: str = "job") -> tqdm:
         disable=not show,
         mininterval=0.1 if terminal else LOG_INTERVAL_S,
         maxinterval=10.0 if terminal else LOG_INTERVAL_S,
+        **({} if terminal else {"smoothing": 0.0}),
     )
+
+
+class _LoggedBar(tqdm):
+    """A bar in a log file (`bar`): a daemon thread draws it again whenever it was not
+    drawn for LOG_INTERVAL_S (a long job kept its line for minutes: the elapsed time and
+    the time left, from the mean rate since the start (``smoothing=0``), stood still);
+    the step that completes it is drawn by its closing only (it was drawn twice, the
+    two lines' rates differing)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._halt = threading.Event()
+        if not self.disable:
+            threading.Thread(target=self._redraw, daemon=True).start()
+
+    def _redraw(self) -> None:
+        while not self._halt.wait(1.0):
+            drawn = float(getattr(self, "last_print_t", 0.0))
+            if self._time() - drawn >= LOG_INTERVAL_S:
+                self.refresh()
+                self.last_print_t = self._time()
+
+    def update(self, n: float | None = 1) -> bool | None:
+        """n steps more; the last (the bar full) drawn when the bar closes."""
+        if not self.disable and self.total is not None and self.n + (n or 0) >= self.total:
+            self.n += n or 0
+            return None
+        return super().update(n)
+
+    def close(self) -> None:
+        """Stop redrawing, then draw the last line (tqdm's close)."""
+        if hasattr(self, "_halt"):
+            self._halt.set()
+        super().close()
 
 
 def bars_cleared() -> AbstractContextManager:

@@ -91,7 +91,14 @@ def test_a_long_compile_is_announced_again_while_it_lasts():
 
     slow.__module__ = "stabctl.kernel_for_the_test"
     heard = []
-    stop = on_first_compile(lambda: None, still=heard.append, every_s=0.05)
+    kernels = set()
+
+    def still(seconds, kernel, kernel_s):
+        heard.append(seconds)
+        kernels.add(kernel)
+        assert 0 <= kernel_s <= seconds + 1e-9
+
+    stop = on_first_compile(lambda: None, still=still, every_s=0.05)
     from numba.core import event
 
     real_start = event.start_event
@@ -119,6 +126,23 @@ def test_a_long_compile_is_announced_again_while_it_lasts():
         event.start_event = real_start
     stop()
     assert len(heard) > n and heard == sorted(heard) and heard[n] > before + 0.5
+    assert kernels == {"slow"}  # the function compiling named
+
+
+def test_a_long_compile_says_what_compiles_and_its_time_left():
+    """Round 57 AV: a cold `stabctl compile` said "stabctl: still compiling (N s)" every
+    10 s for 108 s, no fraction or time left.  The line names the kernel compiling and,
+    by the seconds it took on the reference machine, its share and the time left, or
+    that it is past them."""
+    from stabctl._jit.notify import REFERENCE_S, still_line
+
+    ref = REFERENCE_S["evaluate_kernel"][1]
+    assert still_line(42.4, "evaluate_kernel", 30.0) == (
+        f"stabctl: still compiling (42 s): the model's evaluation, 30 s of about {ref:.0f} s "
+        f"on the 2-core reference machine ({30 / ref:.0%}), about {ref - 30:.0f} s left"
+    )
+    assert "past the" in still_line(200, "evaluate_kernel", ref + 5)
+    assert still_line(12, "_other", 3) == "stabctl: still compiling (12 s): _other, 3 s"
 
 
 def test_model_files_stay_small_and_read_states_by_name():

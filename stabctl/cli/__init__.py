@@ -133,13 +133,13 @@ def main(ctx):
     if note := cache_dir_note():
         click.echo(f"warning: {note}", err=True)
     if ctx.invoked_subcommand in _SIMULATING and "--help" not in sys.argv:
-        from stabctl._jit.notify import on_first_compile
+        from stabctl._jit.notify import on_first_compile, still_line
 
         # said when compiling starts (never for cached kernels; bad input fails before)
         ctx.call_on_close(
             on_first_compile(
                 lambda: click.echo(compile_notice(ctx.invoked_subcommand), err=True),
-                still=lambda s: click.echo(f"stabctl: still compiling ({s:.0f} s)", err=True),
+                still=lambda *a: click.echo(still_line(*a), err=True),
             )
         )
 

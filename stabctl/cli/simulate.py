@@ -562,7 +562,7 @@ def simulate(
     sim.check_separation_limit(separation_limit, "--separation-limit")
     h = sim.default_h if step is None else step
     sub = sim.sub_stepped(h, method)
-    from stabctl.progress import runs_shown
+    from stabctl.progress import RUN_SHOWN_AFTER_S, runs_shown
 
     run = functools.partial(
         sim.run,
@@ -605,6 +605,10 @@ def simulate(
         if esd is not None:
             title += "\n" + describe_esd(esd, short=True)
         outputs.append((plot_p, plot_writer(result, title, case)))
+    if outputs and result.meta.get("wall_time_s", 0.0) > RUN_SHOWN_AFTER_S:
+        # a run long enough to show its bar: its outputs take a while too, said (round
+        # 57 AV: a 660-s run's bar was cleared at 96 %, then 24 s without a line)
+        click.echo(f"writing {', '.join(str(p) for p, _ in outputs)} ...", err=True)
     atomic_writes(outputs)
     written = [str(p) for p, _ in outputs]
     summary = result.summary()

@@ -24,8 +24,10 @@ before the time stamp, where the offline model centres them on it.  The first fr
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -974,7 +976,7 @@ def cct_study(
     count = {(p, e): 1 if e == "ideal" else first for p in ratings for e in estimators}
     n_workers = runner.workers or default_workers()
     with pooled(n_workers) if n_workers > 1 else nullcontext() as pool:  # one for all rounds
-        while True:
+        for round_ in itertools.count(1):
             jobs = {pe: [job(*pe, s) for s in range(seed, seed + n)] for pe, n in count.items()}
             rep = run_sweep(
                 [j for row in jobs.values() for j in row],
@@ -982,7 +984,11 @@ def cct_study(
                 workers=runner.workers,
                 progress=runner.progress,
                 pool=pool,
-                label=label,
+                # a round of more seeds has a bar of its own, named as such (round 57 AV:
+                # each began again from 0 under the first's name)
+                label=label
+                if round_ == 1
+                else f"{label or Path(out).name}: more seeds, round {round_}",
             )
             values = {
                 pe: [

@@ -29,6 +29,7 @@ from stabctl.placement.evaluation import (
 )
 from stabctl.placement.loop import PlaceOptions, Study, evaluations
 from stabctl.placement.requirements import CostModel
+from stabctl.progress import BatchClock
 from stabctl.stability.cct import cached_simulator, fault_inputs
 from stabctl.storage.control import BangBangCOI
 from stabctl.storage.devices import model_inputs
@@ -150,27 +151,21 @@ class PlanContext:
 
     def counting(self, run_map, beat):
         """run_map that adds the simulations its jobs report to n_runs and tells the
-        heartbeat `beat` how far each batch is: jobs done of the batch's and the time
-        left at the pace so far (when run_map takes ``done``, as `stabctl.parallel.
-        worker_pool`'s does), and how long the plan has run (its rounds and iterations
-        are bounded where each round starts: `stabctl.placement.plan`), repeated while
-        nothing else is said."""
+        heartbeat `beat` how far each batch is (`stabctl.progress.BatchClock`: jobs done
+        of the batch's and the time left, worked out at each repeat, when run_map takes
+        ``done``, as `stabctl.parallel.worker_pool`'s does) and when the batch was handed
+        in, into the plan (its rounds and iterations are bounded where each round
+        starts: `stabctl.placement.plan`), repeated while nothing else is said."""
 
         def counted(func, jobs):
             ran = tqdm.format_interval(time.monotonic() - self.started)
-            before = f"{self.n_runs} runs simulated before them, started {ran} into the plan"
-            beat.note(f"{len(jobs)} {func.__name__} job(s) running, {before}")
-            t0 = time.monotonic()
-
-            def done(k, n, *_):
-                left = (time.monotonic() - t0) * (n - k) / k
-                beat.note(
-                    f"{func.__name__}: {k} of {n} job(s) done ({k / n:.0%}), about "
-                    f"{left:.0f} s left in this batch, {before}"
-                )
-
+            before = (
+                f"the batch handed in {ran} into the plan, {self.n_runs} runs simulated before it"
+            )
+            clock = BatchClock(len(jobs))
+            beat.note(lambda: f"{func.__name__}: {clock.line()}; {before}")
             takes_done = "done" in inspect.signature(run_map).parameters
-            out = run_map(func, jobs, done=done) if takes_done else run_map(func, jobs)
+            out = run_map(func, jobs, done=clock.done) if takes_done else run_map(func, jobs)
             with self.lock:  # `faults_alone` runs batches from several threads
                 self.n_runs += sum(o.get("n_simulations") or 0 for o in out)
             return out

@@ -206,7 +206,8 @@ class Memo:
         Returns
         -------
         callable
-            The same signature; ``done`` is told of the jobs run only.
+            The same signature; ``done`` is told of the kept jobs at once, as
+            ``done(kept, n)`` (no job index or result), then of each job run.
         """
 
         takes_done = "done" in inspect.signature(run_map).parameters
@@ -224,6 +225,8 @@ class Memo:
                 if done is not None:
                     done(reused + k, len(jobs), todo[i], result)
 
+            if todo and reused and done is not None:  # the kept jobs are done already
+                done(reused, len(jobs))
             if todo:
                 run = [jobs[i] for i in todo]
                 out = run_map(func, run, done=finished) if takes_done else run_map(func, run)

@@ -148,6 +148,40 @@ def test_cct_study_adds_seed_batches_until_the_interval_is_narrow(tmp_path):
     assert table["raw"]["half_width"] == pytest.approx((1 - 0.05 ** (1 / 6)) / 4)
 
 
+def test_each_round_of_more_seeds_has_a_bar_named_as_such(tmp_path, monkeypatch):
+    """Round 57 AV: `paper --only estimation`'s bar reached 100 % and began again from 0/5
+    under the same name, three times (each round of more seeds a sweep of its own).  A
+    round after the first is named "more seeds, round k"."""
+    from types import SimpleNamespace
+
+    import stabctl.parallel as par
+
+    labels = []
+
+    def fake_sweep(jobs, out, **kw):
+        labels.append(kw["label"])
+        return SimpleNamespace(
+            records={j.key: {"status": "ok", "result": {"cct_cycles": 11.75}} for j in jobs}
+        )
+
+    monkeypatch.setattr(par, "run_sweep", fake_sweep)
+    cl.cct_study(
+        "kundur",
+        LineFault(3, 101),
+        [5.0],
+        cl.SeedRule(batch=2, max_runs=8),  # three rounds (the test above)
+        tmp_path / "cct.jsonl",
+        estimators=("ideal", "raw"),
+        runner=RunnerOptions(progress=False, workers=1),
+        label="estimate cct",
+    )
+    assert labels == [
+        "estimate cct",
+        "estimate cct: more seeds, round 2",
+        "estimate cct: more seeds, round 3",
+    ]
+
+
 def test_cct_study_passes_the_pmu_window_to_every_run_and_names_it_when_not_default(
     tmp_path, monkeypatch
 ):
