@@ -122,23 +122,29 @@ class BatchClock:
         self.k, self._t_last = k, now
 
     def line(self) -> str:
-        """'k of n job(s) done (p%)' and the time left, or since when nothing finished."""
+        """'k of n job(s) done (p%)' and, while jobs are left, the time left (`left`)."""
+        share = math.floor(100 * self.k / self.n) if self.n else 100
+        head = f"{self.k} of {self.n} job(s) done ({share}%)"
+        return head if self.k >= self.n else f"{head}, {self.left()}"
+
+    def left(self) -> str:
+        """The time left ('about 41 s left'), or since when nothing ended."""
         now, n, k = self._clock(), self.n, self.k
-        head = f"{k} of {n} job(s) done ({math.floor(100 * k / n) if n else 100}%)"
         if k >= n:
-            return head
+            return "none left"
         if self._base is None:
-            return f"{head}, none ended in {now - self.t0:.0f} s"
+            return f"none ended in {now - self.t0:.0f} s"
         k0, t0 = self._base
         if k == k0:
-            return f"{head}, the time left known at the next job's end"
+            return "the time left known at the next job's end"
         pace = (self._t_last - t0) / (k - k0)  # s a job, the pool's workers together
         left = pace * (n - k) - (now - self._t_last)
         if left >= 0.5:
-            return f"{head}, about {left:.0f} s left"
+            return f"about {left:.0f} s left"
+        gave = pace * (n - k)
         return (
-            f"{head}, the {n - k} left running {now - self._t_last:.0f} s since the last "
-            f"ended (the pace so far gave them {pace * (n - k):.0f} s)"
+            f"the {n - k} left running {now - self._t_last:.0f} s since the last ended "
+            f"(the pace so far gave them {f'{gave:.0f} s' if gave >= 1 else 'under 1 s'})"
         )
 
 
@@ -165,18 +171,22 @@ def bar(total: int, desc: str, show: bool = True, unit: str = "job") -> tqdm:
         disable=not show,
         mininterval=0.1 if terminal else LOG_INTERVAL_S,
         maxinterval=10.0 if terminal else LOG_INTERVAL_S,
-        **({} if terminal else {"smoothing": 0.0}),
+        **({} if terminal else {"bar_format": _LoggedBar.FORMAT, "smoothing": 0.0}),
     )
 
 
 class _LoggedBar(tqdm):
     """A bar in a log file (`bar`): a daemon thread draws it again whenever it was not
     drawn for LOG_INTERVAL_S (a long job kept its line for minutes: the elapsed time and
-    the time left, from the mean rate since the start (``smoothing=0``), stood still);
+    the time left stood still); its time left is a `BatchClock`'s (tqdm's, from the
+    rate at the last step, said 4 s left of a sweep's last three jobs for two minutes);
     the step that completes it is drawn by its closing only (it was drawn twice, the
     two lines' rates differing)."""
 
+    FORMAT = "{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}, {left}, {rate_fmt}{postfix}]"
+
     def __init__(self, *args, **kwargs):
+        self._clock = BatchClock(kwargs.get("total") or 0)
         super().__init__(*args, **kwargs)
         self._halt = threading.Event()
         if not self.disable:
@@ -189,8 +199,14 @@ class _LoggedBar(tqdm):
                 self.refresh()
                 self.last_print_t = self._time()
 
+    @property
+    def format_dict(self) -> dict:
+        """tqdm's, with ``left``: the clock's time left."""
+        return {**super().format_dict, "left": self._clock.left()}
+
     def update(self, n: float | None = 1) -> bool | None:
         """n steps more; the last (the bar full) drawn when the bar closes."""
+        self._clock.done(int(self.n + (n or 0)))
         if not self.disable and self.total is not None and self.n + (n or 0) >= self.total:
             self.n += n or 0
             return None

@@ -62,9 +62,11 @@ def test_the_command_line_shows_library_log_lines_on_stderr_once(capsys):
 
 def test_a_bar_in_a_log_file_moves_while_no_job_ends_and_ends_once(capsys, monkeypatch):
     """Round 57 AV: `screen --workers 1` into a log file kept "0%| 0/171" as its only
-    line for 80 s (a bar drawn only as jobs end), and a sweep's bar drew its 100 % twice
-    with two rates.  On a stderr that is no terminal the bar is drawn again whenever
-    LOG_INTERVAL_S passed without a frame, and its full frame once, at its close."""
+    line for 80 s (a bar drawn only as jobs end), a sweep's bar said "<00:04" left of
+    its last three jobs for two minutes and drew its 100 % twice with two rates.  On a
+    stderr that is no terminal the bar is drawn again whenever LOG_INTERVAL_S passed
+    without a frame, with a `BatchClock`'s time left, and its full frame once, at its
+    close."""
     monkeypatch.setattr(progress, "LOG_INTERVAL_S", 0.5)
     with progress.bar(3, "log") as shown:
         time.sleep(2.3)  # no job ends: drawn again, its elapsed time moving
@@ -73,6 +75,7 @@ def test_a_bar_in_a_log_file_moves_while_no_job_ends_and_ends_once(capsys, monke
     frames = [f for f in capsys.readouterr().err.replace("\n", "\r").split("\r") if f.strip()]
     waiting = [f for f in frames if "0/3" in f]
     assert len(waiting) >= 2 and len({f.split("[")[1] for f in waiting}) >= 2
+    assert "none ended in 2 s" in waiting[-1]  # the time left is a BatchClock's
     assert sum("3/3" in f for f in frames) == 1 and "100%" in frames[-1]
 
 
