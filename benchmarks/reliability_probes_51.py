@@ -237,102 +237,26 @@ FAULTS21 = (
     "84,28 33,83 33,85 83,85 20,24 84,20 49,113 72,69 115,46 6,79 6,28 83,84 63,96 "
     "6,106 63,66 63,97 83,103 24,86 7,10 24,15 68,69"
 )
-PLACE21 = [
-    "place",
-    "miniwecc",
-    "--faults",
-    "f21.csv",
-    "--target-cct-gain",
-    "10",
-    "--load-levels",
-    "0.95,1.0",
-    "--workers",
-    "1",
-]
+# commands as their words (one string each: a list of words, one a line, hid them)
+PLACE21 = "place miniwecc --faults f21.csv --target-cct-gain 10 --load-levels 0.95,1.0 --workers 1".split()
+PLACE_DEFAULT = "place miniwecc --faults DEFAULT --target-cct-gain 10 --load-levels 0.95,1.0 --workers 1".split()
 CASES = [
-    ("AV02", ["paper", "--only", "estimation", "--out-dir", "p_est"]),
-    ("AV03", ["paper", "--only", "placement", "--out-dir", "p_pl"]),  # 11-17 min
-    ("AV04", ["paper", "--only", "table4", "--out-dir", "p_t4"]),
+    ("AV02", "paper --only estimation --out-dir p_est".split()),
+    ("AV03", "paper --only placement --out-dir p_pl".split()),  # 11-17 min
+    ("AV04", "paper --only table4 --out-dir p_t4".split()),
     (
         "AV05",
-        [
-            "paper",
-            "--only",
-            "wecc",
-            "--only",
-            "convergence",
-            "--only",
-            "cases",
-            "--only",
-            "analytic",
-            "--out-dir",
-            "p_rest",
-        ],
+        "paper --only wecc --only convergence --only cases --only analytic --out-dir p_rest".split(),
     ),
-    (
-        "AV06",
-        [
-            "place",
-            "miniwecc",
-            "--faults",
-            "DEFAULT",
-            "--target-cct-gain",
-            "10",
-            "--load-levels",
-            "0.95,1.0",
-            "--workers",
-            "1",
-        ],
-    ),
-    (
-        "AV07",
-        [
-            "place",
-            "miniwecc",
-            "--faults",
-            "DEFAULT",
-            "--target-cct-gain",
-            "10",
-            "--load-levels",
-            "0.95,1.0",
-            "--workers",
-            "1",
-            "--set-aside-infeasible",
-        ],
-    ),
-    ("AV08", ["screen", "miniwecc", "--lines", "--workers", "1", "--out", "scr.jsonl"]),
+    ("AV06", PLACE_DEFAULT),
+    ("AV07", PLACE_DEFAULT + ["--set-aside-infeasible"]),
+    ("AV08", "screen miniwecc --lines --workers 1 --out scr.jsonl".split()),
     (
         "AV09",
-        [
-            "sweep-cct",
-            "miniwecc",
-            "--faults",
-            "f21.csv",
-            "--esd-pct",
-            "none,5,10",
-            "--out",
-            "s.jsonl",
-            "--workers",
-            "1",
-        ],
+        "sweep-cct miniwecc --faults f21.csv --esd-pct none,5,10 --out s.jsonl --workers 1".split(),
     ),
-    (
-        "AV10",
-        [
-            "estimate",
-            "cct",
-            "kundur",
-            "--fault",
-            "3",
-            "--far-bus",
-            "101",
-            "--esd-pct",
-            "5",
-            "--runs",
-            "20",
-        ],
-    ),
-    ("AV11", ["eig", "miniwecc", "--report", "--out-dir", "eig"]),
+    ("AV10", "estimate cct kundur --fault 3 --far-bus 101 --esd-pct 5 --runs 20".split()),
+    ("AV11", "eig miniwecc --report --out-dir eig".split()),
     ("AV12", PLACE21 + ["--set-aside-infeasible"]),
 ]
 
