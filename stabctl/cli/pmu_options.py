@@ -25,6 +25,7 @@ from stabctl.cli.options import (
 from stabctl.errors import InputError, number_text
 from stabctl.estimation.settings import RATES, RATES_TEXT, check_rate, nominal_rate
 from stabctl.estimation.settings import PMUSettings as _PMU  # its defaults are the CLI's
+from stabctl.io.inputs import plain_integer, shown_field
 
 RATE = click.option(
     "--rate",
@@ -72,12 +73,13 @@ def stream_idcodes(text: str, servers: int) -> list[int]:
     """
     codes = []
     for item in (x.strip() for x in text.split(",")):
-        if not (item.isascii() and item.isdigit() and 1 <= int(item) <= 65534):
+        code = plain_integer(item, 5) if item.isdigit() else None
+        if code is None or not 1 <= code <= 65534:
             raise InputError(
-                f"--idcode {text!r}: {item!r} is not an IDCODE (a number in 1-65534; "
-                "C37.118.2 reserves 0 and 65535)"
+                f"--idcode {shown_field(text)!r}: {shown_field(item)!r} is not an IDCODE "
+                "(a number in 1-65534; C37.118.2 reserves 0 and 65535)"
             )
-        codes.append(int(item))
+        codes.append(code)
     if len(codes) not in (1, servers):
         raise InputError(
             f"--idcode {text}: {len(codes)} IDCODEs for {servers} server(s); give one for "

@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 
 from stabctl.errors import CaseError, advice
-from stabctl.io.inputs import case_text, input_file, plain_float
+from stabctl.io.inputs import case_text, input_file, plain_float, plain_integer, shown_field
 from stabctl.io.provenance import Origin, Written
 from stabctl.models.converters import CONVERTER
 from stabctl.models.declaration import DyrModel, Family
@@ -279,15 +279,17 @@ def _record(file: str, line: int, tokens: list[str]) -> DyrRecord:
         )
     model = tokens[1].strip("'").strip().upper()
     bus = _integer(tokens[0])
-    label = f"{file}:{line} {model} (bus {tokens[0]}, id {machine_id(tokens[2])})"
+    written = shown_field(tokens[0])
+    label = f"{file}:{line} {model} (bus {written}, id {machine_id(tokens[2])})"
     if bus is None or bus <= 0:
         if model in N_PARAMS:
             raise CaseError(
                 f"{label}: "
                 + (
-                    f"IBUS = {tokens[0]!r}: not an integer (ASCII digits, no '_')"
+                    f"IBUS = {written!r}: not an integer (ASCII digits, no '_'; a bus "
+                    f"number has at most {BUS_DIGITS})"
                     if bus is None
-                    else f"IBUS = {tokens[0]}: a bus number must be a positive integer"
+                    else f"IBUS = {written}: a bus number must be a positive integer"
                 )
             )
         bus = 0
@@ -401,15 +403,15 @@ def maps_machine(rec: DyrRecord) -> bool:
 SOURCE_UNSUPPORTED = "generator model not supported by stabctl (yet)"
 
 
-#: an integer field as PSS/E reads one: digits with an optional sign ("103.0" and "1.03E2"
-#: are errors to it, as the RAW reader's `stabctl.io.psse_raw` refuses them; round 46: a
-#: DYR's were read as bus 103)
-_INTEGER = re.compile(r"[+-]?[0-9]+")
+#: the most digits of a bus number (PSS/E's are 1-999997)
+BUS_DIGITS = 6
 
 
 def _integer(tok: str) -> int | None:
-    text = tok.strip("'").strip()
-    return int(text) if _INTEGER.fullmatch(text) else None
+    """An integer field as PSS/E reads one: digits with an optional sign ("103.0" and
+    "1.03E2" are errors to it, as the RAW reader's `stabctl.io.psse_raw` refuses them;
+    round 46: a DYR's were read as bus 103), of at most `BUS_DIGITS` digits."""
+    return plain_integer(tok.strip("'").strip(), BUS_DIGITS)
 
 
 # -- mapping ------------------------------------------------------------------------------------

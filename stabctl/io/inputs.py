@@ -39,6 +39,7 @@ __all__ = [
     "number",
     "parse_json",
     "plain_float",
+    "plain_integer",
     "plain_number",
     "read_csv",
 ]
@@ -315,6 +316,50 @@ def plain_number(text: str) -> bool:
     bool
     """
     return text.isascii() and "_" not in text
+
+
+_SIGNED_DIGITS = re.compile(r"[+-]?[0-9]+")
+
+
+def plain_integer(text: str, most: int) -> int | None:
+    """`text` as an integer when it is ASCII digits with an optional sign, of at most `most`
+    digits leading zeros aside; None otherwise.  Python's int() refuses a string of more
+    than 4300 digits with a ValueError of its own (``sys.get_int_max_str_digits``); a
+    field's count of digits is checked before, so such a field is refused by its reader,
+    naming it, as any other malformed one (round 58: an IDCODE, a case file's machine
+    number and a DYR bus of 5000 digits escaped as that ValueError with a traceback).
+
+    Parameters
+    ----------
+    text : str
+        The field as written (stripped by the caller).
+    most : int
+        The most digits a value of the field can have (a PSS/E bus number 6, an IDCODE 5).
+
+    Returns
+    -------
+    int or None
+    """
+    if not _SIGNED_DIGITS.fullmatch(text):
+        return None
+    digits = text.lstrip("+-").lstrip("0")
+    return int(text) if len(digits) <= most else None
+
+
+def shown_field(text: str, most: int = 24) -> str:
+    """A field as written, for a message: cut after `most` characters with its length said
+    (a field of 5000 digits is not echoed whole).
+
+    Parameters
+    ----------
+    text : str
+    most : int
+
+    Returns
+    -------
+    str
+    """
+    return text if len(text) <= most else f"{text[:most]}... ({len(text)} characters)"
 
 
 #: why a number below the smallest float is refused (`underflows`)

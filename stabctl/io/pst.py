@@ -36,7 +36,7 @@ from stabctl.case import TABLES, Case
 from stabctl.case.events import check_case_events
 from stabctl.case.system import tables_named
 from stabctl.errors import CaseError
-from stabctl.io.inputs import input_file, parse_json, plain_float
+from stabctl.io.inputs import input_file, parse_json, plain_float, plain_integer, shown_field
 from stabctl.jsontext import MAX_JSON_BYTES
 
 __all__ = [
@@ -597,15 +597,17 @@ def _case_of_dict(data: Mapping, raw_tables: Mapping, where: str) -> Case:
         if field in raw_tables
     }
     extra = _extra_field(data.get("extra"), where)
+    events = _events_field(data.get("events"), where)
+    machine_ids = _machine_ids_field(data.get("machine_ids"), where)
     with _located(where):
         case = Case(
             name=str(data.get("name", Path(where).stem)),
             base_mva=_field_number(data, "base_mva", where),
             freq_hz=_field_number(data, "freq_hz", where),
             sw_con=data.get("sw_con"),
-            events=_events_field(data.get("events"), where),
+            events=events,
             extra=extra,
-            machine_ids=_machine_ids_field(data.get("machine_ids"), where),
+            machine_ids=machine_ids,
             source=str(data.get("source", "")),
             description=str(data.get("description", "")),
             **tables,
@@ -650,11 +652,12 @@ def _machine_ids_field(ids, where: str) -> dict[int, str]:
         raise CaseError(f"{where}: 'machine_ids' must be an object of machine number -> ID")
     out = {}
     for key, ident in ids.items():
-        if not (isinstance(key, str) and key.isdigit() and key.isascii() and int(key) > 0):
-            raise CaseError(f"{where}: machine_ids: {key!r} is no machine number")
+        number = plain_integer(key, 9) if isinstance(key, str) and key.isdigit() else None
+        if number is None or number <= 0:
+            raise CaseError(f"{where}: machine_ids: {shown_field(str(key))!r} is no machine number")
         if not isinstance(ident, str):
             raise CaseError(f"{where}: machine_ids: machine {key}: ID {ident!r} is no text")
-        out[int(key)] = ident
+        out[number] = ident
     return out
 
 

@@ -2947,3 +2947,44 @@ def test_round_56_eig_no_pss_on_a_case_without_one_is_refused(tmp_path):
     res = run("eig", str(path), "--no-pss", "--report", "--out-dir", str(tmp_path / "r"))
     assert_error(res, "--no-pss: case 'kundur' has no stabiliser (PSS) to leave out")
     assert not (tmp_path / "r").exists()
+
+
+def test_round_58_integers_of_5000_digits_are_refused_by_their_readers(tmp_path):
+    """Python's int() refuses a string of more than 4300 digits with a ValueError of its
+    own: an IDCODE, a case file's machine number and a DYR bus of 5000 digits escaped as
+    it, a traceback and exit status 1 (round 58 AZ03-06).  Each reader counts a field's
+    digits first and refuses it by name, echoing the field cut short; nothing written."""
+    big = "1" * 5000
+    shown = "111111111111111111111111... (5000 characters)"
+    res = run(
+        "pmu",
+        "record",
+        "127.0.0.1:9",
+        "--frames",
+        1,
+        "-o",
+        str(tmp_path / "x.c37"),
+        "--idcode",
+        big,
+    )
+    assert_error(res, "--idcode", f"'{shown}' is not an IDCODE")
+    res = run(
+        *("estimate", "track", "kundur", "--source", "tcp://127.0.0.1:9", "--frames", 5),
+        *("--out", str(tmp_path / "t.csv"), "--idcode", "1," + big),
+    )
+    assert_error(res, "--idcode", f"'{shown}' is not an IDCODE")
+    d = _kundur_dict()
+    d["machine_ids"] = {big: "X"}
+    (tmp_path / "ids.json").write_text(json.dumps(d))
+    res = run("simulate", str(tmp_path / "ids.json"), "--tf", 1)
+    assert_error(res, f"ids.json: machine_ids: '{shown}' is no machine number")
+    assert "ids.json: ids.json" not in res.output
+    dyr = (PSSE / "five_bus.dyr").read_text()
+    first = dyr.splitlines()[0]
+    (tmp_path / "big.dyr").write_text(dyr.replace(first, first.replace(first.split()[0], big, 1)))
+    out = tmp_path / "big.json"
+    res = run(
+        "import-psse", str(PSSE / "five_bus_v33.raw"), str(tmp_path / "big.dyr"), "-o", str(out)
+    )
+    assert_error(res, "big.dyr:1 GENROU", f"IBUS = '{shown}': not an integer")
+    assert not out.exists() and not (tmp_path / "x.c37").exists()
