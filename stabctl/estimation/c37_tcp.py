@@ -1101,7 +1101,7 @@ def receive(
     InputError
         No server there, no whole frame within `timeout` s before the first data frame, a
         reply to 'cfg2' that is not a readable CFG-2 (`c37.read_config`: its frame type,
-        its CRC), a peer of another protocol or bytes off a frame's start (a FRAMESIZE
+        its CRC) or is another stream's than `idcode`'s, a peer of another protocol or bytes off a frame's start (a FRAMESIZE
         that is not the frame's), a connection reset or closed before the first data
         frame, a first data frame refused, an `end` whose data frames are more than
         `max_bytes` (`most_frames`, before 'start'), or more than those of a stream
@@ -1132,6 +1132,11 @@ def receive(
                     f"addressed (its messages say which)"
                 )
             cfg = c37.read_config(cfg2, "its CFG-2")
+            if (theirs := int(cfg.get_id_code())) != idcode:  # Table 2: the destination's
+                raise InputError(
+                    f"its CFG-2 is of stream IDCODE {theirs}, not the IDCODE {idcode} "
+                    "these commands addressed (--idcode): another stream than the one asked for"
+                )
             if config is not None:
                 config.append(cfg2)
             most = most_frames(cfg, max_bytes, end)

@@ -793,3 +793,17 @@ def test_a_command_frame_without_its_command_word_is_not_obeyed():
     from pyc37.frame import CommandFrame
 
     assert command_word(CommandFrame(1, "start").convert2bytes(), 1) == 2  # a whole one
+
+
+def test_a_stream_of_another_idcode_than_asked_is_refused(kundur_stream):
+    """A server that answers commands addressed to IDCODE 1 with the stream IDCODE 7 (its
+    CFG-2 and data frames valid) was tracked and recorded as the stream asked for, exit 0,
+    no word (round 58 AZ15-16).  A command's IDCODE is its destination stream's
+    (C37.118.2-2011 Table 2), as `pmu control` refuses a plant's CFG-2 of another: the
+    receive refuses it naming both IDCODEs, before any data frame."""
+    case, pmus, _cfg, _cfg2, frames = kundur_stream
+    cfg = c37.stream_config(case, pmus, RATE, idcode=7)
+    cfg2 = c37.config_frame(cfg)
+    address = _cut_server(cfg2, _encoded(cfg, cfg2, frames), cut_last=False)
+    with pytest.raises(InputError, match="its CFG-2 is of stream IDCODE 7, not the IDCODE 1"):
+        receive(*address, End(frames=61), idcode=1, timeout=10)
