@@ -767,7 +767,9 @@ def track(
     partial estimate (exit status 130, 143), and said; interrupted before (a TCP stream is
     estimated once received), no frame is estimated and no CSV is written: it says how
     many frames had come, and writes each stream's frames received beside OUT as a
-    partial recording, STEM.received.c37, to track with --source.
+    partial recording, STEM.received.c37, to track with --source.  So does a source of
+    several servers refused for one of them (one that sends no CFG-2, say): the other
+    streams' frames are kept.
 
     \b
     Example:
@@ -825,6 +827,11 @@ def track(
             f"kept ({out_path} {left})"
         )
         raise
+    except InputError as exc:  # a stream failed: the others' frames kept as on Ctrl-C
+        if not (recordings := getattr(exc, "recordings", [])):
+            raise
+        kept = _keep_received(out_path, recordings, case_name)
+        raise InputError(f"{exc}; nothing is tracked, but {kept}") from None
     why = f"--source {src} stopped before {end}: {'; '.join(got.short)}"
     kept = f"{_instants(got)} tracked"
     at = kept_at(out_path) if got.short else out_path

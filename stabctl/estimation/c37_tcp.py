@@ -1100,12 +1100,12 @@ def receive(
         whose `Stream.short` says it was interrupted, or None before the CFG-2 came.
     InputError
         No server there, no whole frame within `timeout` s before the first data frame, a
-        reply to 'cfg2' that is not a readable CFG-2 (`c37.read_config`: its frame type,
-        its CRC) or is another stream's than `idcode`'s, a peer of another protocol or bytes off a frame's start (a FRAMESIZE
-        that is not the frame's), a connection reset or closed before the first data
-        frame, a first data frame refused, an `end` whose data frames are more than
-        `max_bytes` (`most_frames`, before 'start'), or more than those of a stream
-        without a stated end: each named with host:port.
+        reply to 'cfg2' that is not a readable CFG-2 (`c37.read_config`: its frame type, its
+        CRC) or is another stream's than `idcode`'s, a peer of another protocol or bytes off
+        a frame's start (a FRAMESIZE that is not the frame's), a connection reset or closed
+        before the first data frame, a first data frame refused, an `end` whose data frames
+        are more than `max_bytes` (`most_frames`, before 'start'), or more than those of a
+        stream without a stated end: each named with host:port.
     """
     from pyc37.frame import CommandFrame
 

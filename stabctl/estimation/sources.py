@@ -373,9 +373,10 @@ def read_frames(
         that had sent data frames, a recording of what came (`estimate track` writes it).
     InputError
         As `c37.recorded_frames` and `c37_tcp.receive` (a TCP stream's named with its
-        ``--source``); more TCP servers than PMUs; a stream at another rate or nominal
-        frequency (`c37.check_config`), a station that is not one of `pmus` or in two
-        streams, a PMU in no stream, a data frame that is not readable or not the
+        ``--source``, the error carrying ``recordings`` as a KeyboardInterrupt does: the
+        other streams' frames received); more TCP servers than PMUs; a stream at another
+        rate or nominal frequency (`c37.check_config`), a station that is not one of `pmus`
+        or in two streams, a PMU in no stream, a data frame that is not readable or not the
         stream's (`c37.parse_frame`; over TCP as received: `c37_tcp.Stream.refused`), a
         stream whose time stamps repeat or go backwards, streams that share no time stamp
         (`merge`), or frames whose every value is absent.
@@ -430,14 +431,14 @@ def read_frames(
                     t.join(0.2)
         except KeyboardInterrupt as exc:  # said with what had come, kept by the caller
             exc.received = _came(source, came)  # type: ignore[attr-defined]
-            exc.recordings = [  # type: ignore[attr-defined]
-                (hostport(h, p), cfg[0], list(frames))
-                for (h, p), cfg, frames in zip(source.servers, configs, came)
-                if cfg and frames
-            ]
+            exc.recordings = _recordings(source, configs, came)  # type: ignore[attr-defined]
             raise
         if errors := [g for g in got if isinstance(g, Exception)]:
-            raise InputError(f"--source {source}: {errors[0]}") from None
+            failed = InputError(f"--source {source}: {errors[0]}")
+            # the other streams' frames, kept by the caller as on Ctrl-C (round 58 AZ17: three
+            # streams received whole were dropped for a fourth server that sent no CFG-2)
+            failed.recordings = _recordings(source, configs, came)  # type: ignore[attr-defined]
+            raise failed from None
         for (h, p), g in zip(source.servers, got):
             if isinstance(g, Stream) and g.refused:  # its frames are not taken in part
                 raise InputError(f"--source {source}: {hostport(h, p)}: {g.refused}")
@@ -468,6 +469,16 @@ def read_frames(
             f"{received.missing} missing: nothing was measured"
         )
     return dataclasses.replace(received, short=tuple(s for _, _, s in streams if s))
+
+
+def _recordings(source: Source, configs: list, came: list) -> list:
+    """(server, its CFG-2 bytes, its data frames) of each stream of a TCP `source` whose
+    CFG-2 and at least one data frame came (`read_frames`' threads' lists as they stand)."""
+    return [
+        (hostport(h, p), cfg[0], list(frames))
+        for (h, p), cfg, frames in zip(source.servers, configs, came)
+        if cfg and frames
+    ]
 
 
 def _came(source: Source, came: list) -> str:

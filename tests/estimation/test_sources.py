@@ -481,3 +481,65 @@ def test_a_source_with_a_pmu_unusable_longer_than_a_gap_is_no_ground_for_error_f
             )
         else:
             assert res.exit_code == 0, res.output
+
+
+def _closing_server():
+    """(host, port) of a server that accepts one peer and closes before any CFG-2."""
+    import socket
+    import threading
+
+    srv = socket.create_server(("127.0.0.1", 0))
+
+    def run():
+        conn, _ = srv.accept()
+        conn.close()
+        srv.close()
+
+    threading.Thread(target=run, daemon=True).start()
+    return srv.getsockname()[:2]
+
+
+def test_the_streams_received_are_kept_when_another_fails(kundur_run, tmp_path):
+    """Of two servers, one sends its stream whole and the other closes before its CFG-2:
+    the source is refused (a PMU has no stream), and the stream received, which was
+    dropped (round 58 AZ17: three streams received whole, nothing kept), is handed on as
+    on Ctrl-C, and `estimate track` writes it beside --out as a partial recording that
+    reads back frame for frame."""
+    from click.testing import CliRunner
+
+    from stabctl.cli import main
+
+    case, _res, pmus, drawn = kundur_run
+    sub = c37.stream_config(case, [pmus[0], pmus[1]], SETTINGS.rate, 1)
+    frames = [f.of([0, 1]) for f in drawn]
+    with StreamServer.of_frames(sub, frames, speed=float("inf")) as server:
+        src = sources.Source(servers=(server.address, _closing_server()))
+        with pytest.raises(InputError, match="closed the connection before sending its CFG-2") as e:
+            sources.read_frames(src, case, pmus, SETTINGS.rate, timeout=20, idcode=[1, 10])
+    ((name, _cfg2, data),) = e.value.recordings
+    assert name == f"127.0.0.1:{server.address[1]}" and len(data) == len(drawn)
+    with StreamServer.of_frames(sub, frames, speed=float("inf")) as server:
+        (h, p), (h2, p2) = server.address, _closing_server()
+        res = CliRunner().invoke(
+            main,
+            [
+                "estimate",
+                "track",
+                "kundur",
+                "--source",
+                f"tcp://{h}:{p},{h2}:{p2}",
+                "--idcode",
+                "1,10",
+                "--frames",
+                str(len(drawn)),
+                "--out",
+                str(tmp_path / "t.csv"),
+            ],
+        )
+    assert res.exit_code == 2, res.output
+    assert "nothing is tracked, but" in res.output and "a partial recording" in res.output
+    kept = tmp_path / "t.received.c37"
+    assert not (tmp_path / "t.csv").exists()
+    assert c37.recorded_frames(kept)[1] == [
+        c37.data_frame(sub, c37.config_frame(sub), f) for f in frames
+    ]
