@@ -380,13 +380,18 @@ class StreamServer:
 
     def done(self) -> bool:
         """True when the server has nothing more to do: a session was whole and no PDC is
-        at work (streaming, or connected and past its first command: a PDC that has its
-        CFG-2 and has not said 'start' yet is served, not left with a closed server), or
-        every session that streamed was cut and no peer has been connected for
-        `Guard.wait` s (no PDC came for the stream again)."""
+        at work (streaming, or connected and past its first command within `Guard.timeout`
+        s of connecting: a PDC that has its CFG-2 and has not said 'start' yet is served,
+        not left with a closed server; round 58 AZ08: a peer asking for the header every
+        2 s, never starting, held the server open for as long as it went on), or every
+        session that streamed was cut and no peer has been connected for `Guard.wait` s
+        (no PDC came for the stream again)."""
         with self._lock:
             if self.finished.is_set():
-                at_work = any(p.commanded and not p.evicted for p in self._live.values())
+                late = time.monotonic() - self.guard.timeout
+                at_work = any(
+                    p.commanded and not p.evicted and p.since > late for p in self._live.values()
+                )
                 return self._streaming == 0 and not at_work
             idle = self._open == 0 and time.monotonic() - self._idle_since >= self.guard.wait
             return bool(self.sessions) and idle

@@ -807,3 +807,38 @@ def test_a_stream_of_another_idcode_than_asked_is_refused(kundur_stream):
     address = _cut_server(cfg2, _encoded(cfg, cfg2, frames), cut_last=False)
     with pytest.raises(InputError, match="its CFG-2 is of stream IDCODE 7, not the IDCODE 1"):
         receive(*address, End(frames=61), idcode=1, timeout=10)
+
+
+def test_a_peer_that_never_starts_does_not_hold_the_server_open(kundur_stream):
+    """After a PDC was sent the stream whole, a peer that asks for the header every 0.2 s
+    and never says 'start' held `pmu serve` open for as long as it went on (round 58
+    AZ08).  Like a peer it would evict (`Guard.max_peers`), it holds the server only
+    within `Guard.timeout` s of connecting: a PDC that asks for its CFG-2 is still served
+    that long."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    data = _encoded(cfg, cfg2, frames)
+    stop = threading.Event()
+    guard = Guard(timeout=3.0)
+    with (
+        StreamServer(cfg2, data, speed=float("inf"), guard=guard) as server,
+        socket.create_connection(server.address, timeout=2) as stranger,
+    ):
+
+        def ask():
+            while not stop.wait(0.2):
+                with contextlib.suppress(OSError):
+                    stranger.sendall(CommandFrame(1, "header").convert2bytes())
+
+        threading.Thread(target=ask, daemon=True).start()
+        time.sleep(0.3)
+        assert len(receive(*server.address, timeout=10).data) == 61
+        assert server.finished.wait(5)
+        assert not server.done()  # within the stranger's first 3 s
+        deadline = time.monotonic() + 5
+        while not server.done() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        held = server.done()
+        stop.set()
+    assert held
