@@ -48,8 +48,10 @@ from stabctl.errors import InputError
 from stabctl.estimation import c37
 from stabctl.estimation.c37_tcp import (
     ACCEPT_RETRY_S,
+    COMMANDS,
     MAX_STREAM_BYTES,
     NAMED_PEERS,
+    NOT_SENT,
     SHORT_OF,
     End,
     FrameTimeout,
@@ -477,7 +479,10 @@ class PlantLink:
             if frame is None:
                 raise InputError("closed before 'start'")
             word = command_word(frame, self.cfg.idcode)
-            me.commanded = True
+            # a frame whose CRC fails, or no command this plant knows, is no valid command
+            # (round 58 AZ01: seven strangers' bad frames kept their places and a peer that
+            # had its CFG-2 was evicted for a ninth)
+            me.commanded = me.commanded or word in COMMANDS or word in NOT_SENT
             if word == 2:  # 'start'
                 return
             if word == 5:  # 'cfg2'

@@ -842,3 +842,41 @@ def test_a_peer_that_never_starts_does_not_hold_the_server_open(kundur_stream):
         held = server.done()
         stop.set()
     assert held
+
+
+def test_a_plant_evicts_a_peer_of_bad_frames_before_one_of_valid_commands():
+    """With `Guard.max_peers` handshakes open, a new peer takes the place of one without a
+    valid command.  A peer that had its CFG-2 was evicted while seven strangers, whose
+    only frame failed its CRC, kept theirs (round 58 AZ01: any frame counted as a
+    command).  Now the first stranger gives its place, named as one that sent none."""
+    from pyc37.frame import CommandFrame
+
+    case = stabctl.load_case("kundur")
+    partial = stabctl.Simulator(case).run([fault_with_clearing(case, 3, 101, 1.0, 7)], t_end=0.1)
+    _ctrl, _cfg, link = _plant(case, timeout=3)
+    bad = bytearray(CommandFrame(1, "header").convert2bytes())
+    bad[-1] ^= 0xFF
+    with link, contextlib.ExitStack() as peers:
+
+        def wait_for_a_controller():  # none comes: 'no controller connected within 3 s'
+            with contextlib.suppress(InputError):
+                link(0.05, partial)
+
+        thread = threading.Thread(target=wait_for_a_controller, daemon=True)
+        thread.start()
+        first = peers.enter_context(socket.create_connection(link.address, timeout=5))
+        first.sendall(CommandFrame(1, "cfg2").convert2bytes())
+        first.settimeout(5)
+        assert first.recv(4)  # its CFG-2 is coming: a valid command was taken
+        strangers = []
+        for _ in range(7):
+            strangers.append(peers.enter_context(socket.create_connection(link.address)))
+            strangers[-1].sendall(bytes(bad))
+        time.sleep(0.3)
+        peers.enter_context(socket.create_connection(link.address))  # the ninth
+        me = f"127.0.0.1:{strangers[0].getsockname()[1]}"
+        said = f"{me}: sent no command in"
+        assert _until(lambda: any(r.startswith(said) for r in link.refused)), link.refused
+        mine = f"127.0.0.1:{first.getsockname()[1]}:"
+        assert not any(r.startswith(mine) for r in link.refused)
+        thread.join(10)
