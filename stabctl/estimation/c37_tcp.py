@@ -531,6 +531,8 @@ class StreamServer:
             self._refuse(peer, str(exc))
         except FrameTimeout as exc:  # a frame begun, dripped and not finished
             self._refuse(peer, f"sent {exc}")
+        except AnswerTimeout as exc:  # commands sent, the answers not read
+            self._refuse(peer, f"sent {me.commands} command(s) and {exc}")
         except TimeoutError:
             self._refuse(
                 peer,
@@ -591,6 +593,7 @@ class StreamServer:
             if command is None:
                 return None if shown is None else (_PAUSED, shown)
             me.ignored += not command
+            me.commands += bool(command)
             me.commanded = me.commanded or bool(command)
             if command == "start":
                 with self._lock:  # (read by `_admit` under it)
@@ -611,12 +614,17 @@ class StreamServer:
         """Answer a command other than 'start' and 'stop': CFG-2 and header sent (at any
         time, mid-stream too: C37.118.2-2011 6.4), a configuration this server does not
         send added to `asked`."""
-        if command == "cfg2":
-            conn.sendall(self._cfg2.convert2bytes())
-        elif command == "header":
-            conn.sendall(self._header())
-        elif command in NOT_SENT.values():
-            asked.append(command)
+        try:
+            if command == "cfg2":
+                conn.sendall(self._cfg2.convert2bytes())
+            elif command == "header":
+                conn.sendall(self._header())
+            elif command in NOT_SENT.values():
+                asked.append(command)
+        except TimeoutError:
+            raise AnswerTimeout(
+                f"took no answer to its commands for {self.guard.timeout:g} s"
+            ) from None
 
     def _stream(self, conn: socket.socket, shown: _Shown, asked: list) -> str:
         """Send the data frames from `shown.sent` on, paced by their time stamps (each
@@ -765,9 +773,8 @@ def _accept_failed(exc: OSError) -> str:
 class _Peer:
     """A connected peer: its connection, when it connected (`time.monotonic()`), whether
     it has sent a valid command and whether 'start', whether its place was given to a new
-    peer, and how many
-    frames it sent that the server ignores (not a command, a CRC that fails, a command
-    word this server does not know)."""
+    peer, how many frames it sent that the server ignores (not a command, a CRC that
+    fails, a command word this server does not know) and how many valid commands."""
 
     conn: socket.socket
     since: float
@@ -775,6 +782,7 @@ class _Peer:
     streamed: bool = False
     evicted: bool = False
     ignored: int = 0
+    commands: int = 0
 
 
 @dataclass
@@ -901,6 +909,11 @@ def _ignored(n: int, then: str) -> str:
 class FrameTimeout(TimeoutError):
     """A frame begun and not finished within the time-out for a whole frame (a peer that
     sends it a byte at a time)."""
+
+
+class AnswerTimeout(TimeoutError):
+    """An answer (a CFG-2, a header frame) the peer did not take within the time-out: it
+    sends commands and reads nothing (round 58 AZ07: such a peer was named 'silent')."""
 
 
 @dataclass(frozen=True)

@@ -880,3 +880,29 @@ def test_a_plant_evicts_a_peer_of_bad_frames_before_one_of_valid_commands():
         mine = f"127.0.0.1:{first.getsockname()[1]}:"
         assert not any(r.startswith(mine) for r in link.refused)
         thread.join(10)
+
+
+def test_a_peer_that_reads_no_answer_is_named_for_it(kundur_stream):
+    """A peer that sends 'cfg2' again and again and reads none of the answers is dropped
+    once an answer waits the time-out, named for what it did: it was named 'silent'
+    (round 58 AZ07: 159 600 commands, 'silent for 5 s')."""
+    from pyc37.frame import CommandFrame
+
+    _case, _pmus, cfg, cfg2, frames = kundur_stream
+    ask = CommandFrame(1, "cfg2").convert2bytes() * 100
+    with (
+        StreamServer(
+            cfg2, _encoded(cfg, cfg2, frames), speed=float("inf"), guard=Guard(timeout=0.5)
+        ) as server,
+        socket.socket() as peer,
+    ):
+        peer.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        peer.connect(server.address)
+        peer.settimeout(0.2)
+        deadline = time.monotonic() + 20
+        with contextlib.suppress(OSError):  # until the server no longer reads them
+            while time.monotonic() < deadline:
+                peer.sendall(ask)
+        said = "command(s) and took no answer to its commands for 0.5 s"
+        assert _until(lambda: any(said in r for r in server.refused)), server.refused
+    assert not any("silent" in r for r in server.refused)
