@@ -257,7 +257,7 @@ class StreamServer:
     reads nothing has the whole stream acknowledged by its kernel once it fits the
     receive buffer.  Nor is anything a peer that half-closes (shuts only its sending
     side) with the frames unread can be told by: its in-order close is a reader's
-    (docs/estimation.md 6.1; `Guard.allow` keeps such peers out).  A PDC still connected `Guard.timeout` s after the last frame is cut
+    (docs/estimation.md section 6; `Guard.allow` keeps such peers out).  A PDC still connected `Guard.timeout` s after the last frame is cut
     (delivery not confirmed), as is one that resets the connection, says 'stop' and
     leaves, or takes no frame for the time-out.  One PDC's session never decides
     another's: the server is done (`done`) once one session was whole and none streams,
