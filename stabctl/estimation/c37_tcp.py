@@ -248,20 +248,20 @@ class StreamServer:
     'stop' pauses the session's data frames (C37.118.2-2011 Table 15, 'turn off
     transmission'): the connection stays open and 'start' resumes them where they
     stopped; requests for the CFG-2 or the header are answered at any time, mid-stream
-    too.  After the last data frame the server closes its side of the connection, and
-    the session is whole only once the PDC closes its side in turn, in order (FIN),
-    within `Guard.timeout` s: a TCP whose application closes with bytes unread resets the
-    connection instead (RFC 1122 4.2.2.13, as Linux, the BSDs and Windows do), so an
-    orderly close after the last frame is the evidence that the PDC read the stream to its
-    end.  A 'stop' after the last frame, or TCP acknowledgements, are not: a peer that
-    reads nothing has the whole stream acknowledged by its kernel once it fits the
-    receive buffer.  Nor is anything a peer that half-closes (shuts only its sending
-    side) with the frames unread can be told by: its in-order close is a reader's
-    (docs/estimation.md section 6; `Guard.allow` keeps such peers out).  A PDC still connected `Guard.timeout` s after the last frame is cut
-    (delivery not confirmed), as is one that resets the connection, says 'stop' and
-    leaves, or takes no frame for the time-out.  One PDC's session never decides
-    another's: the server is done (`done`) once one session was whole and none streams,
-    or, with every session cut, once no peer has been connected for `Guard.wait` s.
+    too.  After the last data frame the server closes its side of the connection, and the
+    session is whole only once the PDC closes its side in turn, in order (FIN), within
+    `Guard.timeout` s: a TCP whose application closes with bytes unread resets the
+    connection instead (RFC 1122 4.2.2.13, as Linux, the BSDs and Windows do), so an orderly
+    close after the last frame is the evidence that the PDC read the stream to its end.  A
+    'stop' after the last frame, or TCP acknowledgements, are not: a peer that reads nothing
+    has the whole stream acknowledged by its kernel once it fits the receive buffer.  A peer
+    that half-closes (shuts only its sending side) with the frames unread cannot be told
+    apart from a reader either: its in-order close is a reader's (docs/estimation.md section
+    6; `Guard.allow` keeps such peers out).  A PDC still connected `Guard.timeout` s after
+    the last frame is cut (delivery not confirmed), as is one that resets the connection,
+    says 'stop' and leaves, or takes no frame for the time-out.  One PDC's session never
+    decides another's: the server is done (`done`) once one session was whole and none
+    streams, or, with every session cut, once no peer has been connected for `Guard.wait` s.
 
     Parameters
     ----------
