@@ -8,6 +8,7 @@ import contextlib
 import ipaddress
 import json
 import socket
+import warnings
 
 import click
 
@@ -762,3 +763,11 @@ def control(
         + (f"; {flagged}" if flagged else "")
         + (f"; {gaps}" if gaps else "")
     )
+    applied = got.applied_latency_s
+    if applied is not None and abs(applied - settings.latency_s) > 1e-9:
+        warnings.warn(
+            f"the plant applied the ESD modes {1e3 * applied:g} ms after each frame's time "
+            f"stamp (its --latency-ms), and this controller forecast the relative speeds "
+            f"over {1e3 * settings.latency_s:g} ms (--latency-ms): give both the same",
+            stacklevel=2,
+        )

@@ -70,6 +70,10 @@ EXTENDED = 8  # C37.118.2-2011 Table 15: extended frame
 HEADER = 1
 #: the text of the plant's last frame (a header frame) before it closes the loop
 END_OF_RUN = "stabctl: end of run at t = "
+#: what follows it: the latency after each frame's time stamp at which the plant applied the
+#: modes (round 58 AZ09: a plant at 200 ms and a controller forecasting over 50 ms ran
+#: the loop without a word)
+APPLIED = "ESD modes applied after each frame's time stamp plus "
 
 
 class PlantStopped(InputError):
@@ -78,9 +82,9 @@ class PlantStopped(InputError):
     announces is not that of the last frame answered."""
 
 
-def end_of_run_frame(idcode: int, t: float) -> bytes:
+def end_of_run_frame(idcode: int, t: float, latency_s: float | None = None) -> bytes:
     """The plant's last frame: a header frame reading `END_OF_RUN` and the run's end time t
-    (s).
+    (s), and the latency after which the plant applied the modes, if given (`APPLIED`).
 
     Parameters
     ----------
@@ -88,6 +92,8 @@ def end_of_run_frame(idcode: int, t: float) -> bytes:
         The stream's ID code.
     t : float
         The last simulated instant, s.
+    latency_s : float, optional
+        The plant's latency (its ``--latency-ms``), s.
 
     Returns
     -------
@@ -96,12 +102,13 @@ def end_of_run_frame(idcode: int, t: float) -> bytes:
     """
     from pyc37.frame import HeaderFrame
 
-    return HeaderFrame(idcode, f"{END_OF_RUN}{t:.6f} s").convert2bytes()
+    applied = "" if latency_s is None else f"; {APPLIED}{1e3 * latency_s:g} ms"
+    return HeaderFrame(idcode, f"{END_OF_RUN}{t:.6f} s{applied}").convert2bytes()
 
 
-def _end_time(data: bytes, idcode: int) -> float | None:
-    """The end time (s) a header frame of the stream `idcode` from the plant gives, its
-    CRC valid; None for any other frame."""
+def _end_text(data: bytes, idcode: int) -> str | None:
+    """The text of the plant's end-of-run header frame of the stream `idcode`, its CRC
+    valid, from its end time on; None for any other frame."""
     from pyc37.frame import CommonFrame
 
     if len(data) < 16 or (data[1] >> 4) & 0x7 != HEADER:
@@ -109,10 +116,27 @@ def _end_time(data: bytes, idcode: int) -> float | None:
     if not CommonFrame._check_crc(data) or int.from_bytes(data[4:6], "big") != idcode:
         return None
     text = data[14:-2].decode("ascii", "replace")
-    if not text.startswith(END_OF_RUN):
+    return text[len(END_OF_RUN) :] if text.startswith(END_OF_RUN) else None
+
+
+def _end_time(data: bytes, idcode: int) -> float | None:
+    """The end time (s) a header frame of the stream `idcode` from the plant gives, its
+    CRC valid; None for any other frame."""
+    text = _end_text(data, idcode)
+    try:
+        return None if text is None else float(text.split()[0])
+    except (ValueError, IndexError):
+        return None
+
+
+def _applied_latency(data: bytes, idcode: int) -> float | None:
+    """The latency (s) after which the plant says it applied the modes (`APPLIED`), from
+    its end-of-run header; None if it says none."""
+    text = _end_text(data, idcode) or ""
+    if APPLIED not in text:
         return None
     try:
-        return float(text[len(END_OF_RUN) :].split()[0])
+        return 1e-3 * float(text.split(APPLIED)[1].split()[0])
     except (ValueError, IndexError):
         return None
 
@@ -312,7 +336,8 @@ class PlantLink:
         (`end_of_run_frame`), sent before `close` only when the run ended normally."""
         if self._conn is not None:
             try:
-                self._conn.sendall(end_of_run_frame(self.cfg.idcode, t_end))
+                latency = self.ctrl.settings.latency_s
+                self._conn.sendall(end_of_run_frame(self.cfg.idcode, t_end, latency))
             except OSError:  # the controller has gone: nothing to tell
                 pass
 
@@ -533,11 +558,15 @@ class Answered(NamedTuple):
         (`sources.Gap`): one of at most `sources.FILL_S` s fed to the estimator as frames
         of missing values (it predicts across), after a longer one the estimator starts
         again (`closed_loop.LoopController.restart`), as `closed_loop.track` takes them.
+    applied_latency_s : float or None
+        The latency after each frame's time stamp at which the plant applied the modes,
+        as its end-of-run header says (None: it says none).
     """
 
     frames: int
     flagged: dict
     gaps: tuple = ()
+    applied_latency_s: float | None = None
 
 
 def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.0) -> Answered:
@@ -604,7 +633,8 @@ def serve_controller(controller, cfg, host: str, port: int, timeout: float = 30.
             while (data := _read_frame(conn)) is not None:
                 if (t_end := _end_time(data, cfg.idcode)) is not None:
                     _check_run_end(t_end, last, n, cfg.rate, f"{host}:{port}")
-                    return Answered(n, dict(flagged), tuple(gaps))
+                    applied = _applied_latency(data, cfg.idcode)
+                    return Answered(n, dict(flagged), tuple(gaps), applied)
                 if n >= most:
                     raise InputError(
                         f"the plant at {host}:{port} sent more than {most} data frames (what "

@@ -193,6 +193,7 @@ def test_plant_and_controller_in_two_processes_close_the_loop():
     res = CliRunner().invoke(main, ["pmu", "control", "kundur", address, "--esd-pct", "10"])
     assert res.exit_code == 0, res.output
     assert "controller (ekf): answered 180 frames" in res.output
+    assert "warning" not in res.output  # the plant applied the modes at the 50 ms forecast
     status, out = finished(proc)
     assert status == 0, out
     remote = json.loads(out)["closed_loop"]
@@ -963,3 +964,20 @@ def test_control_names_the_gaps_in_the_plant_s_stream(kundur_recording):
             got = serve_controller(ctrl, cfg, "127.0.0.1", port, 10)
         assert got.frames == len(sent) and ctrl.fed == fed
         assert [g.filled for g in got.gaps] == [len(sent) == 43]
+
+
+def test_control_says_when_the_plant_applied_the_modes_at_another_latency():
+    """`pmu plant --latency-ms 200` with `pmu control` forecasting over its default 50 ms
+    ran the loop without a word (round 58 AZ09): the plant's end-of-run header now says
+    the latency at which it applied the modes, and the controller warns of a mismatch."""
+    fault = ["kundur", "--fault", "3", "--far-bus", "101", "--clear-cycles", "7"]
+    proc, address = serving(
+        "plant", *fault, "--tf", "1.5", "--esd-pct", "10", "--speed", "0", "--latency-ms", "200"
+    )
+    res = CliRunner().invoke(main, ["pmu", "control", "kundur", address, "--esd-pct", "10"])
+    assert res.exit_code == 0, res.output
+    assert finished(proc)[0] == 0
+    assert (
+        "warning: the plant applied the ESD modes 200 ms after each frame's time stamp (its "
+        "--latency-ms), and this controller forecast the relative speeds over 50 ms"
+    ) in res.output
