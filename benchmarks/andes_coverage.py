@@ -149,6 +149,11 @@ def main() -> None:
             "",
             "## What blocks the others (files per cause)",
             "",
+            "A column ANDES ignores (no parameter of its model: an older ANDES's, such as "
+            "WTDTA1's `Ht` and `Hg`, whose values ANDES replaces by its defaults without a "
+            "word) refuses the file; `stabctl import-andes --skip-unsupported` imports it "
+            "with each such column named in a warning.",
+            "",
             "| files | model left out, or refusal |",
             "|---|---|",
             *(f"| {n} | {cause} |" for cause, n in causes.most_common()),
