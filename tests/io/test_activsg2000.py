@@ -147,8 +147,9 @@ def test_six_cycle_fault_is_stable_and_converged_in_the_step(imported):
     """A 6-cycle fault at 345 kV bus 2021 cleared by tripping line 2021-2002, the case read as
     PSS/E (the default): stable, its largest angle from the COI the same at half the step
     (measured 1.17712, 1.17707 and 1.17699 rad at a half, a quarter and an eighth of a
-    cycle on 2026-12-03, 1.13828, 1.13831 and 1.13829 before the readings of 2026-12-02; half a cycle, the default step, with 18 EXAC2 in sub-intervals). Without sub-
-    intervals half a cycle is refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05
+    cycle on 2026-12-03, 1.13828, 1.13831 and 1.13829 before the readings of 2026-12-02;
+    half a cycle, the default step, with 18 EXAC2 in sub-intervals). Without sub-intervals
+    half a cycle is refused by name: the EXAC2 at bus 1079 (K_A = 1000, T_A = 0.05
     s, K_F = 0.49, T_E = 0.55 s, a saturated exciter) has a regulator and exciter mode at
     -12 +- 184j 1/s, which Heun's method keeps only below h = 4.85 ms
     (`exac2.heun_step_limit`); with them (the default, `stabctl.dynamics.subinterval`) the
