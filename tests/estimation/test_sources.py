@@ -520,22 +520,9 @@ def test_the_streams_received_are_kept_when_another_fails(kundur_run, tmp_path):
     assert name == f"127.0.0.1:{server.address[1]}" and len(data) == len(drawn)
     with StreamServer.of_frames(sub, frames, speed=float("inf")) as server:
         (h, p), (h2, p2) = server.address, _closing_server()
-        res = CliRunner().invoke(
-            main,
-            [
-                "estimate",
-                "track",
-                "kundur",
-                "--source",
-                f"tcp://{h}:{p},{h2}:{p2}",
-                "--idcode",
-                "1,10",
-                "--frames",
-                str(len(drawn)),
-                "--out",
-                str(tmp_path / "t.csv"),
-            ],
-        )
+        args = ["--idcode", "1,10", "--frames", str(len(drawn)), "--out", str(tmp_path / "t.csv")]
+        source = f"tcp://{h}:{p},{h2}:{p2}"
+        res = CliRunner().invoke(main, ["estimate", "track", "kundur", "--source", source, *args])
     assert res.exit_code == 2, res.output
     assert "nothing is tracked, but" in res.output and "a partial recording" in res.output
     kept = tmp_path / "t.received.c37"
