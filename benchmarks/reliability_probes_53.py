@@ -157,6 +157,31 @@ def close_all(socks):
 
 
 # ------------------------------------------------------------------ the plant's handshake
+def _crowd(port):
+    """Peer A asks for the CFG-2 in a valid frame, seven strangers send one frame whose CRC
+    fails, a ninth peer connects: (A dropped?, each stranger dropped?), or why not run."""
+    socks = []
+    try:
+        a = connect(port)
+        socks.append(a)
+        a.sendall(cmdframe(5))
+        a.settimeout(10)
+        if read_frame(a) is None:
+            return "A got no CFG-2"
+        for _ in range(7):
+            s = connect(port)
+            socks.append(s)
+            time.sleep(0.2)
+            s.sendall(cmdframe(2, bad_crc=True))
+            time.sleep(0.2)
+        time.sleep(0.5)
+        socks.append(connect(port))  # the ninth
+        time.sleep(1.0)
+        return closed_by_peer(a), [closed_by_peer(s, 0.3) for s in socks[1:8]]
+    finally:
+        close_all(socks)
+
+
 @probe("AZ01")
 def plant_garbage_frames_outrank_a_commanded_peer():
     """`pmu plant`: peer A asks for CFG-2 in a valid command frame (a controller between
@@ -170,29 +195,10 @@ def plant_garbage_frames_outrank_a_commanded_peer():
     if not wait_listen(port, 300, p):
         finish(p, 5)
         return False, "plant did not listen"
-    socks = []
-    try:
-        a = connect(port)
-        socks.append(a)
-        a.sendall(cmdframe(5))
-        a.settimeout(10)
-        cfg = read_frame(a)
-        if cfg is None:
-            return False, "A got no CFG-2"
-        for _ in range(7):
-            s = connect(port)
-            socks.append(s)
-            time.sleep(0.2)
-            s.sendall(cmdframe(2, bad_crc=True))
-            time.sleep(0.2)
-        time.sleep(0.5)
-        ninth = connect(port)
-        socks.append(ninth)
-        time.sleep(1.0)
-        a_gone = closed_by_peer(a)
-        gone = [closed_by_peer(s, 0.3) for s in socks[1:8]]
-    finally:
-        close_all(socks)
+    crowd = _crowd(port)
+    if isinstance(crowd, str):
+        return False, crowd
+    a_gone, gone = crowd
     rc, o, e = finish(p, 60)
     bad = []
     if a_gone:
@@ -217,28 +223,10 @@ def serve_garbage_frames_do_not_outrank_a_commanded_peer():
     if not wait_listen(port, 300, p):
         finish(p, 5)
         return False, "serve did not listen"
-    socks = []
-    try:
-        a = connect(port)
-        socks.append(a)
-        a.sendall(cmdframe(5))
-        a.settimeout(10)
-        if read_frame(a) is None:
-            return False, "A got no CFG-2"
-        for _ in range(7):
-            s = connect(port)
-            socks.append(s)
-            time.sleep(0.2)
-            s.sendall(cmdframe(2, bad_crc=True))
-            time.sleep(0.2)
-        time.sleep(0.5)
-        ninth = connect(port)
-        socks.append(ninth)
-        time.sleep(1.0)
-        a_gone = closed_by_peer(a)
-        gone = [closed_by_peer(s, 0.3) for s in socks[1:8]]
-    finally:
-        close_all(socks)
+    crowd = _crowd(port)
+    if isinstance(crowd, str):
+        return False, crowd
+    a_gone, gone = crowd
     with_pdc_waiting = p.poll() is None  # no PDC came: it waits for one (its --help)
     if with_pdc_waiting:
         os.killpg(p.pid, signal.SIGINT)

@@ -434,14 +434,14 @@ def read_frames(
             exc.recordings = _recordings(source, configs, came)  # type: ignore[attr-defined]
             raise
         if errors := [g for g in got if isinstance(g, Exception)]:
-            failed = InputError(f"--source {source}: {errors[0]}")
+            failed = InputError(_of_source(source, str(errors[0])))
             # the other streams' frames, kept by the caller as on Ctrl-C (round 58 AZ17: three
             # streams received whole were dropped for a fourth server that sent no CFG-2)
             failed.recordings = _recordings(source, configs, came)  # type: ignore[attr-defined]
             raise failed from None
         for (h, p), g in zip(source.servers, got):
             if isinstance(g, Stream) and g.refused:  # its frames are not taken in part
-                raise InputError(f"--source {source}: {hostport(h, p)}: {g.refused}")
+                raise InputError(_of_source(source, f"{hostport(h, p)}: {g.refused}"))
         streams = [
             (
                 c37.read_config(g.cfg2, f"--source {source}: {hostport(h, p)}'s CFG-2"),
@@ -469,6 +469,16 @@ def read_frames(
             f"{received.missing} missing: nothing was measured"
         )
     return dataclasses.replace(received, short=tuple(s for _, _, s in streams if s))
+
+
+def _of_source(source: Source, said: str) -> str:
+    """An error of one of a TCP `source`'s servers (``HOST:PORT: ...``), named with the
+    source: its server's address said once where the source is that one server (round
+    58: ``--source tcp://127.0.0.1:4712: 127.0.0.1:4712: ...``)."""
+    (h, p), *more = source.servers
+    if not more and said.startswith(f"{hostport(h, p)}: "):
+        said = said[len(hostport(h, p)) + 2 :]
+    return f"--source {source}: {said}"
 
 
 def _recordings(source: Source, configs: list, came: list) -> list:

@@ -874,7 +874,7 @@ def test_track_refuses_a_source_whose_frame_is_refused(kundur_recording, tmp_pat
                 ],
             )
         assert res.exit_code == 2 and res.stdout == "", res.output
-        assert res.stderr.startswith(f"error: --source {src}: 127.0.0.1:"), res.stderr
+        assert res.stderr.startswith(f"error: --source {src}: data frame"), res.stderr
         assert said in res.stderr and "Traceback" not in res.output
         assert out.read_text() == "kept" if existing else not out.exists()
 
