@@ -928,6 +928,36 @@ def place_random_cuts_resume():
     return not bad, "; ".join(bad) or f"plan equal after cuts {', '.join(cuts)}"
 
 
+def _ctrl_c_series(args, out, moments):
+    """Ctrl-C to the group of `stabctl args` at each of `moments` (s) in, `out` removed
+    before each: (ok, why), SHORT when any run printed a traceback or a worker's "Fatal
+    Python error"."""
+    hits, codes = [], []
+    for k, at in enumerate(moments):
+        (WD / out).unlink(missing_ok=True)
+        p = start(args)
+        time.sleep(at)
+        try:
+            os.killpg(p.pid, signal.SIGINT)
+        except ProcessLookupError:
+            pass
+        rcc, oc, ec = finish(p, 120)
+        codes.append(rcc)
+        if tb(ec) or "Fatal Python error" in ec:
+            (WD / f"ctrlc-{out}-{k}.err").write_text(ec)
+            first = next(
+                (ln for ln in ec.splitlines() if "Fatal Python" in ln or "Traceback" in ln), ""
+            )
+            hits.append(f"{at:.2f} s (exit {rcc}: {first[:60]})")
+    n = len(moments)
+    if hits:
+        return False, (
+            f"{len(hits)} of {n} Ctrl-C's printed a worker's start-up traceback (\"Fatal "
+            f'Python error: init_import_site"), at {", ".join(hits[:4])}'
+        )
+    return True, f"{n} Ctrl-C's clean (exits {sorted(set(map(str, codes)))})"
+
+
 @probe("AZ20")
 def place_ctrl_c_while_workers_start():
     """Ctrl-C (SIGINT to the process group, as a terminal sends it) during `place kundur
@@ -943,30 +973,7 @@ def place_ctrl_c_while_workers_start():
     rc, o, e, _ = run(args, 600)
     if rc != 0:
         return False, f"warm-up exit {rc}: {tail(e)}"
-    hits, codes = [], []
-    for k in range(40):
-        (WD / "pc.json").unlink(missing_ok=True)
-        at = 1.6 + 0.04 * k
-        p = start(args)
-        time.sleep(at)
-        try:
-            os.killpg(p.pid, signal.SIGINT)
-        except ProcessLookupError:
-            pass
-        rcc, oc, ec = finish(p, 120)
-        codes.append(rcc)
-        if tb(ec) or "Fatal Python error" in ec:
-            (WD / f"ctrlc{k}.err").write_text(ec)
-            first = next(
-                (ln for ln in ec.splitlines() if "Fatal Python" in ln or "Traceback" in ln), ""
-            )
-            hits.append(f"{at:.2f} s (exit {rcc}: {first[:60]})")
-    if hits:
-        return (
-            False,
-            f"{len(hits)} of 40 Ctrl-C's printed a worker's start-up traceback, e.g. at {hits[0]}",
-        )
-    return True, f"40 Ctrl-C's clean (exits {sorted(set(map(str, codes)))})"
+    return _ctrl_c_series(args, "pc.json", [1.6 + 0.04 * k for k in range(40)])
 
 
 @probe("AZ21")
@@ -975,27 +982,7 @@ def screen_ctrl_c_while_workers_start():
     spawn about 1.3-1.5 s in here): Ctrl-C at 25 moments 1.0-2.2 s in, each a fresh
     records file: one `interrupted:` line, exit 130, no traceback."""
     args = ["screen", "kundur", "--lines", "--workers", 2, "--out", "scc.jsonl"]
-    hits, codes = [], []
-    for k in range(25):
-        (WD / "scc.jsonl").unlink(missing_ok=True)
-        at = 1.0 + 0.05 * k
-        p = start(args)
-        time.sleep(at)
-        try:
-            os.killpg(p.pid, signal.SIGINT)
-        except ProcessLookupError:
-            pass
-        rcc, oc, ec = finish(p, 120)
-        codes.append(rcc)
-        if tb(ec) or "Fatal Python error" in ec:
-            (WD / f"sctrlc{k}.err").write_text(ec)
-            hits.append(f"{at:.2f} s (exit {rcc})")
-    if hits:
-        return False, (
-            f"{len(hits)} of 25 Ctrl-C's printed a worker's \"Fatal Python error: "
-            f'init_import_site" and traceback, at {", ".join(hits[:4])}'
-        )
-    return True, f"25 Ctrl-C's clean (exits {sorted(set(map(str, codes)))})"
+    return _ctrl_c_series(args, "scc.jsonl", [1.0 + 0.05 * k for k in range(25)])
 
 
 if __name__ == "__main__":
