@@ -1036,3 +1036,25 @@ def test_a_flat_run_that_does_not_stay_at_rest_is_said(monkeypatch):
     assert said in " ".join(out.stderr.split()), out.stderr
     out = run("simulate", "kundur", "--tf", "1", "--trip-gen", "4", "0.5")
     assert "did not stay at rest" not in out.stderr  # a disturbance: moves are its answer
+
+
+@pytest.mark.parametrize(("damping", "warned"), [(0.05, True), (0.5, False)])
+def test_heun_warns_of_a_lightly_damped_swing_it_grows(tmp_path, damping, warned):
+    """The five-bus case with its machines classical (H 5, 0.5 and 3 s), a 50 ms fault, 20
+    s at heun's default 10 ms: with a damping D of 0.05 the largest angle was 0.5603 rad
+    against 0.3021 at 1/480 s (85 %), and no word, as only D = 0 was judged (round 58
+    BA95-97).  The swing's decay D / (4 H) is now set against Heun's growth: the warning
+    comes at D = 0.05 (a net growth of a factor 3.15) and not at D = 0.5, whose run is
+    within 1 % of 1/480 s's (0.2981 against 0.2967 rad)."""
+    data = Path(__file__).parents[1] / "data" / "psse"
+    (tmp_path / "c.dyr").write_text(
+        f"    1 'GENCLS' 1   5.0  {damping} /\n    3 'GENCLS' 1   0.5  {damping} /\n"
+        f"    3 'GENCLS' '2' 3.0  {damping} /\n"
+    )
+    case = tmp_path / "c.json"
+    made = run("import-psse", data / "five_bus_v33.raw", tmp_path / "c.dyr", "-o", case)
+    assert made.exit_code == 0, made.output
+    res = run("simulate", case, "--bus-fault", "2:0:0.2", 1, 1.05, "--tf", 20)
+    assert res.exit_code == 0, res.output
+    said = "lets a lightly damped swing grow: one of about 4.5 Hz (G2 (bus 3, id '1')'s swing"
+    assert (said in res.stderr) is warned, res.stderr
