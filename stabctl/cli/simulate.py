@@ -686,6 +686,8 @@ def simulate(
             f"{machine_list(case, result.separated)} separate"
             + (" (run stopped)" if stop_at_separation else "")
         )
+        if runaway := result.meta.get("runaway"):
+            click.echo(f"  note: {runaway}")
     if halved is not None:
         click.echo(_step_check_line(result, halved, method))
     for w in written:

@@ -1457,6 +1457,8 @@ class _Run:
         t_fail = g.t[min(k_end + 1, g.t.size - 1)]
         if self.status == ig.UNSTABLE_STEP:
             q, x = int(self.carry.health.bad[0]), self.carry.x
+            if res.ran_away(sim.case, q, float(x[q]), float(t_fail)):
+                return res  # a verdict: the separated machine's runaway ends the run
             raise NumericalInstabilityError(
                 f"case '{sim.case.name}': numerical instability in the step ending at t = "
                 f"{t_fail:.4f} s: state {self.m.state_name(q)} = {x[q]:.6g} "

@@ -302,6 +302,45 @@ class SimulationResult:
         last = self.last_partition()
         return np.ones(self.machines.size, bool) if last is None else last.judged.copy()
 
+    def ran_away(self, case, q: int, value: float, t: float) -> bool:
+        """Whether a run stopped by the integrator's speed band (state q, its value, at t
+        s) ended in a machine that had already lost synchronism running away (no governor
+        holds a slipping machine).  Then the run's verdict, loss of synchronism, stands:
+        ``meta["runaway"]`` says where it stopped, and the caller returns this result
+        instead of raising a NumericalInstabilityError that blamed the step (round 58
+        BA99-100: the five-bus case cleared late separated at 1.47 s, ran to 10.4 s and
+        failed with "use a smaller step" at every step and with both methods).
+
+        Parameters
+        ----------
+        case : Case
+            The case run.
+        q : int
+            The state the speed band stopped the run at (machine speeds are states n_mac
+            to 2 n_mac - 1).
+        value : float
+            Its value, pu speed.
+        t : float
+            The end of the failing step, s.
+
+        Returns
+        -------
+        bool
+        """
+        from stabctl.dynamics.integrator import SPEED_BAND
+
+        nm = case.machines.number.size
+        if not (nm <= q < 2 * nm and np.isfinite(value)) or self.stable:
+            return False
+        number = int(case.machines.number[q - nm])
+        if number not in self.separated:
+            return False
+        self.meta["runaway"] = (
+            f"{case.machine_name(number)}, separated, ran past {SPEED_BAND:g} pu from "
+            f"synchronous speed ({value:.3g} pu) at t = {t:.4f} s: the run stopped there"
+        )
+        return True
+
     def drift(self) -> dict:
         """The largest move from the run's start of a machine speed, field voltage or bus
         voltage magnitude: what a run without disturbance (a flat run) must keep within

@@ -500,6 +500,12 @@ def run(
         if bad < 0:
             bad = _unhealthy_state(x, nm, _judged_now(partitions, grid.t[k + 1], nm))
             why = symptom(x[bad], bad, nm) if bad >= 0 else ""
+        if why and bad >= 0 and np.isfinite(x[bad]):  # a separated machine's runaway
+            res = sim._result(
+                grid.t, rec, k + 1, time.perf_counter() - wall, limit, None, partitions
+            )
+            if res.ran_away(sim.case, bad, float(x[bad]), float(grid.t[k + 1])):
+                return res
         if why:  # the step named as where the network fails (round 38)
             smaller = "" if h > 2 * sim.default_h else "; use a smaller step"  # (said)
             msg = (

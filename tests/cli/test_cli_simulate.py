@@ -1058,3 +1058,25 @@ def test_heun_warns_of_a_lightly_damped_swing_it_grows(tmp_path, damping, warned
     assert res.exit_code == 0, res.output
     said = "lets a lightly damped swing grow: one of about 4.5 Hz (G2 (bus 3, id '1')'s swing"
     assert (said in res.stderr) is warned, res.stderr
+
+
+@pytest.mark.parametrize("method", ["heun", "trapezoid"])
+def test_a_separated_machine_running_away_ends_the_run_with_its_verdict(tmp_path, method):
+    """The PSS/E five-bus case (GENROU, no governor), its line 2-1 fault cleared after 15
+    cycles: machines G2 and G3 lose synchronism at 1.47 s and, slipping with nothing to
+    hold them, pass 1.5 pu speed near 10.4 s.  The run failed there, "numerical
+    instability ... use a smaller step", exit 2, at every step and with both methods: the
+    verdict lost (round 58 BA99-100).  The run now ends there with its verdict, loss of
+    synchronism, and says why it stopped (`SimulationResult.ran_away`; JSON `runaway`)."""
+    data = Path(__file__).parents[1] / "data" / "psse"
+    case = tmp_path / "five.json"
+    made = run("import-psse", data / "five_bus_v33.raw", data / "five_bus.dyr", "-o", case)
+    assert made.exit_code == 0, made.output
+    args = ("simulate", case, "--fault", 2, "--far-bus", 1, "--clear-cycles", 15, "--tf", 30)
+    res = run(*args, "--step", 0.0020833, "--method", method)
+    assert res.exit_code == 0, res.output
+    assert "loss of synchronism at t = 1.4687 s: machine(s) G2 (bus 3, id '1'), G3" in res.stdout
+    note = r"note: G[23] \(bus 3, id '[12]'\), separated, ran past 0.5 pu from synchronous speed"
+    assert re.search(note + r" \(1.5 pu\) at t = 10.3\d+ s: the run stopped", res.stdout)
+    out = json.loads(run(*args, "--step", 0.0020833, "--method", method, "--json").stdout)
+    assert out["stable"] is False and "ran past 0.5 pu" in out["runaway"]
