@@ -124,17 +124,23 @@ def warned(d, err):
     return bool(re.search(r"warning", err, re.I)) or bool(d and d.get("warnings"))
 
 
+def _failed(tag, rc, err):
+    """(ok, why) of a run that did not end with exit 0: a refusal naming the step is ok; a
+    traceback or any other exit is SHORT."""
+    if "Traceback" in err:
+        return False, f"{tag}: traceback rc {rc}: {tail(err, 200)}"
+    if rc == 2 and re.search(r"step", err):
+        return True, f"{tag}: refused: {tail(err, 140)}"
+    return False, f"{tag}: rc {rc}: {tail(err, 200)}"
+
+
 def compare(case, extra, h, method="heun", conventions=None):
     x = list(extra) + (["--conventions", conventions] if conventions else [])
     r = ref(case, x, method)
     rc, d, err = sim(case, x, h, method)
     tag = f"{case} {' '.join(map(str, extra))} {method} h={h:g}"
     if rc != 0:
-        if "Traceback" in err:
-            return False, f"{tag}: traceback rc {rc}: {tail(err, 200)}"
-        if rc == 2 and re.search(r"step", err):
-            return True, f"{tag}: refused: {tail(err, 140)}"
-        return False, f"{tag}: rc {rc}: {tail(err, 200)}"
+        return _failed(tag, rc, err)
     w = warned(d, err)
     a, b = d["max_angle_from_coi_rad"], r["max_angle_from_coi_rad"]
     same = d["verdict"] == r["verdict"]
@@ -208,11 +214,7 @@ def cct_compare(case, h, tol=0.005):
     rc, d, err = cct(case, h)
     tag = f"cct {case} h={h:g}"
     if rc != 0:
-        if "Traceback" in err:
-            return False, f"{tag}: traceback rc {rc}: {tail(err, 200)}"
-        if rc == 2 and re.search(r"step", err):
-            return True, f"{tag}: refused: {tail(err, 140)}"
-        return False, f"{tag}: rc {rc}: {tail(err, 200)}"
+        return _failed(tag, rc, err)
     w = warned(None, err)
     c, c0 = d.get("cct_s"), r.get("cct_s")
     e, e0 = d.get("numerical_error_s") or 0, r.get("numerical_error_s") or 0
