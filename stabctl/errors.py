@@ -295,7 +295,8 @@ def check_fields(obj) -> None:
 
 def number_text(x: float) -> str:
     """A number as a message gives it: short (``:g``) unless that rounds it, then all its
-    digits (``--rate 59.9999999`` was said as "--rate 60: must be one of ..., 60").
+    digits (``--rate 59.9999999`` was said as "--rate 60: must be one of ..., 60"), an
+    integer's as written.
 
     Parameters
     ----------
@@ -307,7 +308,9 @@ def number_text(x: float) -> str:
     str
     """
     short = f"{x:g}"
-    return short if float(short) == x else repr(float(x))
+    if float(short) == x:
+        return short
+    return repr(x) if isinstance(x, int) else repr(float(x))
 
 
 def _shown(value) -> str:

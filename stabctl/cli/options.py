@@ -36,7 +36,7 @@ import click
 
 from stabctl.cli.format import one_line
 from stabctl.cli.stdout import StdoutError, cannot_write
-from stabctl.errors import InputError, StabctlError, on_command_line
+from stabctl.errors import InputError, StabctlError, number_text, on_command_line
 from stabctl.io.inputs import UNDERFLOW, plain_number, underflows
 
 #: seconds a run continues after the fault start when --tf is not given
@@ -502,16 +502,9 @@ def interval(spec) -> str:
     str
     """
     lo, hi, lo_in, hi_in, unit = spec
-    return f"{'[' if lo_in else '('}{_shown(lo)}, {_shown(hi)}{']' if hi_in else ')'}" + (
+    return f"{'[' if lo_in else '('}{number_text(lo)}, {number_text(hi)}{']' if hi_in else ')'}" + (
         f" {unit}" if unit else ""
     )
-
-
-def _shown(value) -> str:
-    """A value as a refusal names it: short (``1e+06``), but never rounded to another
-    value (``100.0000001``, which ``:g`` shows as the allowed 100)."""
-    short = f"{value:g}"
-    return short if float(short) == value else repr(value)
 
 
 def check_number(label: str, value) -> None:
@@ -538,13 +531,13 @@ def check_number(label: str, value) -> None:
     if spec is None:
         if abs(value) > ANY_NUMBER_MAX:
             raise InputError(
-                f"{label} {_shown(value)}: beyond any value it can take (at most "
+                f"{label} {number_text(value)}: beyond any value it can take (at most "
                 f"{ANY_NUMBER_MAX:g} in magnitude)"
             )
         return
     lo, hi, lo_in, hi_in, _ = spec
     if not ((value >= lo if lo_in else value > lo) and (value <= hi if hi_in else value < hi)):
-        raise InputError(f"{label} {_shown(value)}: must be{allowed}")
+        raise InputError(f"{label} {number_text(value)}: must be{allowed}")
 
 
 def _check_numbers(kwargs) -> None:

@@ -256,7 +256,11 @@ class AndesImport:
         generation of bus B, which has no machine; the rest, ..."``, from the written
         converter table), a
         parameter of a machine or its controls that ANDES requires non-zero or of one sign
-        left empty in an xlsx or json file (``NAME left empty, run at ANDES's default d``).
+        left empty in an xlsx or json file (``NAME left empty, run at ANDES's default d``);
+        from a RAW file, what ANDES's RAW reader makes of it otherwise than PSS/E reads it
+        (`_raw_unlike_andes`: branches, shunts, unsupported records, isolated buses, held
+        controls, remote regulation, wind Q limits); a DYR record read with another value
+        (``stabctl.io.dyr.DyrTables.changed``: a stabiliser of gain 0).
     unlike_andes : tuple of str
         DYR values stabctl keeps as the file gives them where ANDES replaces them (the
         infinite bus, a GENCLS of H = 0, which ANDES runs with its default H = 3 s).
@@ -410,6 +414,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     changed += _grouped(zip_changed + given.changed)
     refused += ibr_refused
     motor_numbers: dict = {}
+    read_as: list[str] = []
     for key, (rows, why) in (  # stabctl's own tables of the devices ANDES has
         ("shaft_con", _shafts(ss, gens)),
         ("inj_con", _dc_links(ss, numbers)),
@@ -424,6 +429,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     if records:
         tables = dyr_tables(records, gens, on_unsupported="skip", conventions=conventions)
         refused += [f"{r.label()}: {why}" for r, why in zip(tables.unsupported, tables.why)]
+        read_as = list(tables.changed)  # named, as import-psse names them (round 59 BD18)
         origins.update(
             {table: [by_record.get(r) for r in recs] for table, recs in tables.records.items()}
         )
@@ -492,7 +498,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
                 np.rad2deg(np.asarray(ss.Bus.a0.v, float)[on]),
             )
         )
-        changed += _branches_unlike_raw(path, case)
+        changed += _raw_unlike_andes(path, case)
     return AndesImport(
         case,
         left_out,
@@ -500,7 +506,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
         pf_bus,
         pf_vmag,
         pf_vang,
-        tuple(changed),
+        tuple(changed + read_as),
         tuple(unlike),
         solution,
         tuple(given.defaulted),
@@ -508,19 +514,24 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     )
 
 
-#: relative difference of a branch's ratio, phase or reactance between ANDES's reading of
-#: a RAW file and the file's (`_branches_unlike_raw`) named as a change
+#: relative difference of a branch's or a bus shunt's value between ANDES's reading of a
+#: RAW file and the file's (`_raw_unlike_andes`) named as a change
 RAW_BRANCH_TOL = 1e-6
 
 
-def _branches_unlike_raw(path: Path, case: Case) -> list[str]:
-    """The branches ANDES's RAW reader reads otherwise than the RAW file states them
-    (stabctl's own reading, `stabctl.io.psse_raw.read_raw`, as ``import-psse`` reads
-    it), named each with both readings, kept as ANDES reads them: a two-winding
-    transformer's WINDV2, which ANDES drops (PSS/E's TVC system: ratio 1 for 0.96154),
-    Nordic 44's transformers, whose reactances ANDES reads ten times the file's (its case
-    then has no power flow).  Nothing when stabctl cannot read the file itself
-    (``import-psse`` names why)."""
+#: the record `read_raw` names an isolated bus by (its ``switched_off``)
+_ISOLATED = re.compile(r"bus (\d+): isolated \(IDE 4\)")
+
+
+def _raw_unlike_andes(path: Path, case: Case) -> list[str]:
+    """What ANDES's RAW reader makes of a RAW file otherwise than PSS/E (and ``import-psse``,
+    stabctl's own reading, `stabctl.io.psse_raw.read_raw`) reads it, each record named with
+    both readings and kept as ANDES reads it: the branches (`_branches_unlike_raw`), the
+    buses' shunts, the records PSS/E leaves out or stabctl cannot represent, the isolated
+    (IDE 4) buses ANDES keeps, the controls held at their RAW setting, remote voltage
+    regulation and the Q limits of wind machines (round 59 BD01-BD08, BD14: each went
+    without a word).  Nothing when stabctl cannot read the file itself (``import-psse``
+    names why)."""
     from stabctl.io.psse_raw import read_raw
 
     try:
@@ -529,28 +540,103 @@ def _branches_unlike_raw(path: Path, case: Case) -> list[str]:
             raw = read_raw(path)
     except (CaseError, InputError):
         return []
+    file, ours = path.name, set(case.buses.number.tolist())
+    return [
+        *_branches_unlike_raw(file, raw, case),
+        *_shunts_unlike_raw(file, raw, case),
+        *(
+            f"{s} (import-psse: unsupported; not in ANDES's reading as PSS/E has it)"
+            for s in raw.unsupported
+        ),
+        *(
+            f"{s}, which PSS/E leaves out with the records at it: ANDES's reading keeps it"
+            for s in raw.switched_off
+            if (m := _ISOLATED.fullmatch(s.record)) and int(m.group(1)) in ours
+        ),
+        *(f"{h.source} (ANDES's reading holds it too)" for h in raw.held),
+        *(
+            f"{file}: generator at bus {int(g)} regulates bus {int(r)}'s voltage at VS {vs:g} "
+            f"(IREG): ANDES's reading holds bus {int(g)}'s own"
+            for g, r, vs, _ in raw.vreg_con
+        ),
+        *(f"{s}: ANDES's reading keeps QT and QB" for s in raw.changed if "WPF" in s.record),
+    ]
+
+
+def _branches_unlike_raw(file: str, raw, case: Case) -> list[str]:
+    """The branches ANDES's RAW reader reads otherwise than the RAW file states them
+    (``raw``, stabctl's reading): ratio, phase, r, x, charging b and line-end shunts, named
+    each with both readings: a two-winding transformer's WINDV2, which ANDES drops (PSS/E's
+    TVC system: ratio 1 for 0.96154), Nordic 44's transformers, whose reactances ANDES
+    reads ten times the file's, a line's GI/BI/GJ/BJ, which ANDES drops, a transformer's
+    magnetising admittance, which ANDES reads as line charging."""
     br = case.branches
-    ours: dict[tuple[int, int], list[int]] = {}
+    rows: dict[tuple[int, int], list[int]] = {}
     for k, (f, t) in enumerate(zip(br.from_bus, br.to_bus)):
-        ours.setdefault((int(f), int(t)), []).append(k)
+        rows.setdefault((int(f), int(t)), []).append(k)
     seen: dict[tuple[int, int], int] = {}
     found = []
     for row in raw.line:
         pair = (int(row[0]), int(row[1]))
         n = seen[pair] = seen.get(pair, 0) + 1
-        rows = ours.get(pair, [])
-        if len(rows) < n:
+        if len(rows.get(pair, [])) < n:
             continue
-        k = rows[n - 1]
-        given = (row[5] or 1.0, row[6], row[3])
-        andes = (br.tap[k] or 1.0, br.phase_deg[k], br.x[k])
+        k = rows[pair][n - 1]
+        ends = tuple(row[10:14]) if row.size > 10 else (0.0,) * 4
+        given = (row[5] or 1.0, row[6], row[2], row[3], row[4], *ends)
+        andes = (
+            br.tap[k] or 1.0,
+            br.phase_deg[k],
+            br.r[k],
+            br.x[k],
+            br.b[k],
+            br.g_from[k],
+            br.b_from[k],
+            br.g_to[k],
+            br.b_to[k],
+        )
         if all(abs(a - b) <= RAW_BRANCH_TOL * max(1.0, abs(b)) for a, b in zip(andes, given)):
             continue
         found.append(
-            f"{path.name} branch {pair[0]}-{pair[1]} (circuit {n}): ratio "
-            f"{andes[0]:.5g}, phase {andes[1] + 0.0:g} deg, x {andes[2]:.5g} pu as ANDES's "
-            f"RAW reader reads it; the file states ratio {given[0]:.5g}, phase {given[1] + 0.0:g} "
-            f"deg, x {given[2]:.5g} pu (import-psse reads it as the file states)"
+            f"{file} branch {pair[0]}-{pair[1]} (circuit {n}): {_branch_text(andes)} as "
+            f"ANDES's RAW reader reads it; the file states {_branch_text(given)} (import-psse "
+            "reads it as the file states)"
+        )
+    return found
+
+
+def _branch_text(v) -> str:
+    """ratio, phase, r, x, b and the line-end shunts of a branch (pu, deg) for a message."""
+    ends = (
+        ""
+        if not any(v[5:])
+        else (
+            f", line-end shunts g, b {v[5]:.5g}, {v[6]:.5g} (from) {v[7]:.5g}, {v[8]:.5g} (to) pu"
+        )
+    )
+    return (
+        f"ratio {v[0]:.5g}, phase {v[1] + 0.0:g} deg, r {v[2]:.5g}, x {v[3]:.5g}, "
+        f"b {v[4]:.5g} pu{ends}"
+    )
+
+
+def _shunts_unlike_raw(file: str, raw, case: Case) -> list[str]:
+    """The buses whose fixed shunt g, b (pu) ANDES's RAW reader reads otherwise than
+    stabctl's reading of the file (``raw``): a transformer's magnetising conductance, which
+    ANDES drops, for one."""
+    b = case.buses
+    at = {int(n): (g, s) for n, g, s in zip(b.number, b.gshunt, b.bshunt)}
+    found = []
+    for row in raw.bus:
+        num = int(row[0])
+        if num not in at:
+            continue
+        given, andes = (row[7], row[8]), at[num]
+        if all(abs(a - g) <= RAW_BRANCH_TOL * max(1.0, abs(g)) for a, g in zip(andes, given)):
+            continue
+        found.append(
+            f"{file} bus {num}: shunt g {andes[0]:.5g}, b {andes[1]:.5g} pu as ANDES's RAW "
+            f"reader reads it; the file gives g {given[0]:.5g}, b {given[1]:.5g} pu (import-psse)"
         )
     return found
 
@@ -1558,9 +1644,18 @@ def _network(ss, file: str) -> tuple[dict, dict]:
             f"Slack {ss.Slack.idx.v[k]} {_off_why(ss.Slack, k)}" for k in range(ss.Slack.n)
         )
         raise CaseError(f"{file}: no Slack in service, so no swing bus: {why}")
+    held: dict = {}  # bus row -> the first PV or Slack holding it: (name, idx, v0)
     for m, kind in ((ss.PV, PV), (ss.Slack, SWING)):
         for k in _in_service(m):
             r = row[m.bus.v[k]]
+            first = held.setdefault(r, (m.class_name, m.idx.v[k], m.v0.v[k]))
+            if first[2] != m.v0.v[k]:  # round 59 BD09: the last one's v0 was taken
+                raise CaseError(
+                    f"{file}: {first[0]} {first[1]} and {m.class_name} {m.idx.v[k]} both hold "
+                    f"bus {numbers[m.bus.v[k]]}, at v0 {first[2]:g} and {m.v0.v[k]:g} pu: one "
+                    "bus has one voltage (ANDES's power flow does not converge; give both "
+                    "the same v0)"
+                )
             bus[r, 1], bus[r, 9] = m.v0.v[k], kind
             if kind == SWING:
                 bus[r, 2] = np.rad2deg(m.a0.v[k])
@@ -2252,8 +2347,8 @@ def _dynamic_records(ss, file: str, numbers: dict, with_converter=frozenset(), b
                 "mbase": float(m.Sn.v[k]),
                 "ra": float(m.ra.vin[k]),
                 "xsource": float(m.xd1.vin[k]),
-                "pg": float(m.gammap.v[k] * sg.p.v[j]),
-                "qg": float(m.gammaq.v[k] * sg.q.v[j]),
+                "pg": float(m.gammap.v[k] * _pf_power(sg, "p", j)),
+                "qg": float(m.gammaq.v[k] * _pf_power(sg, "q", j)),
                 "sbase": float(ss.config.mva),
             }
         )
@@ -2903,3 +2998,12 @@ def _powerflow(ss, numbers: dict):
         np.array(ss.Bus.v.v, float)[on],
         np.array(ss.Bus.a.v, float)[on],
     )
+
+
+def _pf_power(sg, name: str, j: int) -> float:
+    """Static generator ``sg``'s row ``j`` P (``name`` "p") or Q ("q") of ANDES's power
+    flow, pu on the system base; its data p0 or q0 when that power flow did not converge
+    (round 59 BD09: the last iterate's Q made machine shares of +5e7 and -5e7)."""
+    if getattr(getattr(sg.system, "PFlow", None), "converged", True):
+        return float(getattr(sg, name).v[j])
+    return float(getattr(sg, f"{name}0").v[j])

@@ -609,6 +609,7 @@ def _map_records(records, generators, conventions):
             row[MACHINE.col("speed_effects") - 1] = 0.0
             row[MACHINE.col("psse_sat") - 1] = 1.0
         elif kind == "machine" and conventions == "psse":
+            _positive_time_constants(rec)
             row[MACHINE.col("speed_effects") - 1] = 0.0
             sat, swing = _PSSE_MACHINE[rec.model]
             row[MACHINE.col("psse_sat") - 1] = sat
@@ -848,10 +849,43 @@ def _set_fractions(generators, machines) -> None:
                 "split the bus generation (mac_con pfrac, qfrac)"
             )
         for key, col in (("pg", MACHINE.col("pfrac") - 1), ("qg", MACHINE.col("qfrac") - 1)):
-            total = sum(float(g[key]) for g in gs)
-            for g in gs:
-                share = float(g[key]) / total if total else 1.0 / len(gs)
+            for g, share in zip(gs, bus_shares(gs, key)):
                 machines[int(g["number"])][1][col] = share
+
+
+def bus_shares(gs: list[dict], key: str) -> list[float]:
+    """Each generator's share of its bus's ``key`` (``"pg"`` MW or ``"qg"`` Mvar): its value
+    over their sum, equal shares when every value is 0.
+
+    Parameters
+    ----------
+    gs : list of dict
+        The generators at one bus (keys "bus", "id" and ``key``).
+    key : str
+        ``"pg"`` or ``"qg"``.
+
+    Returns
+    -------
+    list of float
+        One share a generator, summing to 1.
+
+    Raises
+    ------
+    CaseError
+        Values that sum to 0 without all being 0 (+40 and -40 MW): stabctl gives each
+        machine a share of the bus's total, and no share of 0 is their own values (round
+        59 BD11: both ran at 0 MW, halves of 0, without a word).
+    """
+    values = [float(g[key]) for g in gs]
+    total = sum(values)
+    if total == 0 and any(values):
+        listing = ", ".join(f"'{g['id']}' {v:g}" for g, v in zip(gs, values))
+        raise CaseError(
+            f"bus {gs[0]['bus']}: its generators' {key.upper()} ({listing}) sum to 0: a "
+            "machine's share of its bus's generation cannot give each its own (stabctl "
+            "splits the bus's total among its machines)"
+        )
+    return [v / total if total else 1.0 / len(values) for v in values]
 
 
 def _matrix(rows: dict, width: int) -> np.ndarray | None:
@@ -877,6 +911,22 @@ def _mac_row(rec, gen, **cols) -> list:
         speed_effects=1.0,
     )
     return MACHINE.dyr_row(DYR_MODELS[rec.model], rec.params, **cols)
+
+
+def _positive_time_constants(rec) -> None:
+    """With the psse conventions, CaseError naming a machine record's open-circuit time
+    constant (T'do, T''do, T'qo, T''qo) that is not > 0: the Model Library's GENROU, GENSAL,
+    GENROE and GENSAE integrate each flux over its time constant (OpenIPSL's PSS/E-verified
+    models divide by it), and PST's reading of 0 as "no such circuit" (the pst conventions)
+    is not the limit of a time constant going to 0 (round 59 BD12-13: T'qo 0 ran as 999 s,
+    E'd frozen; T''qo 0 ran x'q as x''d)."""
+    v = DYR_MODELS[rec.model].values(rec.params)
+    for name in ("T'do", "T''do", "T'qo", "T''qo"):
+        if name in v and not v[name] > 0:
+            raise CaseError(
+                f"{rec.label()}: {name} = {v[name]:g} s must be > 0 (the Model Library's "
+                f"{rec.model} has this circuit; a machine without it is another model)"
+            )
 
 
 def _leakage_noted(rec, v) -> None:
@@ -1289,6 +1339,7 @@ def _pss1a(rec, gen):
     _washout(rec, v, "T5", "T5")
     if v["ICS"] == 0:
         raise _Unsupported("no input (ICS 0)")
+    _no_gain(rec, v, "KS")
     return _pss_row(rec, gen, K1=1.0, KTw=v["KS"] * v["T5"])
 
 
@@ -1303,6 +1354,8 @@ def _st2cut(rec, gen):
     _washout(rec, v, "T3", "T4")
     if v["MODE"] == 0:
         raise _Unsupported("no first input (MODE 0)")
+    if v["K1"] == 0 and v["K2"] == 0:  # round 59 BD18: counted a PSS without a word
+        _read_as(rec, "K1 = K2 = 0: its output is always 0, no effect on the run")
     return _pss_row(rec, gen, cut_relative=1)
 
 

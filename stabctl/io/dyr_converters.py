@@ -62,7 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stabctl.errors import CaseError
-from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, machine_id, no_generator
+from stabctl.io.dyr import CONVERTER_DYR, DyrRecord, bus_shares, machine_id, no_generator
 from stabctl.io.provenance import Origin
 from stabctl.models.converters import (
     CONVERTER,
@@ -248,18 +248,15 @@ def _plant_origin(plant: dict[str, DyrRecord]) -> Origin:
 
 
 def shares(generators, gen) -> tuple[float, float]:
-    """The share of generator ``gen`` in its bus's P and Q generation, PG / sum(PG) and
-    QG / sum(QG) over the ``generators`` at its bus (keys "bus", "pg", "qg"; equal shares
-    of a sum 0; 1, 1 alone on its bus): as PSS/E's generators, each keeps its own PG, QG
-    of the RAW's power flow."""
+    """The share of generator ``gen`` in its bus's P and Q generation, PG / sum(PG) and QG /
+    sum(QG) over the ``generators`` at its bus (keys "bus", "pg", "qg";
+    `stabctl.io.dyr.bus_shares`; 1, 1 alone on its bus): as PSS/E's generators, each keeps
+    its own PG, QG of the RAW's power flow."""
     at = [g for g in generators if int(g["bus"]) == int(gen["bus"])]
     if len(at) == 1:
         return 1.0, 1.0
-    out = []
-    for key in ("pg", "qg"):
-        total = sum(float(g[key]) for g in at)
-        out.append(float(gen[key]) / total if total else 1.0 / len(at))
-    return out[0], out[1]
+    k = at.index(gen)
+    return bus_shares(at, "pg")[k], bus_shares(at, "qg")[k]
 
 
 def _plant_row(

@@ -2112,13 +2112,20 @@ def test_import_andes_n44_keeps_its_machines_and_says_what_changed():
     # and its transformers, whose reactances ANDES's RAW reader reads ten times the
     # file's (stabctl's own reading solves to 3.6e-3 pu of the RAW's solution; ANDES's
     # does not converge in stabctl's power flow): each named (round 34)
-    branches = [c for c in imported.changed[1:] if not c.startswith("SCRX (")]
+    # (and, round 59, its r and b, and its transformers under voltage control, which
+    # ANDES's reading holds at their ratio as stabctl's does)
+    rest = [c for c in imported.changed[1:] if not c.startswith("SCRX (")]
+    branches = [c for c in rest if c.startswith("N44_BC.raw branch ")]
     assert (
-        "N44_BC.raw branch 7000-7010 (circuit 1): ratio 1, phase 0 deg, x 0.1 pu as ANDES's "
-        "RAW reader reads it; the file states ratio 1, phase 0 deg, x 0.01 pu (import-psse "
-        "reads it as the file states)"
+        "N44_BC.raw branch 7000-7010 (circuit 1): ratio 1, phase 0 deg, r 0, x 0.1, b 0 pu as "
+        "ANDES's RAW reader reads it; the file states ratio 1, phase 0 deg, r 0, x 0.01, b 0 "
+        "pu (import-psse reads it as the file states)"
     ) in branches
-    assert all(c.startswith("N44_BC.raw branch ") for c in branches)
+    held = [c for c in rest if c not in branches]
+    assert len(held) == 11
+    assert all(
+        "held at its RAW ratio" in c and c.endswith("(ANDES's reading holds it too)") for c in held
+    )
     assert all(
         c.endswith("ANDES reads the record as its SEXS, with that model's defaults") for c in scrx
     )
@@ -3461,12 +3468,18 @@ def test_import_andes_reports_its_power_flow_against_the_raw_solution(tmp_path):
     gap = summary["powerflow_against_raw"]
     assert gap["vmag_bus"] == 3 and gap["vmag_diff_pu"] == pytest.approx(0.033, abs=1e-3)
     assert "differs from the RAW file's own solution by up to 3.3e-02 pu (bus 3)" in res.stderr
-    # and the transformer it reads otherwise is named, with both readings (round 34)
-    assert summary["changed"] == [
-        "TVC_System_32.raw branch 2-4 (circuit 1): ratio 1, phase 0 deg, x 0.016 pu as "
-        "ANDES's RAW reader reads it; the file states ratio 0.96154, phase 0 deg, x 0.017306 "
-        "pu (import-psse reads it as the file states)"
-    ]
+    # and the transformer it reads otherwise is named, with both readings (round 34), and
+    # the one under voltage control that both readings hold at its ratio (round 59)
+    assert summary["changed"][0] == (
+        "TVC_System_32.raw branch 2-4 (circuit 1): ratio 1, phase 0 deg, r 0, x 0.016, b 0 pu "
+        "as ANDES's RAW reader reads it; the file states ratio 0.96154, phase 0 deg, r 0, "
+        "x 0.017306, b 0 pu (import-psse reads it as the file states)"
+    )
+    assert summary["changed"][1].startswith(
+        "TVC_System_32.raw:23 transformer 4-3 '1': held at its RAW ratio and angle (COD1 1"
+    )
+    assert summary["changed"][1].endswith("(ANDES's reading holds it too)")
+    assert len(summary["changed"]) == 2
     assert (
         "  changed: TVC_System_32.raw branch 2-4 (circuit 1): ratio 1,"
         in CliRunner().invoke(main, [*args, "-o", str(tmp_path / "tvc2.json")]).output
