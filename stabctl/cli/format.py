@@ -1171,6 +1171,8 @@ def print_plan(case, d) -> None:
     for line in _run_end_lines(d):
         click.echo(line)
     for r in d["contingencies"]:
+        for line in islanding_lines(case, r.get("islanded") or [], timed=False):
+            click.echo(f"  {r['name']}: the contingency's trip: {line}")
         if r.get("critical_group"):
             click.echo(f"  {r['name']}: the law armed on {machine_list(case, r['critical_group'])}")
         if r.get("chattering"):

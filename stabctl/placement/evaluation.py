@@ -127,10 +127,12 @@ def evaluate(job: dict) -> dict:
         {"cct_s", "t_unstable_s", "n_simulations", "separated", "critical", "margin",
         "dmargin_dtc", "gradient_s_per_mw" (n_sites,), "above_t_max", "run_end_check"
         (the CCT search's check of its run's end, `CCTResult.to_dict`'s: None, or
-        {"t_end_s", "t_separation_s"} when its unstable end separated late in its run)}
+        {"t_end_s", "t_separation_s"} when its unstable end separated late in its run),
+        "islanded" (the search's islanding log, `CCTResult.islanded`: the buses and
+        machines the fault's trip cuts off, [] if none)}
         and with check_s the keys of `check`; a CCT above t_max is returned as t_max with
         a zero gradient.  With insecure_verdict, an N-1 insecure fault gives
-        {"n1_insecure" (the verdict's message), "cct_s" 0, "n_simulations"}.
+        {"n1_insecure" (the verdict's message), "cct_s" 0, "n_simulations", "islanded"}.
         Runs repeated within one evaluation (the scan's and the bisection's bracket
         ends, the gradient's run beyond the CCT) are simulated once (`_Memo`);
         n_simulations counts the runs simulated.
@@ -169,9 +171,15 @@ def evaluate(job: dict) -> dict:
     except InsecureContingency as exc:
         if not job.get("insecure_verdict"):
             raise
-        return {"n1_insecure": str(exc), "cct_s": 0.0, "n_simulations": sim.n_runs}
-    except AboveSearchLimit:
         return {
+            "n1_insecure": str(exc),
+            "cct_s": 0.0,
+            "n_simulations": sim.n_runs,
+            "islanded": list(exc.islanded),
+        }
+    except AboveSearchLimit as exc:
+        return {
+            "islanded": list(exc.islanded),
             "cct_s": t_max,
             "t_unstable_s": None,
             "n_simulations": sim.n_runs,
@@ -186,6 +194,7 @@ def evaluate(job: dict) -> dict:
         }
     if not job.get("gradient", True):
         return {
+            "islanded": list(res.islanded),
             "cct_s": res.cct_s,
             "t_unstable_s": res.t_unstable,
             "n_simulations": sim.n_runs,
@@ -213,6 +222,7 @@ def evaluate(job: dict) -> dict:
         grad = cct_difference_gradient(sim, f, job, ctrl, res)
     grad.pop("n_runs")
     return {
+        "islanded": list(res.islanded),
         "cct_s": res.cct_s,
         "t_unstable_s": res.t_unstable,
         "n_simulations": sim.n_runs,

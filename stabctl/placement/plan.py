@@ -1018,7 +1018,9 @@ def _rows(cons, checks, evs, base, longer=None) -> list:
     (``place --coi critical``; None otherwise or without such a run); the run's end
     checks (`CCTResult.run_end_check` of each CCT search, and its check run
     T_AFTER_FAULT s longer, `_run_end`: longer, name -> {"t_end_s", "t_separation_s"};
-    None: not in question, not run)."""
+    None: not in question, not run); the islanding of its search without storage
+    (``islanded``: buses cut from every machine, their load shed, or machines lost with
+    their island; the CCT is the rest of the system's)."""
     longer = longer or {}
     out = []
     for c in cons:
@@ -1044,6 +1046,9 @@ def _rows(cons, checks, evs, base, longer=None) -> list:
                 "cct_no_storage_run_end_check": base.get(c.name, {}).get("run_end_check"),
                 "cct_run_end_check": evs.get(c.name, {}).get("run_end_check"),
                 "run_end_check": longer.get(c.name),
+                # what the fault's trip cuts off (its search without storage; round 59
+                # BC03: a trip losing a machine was "met" without a word)
+                "islanded": base.get(c.name, {}).get("islanded") or [],
             }
         )
     return out

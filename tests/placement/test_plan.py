@@ -883,6 +883,10 @@ def test_a_plan_says_its_runs_end_and_sets_an_n1_insecure_fault_aside(tmp_path):
     (row,) = d["contingencies"]
     assert row["cct_no_storage_s"] == ref["cct_s"]
     assert row["cct_no_storage_run_end_check"] == ref["run_end_check"]
+    # and its trip's islanding, G1 lost, as `cct` names it (round 59 BC03: "met" without
+    # a word that the CCT judges the rest of the system)
+    assert row["islanded"] == ref["islanded"] and row["islanded"][0]["machines"] == [1]
+    assert "  1-10: the contingency's trip: " in res.stdout
     # the check run 5 s longer, against the same run simulated here
     fault = LineFault(1, 10, 1.0)
     rows = d["allocation"]
