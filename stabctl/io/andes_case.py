@@ -411,7 +411,7 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
     origins: dict[str, list] = {"ibr_con": ibr_origins}
     changed += unchecked + _grouped(_dc_changes(ss))
     refused = dropped + refused
-    changed += _grouped(zip_changed + given.changed)
+    changed += _grouped(zip_changed + given.changed + _unused_by_andes(ss, numbers))
     refused += ibr_refused
     motor_numbers: dict = {}
     read_as: list[str] = []
@@ -499,6 +499,8 @@ def _read(path: Path, conventions: str, on_unsupported: str, dyr, said: list) ->
             )
         )
         changed += _raw_unlike_andes(path, case)
+    elif path.suffix.lower() == ".m":
+        changed += _matpower_unlike_andes(path)
     return AndesImport(
         case,
         left_out,
@@ -561,6 +563,33 @@ def _raw_unlike_andes(path: Path, case: Case) -> list[str]:
         ),
         *(f"{s}: ANDES's reading keeps QT and QB" for s in raw.changed if "WPF" in s.record),
     ]
+
+
+def _matpower_unlike_andes(path: Path) -> list[str]:
+    """What ANDES's MATPOWER reader (``andes.io.matpower``) makes of a ``.m`` file otherwise
+    than MATPOWER: a branch of TAP 0 (ratio 1) with a SHIFT, which MATPOWER's ``makeYbus``
+    applies and ANDES drops; buses of BASE_KV 0 (not given), which ANDES reads as 110 kV
+    (round 59 BD15-16: both without a word)."""
+    from andes.io.matpower import m2mpc
+
+    try:
+        mpc = m2mpc(str(path))
+        branch, bus = np.asarray(mpc["branch"], float), np.asarray(mpc["bus"], float)
+    except (OSError, ValueError, KeyError, IndexError):  # ANDES read it: nothing to name
+        return []
+    found = [
+        f"{path.name} branch {int(b[0])}-{int(b[1])} (row {k + 1}): SHIFT {b[9]:g} deg with "
+        "TAP 0 (MATPOWER: ratio 1, the shift applied): ANDES's MATPOWER reader drops the shift"
+        for k, b in enumerate(branch)
+        if b.size > 9 and b[8] == 0 and b[9] != 0
+    ]
+    unknown = [int(b[0]) for b in bus if b.size > 9 and b[9] == 0]
+    if unknown:
+        found.append(
+            f"{path.name}: {len(unknown)} bus(es) of BASE_KV 0 (not given: "
+            f"{_row_list(unknown)}): ANDES's MATPOWER reader reads them as 110 kV"
+        )
+    return found
 
 
 def _branches_unlike_raw(file: str, raw, case: Case) -> list[str]:
@@ -1696,6 +1725,39 @@ def _network(ss, file: str) -> tuple[dict, dict]:
         },
         numbers,
     )
+
+
+def _unused_by_andes(ss, numbers: dict) -> list[tuple[str, str, str]]:
+    """(model, idx, what) of the data ANDES 2.0's equations leave unused, run as ANDES runs
+    it (round 59 BD10, BD17: without a word): a Line's to-end shunt g2, b2 other than its
+    from-end g1, b1 (ANDES's Line applies g1 + g/2, b1 + b/2 at both ends), a PV's or
+    Slack's remote bus ``busr`` (its power flow holds the device's own bus)."""
+    ln, out = ss.Line, []
+    for k in _in_service(ln):
+        g1, b1, g2, b2 = (float(getattr(ln, p).v[k]) for p in ("g1", "b1", "g2", "b2"))
+        if (g2, b2) != (g1, b1):
+            out.append(
+                (
+                    "Line",
+                    str(ln.idx.v[k]),
+                    f"to-end shunt g2 {g2:g}, b2 {b2:g} run as the from-end g1 {g1:g}, b1 "
+                    f"{b1:g} (ANDES 2.0's Line applies g1, b1 at both ends)",
+                )
+            )
+    for sg in (ss.PV, ss.Slack):
+        for k in _in_service(sg):
+            busr = sg.busr.v[k]
+            if _remote(busr, sg.bus.v[k]):
+                bus = numbers.get(busr, busr)
+                out.append(
+                    (
+                        sg.class_name,
+                        str(sg.idx.v[k]),
+                        f"busr {bus} (remote voltage control) unused: its bus holds v0 itself, "
+                        "as ANDES 2.0's power flow runs it",
+                    )
+                )
+    return out
 
 
 def _zip_loads(ss, numbers: dict, bus: np.ndarray) -> tuple[np.ndarray, list]:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from stabctl.errors import CaseError
+from stabctl.errors import CaseError, InputError
 from stabctl.io.psse import import_psse
 
 andes = pytest.importorskip("andes")
@@ -195,3 +195,48 @@ def test_stabilisers_of_gain_zero_are_named(tmp_path):
         "ST2CUT (bus 1, id GENROU_1): K1 = K2 = 0" in c
         for c in _changed_by_andes(IEEE14 / "ieee14.raw", IEEE14 / "ieee14.dyr")
     )
+
+
+def test_what_andes_reads_otherwise_than_matpower_is_named(tmp_path):
+    """A MATPOWER branch of TAP 0 with SHIFT -5 deg (MATPOWER's makeYbus applies the shift
+    at ratio 1) and buses of BASE_KV 0: ANDES's reader drops the shift and reads 110 kV,
+    without a word (round 59 BD15-16); each named."""
+    text = (IEEE14.parent / "matpower" / "case14.m").read_text()
+    old = "\t2\t4\t0.05811\t0.17632\t0.034\t0\t0\t0\t0\t0\t1\t-360\t360;"
+    assert old in text
+    m = tmp_path / "case14.m"
+    m.write_text(text.replace(old, old.replace("\t0\t0\t1\t-360", "\t0\t-5\t1\t-360")))
+    changed = _changed_by_andes(m)
+    assert changed == [
+        "case14.m branch 2-4 (row 4): SHIFT -5 deg with TAP 0 (MATPOWER: ratio 1, the shift "
+        "applied): ANDES's MATPOWER reader drops the shift",
+        "case14.m: 14 bus(es) of BASE_KV 0 (not given: 1-14): ANDES's MATPOWER reader reads "
+        "them as 110 kV",
+    ]
+
+
+def test_data_andes_leaves_unused_is_named(tmp_path):
+    """ANDES's ieee14.json with Line_3's to-end shunt g2 0.1, b2 0.3 (ANDES 2.0's Line
+    applies g1, b1 at both ends) and PV_2's busr 12 (its power flow holds bus 2 itself):
+    run as ANDES runs them, without a word (round 59 BD10, BD17); now named, kept only with
+    on_unsupported="skip"."""
+    import json
+
+    d = json.loads((IEEE14 / "ieee14.json").read_text())
+    line = next(x for x in d["Line"] if x["idx"] == "Line_3")
+    line["g2"], line["b2"] = 0.1, 0.3
+    pv = next(x for x in d["PV"] if x["bus"] == 2)
+    pv["busr"] = 12
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(d))
+    with pytest.raises(InputError, match=r"to keep with a change: .*Line \(1: Line_3\)"):
+        read_andes_case(path)
+    changed = _changed_by_andes(path)
+    assert (
+        "Line (1: Line_3): to-end shunt g2 0.1, b2 0.3 run as the from-end g1 0, b1 0 (ANDES "
+        "2.0's Line applies g1, b1 at both ends)"
+    ) in changed
+    assert any(
+        c.startswith(f"PV (1: {pv['idx']}): busr 12 (remote voltage control) unused")
+        for c in changed
+    ), changed
