@@ -37,7 +37,12 @@ it as rad/s: a 1.8 Hz mode at 0.27 Hz); WTARA1's theta is the pitch angle in deg
 Pm0 - Ka theta (theta - theta0), at rest at theta0, WTPTA1's pitch starting there (ANDES
 mixes rad(Theta0) with degrees: no start with Theta0 not 0); WTPTA1's speed PI acts on wt
 - wref, WTTQA1's speed reference (ANDES: the constant w0 = 1), its rate limits RTetaMax,
-RTetaMin on dtheta/dt (ANDES: on Tp dtheta/dt).
+RTetaMin on dtheta/dt (ANDES: on Tp dtheta/dt).  PSS/E gives every value on MBASE; the
+values the table holds on the system base as ANDES reads them (REGCA1's Rrpwr, Lvpl1, Khv,
+REECx's Kqv, Iqh1, Iql1, Iqfrz, the Q and V PIs' gains and tracking gains, REPCA1's Kc,
+Rc, Xc, Qmax, Qmin, droops, P error limits, its PI's gains and, with RefFlag 0, its error
+limits and deadband) are converted by MBASE/SBASE (`_to_table_bases`), so that a plant
+runs the same on any system base and split into any number of units.
 REPCA1's monitored branch
 (BUS1, BUS2, CKTID; 0 0: none) is the RAW branch between those buses (its r, x on the
 system base).  REGCA1's Accel (the network solution's acceleration factor) is not a model
@@ -295,7 +300,46 @@ def _plant_row(
             p0 = float(gen["pg"]) / float(gen["mbase"])
             v["pc_Pmax"], v["pc_Pmin"] = v["pc_Pmax"] - p0, v["pc_Pmin"] - p0
     _wind(plant, reec[0] if reec else None, v)
+    if conventions == "psse":
+        _to_table_bases(v, float(gen["mbase"]) / float(gen.get("sbase", 100.0)))
     return [float(v[p.name]) for p in CONVERTER.params]
+
+
+#: ibr_con fields the table holds on the system base (ANDES's reading, which does not
+#: convert them) that PSS/E gives on MBASE: (field, power of MBASE/SBASE that converts
+#: them), `_to_table_bases`
+_SYSTEM_BASE_FIELDS = (
+    *(("Rrpwr", 1), ("Lvpl1", 1), ("Khv", 1)),  # REGCA1: dIp/dt, a current, Iq per V
+    *(("Kqv", 1), ("Iqh1", 1), ("Iql1", 1), ("Iqfrz", 1)),  # REECx: V -> Iqinj, currents
+    *(("Kvp", 1), ("Kvi", 1), ("Kqp", -1), ("Kqi", -1)),  # V -> Iq; Q -> V
+    # the PIs' tracking gains (error per output, `stabctl.models.blocks.pi_track_aw`)
+    *(("Kvs", -1), ("Kqs", 1)),
+    *(("pc_Qmax", 1), ("pc_Qmin", 1), ("pc_Kc", -1), ("pc_Rc", -1), ("pc_Xc", -1)),
+    *(("pc_Ddn", 1), ("pc_Dup", 1), ("pc_femax", 1), ("pc_femin", 1)),  # f -> P; P
+)
+#: REPCA1's fields of its error (V with RefFlag 1, Q with 0): the power of MBASE/SBASE for
+#: each RefFlag (the PI's gains turn the error into Q; its tracking gain, Q into error)
+_REPC_ERROR_FIELDS = (
+    *(("pc_Kp", 1, 0), ("pc_Ki", 1, 0), ("pc_Kqs", -1, 0)),
+    *(("pc_emax", 0, 1), ("pc_emin", 0, 1), ("pc_dbd1", 0, 1), ("pc_dbd2", 0, 1)),
+)
+
+
+def _to_table_bases(v: dict, s: float) -> None:
+    """Convert a PSS/E plant's values on its MBASE (PSS/E Model Library: REGC_A, REEC_A/B/D,
+    REPC_A parameters in pu on MBASE) to the bases of the table (``v``, in place), whose
+    kernels run on the system base: the fields the table takes as ANDES reads them, on
+    the system base (`_SYSTEM_BASE_FIELDS`; the table's device-base fields are converted by
+    `stabctl.models.converters.converter_params`), times ``s`` = MBASE/SBASE to a power
+    (round 59 BB16-17: a plant's Q 0.21 pu off at SBASE 200, and a plant split in two
+    halves differed so; PSS/E's results do not depend on SBASE)."""
+    has = {"reec": bool(v["reec"]), "pc": bool(v["repc"])}
+    for name, power in _SYSTEM_BASE_FIELDS:
+        if name in ("Rrpwr", "Lvpl1", "Khv") or has["pc" if name.startswith("pc_") else "reec"]:
+            v[name] *= s**power
+    ref = v["pc_RefFlag"] == 1.0
+    for name, on_v, on_q in _REPC_ERROR_FIELDS if has["pc"] else ():
+        v[name] *= s ** (on_v if ref else on_q)
 
 
 def _no_curve_noted(rec: DyrRecord, v: dict) -> None:

@@ -964,3 +964,32 @@ def test_repca1_without_a_monitored_branch_measures_the_plant_as_pss_e_reads_it(
         assert cp.pc_Pline0[0] == 0.0 and cp.pc_Qline0[0] == 0.0
     # at rest nothing moves under either reading
     assert abs(dx[names.index("ibr.Qline_filter.C1")]) < 1e-12
+
+
+@pytest.mark.parametrize("run", ["RENA_DEFAULT", "RENA_Q_FLAG", "RENA_REF_FLAG"])
+def test_a_plant_runs_the_same_on_any_system_base(tmp_path, run):
+    """PSS/E's REGC_A, REEC_B and REPC_A take their values on MBASE, so a plant's run does
+    not depend on SBASE.  The ThreeBus plant at SBASE 200 (the RAW's branch R and X doubled,
+    the fault's reactance too: the same ohms) ran with its Q 0.21 pu of 100 MVA off, the
+    gains and currents the table holds on the system base (Kqv, Kvp, Kqp, Iqh1, REPC_A's
+    Kp, Qmax, the PIs' tracking gains, ...) read unconverted (round 59 BB16-17); now the
+    two runs are the same in MW, Mvar and pu voltage."""
+    src = RENA.parent / run
+    raw = (src / "ThreeBusRenewable.raw").read_text()
+    (dyr,) = src.glob("*.dyr")
+    at_200 = tmp_path / "ThreeBusRenewable.raw"
+    at_200.write_text(
+        raw.replace("0,   100.00,  32,", "0,   200.00,  32,", 1).replace(
+            "1.00000E-2, 1.20000E-1,", "2.00000E-2, 2.40000E-1,"
+        )
+    )
+    runs = []
+    for path, base in ((src / "ThreeBusRenewable.raw", 100.0), (at_200, 200.0)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            case = load_psse(path, dyr, on_unsupported="skip")
+        assert case.base_mva == base
+        res = Simulator(case).run([Fault(103, 1.0, 1.1, x=0.1 * base / 100.0)], 4.0)
+        runs.append((res.ibr_p[:, 0] * base, res.ibr_q[:, 0] * base, res.vmag))
+    for a, b in zip(*runs):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9)

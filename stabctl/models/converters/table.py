@@ -51,7 +51,8 @@ def _reeca1_params(col: int) -> tuple[Param, ...]:
     its config kqs, kvs, tpfilt; PQFLAG is the table's ``pqflag``).  Powers and currents
     on the device base where ANDES converts them (``power``/``current`` True); the gains
     Kqv, Kqp, Kqi, Kvp, Kvi and the currents Iqh1, Iql1, Iqfrz on the system base, as
-    ANDES reads them."""
+    ANDES reads them (``import-psse`` converts PSS/E's values on MBASE to them:
+    `stabctl.io.dyr_converters`)."""
     rows: list[tuple[str, dict[str, Any]]] = [
         ("PFFLAG", dict(_FLAG, doc="REECA1: 1 power-factor control, 0 Q control")),
         ("VFLAG", dict(_FLAG, doc="REECA1: 1 Q control (PI), 0 voltage control")),
