@@ -84,8 +84,8 @@ search_option = click.option(
     "--t-max first (robust in one run when no machine swings 1 rad there), then from "
     "SIME's margins of the unstable runs, clearing at once checked only when no probe "
     "was stable first (the same CCT cells on Kundur and miniWECC, 3-8 % fewer runs per "
-    "CCT; 30 % less time a search on a sample of ACTIVSg2000's N-1, most of it robust; "
-    "docs/cli.md).",
+    "CCT there, but up to 10 % more on IEEE 14 and the GB network; 30 % less time a "
+    "search on a sample of ACTIVSg2000's N-1, most of it robust; docs/cli.md).",
 )
 
 
