@@ -351,7 +351,8 @@ class RawData:
     changed: tuple[RawSource, ...] = ()
     #: records kept as written though they look wrong, each named with why (a bus's
     #: voltage limits inverted, which stabctl does not use; a branch of negative R, as a
-    #: network equivalent's): PSS/E reads them too (round 41: without a word)
+    #: network equivalent's; a branch at or below PSS/E's zero-impedance threshold,
+    #: `THRSHZ`, kept as its impedance): PSS/E reads them too (round 41: without a word)
     noted: tuple[RawSource, ...] = ()
     #: the records of each section read but of no use to a run (area, zone, owner and
     #: inter-area transfer data, ...: `_SKIPPED`), one text a section: "N area record(s)
@@ -1290,6 +1291,11 @@ def _ends(b: _Builder, rec: _Rec, i: int, j: int, what: str):
     return None if fi is None or tj is None else (fi, tj)
 
 
+#: PSS/E's default zero-impedance threshold (pu): a non-transformer branch of R 0 and |X| at
+#: or below it is a zero-impedance line there (POM, Zero Impedance Lines), `_branch`
+THRSHZ = 1e-4
+
+
 def _branch(b: _Builder, rec: _Rec):
     """Non-transformer branch: I, J, CKT, R, X, B, [NAME (v34)], ratings, GI, BI, GJ, BJ,
     ST (POM Non-Transformer Branch Data; J < 0 marks the metered end)."""
@@ -1305,6 +1311,14 @@ def _branch(b: _Builder, rec: _Rec):
     gi, bi, gj, bj = (rec.num(0, k + n, 0.0) for n in range(4))
     if r == 0 and x == 0:
         rec.fail(f"{what}: R + jX must not be 0")
+    if r == 0 and abs(x) <= THRSHZ:  # round 59 BB11: kept without a word
+        b.noted.append(
+            rec.source(
+                f"{what}: R 0, X {rec.written(0, 4)} pu, at or below PSS/E's zero-impedance "
+                f"threshold THRSHZ {THRSHZ:g} (PSS/E: a zero-impedance line, its two buses "
+                "one; kept as the impedance it is)"
+            )
+        )
     if r < 0:  # allowed, named: network equivalents carry it
         b.noted.append(
             rec.source(

@@ -240,3 +240,21 @@ def test_data_andes_leaves_unused_is_named(tmp_path):
         c.startswith(f"PV (1: {pv['idx']}): busr 12 (remote voltage control) unused")
         for c in changed
     ), changed
+
+
+def test_a_branch_below_pssEs_zero_impedance_threshold_is_named(tmp_path):
+    """A branch of R 0 and X 1e-4 pu is a zero-impedance line in PSS/E (THRSHZ 0.0001: its
+    two buses one); stabctl keeps it as the impedance it is, which moved the run by 1e-5
+    rad without a word (round 59 BB11): named among the records that look wrong."""
+    raw = _edited(
+        tmp_path,
+        "ieee14.raw",
+        BRANCH23,
+        BRANCH23.replace(" 4.69900E-2, 1.97970E-1,", " 0.0, 1.0E-4,"),
+    )
+    with pytest.warns(
+        UserWarning,
+        match=r"branch 2-3 '1': R 0, X 1.0E-4 pu, at or below PSS/E's zero-impedance "
+        r"threshold THRSHZ 0.0001",
+    ):
+        import_psse(raw, IEEE14 / "ieee14.dyr", on_unsupported="skip")
